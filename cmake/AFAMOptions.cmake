@@ -1,0 +1,26 @@
+# AFAM_ENABLE_CUDA: on when nvcc is found; AFAM_ENABLE_PARAVIEW: on when ParaView 5.11 is found.
+include(CheckLanguage)
+check_language(CUDA)
+if (CMAKE_CUDA_COMPILER)
+  set(_afam_cuda_default ON)
+else ()
+  set(_afam_cuda_default OFF)
+endif ()
+option(AFAM_ENABLE_CUDA "Build the CUDA decode-and-raycast kernels" ${_afam_cuda_default})
+
+find_package(ParaView 5.11 QUIET)
+if (ParaView_FOUND)
+  set(_afam_pv_default ON)
+else ()
+  set(_afam_pv_default OFF)
+endif ()
+option(AFAM_ENABLE_PARAVIEW "Build the ParaView plugin and the VTK module" ${_afam_pv_default})
+
+if (AFAM_ENABLE_CUDA)
+  if (NOT DEFINED CMAKE_CUDA_ARCHITECTURES)
+    set(CMAKE_CUDA_ARCHITECTURES 90)  # H100/H200; CUDA 13 has nothing below sm_75
+  endif ()
+  enable_language(CUDA)
+  find_package(CUDAToolkit REQUIRED)
+endif ()
+message(STATUS "Adaptive-FAM: CUDA ${AFAM_ENABLE_CUDA}, ParaView ${AFAM_ENABLE_PARAVIEW}")

@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Multi-resolution partition of a volume into micro-blocks: the one place that decides which
+// samples each micro-block holds. Encoder, file reader, LOD selection and ray casters all ask it.
+//
+// Level numbering (also in docs/FORMAT.md): level 0 is the coarsest, level L-1 the finest.
+// Per axis with N samples, the finest level has Bf = min(B, max(1, N-1)) blocks whose boundaries
+// are the sample indices round(i (N-1) / Bf), i = 0..Bf, so neighbours share one boundary sample.
+// Level l groups r = 2^(L-1-l) finest blocks per axis: it has ceil(Bf / r) blocks (the last one may
+// group fewer; that is how edge blocks of any dims are handled) and block j spans the finest
+// boundaries [j r, min((j+1) r, Bf)]. Its micro-block is sampled with stride r: n = round(extent/r)+1
+// samples at lo + k (hi-lo)/(n-1). Where those positions fall between grid samples (dims that are not
+// B 2^k + 1) the value is linearly interpolated along that axis; for B 2^k + 1 dims every position is
+// a grid sample and the micro-block is the paper's plain strided downsampling.
+// A one-sample axis gives blocks of extent 0 with n = 1.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace afam {
+
+using Int3 = std::array<int, 3>;
+using Index3 = std::array<int64_t, 3>;
+
+/// Where one micro-block sits, in voxel index coordinates of the full volume.
+struct BlockExtent {
+  Index3 lo{};   ///< first sample index per axis
+  Index3 hi{};   ///< last sample index per axis (shared with the next block)
+  Int3 samples{};  ///< micro-block samples per axis
+};
+
+class Partition {
+ public:
+  Partition() = default;
+  /// Throws afam::InvalidArgument on dims < 1, levels outside [1, 16], blocks < 1.
+  Partition(Index3 dims, int levels, int finestBlocksPerAxis);
+
+  const Index3& dims() const { return dims_; }
+  int levels() const { return levels_; }
+  int requestedBlocks() const { return requestedBlocks_; }
+  /// Blocks per axis at a level.
+  Int3 blocksPerAxis(int level) const;
+  int64_t blockCount(int level) const;
+  int64_t totalBlockCount() const;
+  /// Sampling stride (in finest samples) of a level: 2^(levels-1-level).
+  int stride(int level) const { return 1 << (levels_ - 1 - level); }
+  BlockExtent extent(int level, Int3 ijk) const;
+  /// Linear index of a block inside its level, x fastest.
+  int64_t linearIndex(int level, Int3 ijk) const;
+  Int3 blockFromLinear(int level, int64_t index) const;
+  /// Children at level+1 of a block (1 to 8 of them), as ijk.
+  std::vector<Int3> children(int level, Int3 ijk) const;
+  Int3 parent(int level, Int3 ijk) const;  ///< block at level-1 holding this one
+
+  /// Sample positions (voxel index coordinate, possibly fractional) of a micro-block on one axis.
+  double samplePosition(const BlockExtent& e, int axis, int k) const;
+
+ private:
+  Index3 dims_{1, 1, 1};
+  int levels_ = 1;
+  int requestedBlocks_ = 1;
+  std::array<std::vector<int64_t>, 3> finestBounds_;  // Bf+1 boundaries per axis
+};
+
+}  // namespace afam

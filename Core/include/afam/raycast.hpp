@@ -1,0 +1,435 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The per-ray logic of every Adaptive-FAM ray caster, written ONCE for the host and the device.
+//
+// This header is the contract between the CPU ray caster (Core/src/cpu_raycaster.cpp), the CUDA
+// kernel (CudaKernels/) and the analytic ground truth (ground_truth.hpp). All three call
+// castRay<Shaded>() / castRayWith<Shaded>() with the same FrameView; they differ only in where the
+// pointers of the FrameView live (host or device memory) and, for the ground truth, in the sampler.
+//
+// Rules for this file: no std:: containers, no exceptions, no virtual functions, no allocation;
+// every struct is trivially copyable so that a FrameView is passed to a kernel by value; pointers
+// are raw and device-agnostic (the CUDA launcher fills them with device pointers).
+//
+// ---------------------------------------------------------------------------------------------
+// Coordinate systems
+// ---------------------------------------------------------------------------------------------
+//  * Normalised frame: the paper's frame, in which the volume's bounding box is [boxLo, boxHi]
+//    (normally [-1, 1]^3, every axis rescaled independently as in the paper). Cameras, rays,
+//    sample distance, LOD distances and shading all live in this frame.
+//  * Voxel frame: continuous voxel index coordinates x in [0, dims-1] per axis, the frame of
+//    Partition's block extents. x = (n - boxLo) * voxelPerUnit, voxelPerUnit = (dims-1)/(boxHi-boxLo)
+//    (0 on a one-sample axis).
+//  * Model parameters: a micro-model covering voxel extent [lo, hi] on an axis is evaluated at
+//    u = (x - lo) / (hi - lo), clamped to [0, 1] (u = 0 when hi == lo).
+//
+// ---------------------------------------------------------------------------------------------
+// Per-frame model lookup in O(1)
+// ---------------------------------------------------------------------------------------------
+//  The finest block grid (gridDims = finest blocks per axis, Bf) is the indirection grid. For each
+//  finest cell, cellSlot[(cz * By + cy) * Bx + cx] holds the slot of the micro-model that covers it
+//  in this frame's LOD cut (a coarse block fills all its finest cells with its slot), or -1 when
+//  the cell is culled (outside the frustum, transparent under the TF, or absent). The cell of a
+//  voxel coordinate x is floor(x * cellPerVoxel) corrected by at most one step against the finest
+//  boundaries cellBounds[a][0..Bf] (voxel coordinates, Partition's rounding), so lookup cost does
+//  not depend on how many blocks are visible. A point on a shared boundary belongs to the upper
+//  cell (x >= bounds[c+1] -> c+1), except at the last boundary of the volume.
+//
+// ---------------------------------------------------------------------------------------------
+// Slots and the float pool
+// ---------------------------------------------------------------------------------------------
+//  slots[s] describes one resident model; its floats start at pool + slots[s].offset.
+//  * kSlotSpline: B-spline micro-model (Adaptive-FAM and FAM). knots[a] = Knots::make(ncp, degree);
+//    control points ncp.x*ncp.y*ncp.z, x fastest (the .afam payload unchanged).
+//  * kSlotRaw: downsampled raw block (DS). knots[a].ncp = samples+2 (one ghost sample per side,
+//    clamped at the volume edge), knots[a].degree unused; samples k = 0..n-1 sit at
+//    lo + k (hi-lo)/(n-1), ghost k = -1 and k = n one sample spacing outside. Trilinear
+//    interpolation, gradient by central differences of one sample spacing.
+//
+// ---------------------------------------------------------------------------------------------
+// Camera and pixels
+// ---------------------------------------------------------------------------------------------
+//  Pixel (px, py), py = 0 the TOP row, has the camera-space direction
+//      d = normalize(su * tanHalfX * right + sv * tanHalfY * up + forward),
+//      su = 2 (px + 0.5) / width - 1,  sv = 1 - 2 (py + 0.5) / height.
+//  The authors' camera (data README) is tanHalfX = tanHalfY = 1/8: direction normalize(u, v, -8).
+//  Rays start at max(box entry, nearDistance): a camera inside the volume starts at its near plane.
+//  Samples are taken at t = k * sampleDistance (k integer, t measured from the eye), so samples do
+//  not shimmer when the box entry moves and all samplers see the same positions.
+//
+// ---------------------------------------------------------------------------------------------
+// Classification, shading, compositing
+// ---------------------------------------------------------------------------------------------
+//  tf: tfSize RGBA entries (float, interleaved r,g,b,a) spanning [tfMin, tfMax], linearly
+//  interpolated, clamped outside. The alpha of an entry is the opacity of a segment of length
+//  tfReferenceDistance; a sample uses alpha' = 1 - (1 - alpha)^(sampleDistance / tfReferenceDistance).
+//  Shading (Shaded = true): Phong with a headlight (light at the eye, L = V = -d), two-sided
+//  normals n = normalize(gradient in the normalised frame):
+//      c_out = c * (ambient + diffuse * |n.L|) + specular * |n.H|^specularPower * specularColor
+//  (H = L for a headlight). Where |gradient| < 1e-12 the sample is unshaded (c_out = c).
+//  With Shaded = false no gradient is ever computed (the evaluation is compiled with
+//  WithGradient = false).
+//  Compositing is front to back with premultiplied colour; the ray stops once the accumulated
+//  opacity reaches terminationOpacity (0.95). castRay returns premultiplied RGBA; compose it over a
+//  background with c + (1 - a) * background.
+#pragma once
+
+#include <stdint.h>
+
+#include "afam/basis.hpp"
+#include "afam/evaluate.hpp"
+#include "afam/host_device.hpp"
+
+#if !defined(__CUDACC__)
+#include <cmath>
+#endif
+
+namespace afam {
+
+/// Premultiplied colour and opacity of one ray.
+struct RGBA {
+  float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
+};
+
+enum SlotKind : int32_t { kSlotSpline = 0, kSlotRaw = 1 };
+
+/// One resident model of this frame. Trivially copyable.
+struct FrameSlot {
+  int32_t kind = kSlotSpline;  ///< SlotKind
+  int32_t level = 0;           ///< LOD level of the model (diagnostics only)
+  Knots knots[3];              ///< spline: implied knots; raw: knots[a].ncp = padded sample count
+  float lo[3] = {0.f, 0.f, 0.f};         ///< block extent, voxel coordinates
+  float invExtent[3] = {0.f, 0.f, 0.f};  ///< 1 / (hi - lo), 0 on a one-sample axis
+  uint64_t offset = 0;         ///< first float of this model in FrameView::pool
+};
+
+/// Camera of one frame in the normalised frame. Trivially copyable.
+struct RayCamera {
+  float eye[3] = {0.f, 0.f, 5.f};
+  float right[3] = {1.f, 0.f, 0.f};     ///< unit
+  float up[3] = {0.f, 1.f, 0.f};        ///< unit
+  float forward[3] = {0.f, 0.f, -1.f};  ///< unit, viewing direction
+  float tanHalfX = 0.125f;  ///< tan of half the horizontal view angle (authors: 1/8)
+  float tanHalfY = 0.125f;  ///< tan of half the vertical view angle
+  float nearDistance = 1e-3f;  ///< rays start no closer than this to the eye
+  int width = 1, height = 1;
+};
+
+/// Everything a ray needs for one frame. Trivially copyable; all pointers are non-owning and
+/// point into host memory (CPU caster) or device memory (CUDA kernel).
+struct FrameView {
+  RayCamera camera;
+
+  // Volume placement.
+  float boxLo[3] = {-1.f, -1.f, -1.f};  ///< volume bounding box, normalised frame
+  float boxHi[3] = {1.f, 1.f, 1.f};
+  float voxelPerUnit[3] = {0.f, 0.f, 0.f};  ///< (dims-1) / (boxHi-boxLo); 0 on a one-sample axis
+  float voxelMax[3] = {0.f, 0.f, 0.f};      ///< dims-1
+
+  // Indirection grid over the finest block grid.
+  int gridDims[3] = {1, 1, 1};               ///< finest blocks per axis (Bf)
+  float cellPerVoxel[3] = {0.f, 0.f, 0.f};   ///< Bf / (dims-1) (estimate before the +-1 correction)
+  const float* cellBounds[3] = {nullptr, nullptr, nullptr};  ///< Bf+1 finest boundaries per axis, voxel coords
+  const int32_t* cellSlot = nullptr;          ///< Bx*By*Bz, x fastest: slot index or -1
+
+  // Resident models.
+  const FrameSlot* slots = nullptr;
+  int32_t slotCount = 0;
+  const float* pool = nullptr;  ///< control points / raw samples of all slots
+
+  // Transfer function.
+  const float* tf = nullptr;  ///< tfSize RGBA entries, interleaved
+  int32_t tfSize = 0;
+  float tfMin = 0.f, tfMax = 1.f;
+  float tfReferenceDistance = 0.01f;  ///< segment length the table's alpha refers to
+
+  // Sampling and shading.
+  float sampleDistance = 0.01f;  ///< normalised units
+  float terminationOpacity = 0.95f;
+  float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
+  float specularColor[3] = {1.f, 1.f, 1.f};
+  int32_t shading = 1;  ///< informative: the caster picks castRay<true> or castRay<false> from it
+};
+
+// ---------------------------------------------------------------------------------------------
+// Small math helpers
+// ---------------------------------------------------------------------------------------------
+namespace rc {
+
+AFAM_HD float minf(float a, float b) { return a < b ? a : b; }
+AFAM_HD float maxf(float a, float b) { return a > b ? a : b; }
+AFAM_HD float clampf(float x, float a, float b) { return x < a ? a : (x > b ? b : x); }
+AFAM_HD float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+}  // namespace rc
+
+// ---------------------------------------------------------------------------------------------
+// Ray setup
+// ---------------------------------------------------------------------------------------------
+
+/// Unit ray direction of pixel (px, py), py = 0 the top row (see the header comment).
+AFAM_HD void rayDirection(const RayCamera& c, int px, int py, float* d) {
+  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX;
+  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY;
+  float x = su * c.right[0] + sv * c.up[0] + c.forward[0];
+  float y = su * c.right[1] + sv * c.up[1] + c.forward[1];
+  float z = su * c.right[2] + sv * c.up[2] + c.forward[2];
+  const float inv = 1.f / sqrtf(x * x + y * y + z * z);
+  d[0] = x * inv;
+  d[1] = y * inv;
+  d[2] = z * inv;
+}
+
+/// Slab test of the ray o + t d against [lo, hi]; returns false when it misses.
+AFAM_HD bool intersectBox(const float* o, const float* d, const float* lo, const float* hi,
+                          float& tEnter, float& tExit) {
+  float t0 = -3.0e38f, t1 = 3.0e38f;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.f) {
+      if (o[a] < lo[a] || o[a] > hi[a]) return false;
+      continue;
+    }
+    const float inv = 1.f / d[a];
+    float ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
+    if (ta > tb) {
+      const float s = ta;
+      ta = tb;
+      tb = s;
+    }
+    t0 = rc::maxf(t0, ta);
+    t1 = rc::minf(t1, tb);
+  }
+  tEnter = t0;
+  tExit = t1;
+  return t1 >= t0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lookup: normalised point -> voxel coordinate -> finest cell -> slot
+// ---------------------------------------------------------------------------------------------
+
+/// Voxel coordinates of a normalised-frame point, clamped to the volume.
+AFAM_HD void toVoxel(const FrameView& f, const float* p, float* x) {
+  for (int a = 0; a < 3; ++a)
+    x[a] = rc::clampf((p[a] - f.boxLo[a]) * f.voxelPerUnit[a], 0.f, f.voxelMax[a]);
+}
+
+/// Finest cell on one axis in O(1): floor estimate, then one +-1 correction against the bounds.
+AFAM_HD int findCell(const FrameView& f, int axis, float x) {
+  const int n = f.gridDims[axis];
+  int c = int(x * f.cellPerVoxel[axis]);
+  c = c < 0 ? 0 : (c > n - 1 ? n - 1 : c);
+  const float* b = f.cellBounds[axis];
+  if (c > 0 && x < b[c]) --c;
+  else if (c < n - 1 && x >= b[c + 1]) ++c;
+  return c;
+}
+
+/// Slot covering voxel coordinate x, or -1 (culled / empty).
+AFAM_HD int32_t lookupSlot(const FrameView& f, const float* x) {
+  const int cx = findCell(f, 0, x[0]);
+  const int cy = findCell(f, 1, x[1]);
+  const int cz = findCell(f, 2, x[2]);
+  return f.cellSlot[(int64_t(cz) * f.gridDims[1] + cy) * f.gridDims[0] + cx];
+}
+
+// ---------------------------------------------------------------------------------------------
+// Model evaluation
+// ---------------------------------------------------------------------------------------------
+
+/// Spline slot: value (and gradient in voxel units, d/dx) at voxel coordinate x.
+template <bool WithGradient>
+AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* pool, const float* x, float* gVoxel) {
+  ModelView m;
+  m.knots[0] = s.knots[0];
+  m.knots[1] = s.knots[1];
+  m.knots[2] = s.knots[2];
+  m.control = pool + s.offset;
+  const float u = (x[0] - s.lo[0]) * s.invExtent[0];
+  const float v = (x[1] - s.lo[1]) * s.invExtent[1];
+  const float w = (x[2] - s.lo[2]) * s.invExtent[2];
+  float g[3];
+  const float value = evaluateModel<WithGradient>(m, u, v, w, WithGradient ? g : nullptr);
+  if (WithGradient) {
+    gVoxel[0] = g[0] * s.invExtent[0];
+    gVoxel[1] = g[1] * s.invExtent[1];
+    gVoxel[2] = g[2] * s.invExtent[2];
+  }
+  return value;
+}
+
+/// Trilinear interpolation of a padded raw block at padded sample coordinates t (clamped).
+AFAM_HD float trilinearRaw(const FrameSlot& s, const float* data, float tx, float ty, float tz) {
+  const int nx = s.knots[0].ncp, ny = s.knots[1].ncp, nz = s.knots[2].ncp;
+  const float t[3] = {rc::clampf(tx, 0.f, float(nx - 1)), rc::clampf(ty, 0.f, float(ny - 1)),
+                      rc::clampf(tz, 0.f, float(nz - 1))};
+  const int n[3] = {nx, ny, nz};
+  int i0[3];
+  float fr[3];
+  for (int a = 0; a < 3; ++a) {
+    int i = int(t[a]);
+    i = i > n[a] - 2 ? n[a] - 2 : i;
+    i = i < 0 ? 0 : i;
+    i0[a] = i;
+    fr[a] = n[a] > 1 ? t[a] - float(i) : 0.f;
+  }
+  const int sx = nx > 1 ? 1 : 0;
+  const int sy = ny > 1 ? nx : 0;
+  const int sz = nz > 1 ? nx * ny : 0;
+  const float* c = data + (int64_t(i0[2]) * ny + i0[1]) * nx + i0[0];
+  const float c00 = c[0] + fr[0] * (c[sx] - c[0]);
+  const float c10 = c[sy] + fr[0] * (c[sy + sx] - c[sy]);
+  const float c01 = c[sz] + fr[0] * (c[sz + sx] - c[sz]);
+  const float c11 = c[sz + sy] + fr[0] * (c[sz + sy + sx] - c[sz + sy]);
+  const float c0 = c00 + fr[1] * (c10 - c00);
+  const float c1 = c01 + fr[1] * (c11 - c01);
+  return c0 + fr[2] * (c1 - c0);
+}
+
+/// Raw (DS) slot: trilinear value and central-difference gradient in voxel units.
+template <bool WithGradient>
+AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* pool, const float* x, float* gVoxel) {
+  const float* data = pool + s.offset;
+  float t[3], perVoxel[3];
+  for (int a = 0; a < 3; ++a) {
+    const int n = s.knots[a].ncp - 2;  // real samples on this axis
+    const float samplesPerVoxel = float(n - 1) * s.invExtent[a];
+    perVoxel[a] = samplesPerVoxel;
+    t[a] = (x[a] - s.lo[a]) * samplesPerVoxel + 1.f;
+  }
+  const float value = trilinearRaw(s, data, t[0], t[1], t[2]);
+  if (WithGradient) {
+    gVoxel[0] = 0.5f * (trilinearRaw(s, data, t[0] + 1.f, t[1], t[2]) -
+                        trilinearRaw(s, data, t[0] - 1.f, t[1], t[2])) * perVoxel[0];
+    gVoxel[1] = 0.5f * (trilinearRaw(s, data, t[0], t[1] + 1.f, t[2]) -
+                        trilinearRaw(s, data, t[0], t[1] - 1.f, t[2])) * perVoxel[1];
+    gVoxel[2] = 0.5f * (trilinearRaw(s, data, t[0], t[1], t[2] + 1.f) -
+                        trilinearRaw(s, data, t[0], t[1], t[2] - 1.f)) * perVoxel[2];
+  }
+  return value;
+}
+
+/// The default sampler: the frame's resident micro-models (spline or raw), found in O(1).
+/// A sampler provides `template <bool G> bool sample(const FrameView&, const float* p, float& value,
+/// float* gradient) const` with p and gradient in the NORMALISED frame; it returns false where
+/// nothing is to be sampled (culled cell). castRayWith<> accepts any such sampler (ground_truth.hpp
+/// plugs the analytic Marschner-Lobb function in here).
+struct ModelSampler {
+  template <bool WithGradient>
+  AFAM_HD bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
+    float x[3];
+    toVoxel(f, p, x);
+    const int32_t slot = lookupSlot(f, x);
+    if (slot < 0) return false;
+    const FrameSlot& s = f.slots[slot];
+    float gv[3] = {0.f, 0.f, 0.f};
+    if (s.kind == kSlotRaw)
+      value = sampleRawSlot<WithGradient>(s, f.pool, x, gv);
+    else
+      value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
+    if (WithGradient) {
+      gradient[0] = gv[0] * f.voxelPerUnit[0];
+      gradient[1] = gv[1] * f.voxelPerUnit[1];
+      gradient[2] = gv[2] * f.voxelPerUnit[2];
+    }
+    return true;
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Classification, shading, compositing
+// ---------------------------------------------------------------------------------------------
+
+/// Transfer-function lookup (linear between entries): colour and alpha per tfReferenceDistance.
+AFAM_HD RGBA classify(const FrameView& f, float value) {
+  RGBA out;
+  if (f.tfSize <= 0) return out;
+  const float range = f.tfMax - f.tfMin;
+  float t = range > 0.f ? (value - f.tfMin) / range : 0.f;
+  t = rc::clampf(t, 0.f, 1.f) * float(f.tfSize - 1);
+  if (!(t >= 0.f)) t = 0.f;  // NaN
+  int i = int(t);
+  if (i > f.tfSize - 2) i = f.tfSize - 2;
+  if (i < 0) i = 0;
+  const float w = f.tfSize > 1 ? t - float(i) : 0.f;
+  const float* e0 = f.tf + 4 * i;
+  const float* e1 = f.tfSize > 1 ? e0 + 4 : e0;
+  out.r = e0[0] + w * (e1[0] - e0[0]);
+  out.g = e0[1] + w * (e1[1] - e0[1]);
+  out.b = e0[2] + w * (e1[2] - e0[2]);
+  out.a = e0[3] + w * (e1[3] - e0[3]);
+  return out;
+}
+
+/// Opacity correction for the sample distance: 1 - (1 - alpha)^(sampleDistance / reference).
+AFAM_HD float correctOpacity(float alpha, float ratio) {
+  alpha = rc::clampf(alpha, 0.f, 1.f);
+  if (alpha >= 1.f) return 1.f;
+  return 1.f - powf(1.f - alpha, ratio);
+}
+
+/// Phong with a headlight; `d` is the unit ray direction, `g` the gradient (normalised frame).
+AFAM_HD void shadePhong(const FrameView& f, const float* d, const float* g, RGBA& c) {
+  const float len2 = rc::dot3(g, g);
+  if (!(len2 > 1e-24f)) return;  // flat or NaN: unshaded
+  const float inv = 1.f / sqrtf(len2);
+  float ndl = -(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) * inv;  // n.L with L = -d
+  ndl = ndl < 0.f ? -ndl : ndl;                                  // two-sided
+  const float spec = f.specular * powf(ndl, f.specularPower);
+  const float k = f.ambient + f.diffuse * ndl;
+  c.r = c.r * k + spec * f.specularColor[0];
+  c.g = c.g * k + spec * f.specularColor[1];
+  c.b = c.b * k + spec * f.specularColor[2];
+}
+
+/// Front-to-back compositing of one classified (non-premultiplied) sample into `acc`.
+AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
+  const float w = (1.f - acc.a) * s.a;
+  acc.r += w * s.r;
+  acc.g += w * s.g;
+  acc.b += w * s.b;
+  acc.a += w;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The ray
+// ---------------------------------------------------------------------------------------------
+
+/// March pixel (px, py) through the volume with any sampler; returns premultiplied RGBA.
+template <bool Shaded, typename Sampler>
+AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int py) {
+  RGBA acc;
+  float d[3];
+  rayDirection(f.camera, px, py, d);
+  float tEnter, tExit;
+  if (!intersectBox(f.camera.eye, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
+  const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
+  if (tExit < tStart || !(f.sampleDistance > 0.f)) return acc;
+  const float dt = f.sampleDistance;
+  const float ratio = dt / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : dt);
+  // Samples on the global lattice t = k dt.
+  int64_t k = int64_t(ceilf(tStart / dt));
+  const int64_t kEnd = int64_t(floorf(tExit / dt));
+  for (; k <= kEnd; ++k) {
+    const float t = float(k) * dt;
+    const float p[3] = {f.camera.eye[0] + t * d[0], f.camera.eye[1] + t * d[1],
+                        f.camera.eye[2] + t * d[2]};
+    float value = 0.f;
+    float g[3] = {0.f, 0.f, 0.f};
+    if (!sampler.template sample<Shaded>(f, p, value, g)) continue;
+    RGBA c = classify(f, value);
+    if (c.a <= 0.f) continue;
+    c.a = correctOpacity(c.a, ratio);
+    if (Shaded) shadePhong(f, d, g, c);
+    compositeFrontToBack(acc, c);
+    if (acc.a >= f.terminationOpacity) break;
+  }
+  return acc;
+}
+
+/// The ray of the resident micro-models: what the CPU caster and the CUDA kernel call per pixel.
+template <bool Shaded>
+AFAM_HD RGBA castRay(const FrameView& f, int px, int py) {
+  return castRayWith<Shaded>(f, ModelSampler{}, px, py);
+}
+
+}  // namespace afam

@@ -1,0 +1,27 @@
+# SPDX-License-Identifier: BSD-3-Clause
+# The VTK module AFAM::vtkAFAM (declared by the root vtk.module). Included from the staged module
+# folder (see Plugin/CMakeLists.txt), so every path here is absolute.
+get_filename_component(_afam_root "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
+
+set(_afam_classes
+  Readers/vtkAFAMReader
+  )
+
+set(_afam_sources)
+set(_afam_headers)
+foreach (_class IN LISTS _afam_classes)
+  list(APPEND _afam_sources "${_afam_root}/${_class}.cxx")
+  list(APPEND _afam_headers "${_afam_root}/${_class}.h")
+endforeach ()
+
+vtk_module_add_module(AFAM::vtkAFAM
+  FORCE_STATIC
+  SOURCES ${_afam_sources}
+  HEADERS ${_afam_headers})
+vtk_module_include(AFAM::vtkAFAM
+  PUBLIC
+    "$<BUILD_INTERFACE:${_afam_root}/Readers>"
+    "$<BUILD_INTERFACE:${_afam_root}/Filters>"
+    "$<BUILD_INTERFACE:${_afam_root}/Mapper>")
+# Core is VTK-free and static (PIC): linked into the module, nothing of it is exported.
+vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)

@@ -1,0 +1,87 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The CUDA ray caster behind a plain C++ interface (no CUDA header here).
+//
+// The caller builds a FrameView exactly as for the CPU ray caster (host pointers); render() uploads
+// the models that the GPU model pool does not hold yet, the per-frame indirection grid, slot table
+// and transfer function, launches one thread per pixel calling the shared afam::castRay<Shaded>
+// (raycast.hpp), and copies the premultiplied RGBA image back. CPU and GPU run the same math.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/gpu_model_pool.hpp"
+#include "afam/raycast.hpp"
+
+namespace afam {
+
+/// Times of one render() call, milliseconds from CUDA events on the renderer's stream.
+struct GpuFrameTimes {
+  double uploadMs = 0;    ///< models not yet resident + frame tables
+  double kernelMs = 0;
+  double downloadMs = 0;  ///< image back to the host
+  double totalMs = 0;
+  uint64_t modelsUploaded = 0;
+  uint64_t bytesUploaded = 0;
+};
+
+enum class GpuKernelKind {
+  Full,             ///< castRay<Shaded>: lookup, value(+gradient), TF, Phong, compositing
+  BareValueGradient ///< baseline: lookup + value + gradient at every sample of the same rays
+};
+
+/// Result of timeKernel(): per-launch milliseconds and the number of model evaluations per launch.
+struct GpuKernelTiming {
+  std::vector<double> ms;
+  uint64_t samples = 0;  ///< evaluated samples per launch (counted in a separate, untimed launch)
+  double median() const;
+};
+
+class GpuRenderer {
+ public:
+  /// poolBudgetBytes: device memory for resident models. Throws GpuOutOfMemory / GpuError.
+  explicit GpuRenderer(size_t poolBudgetBytes, int device = 0);
+  ~GpuRenderer();
+  GpuRenderer(const GpuRenderer&) = delete;
+  GpuRenderer& operator=(const GpuRenderer&) = delete;
+
+  /// Renders `view` (host pointers; castRay<true> when view.shading != 0) into `rgba`
+  /// (width*height*4 floats, premultiplied, row 0 at the top, as castRay returns it).
+  /// slotKeys[s] names slot s's model across frames (nullptr: a key derived from its kind, level,
+  /// extent and size). Throws GpuOutOfMemory when the frame's models exceed the pool budget.
+  void render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
+              GpuFrameTimes* times = nullptr);
+
+  /// Benchmark helper: uploads the frame, then launches `kind` `repetitions` times (after one
+  /// warm-up) and returns each launch's time.
+  GpuKernelTiming timeKernel(const FrameView& view, const uint64_t* slotKeys, GpuKernelKind kind,
+                             int repetitions);
+
+  /// Fill the device image with NaN before each render so an unwritten pixel shows (tests).
+  void setPoisonOutput(bool on) { poison_ = on; }
+  /// Use kernels specialised on the frame's degree when all spline slots share one (default on).
+  void setDegreeSpecialisation(bool on) { specialise_ = on; }
+  /// "full<shaded,p=2>: 40 registers, 0 bytes local" for the kernel the last frame used.
+  std::string lastKernelInfo() const { return kernelInfo_; }
+
+  GpuModelPool& pool();
+  const GpuModelPool& pool() const;
+
+  /// Key used for slot s when the caller gives none.
+  static uint64_t defaultSlotKey(const FrameSlot& slot);
+  /// Floats of a slot's model: ncp.x * ncp.y * ncp.z (raw blocks: padded sample counts).
+  static uint64_t slotFloats(const FrameSlot& slot);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  bool poison_ = false;
+  bool specialise_ = true;
+  std::string kernelInfo_;
+};
+
+}  // namespace afam

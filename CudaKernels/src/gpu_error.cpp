@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/cuda/gpu_error.hpp"
+
+#include <cuda_runtime_api.h>
+
+#include <cstdio>
+
+namespace afam {
+
+bool gpuAvailable(std::string* why) {
+  int count = 0;
+  const cudaError_t status = cudaGetDeviceCount(&count);
+  if (status != cudaSuccess) {
+    (void)cudaGetLastError();
+    if (why) {
+      const std::string name = cudaGetErrorName(status);
+      if (status == cudaErrorInsufficientDriver)
+        *why = "CUDA driver is missing or too old for this build (" + name + ", " +
+               std::to_string(int(status)) + ")";
+      else if (status == cudaErrorNoDevice)
+        *why = "no CUDA device (" + name + ", " + std::to_string(int(status)) + ")";
+      else
+        *why = "CUDA is not usable: " + name + " (" + std::to_string(int(status)) + "): " +
+               cudaGetErrorString(status);
+    }
+    return false;
+  }
+  if (count < 1) {
+    if (why) *why = "no CUDA device";
+    return false;
+  }
+  // A device may be listed but unusable (compute-prohibited, wrong architecture for this binary):
+  // touch the context once.
+  const cudaError_t touch = cudaFree(nullptr);
+  if (touch != cudaSuccess) {
+    (void)cudaGetLastError();
+    if (why)
+      *why = std::string("CUDA device 0 is not usable: ") + cudaGetErrorName(touch) + " (" +
+             std::to_string(int(touch)) + ")";
+    return false;
+  }
+  if (why) why->clear();
+  return true;
+}
+
+std::string gpuDescription(int device) {
+  cudaDeviceProp prop{};
+  if (cudaGetDeviceProperties(&prop, device) != cudaSuccess) {
+    (void)cudaGetLastError();
+    return {};
+  }
+  char text[256];
+  std::snprintf(text, sizeof(text), "%s (sm_%d%d, %d SMs, %.1f GiB)", prop.name, prop.major,
+                prop.minor, prop.multiProcessorCount,
+                double(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0));
+  return text;
+}
+
+}  // namespace afam

@@ -2,45 +2,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMReader.h"
 
+#include "vtkAFAMModelTree.h"
+
+#include "afam/afam_file.hpp"
+#include "afam/errors.hpp"
+
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkObjectFactory.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
-#include <cstring>
-#include <fstream>
-
 vtkStandardNewMacro(vtkAFAMReader);
-
-namespace
-{
-// Placeholder until Core's afam_file.hpp lands: the first bytes of every .afam file.
-constexpr char kMagic[4] = { 'A', 'F', 'A', 'M' };
-
-bool HasMagic(const char* filename, std::string& why)
-{
-  if (!filename || !*filename)
-  {
-    why = "no file name set";
-    return false;
-  }
-  std::ifstream in(filename, std::ios::binary);
-  if (!in)
-  {
-    why = std::string("cannot open '") + filename + "'";
-    return false;
-  }
-  char head[sizeof(kMagic)] = {};
-  in.read(head, sizeof(head));
-  if (in.gcount() != sizeof(head) || std::memcmp(head, kMagic, sizeof(kMagic)) != 0)
-  {
-    why = std::string("'") + filename + "' is not an .afam file (bad magic)";
-    return false;
-  }
-  return true;
-}
-}
 
 vtkAFAMReader::vtkAFAMReader()
 {
@@ -54,34 +27,60 @@ vtkAFAMReader::~vtkAFAMReader()
 
 int vtkAFAMReader::CanReadFile(const char* filename)
 {
-  std::string why;
-  return HasMagic(filename, why) ? 1 : 0;
+  if (!filename || !*filename)
+  {
+    return 0;
+  }
+  try
+  {
+    afam::AfamFile::open(filename);
+    return 1;
+  }
+  catch (const std::exception&)
+  {
+    return 0;
+  }
 }
 
 int vtkAFAMReader::RequestInformation(
-  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outV)
 {
-  std::string why;
-  if (!HasMagic(this->FileName, why))
+  if (!this->FileName || !*this->FileName)
   {
-    vtkErrorMacro(<< why);
+    vtkErrorMacro(<< "No file name set.");
     return 0;
   }
+  // Pieces are groups of coarsest blocks (see vtkAFAMModelTree::Build).
+  outV->GetInformationObject(0)->Set(CAN_HANDLE_PIECE_REQUEST(), 1);
   return 1;
 }
 
 int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector* outV)
 {
+  vtkInformation* outInfo = outV->GetInformationObject(0);
   auto* output = vtkMultiBlockDataSet::GetData(outV, 0);
-  if (!output)
+  if (!output || !this->FileName || !*this->FileName)
   {
-    vtkErrorMacro(<< "no output multiblock");
+    vtkErrorMacro(<< "No file name set.");
     return 0;
   }
-  std::string why;
-  if (!HasMagic(this->FileName, why))
+  int piece = 0, numPieces = 1;
+  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()))
   {
-    vtkErrorMacro(<< why);
+    piece = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER());
+    numPieces = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES());
+  }
+  try
+  {
+    // Opening reads and validates the header and the index only, never a payload.
+    auto file = afam::AfamFile::open(this->FileName);
+    vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), piece,
+      numPieces, output, [this](double f) { this->UpdateProgress(f); });
+  }
+  catch (const std::exception& e)
+  {
+    output->Initialize();
+    vtkErrorMacro(<< e.what());
     return 0;
   }
   return 1;

@@ -14,10 +14,21 @@ foreach (_class IN LISTS _afam_classes)
   list(APPEND _afam_headers "${_afam_root}/${_class}.h")
 endforeach ()
 
+# Private helpers: compiled in, neither wrapped nor installed.
+set(_afam_private
+  Readers/vtkAFAMModelTree
+  )
+set(_afam_private_headers)
+foreach (_helper IN LISTS _afam_private)
+  list(APPEND _afam_sources "${_afam_root}/${_helper}.cxx")
+  list(APPEND _afam_private_headers "${_afam_root}/${_helper}.h")
+endforeach ()
+
 vtk_module_add_module(AFAM::vtkAFAM
   FORCE_STATIC
   SOURCES ${_afam_sources}
-  HEADERS ${_afam_headers})
+  HEADERS ${_afam_headers}
+  PRIVATE_HEADERS ${_afam_private_headers})
 vtk_module_include(AFAM::vtkAFAM
   PUBLIC
     "$<BUILD_INTERFACE:${_afam_root}/Readers>"

@@ -1,0 +1,47 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+// Private helper shared by vtkAFAMReader and vtkAFAMEncoder (not wrapped, not installed): builds
+// the metadata multiblock of a set of micro-models (one block per level, one leaf per model) from
+// Core's index structures. It reads no payload.
+#ifndef vtkAFAMModelTree_h
+#define vtkAFAMModelTree_h
+
+#include <functional>
+#include <string>
+#include <vector>
+
+class vtkMultiBlockDataSet;
+namespace afam
+{
+struct VolumeHeader;
+struct ModelEntry;
+class Partition;
+}
+
+namespace vtkAFAMModelTree
+{
+/// Field-data array names on every leaf (one tuple each) and on the root.
+constexpr const char* FileNameArray = "AFAM_FileName";     // root and leaves: the .afam path
+constexpr const char* LevelArray = "AFAM_Level";           // leaves: 0 = coarsest
+constexpr const char* BlockArray = "AFAM_Block";           // leaves: block i, j, k
+constexpr const char* NcpArray = "AFAM_NCP";               // leaves: control points per axis
+constexpr const char* DegreeArray = "AFAM_Degree";         // leaves: effective degree per axis
+constexpr const char* ValueRangeArray = "AFAM_ValueRange"; // leaves: model min, max
+constexpr const char* RmseArray = "AFAM_RMSE";             // leaves: achieved RMSE
+constexpr const char* MaxErrorArray = "AFAM_MaxError";     // leaves: achieved max abs error
+constexpr const char* EntryArray = "AFAM_EntryIndex";      // leaves: index entry in the file
+constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves
+constexpr const char* DimensionsArray = "AFAM_Dimensions"; // root: volume samples per axis
+
+/// Fills `out`. Piece `piece` of `numPieces` keeps the leaves whose coarsest-level ancestor lies in
+/// its contiguous range of coarsest blocks (z-major slabs: spatially coherent); other leaves are
+/// null, so every rank has the same structure. `progress` gets fractions in [0, 1].
+void Build(const afam::VolumeHeader& header, const afam::Partition& partition,
+  const std::vector<afam::ModelEntry>& entries, const std::string& path, int piece, int numPieces,
+  vtkMultiBlockDataSet* out, const std::function<void(double)>& progress);
+
+/// The .afam path stored in a multiblock built by Build (empty when there is none).
+std::string FileName(vtkMultiBlockDataSet* tree);
+}
+
+#endif

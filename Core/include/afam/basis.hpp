@@ -44,21 +44,33 @@ struct Knots {
     return k;
   }
 
+  /// 1/(ncp-1) in Real; for float this is bit-identical to `spacing` (one correctly rounded
+  /// division), so the float path reads it instead of dividing again.
+  template <typename Real>
+  AFAM_HD Real spacingAs() const {
+    return sizeof(Real) == sizeof(float) ? Real(spacing)
+                                         : (ncp > 1 ? Real(1) / Real(ncp - 1) : Real(1));
+  }
+
   /// Knot t[i], i in [0, ncp+degree]; Real = double on the fitter, float in the ray casters.
   template <typename Real>
   AFAM_HD Real knot(int i) const {
     if (i <= degree) return Real(0);
     if (i >= ncp) return Real(1);
-    const Real h = Real(1) / Real(ncp - 1);
+    const Real h = spacingAs<Real>();
     return Real(0.5) * Real(degree - 1) * h + Real(i - degree) * h;
   }
 
   /// Span index s in [degree, ncp-1] with t[s] <= u < t[s+1] (u = 1 maps to the last span).
+  /// Truncation instead of floor: the two differ only below zero, which is clamped to 0 anyway
+  /// (and floor would be a libm call on baseline x86-64). Multiplies by ncp-1 instead of
+  /// dividing by the spacing; at a knot either neighbouring span gives the same value.
   template <typename Real>
   AFAM_HD int span(Real u) const {
     const int last = ncp - degree - 1;  // number of interior knots
-    int j = int(floor((u - Real(offset)) / Real(spacing)));
-    j = j < 0 ? 0 : (j > last ? last : j);
+    const Real x = (u - Real(offset)) * Real(ncp - 1);
+    int j = x > Real(0) ? int(x) : 0;  // also maps NaN to 0
+    j = j > last ? last : j;
     return degree + j;
   }
 };
@@ -80,7 +92,7 @@ AFAM_HD void basisOfDegree(const Knots& k, int s, Real u, int deg, Real* N) {
     Real saved = Real(0);
     for (int r = 0; r < j; ++r) {
       const Real denom = right[r + 1] + left[j - r];
-      const Real temp = denom != Real(0) ? N[r] / denom : Real(0);
+      const Real temp = denom != Real(0) ? N[r] / denom : Real(0);  // > 0 on a non-empty span
       N[r] = saved + right[r + 1] * temp;
       saved = left[j - r] * temp;
     }
@@ -94,8 +106,10 @@ AFAM_HD void basisFunctions(const Knots& k, int s, Real u, Real* N) {
   basisOfDegree(k, s, u, k.degree, N);
 }
 
-/// Basis functions N[0..p] and their first derivatives dN[0..p] with respect to u
-/// (The NURBS Book eq. 2.9, from the degree p-1 functions on the same span).
+/// Basis functions N[0..p] and their first derivatives dN[0..p] with respect to u, in one
+/// triangular pass (The NURBS Book A2.3, first derivative only). Each knot difference is inverted
+/// once and reused by the derivative (p(p+1)/2 divisions in all): on a non-empty span every such
+/// difference is positive.
 template <typename Real>
 AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const int p = k.degree;
@@ -104,17 +118,31 @@ AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N
     dN[0] = Real(0);
     return;
   }
-  Real lower[kMaxOrder];  // lower[r] = N_{s-p+1+r, p-1}(u)
-  basisOfDegree(k, s, u, p - 1, lower);
-  for (int i = 0; i <= p; ++i) {
-    const int g = s - p + i;  // global index of basis function i
-    const Real a = i >= 1 ? lower[i - 1] : Real(0);     // N_{g, p-1}
-    const Real b = i <= p - 1 ? lower[i] : Real(0);     // N_{g+1, p-1}
-    const Real da = k.knot<Real>(g + p) - k.knot<Real>(g);
-    const Real db = k.knot<Real>(g + p + 1) - k.knot<Real>(g + 1);
-    dN[i] = Real(p) * ((da != Real(0) ? a / da : Real(0)) - (db != Real(0) ? b / db : Real(0)));
+  Real left[kMaxOrder], right[kMaxOrder];
+  Real lower[kMaxOrder];  // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
+  Real inv[kMaxOrder];    // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
+  N[0] = Real(1);
+  for (int j = 1; j <= p; ++j) {
+    left[j] = u - k.knot<Real>(s + 1 - j);
+    right[j] = k.knot<Real>(s + j) - u;
+    if (j == p)
+      for (int r = 0; r < p; ++r) lower[r] = N[r];
+    Real saved = Real(0);
+    for (int r = 0; r < j; ++r) {
+      const Real denom = right[r + 1] + left[j - r];
+      const Real invDenom = denom != Real(0) ? Real(1) / denom : Real(0);
+      if (j == p) inv[r] = invDenom;
+      const Real temp = N[r] * invDenom;
+      N[r] = saved + right[r + 1] * temp;
+      saved = left[j - r] * temp;
+    }
+    N[j] = saved;
   }
-  basisOfDegree(k, s, u, p, N);
+  // dN_r = p (N_{r-1,p-1} / (t[s+r] - t[s+r-p]) - N_{r,p-1} / (t[s+r+1] - t[s+r+1-p])).
+  const Real deg = Real(p);
+  dN[0] = -deg * lower[0] * inv[0];
+  for (int r = 1; r < p; ++r) dN[r] = deg * (lower[r - 1] * inv[r - 1] - lower[r] * inv[r]);
+  dN[p] = deg * lower[p - 1] * inv[p - 1];
 }
 
 }  // namespace afam

@@ -1,0 +1,541 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Separable least-squares fitting and separable grid evaluation; see fit.hpp for the method.
+#include "afam/fit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+#include "afam/basis.hpp"
+
+namespace afam {
+
+int effectiveDegree(int degree, int samples) { return std::max(0, std::min(degree, samples - 1)); }
+
+std::array<int, 3> clampNcp(int ncp, const std::array<int, 3>& samples,
+                            const std::array<int, 3>& degrees) {
+  std::array<int, 3> out{};
+  for (int a = 0; a < 3; ++a) out[a] = std::max(degrees[a] + 1, std::min(ncp, samples[a]));
+  return out;
+}
+
+double psnr(double rmse, double valueRange) {
+  if (rmse == 0) return std::numeric_limits<double>::infinity();
+  return 20.0 * std::log10(valueRange / rmse);
+}
+
+namespace {
+
+constexpr const char* kAxisName[3] = {"x", "y", "z"};
+
+/// One axis: collocation (span start and p+1 weights per sample) and the banded Cholesky factor
+/// of the normal matrix A^T A, all in double.
+struct AxisSystem {
+  int n = 0, ncp = 0, p = 0;
+  bool factored = false;
+  std::vector<int> first;       ///< first control point of sample i's support (span - p)
+  std::vector<double> weight;   ///< (p+1) basis values per sample
+  std::vector<double> lower;    ///< L[j][k] at lower[j*(p+1) + k - j + p], k in [j-p, j]
+  std::vector<double> invDiag;  ///< 1 / L[j][j]
+
+  double L(int j, int k) const { return lower[size_t(j) * size_t(p + 1) + size_t(k - j + p)]; }
+};
+
+double parameterOf(int i, int n) { return n > 1 ? double(i) / double(n - 1) : 0.0; }
+
+void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
+  s.n = n;
+  s.ncp = ncp;
+  s.p = p;
+  s.factored = false;
+  const int w = p + 1;
+  const Knots knots = Knots::make(ncp, p);
+  s.first.assign(size_t(n), 0);
+  s.weight.assign(size_t(n) * size_t(w), 0.0);
+  // Span search in double (Knots::span works in the float offset/spacing the kernels use).
+  const double h = ncp > 1 ? 1.0 / double(ncp - 1) : 1.0;
+  const double c = 0.5 * double(p - 1) * h;
+  const int lastInterior = ncp - p - 1;
+  double N[kMaxOrder];
+  for (int i = 0; i < n; ++i) {
+    const double u = parameterOf(i, n);
+    int j = ncp > 1 ? int(std::floor((u - c) / h)) : 0;
+    j = std::max(0, std::min(j, lastInterior));
+    const int span = p + j;
+    basisFunctions<double>(knots, span, u, N);
+    s.first[size_t(i)] = span - p;
+    for (int r = 0; r < w; ++r) s.weight[size_t(i) * size_t(w) + size_t(r)] = N[r];
+  }
+}
+
+void factorNormal(AxisSystem& s) {
+  const int m = s.ncp, p = s.p, w = p + 1;
+  std::vector<double> normal(size_t(m) * size_t(w), 0.0);  // same band layout as `lower`
+  for (int i = 0; i < s.n; ++i) {
+    const double* wi = &s.weight[size_t(i) * size_t(w)];
+    const int f = s.first[size_t(i)];
+    for (int a = 0; a < w; ++a)
+      for (int b = 0; b <= a; ++b)  // row f+a, column f+b <= f+a
+        normal[size_t(f + a) * size_t(w) + size_t(b - a + p)] += wi[a] * wi[b];
+  }
+  s.lower.assign(normal.size(), 0.0);
+  s.invDiag.assign(size_t(m), 0.0);
+  for (int j = 0; j < m; ++j) {
+    const int k0 = std::max(0, j - p);
+    for (int k = k0; k <= j; ++k) {
+      double sum = normal[size_t(j) * size_t(w) + size_t(k - j + p)];
+      for (int l = k0; l < k; ++l) sum -= s.L(j, l) * s.L(k, l);
+      if (k < j) {
+        s.lower[size_t(j) * size_t(w) + size_t(k - j + p)] = sum * s.invDiag[size_t(k)];
+      } else {
+        const double diag = normal[size_t(j) * size_t(w) + size_t(p)];
+        if (!(sum > 1e-13 * diag)) {
+          std::ostringstream msg;
+          msg << "afam fit: normal matrix of the axis system (n=" << s.n << ", ncp=" << m
+              << ", p=" << p << ") is singular at pivot " << j << " (" << sum << " of " << diag
+              << ")";
+          throw NumericError(msg.str());
+        }
+        const double l = std::sqrt(sum);
+        s.lower[size_t(j) * size_t(w) + size_t(p)] = l;
+        s.invDiag[size_t(j)] = 1.0 / l;
+      }
+    }
+  }
+  s.factored = true;
+}
+
+// ---- Row kernels: one operation applied to `len` contiguous values of each row (vectorised) ----
+
+/// out rows [0, m) = A^T * in rows [0, n): out_j = sum_i A[i][j] in_i.
+template <typename In>
+void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, double* out,
+                        size_t outStride, size_t len) {
+  const int w = s.p + 1;
+  for (int j = 0; j < s.ncp; ++j) std::fill_n(out + size_t(j) * outStride, len, 0.0);
+  for (int i = 0; i < s.n; ++i) {
+    const In* __restrict src = in + size_t(i) * inStride;
+    const double* wi = &s.weight[size_t(i) * size_t(w)];
+    const int f = s.first[size_t(i)];
+    for (int r = 0; r < w; ++r) {
+      const double a = wi[r];
+      double* __restrict dst = out + size_t(f + r) * outStride;
+      for (size_t c = 0; c < len; ++c) dst[c] += a * double(src[c]);
+    }
+  }
+}
+
+/// In place: rows [0, m) <- (L L^T)^{-1} rows.
+void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+  const int m = s.ncp, p = s.p;
+  for (int j = 0; j < m; ++j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    for (int k = std::max(0, j - p); k < j; ++k) {
+      const double l = s.L(j, k);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] -= l * xk[c];
+    }
+    const double d = s.invDiag[size_t(j)];
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+  }
+  for (int j = m - 1; j >= 0; --j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    for (int k = j + 1; k <= std::min(m - 1, j + p); ++k) {
+      const double l = s.L(k, j);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] -= l * xk[c];
+    }
+    const double d = s.invDiag[size_t(j)];
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+  }
+}
+
+/// out rows [0, n) = A * in rows [0, m): the model on the sample parameters of this axis.
+template <typename In, typename Out>
+void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, size_t outStride,
+                  size_t len, double* scratch) {
+  const int w = s.p + 1;
+  for (int i = 0; i < s.n; ++i) {
+    const double* wi = &s.weight[size_t(i) * size_t(w)];
+    const int f = s.first[size_t(i)];
+    double* __restrict acc = std::is_same<Out, double>::value
+                                 ? reinterpret_cast<double*>(out + size_t(i) * outStride)
+                                 : scratch;
+    {
+      const In* __restrict src = in + size_t(f) * inStride;
+      const double a = wi[0];
+      for (size_t c = 0; c < len; ++c) acc[c] = a * double(src[c]);
+    }
+    for (int r = 1; r < w; ++r) {
+      const In* __restrict src = in + size_t(f + r) * inStride;
+      const double a = wi[r];
+      for (size_t c = 0; c < len; ++c) acc[c] += a * double(src[c]);
+    }
+    if (!std::is_same<Out, double>::value) {
+      Out* __restrict dst = out + size_t(i) * outStride;
+      for (size_t c = 0; c < len; ++c) dst[c] = Out(acc[c]);
+    }
+  }
+}
+
+// ---- Line kernels along x (contiguous lines, one at a time), specialised on the degree ----
+
+template <int P>
+void fitLine(const AxisSystem& s, const double* __restrict in, double* __restrict b) {
+  constexpr int W = P + 1;
+  const int m = s.ncp, n = s.n;
+  const double* __restrict weight = s.weight.data();
+  const int* __restrict first = s.first.data();
+  const double* __restrict lower = s.lower.data();
+  const double* __restrict invDiag = s.invDiag.data();
+  for (int j = 0; j < m; ++j) b[j] = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double v = in[i];
+    double* bi = b + first[i];
+    const double* wi = weight + size_t(i) * W;
+    for (int r = 0; r < W; ++r) bi[r] += wi[r] * v;
+  }
+  // Forward: rows j < P have fewer sub-diagonal entries.
+  for (int j = 0; j < m; ++j) {
+    double sum = b[j];
+    const double* lj = lower + size_t(j) * W;  // lj[k - j + P] = L[j][k]
+    const int k0 = j - P < 0 ? 0 : j - P;
+    for (int k = k0; k < j; ++k) sum -= lj[k - j + P] * b[k];
+    b[j] = sum * invDiag[j];
+  }
+  for (int j = m - 1; j >= 0; --j) {
+    double sum = b[j];
+    const int k1 = j + P > m - 1 ? m - 1 : j + P;
+    for (int k = j + 1; k <= k1; ++k) sum -= lower[size_t(k) * W + size_t(j - k + P)] * b[k];
+    b[j] = sum * invDiag[j];
+  }
+}
+
+template <int P>
+void evaluateLine(const AxisSystem& s, const float* __restrict c, double* __restrict out) {
+  constexpr int W = P + 1;
+  const double* __restrict weight = s.weight.data();
+  const int* __restrict first = s.first.data();
+  for (int i = 0; i < s.n; ++i) {
+    const double* wi = weight + size_t(i) * W;
+    const float* ci = c + first[i];
+    double v = 0.0;
+    for (int r = 0; r < W; ++r) v += wi[r] * double(ci[r]);
+    out[i] = v;
+  }
+}
+
+using FitLineFn = void (*)(const AxisSystem&, const double*, double*);
+using EvaluateLineFn = void (*)(const AxisSystem&, const float*, double*);
+
+FitLineFn fitLineFor(int p) {
+  static constexpr FitLineFn table[kMaxOrder] = {fitLine<0>, fitLine<1>, fitLine<2>,
+                                                 fitLine<3>, fitLine<4>, fitLine<5>};
+  return table[p];
+}
+EvaluateLineFn evaluateLineFor(int p) {
+  static constexpr EvaluateLineFn table[kMaxOrder] = {evaluateLine<0>, evaluateLine<1>,
+                                                      evaluateLine<2>, evaluateLine<3>,
+                                                      evaluateLine<4>, evaluateLine<5>};
+  return table[p];
+}
+
+/// Throws NumericError naming the first non-finite sample. The scan is branch-free (vectorised);
+/// the slow search runs only when something is wrong.
+void checkFinite(const float* samples, const std::array<int, 3>& n) {
+  const size_t total = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  int bad = 0;
+  for (size_t i = 0; i < total; ++i) bad |= !(std::fabs(samples[i]) <= FLT_MAX);
+  if (!bad) return;
+  for (size_t i = 0; i < total; ++i) {
+    if (!std::isfinite(samples[i])) {
+      const size_t x = i % size_t(n[0]), y = (i / size_t(n[0])) % size_t(n[1]),
+                   z = i / (size_t(n[0]) * size_t(n[1]));
+      std::ostringstream msg;
+      msg << "afam fit: sample (" << x << ", " << y << ", " << z << ") (flat index " << i
+          << ") of the " << n[0] << " x " << n[1] << " x " << n[2] << " block is "
+          << (std::isnan(samples[i]) ? "NaN" : "infinite") << "; non-finite samples cannot be fitted";
+      throw NumericError(msg.str());
+    }
+  }
+}
+
+void validate(const std::array<int, 3>& n, const std::array<int, 3>& ncp,
+              const std::array<int, 3>& degrees) {
+  for (int a = 0; a < 3; ++a) {
+    if (ncp[a] < degrees[a] + 1 || ncp[a] > n[a]) {
+      std::ostringstream msg;
+      msg << "afam fit: NCP " << ncp[a] << " on axis " << kAxisName[a] << " is outside ["
+          << degrees[a] + 1 << ", " << n[a] << "] (" << n[a] << " samples, degree " << degrees[a]
+          << ")";
+      throw InvalidArgument(msg.str());
+    }
+  }
+}
+
+void validateSamples(const std::array<int, 3>& n) {
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 1) {
+      std::ostringstream msg;
+      msg << "afam fit: block has " << n[a] << " samples on axis " << kAxisName[a]
+          << " (at least 1 needed)";
+      throw InvalidArgument(msg.str());
+    }
+  }
+}
+
+}  // namespace
+
+struct BlockFitter::Impl {
+  std::vector<std::unique_ptr<AxisSystem>> cache;
+  std::vector<double> bufZ, bufY, line, bufX, bufEY, plane;
+
+  const AxisSystem& axis(int n, int ncp, int p, bool needFactor) {
+    AxisSystem* found = nullptr;
+    for (auto& s : cache)
+      if (s->n == n && s->ncp == ncp && s->p == p) {
+        found = s.get();
+        break;
+      }
+    if (!found) {
+      if (cache.size() >= 64) cache.clear();  // encoders use a handful of shapes
+      cache.push_back(std::make_unique<AxisSystem>());
+      found = cache.back().get();
+      buildCollocation(*found, n, ncp, p);
+    }
+    if (needFactor && !found->factored) factorNormal(*found);
+    return *found;
+  }
+
+  /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
+  void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
+                ErrorStats* stats, float* gridOut);
+};
+
+BlockFitter::BlockFitter() : impl_(std::make_unique<Impl>()) {}
+BlockFitter::~BlockFitter() = default;
+BlockFitter::BlockFitter(BlockFitter&&) noexcept = default;
+BlockFitter& BlockFitter::operator=(BlockFitter&&) noexcept = default;
+
+FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                           int degree, bool computeError) {
+  FitResult out;
+  fitInto(samples, n, ncp, degree, computeError, out);
+  return out;
+}
+
+void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                          int degree, bool computeError, FitResult& out) {
+  validateSamples(n);
+  if (degree < 1 || degree > kMaxDegree) {
+    std::ostringstream msg;
+    msg << "afam fit: degree " << degree << " is outside [1, " << kMaxDegree << "]";
+    throw InvalidArgument(msg.str());
+  }
+  std::array<int, 3> p{};
+  for (int a = 0; a < 3; ++a) p[a] = effectiveDegree(degree, n[a]);
+  validate(n, ncp, p);
+  if (!samples) throw InvalidArgument("afam fit: null sample pointer");
+  checkFinite(samples, n);
+
+  Impl& im = *impl_;
+  const AxisSystem& ax = im.axis(n[0], ncp[0], p[0], true);
+  const AxisSystem& ay = im.axis(n[1], ncp[1], p[1], true);
+  const AxisSystem& az = im.axis(n[2], ncp[2], p[2], true);
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]);
+  const size_t mx = size_t(ncp[0]), my = size_t(ncp[1]), mz = size_t(ncp[2]);
+  const size_t plane = nx * ny;
+
+  // Pass z: whole xy-planes are the vectors; chunked so that a chunk's rows stay in cache.
+  im.bufZ.resize(plane * mz);
+  constexpr size_t kChunk = 256;
+  for (size_t c0 = 0; c0 < plane; c0 += kChunk) {
+    const size_t len = std::min(kChunk, plane - c0);
+    applyTransposeRows(az, samples + c0, plane, im.bufZ.data() + c0, plane, len);
+    solveRows(az, im.bufZ.data() + c0, plane, len);
+  }
+  // Pass y: per z-slab, x-rows are the vectors.
+  im.bufY.resize(nx * my * mz);
+  for (size_t k = 0; k < mz; ++k) {
+    double* dst = im.bufY.data() + k * nx * my;
+    applyTransposeRows(ay, im.bufZ.data() + k * plane, nx, dst, nx, nx);
+    solveRows(ay, dst, nx, nx);
+  }
+  // Pass x: one contiguous line at a time.
+  out.ncp = ncp;
+  out.degree = p;
+  out.control.resize(mx * my * mz);
+  im.line.resize(mx);
+  const FitLineFn fitX = fitLineFor(p[0]);
+  float* control = out.control.data();
+  int overflow = 0;
+  for (size_t l = 0; l < my * mz; ++l) {
+    fitX(ax, im.bufY.data() + l * nx, im.line.data());
+    float* dst = control + l * mx;
+    for (size_t j = 0; j < mx; ++j) {
+      dst[j] = float(im.line[j]);
+      overflow |= !(std::fabs(dst[j]) <= FLT_MAX);
+    }
+  }
+  if (overflow) {
+    std::ostringstream msg;
+    msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
+        << " block overflows float32 (samples too close to FLT_MAX)";
+    throw NumericError(msg.str());
+  }
+  out.error = ErrorStats{};
+  if (computeError) im.evaluate(out, n, samples, &out.error, nullptr);
+}
+
+void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3>& n,
+                                 const float* samples, ErrorStats* stats, float* gridOut) {
+  validateSamples(n);
+  for (int a = 0; a < 3; ++a) {
+    if (model.degree[a] < 0 || model.degree[a] > kMaxDegree) {
+      std::ostringstream msg;
+      msg << "afam: model degree " << model.degree[a] << " on axis " << kAxisName[a]
+          << " is outside [0, " << kMaxDegree << "]";
+      throw InvalidArgument(msg.str());
+    }
+  }
+  validate(n, model.ncp, model.degree);
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
+  const size_t mx = size_t(model.ncp[0]), my = size_t(model.ncp[1]), mz = size_t(model.ncp[2]);
+  if (model.control.size() != mx * my * mz) {
+    std::ostringstream msg;
+    msg << "afam: model has " << model.control.size() << " control points, expected "
+        << mx * my * mz;
+    throw InvalidArgument(msg.str());
+  }
+  const AxisSystem& ax = axis(n[0], model.ncp[0], model.degree[0], false);
+  const AxisSystem& ay = axis(n[1], model.ncp[1], model.degree[1], false);
+  const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
+  const size_t planeSize = nx * ny;
+
+  // x: control lines -> sample lines.
+  bufX.resize(nx * my * mz);
+  const EvaluateLineFn evalX = evaluateLineFor(model.degree[0]);
+  for (size_t l = 0; l < my * mz; ++l)
+    evalX(ax, model.control.data() + l * mx, bufX.data() + l * nx);
+  // y: per z-slab, x-rows.
+  bufEY.resize(planeSize * mz);
+  for (size_t k = 0; k < mz; ++k)
+    evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx,
+                 nullptr);
+  // z: whole planes; either written out or reduced against the samples plane by plane.
+  if (gridOut) {
+    plane.resize(planeSize);
+    evaluateRows(az, bufEY.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
+    return;
+  }
+  const int w = az.p + 1;
+  plane.resize(planeSize);
+  constexpr int kLanes = 4;
+  double sumSq[kLanes] = {0, 0, 0, 0};
+  double maxErr[kLanes] = {0, 0, 0, 0};
+  double lo[kLanes], hi[kLanes];
+  for (int l = 0; l < kLanes; ++l) {
+    lo[l] = std::numeric_limits<double>::infinity();
+    hi[l] = -std::numeric_limits<double>::infinity();
+  }
+  double tailSum = 0, tailMax = 0, tailLo = lo[0], tailHi = hi[0];
+  for (size_t i = 0; i < nz; ++i) {
+    const double* wi = &az.weight[i * size_t(w)];
+    const size_t f = size_t(az.first[i]);
+    double* __restrict v = plane.data();
+    {
+      const double* __restrict src = bufEY.data() + f * planeSize;
+      const double a = wi[0];
+      for (size_t c = 0; c < planeSize; ++c) v[c] = a * src[c];
+    }
+    for (int r = 1; r < w; ++r) {
+      const double* __restrict src = bufEY.data() + (f + size_t(r)) * planeSize;
+      const double a = wi[r];
+      for (size_t c = 0; c < planeSize; ++c) v[c] += a * src[c];
+    }
+    const float* __restrict sp = samples + i * planeSize;
+    size_t c = 0;
+    for (; c + kLanes <= planeSize; c += kLanes) {
+      for (int l = 0; l < kLanes; ++l) {
+        const double value = v[c + size_t(l)];
+        const double d = value - double(sp[c + size_t(l)]);
+        sumSq[l] += d * d;
+        const double ad = std::fabs(d);
+        maxErr[l] = ad > maxErr[l] ? ad : maxErr[l];
+        lo[l] = value < lo[l] ? value : lo[l];
+        hi[l] = value > hi[l] ? value : hi[l];
+      }
+    }
+    for (; c < planeSize; ++c) {
+      const double value = v[c];
+      const double d = value - double(sp[c]);
+      tailSum += d * d;
+      tailMax = std::max(tailMax, std::fabs(d));
+      tailLo = std::min(tailLo, value);
+      tailHi = std::max(tailHi, value);
+    }
+  }
+  double sum = tailSum, me = tailMax, mn = tailLo, mxv = tailHi;
+  for (int l = 0; l < kLanes; ++l) {
+    sum += sumSq[l];
+    me = std::max(me, maxErr[l]);
+    mn = std::min(mn, lo[l]);
+    mxv = std::max(mxv, hi[l]);
+  }
+  const double count = double(nx * ny * nz);
+  stats->rmse = std::sqrt(sum / count);
+  stats->maxError = me;
+  stats->minValue = mn;
+  stats->maxValue = mxv;
+}
+
+ErrorStats BlockFitter::error(const float* samples, std::array<int, 3> n, const FitResult& model) {
+  if (!samples) throw InvalidArgument("afam error: null sample pointer");
+  ErrorStats stats;
+  impl_->evaluate(model, n, samples, &stats, nullptr);
+  return stats;
+}
+
+void BlockFitter::evaluateOnGrid(const FitResult& model, std::array<int, 3> n,
+                                 std::vector<float>& out) {
+  validateSamples(n);
+  out.resize(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  impl_->evaluate(model, n, nullptr, nullptr, out.data());
+}
+
+void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out) {
+  thread_local BlockFitter fitter;
+  fitter.evaluateOnGrid(model, n, out);
+}
+
+AxisConditioning axisConditioning(int n, int ncp, int degree) {
+  if (n < 1) throw InvalidArgument("afam conditioning: n must be >= 1");
+  if (degree < 1 || degree > kMaxDegree)
+    throw InvalidArgument("afam conditioning: degree must be in [1, 5]");
+  const int p = effectiveDegree(degree, n);
+  if (ncp < p + 1 || ncp > n) {
+    std::ostringstream msg;
+    msg << "afam conditioning: NCP " << ncp << " outside [" << p + 1 << ", " << n << "]";
+    throw InvalidArgument(msg.str());
+  }
+  AxisSystem s;
+  buildCollocation(s, n, ncp, p);
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, ncp);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r <= p; ++r) a(i, s.first[size_t(i)] + r) = s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);  // singular values only
+  const auto& sv = svd.singularValues();
+  AxisConditioning out;
+  const double smax = sv(0), smin = sv(sv.size() - 1);
+  out.collocation = smin > 0 ? smax / smin : std::numeric_limits<double>::infinity();
+  out.normal = out.collocation * out.collocation;
+  return out;
+}
+
+}  // namespace afam

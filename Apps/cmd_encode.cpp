@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// afam encode IN.raw OUT.afam [options]
+#include <cstdio>
+#include <thread>
+
+#include "afam/encoder.hpp"
+#include "cli.hpp"
+#include "commands.hpp"
+#include "source_args.hpp"
+
+namespace afam::cli {
+
+int runEncode(int argc, char** argv) {
+  Args args(argc, argv,
+            {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads", "search",
+             "spacing", "window"},
+            {"relative", "progress", "quiet"});
+  const char* usage =
+      "afam encode IN.raw OUT.afam [--dims X,Y,Z] [--type float32|float64|uint8|uint16|int16]\n"
+      "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
+      "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search fast|exhaustive]";
+  if (args.help()) {
+    std::printf(
+        "usage: %s\n\n"
+        "Encodes a raw little-endian volume (x fastest) into Adaptive-FAM micro-models (paper,\n"
+        "Algorithm 1), streaming: only the z-planes the current blocks need are in memory.\n"
+        "Dims and type default to what a name like name_64x64x93_int16.raw says.\n\n"
+        "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
+        "  --relative        the bound is E * (max - min) of the volume\n"
+        "  --levels L        levels of detail (default 4; level 0 is the coarsest)\n"
+        "  --blocks B        blocks per axis at the finest level (default 16)\n"
+        "  --degree P        B-spline degree (default 2)\n"
+        "  --mode M          adaptive (default), inlevel (search every block), fixed (NCP = n or\n"
+        "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"
+        "  --ncp K           NCP per axis for --mode fixed (default n)\n"
+        "  --threads T       worker threads (default: all cores)\n"
+        "  --search S        fast (default) or exhaustive (the paper's loop over every NCP)\n"
+        "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1)\n"
+        "  --progress        draw the progress bar even when stderr is not a terminal\n"
+        "  --quiet           print nothing on success\n",
+        usage);
+    return 0;
+  }
+  args.expectPositional(2, usage);
+  auto source = openRaw(args.positional()[0], args);
+  EncoderOptions opt;
+  opt.levels = int(args.integer("levels", 4));
+  opt.blocksPerAxis = int(args.integer("blocks", 16));
+  opt.degree = int(args.integer("degree", 2));
+  opt.errorBound = args.real("error-bound", 1e-4);
+  opt.relativeBound = args.has("relative");
+  opt.mode = parseMode(args.str("mode", "adaptive"));
+  opt.fixedNcp = int(args.integer("ncp", 0));
+  if (args.has("ncp") && opt.mode != EncodingMode::Fixed) throw InvalidArgument("--ncp needs --mode fixed");
+  opt.threads = int(args.integer("threads", 0));
+  opt.fastWindow = int(args.integer("window", 3));
+  const std::string search = args.str("search", "fast");
+  if (search == "fast") opt.search = SearchMethod::Fast;
+  else if (search == "exhaustive") opt.search = SearchMethod::Exhaustive;
+  else throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
+  ProgressBar bar("encode", args.has("progress"));
+  opt.progress = [&](double f) { return bar(f); };
+  const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
+  bar.finish();
+  if (args.has("quiet")) return 0;
+  const Index3 d = source->dims();
+  std::printf("encoded %s -> %s\n", args.positional()[0].c_str(), args.positional()[1].c_str());
+  std::printf("dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
+              (long long)d[0], (long long)d[1], (long long)d[2], scalarTypeName(source->type()),
+              modeName(opt.mode), search.c_str(), opt.levels, opt.blocksPerAxis, opt.degree, s.bound,
+              opt.relativeBound ? " (relative)" : "");
+  std::printf("seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g fits=%lld blocks=%lld\n", s.seconds,
+              s.threads, s.voxelsPerSecondPerThread(), (long long)s.fits, (long long)s.blocks);
+  std::printf("bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
+              (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
+              double(s.bytesIn) / double(s.bytesOut), double(s.inputVoxels) * 4.0 / double(s.bytesOut),
+              (unsigned long long)s.paperBytes);
+  std::printf("max_block_rmse=%.6g max_block_error=%.6g value_range=[%.6g, %.6g]\n", s.maxRmse, s.maxError,
+              s.valueMin, s.valueMax);
+  for (size_t l = 0; l < s.levels.size(); ++l) {
+    const LevelStats& ls = s.levels[l];
+    std::printf("level %zu: blocks=%lld searched=%lld complex=%lld fits=%lld bytes=%llu seconds=%.3f ncp:", l,
+                (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.fits,
+                (unsigned long long)ls.payloadBytes, ls.seconds);
+    for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
+      if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace afam::cli

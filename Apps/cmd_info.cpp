@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// afam info FILE.afam
+#include <algorithm>
+#include <cstdio>
+#include <map>
+
+#include "afam/afam_file.hpp"
+#include "cli.hpp"
+#include "commands.hpp"
+
+namespace afam::cli {
+
+int runInfo(int argc, char** argv) {
+  Args args(argc, argv, {}, {});
+  const char* usage = "afam info FILE.afam";
+  if (args.help()) {
+    std::printf(
+        "usage: %s\n\n"
+        "Prints the header, per level the blocks, the NCP histogram (max NCP over the axes), the\n"
+        "payload bytes and the worst RMSE, then the file size, the size the paper's layout would\n"
+        "take for the same models, and the compression ratio against the float32 volume.\n"
+        "Reads only the header and the index.\n",
+        usage);
+    return 0;
+  }
+  args.expectPositional(1, usage);
+  auto f = AfamFile::open(args.positional()[0]);
+  const VolumeHeader& h = f->header();
+  const Partition& part = f->partition();
+  std::printf("file=%s version=%u bytes=%llu\n", f->path().c_str(), f->version(),
+              (unsigned long long)f->fileSize());
+  std::printf("dims=%lldx%lldx%lld scalar=%s range=[%.9g, %.9g]\n", (long long)h.dims[0], (long long)h.dims[1],
+              (long long)h.dims[2], h.scalarName.c_str(), h.valueMin, h.valueMax);
+  std::printf("origin=%g,%g,%g spacing=%g,%g,%g\n", h.origin[0], h.origin[1], h.origin[2], h.spacing[0],
+              h.spacing[1], h.spacing[2]);
+  std::printf("mode=%s levels=%d blocks=%d degree=%d error_bound=%g%s", modeName(h.mode), h.levels,
+              h.blocksPerAxis, h.degree, h.errorBound, h.relativeBound ? " (relative)" : "");
+  if (h.mode == EncodingMode::Fixed) std::printf(" ncp=%d", h.fixedNcp);
+  std::printf("\n");
+  uint64_t payload = 0, paper = 0;
+  for (int l = 0; l < h.levels; ++l) {
+    const Int3 b = part.blocksPerAxis(l);
+    std::map<int, int64_t> hist;
+    uint64_t bytes = 0, paperL = 0;
+    double maxRmse = 0, maxErr = 0;
+    int64_t complexCount = 0;
+    const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
+    for (int64_t i = s; i < e; ++i) {
+      const ModelEntry& m = f->entries()[size_t(i)];
+      const int k = std::max({m.ncp[0], m.ncp[1], m.ncp[2]});
+      ++hist[k];
+      bytes += m.size;
+      paperL += h.mode == EncodingMode::Downsampled ? m.size : paperModelBytes(m.ncp, m.degree);
+      maxRmse = std::max(maxRmse, double(m.rmse));
+      maxErr = std::max(maxErr, double(m.maxError));
+      const int nmax = std::max({m.samples[0], m.samples[1], m.samples[2]});
+      if (h.mode != EncodingMode::Downsampled && k > std::min(h.degree + 1, nmax)) ++complexCount;
+    }
+    const BlockExtent e0 = part.extent(l, {0, 0, 0});
+    std::printf("level %d: blocks=%dx%dx%d samples=%dx%dx%d complex=%lld bytes=%llu max_rmse=%.4g max_error=%.4g ncp:",
+                l, b[0], b[1], b[2], e0.samples[0], e0.samples[1], e0.samples[2], (long long)complexCount,
+                (unsigned long long)bytes, maxRmse, maxErr);
+    for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
+    std::printf("\n");
+    payload += bytes;
+    paper += paperL;
+  }
+  const double raw = double(h.dims[0]) * double(h.dims[1]) * double(h.dims[2]) * 4.0;
+  std::printf("payload_bytes=%llu file_bytes=%llu paper_layout_bytes=%llu (file/paper=%.4f)\n",
+              (unsigned long long)payload, (unsigned long long)f->fileSize(), (unsigned long long)paper,
+              double(f->fileSize()) / double(paper));
+  std::printf("float32_bytes=%.0f compression_ratio=%.2f\n", raw, raw / double(f->fileSize()));
+  return 0;
+}
+
+}  // namespace afam::cli

@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Sub-commands of the `afam` executable. Each takes (argc, argv) with argv[0] = the command name,
+// prints `--help`, and returns the process exit code; errors are thrown (main prints one line).
+#pragma once
+
+namespace afam::cli {
+
+int runMl(int argc, char** argv);      // afam ml --size N OUT.raw
+int runEncode(int argc, char** argv);  // afam encode IN.raw OUT.afam [...]
+int runInfo(int argc, char** argv);    // afam info FILE.afam
+int runVerify(int argc, char** argv);  // afam verify FILE.afam [--against IN.raw]
+int runDecode(int argc, char** argv);  // afam decode FILE.afam --level K OUT.raw
+
+}  // namespace afam::cli
+
+// Optional commands, each defined in its own Apps/cmd_*.cpp (compiled when the file exists).
+int runCondition(int argc, char** argv);  // Apps/cmd_condition.cpp
+int runRender(int argc, char** argv);     // Apps/cmd_render.cpp
+int runReplay(int argc, char** argv);     // Apps/cmd_replay.cpp
+int runPredict(int argc, char** argv);    // Apps/cmd_predict.cpp

@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// `afam`: the command line over Core. A dispatch table of sub-commands; adding one is one line
+// here (plus its Apps/cmd_*.cpp, compiled when present, see Apps/CMakeLists.txt).
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "afam/errors.hpp"
+#include "commands.hpp"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+const Command kCommands[] = {
+    {"ml", afam::cli::runMl, "write a float32 Marschner-Lobb volume: afam ml --size N OUT.raw"},
+    {"encode", afam::cli::runEncode, "encode a raw volume into an .afam file"},
+    {"info", afam::cli::runInfo, "levels, NCP histograms, sizes and compression of an .afam file"},
+    {"verify", afam::cli::runVerify, "check checksums; with --against IN.raw print rmse= and max_error="},
+    {"decode", afam::cli::runDecode, "decode one level to a float32 raw volume"},
+#ifdef AFAM_HAVE_CMD_CONDITION
+    {"condition", runCondition, "conditioning of the fitting systems"},
+#endif
+#ifdef AFAM_HAVE_CMD_RENDER
+    {"render", runRender, "render an .afam file to an image"},
+#endif
+#ifdef AFAM_HAVE_CMD_REPLAY
+    {"replay", runReplay, "replay a camera trajectory"},
+#endif
+#ifdef AFAM_HAVE_CMD_PREDICT
+    {"predict", runPredict, "predict the next pose along a trajectory (prefetch predictors)"},
+#endif
+};
+
+void usage(std::FILE* out) {
+  std::fprintf(out, "usage: afam <command> [options]   (afam <command> --help for details)\n\ncommands:\n");
+  for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    usage(stderr);
+    return 2;
+  }
+  const std::string name = argv[1];
+  if (name == "-h" || name == "--help" || name == "help") {
+    usage(stdout);
+    return 0;
+  }
+  for (const Command& c : kCommands) {
+    if (name != c.name) continue;
+    try {
+      return c.run(argc - 1, argv + 1);
+    } catch (const afam::Error& e) {
+      std::fprintf(stderr, "\nafam %s: error: %s\n", c.name, e.what());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "\nafam %s: error: %s\n", c.name, e.what());
+    } catch (...) {
+      std::fprintf(stderr, "\nafam %s: error: unknown exception\n", c.name);
+    }
+    return 1;
+  }
+  std::fprintf(stderr, "afam: unknown command '%s' (afam --help lists them)\n", name.c_str());
+  return 2;
+}

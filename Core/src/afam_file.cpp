@@ -1,0 +1,602 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/afam_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "afam/errors.hpp"
+
+namespace afam {
+
+#if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
+#error "the .afam reader and writer copy little-endian structs byte for byte: little-endian hosts only"
+#endif
+
+namespace {
+
+constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
+constexpr uint32_t kVersion = 1;
+constexpr uint32_t kEndianTag = 0x01020304u;
+constexpr uint64_t kAlign = 64;
+constexpr int kMaxLevels = 16;
+
+// On-disk header, version 1: 1024 bytes, every member at a fixed offset (asserted below).
+struct FileHeaderV1 {
+  char magic[8];
+  uint32_t version;
+  uint32_t endianTag;
+  uint32_t headerSize;
+  uint32_t entrySize;
+  int64_t dims[3];
+  double origin[3];
+  double spacing[3];
+  double valueMin;
+  double valueMax;
+  double errorBound;
+  int32_t levels;
+  int32_t blocksPerAxis;
+  int32_t degree;
+  int32_t fixedNcp;
+  uint8_t mode;
+  uint8_t relativeBound;
+  uint16_t reserved0;
+  uint32_t indexChecksum;
+  uint64_t entryCount;
+  uint64_t indexOffset;
+  uint64_t payloadOffset;
+  uint64_t fileSize;
+  char scalarName[64];
+  int32_t levelBlocks[kMaxLevels][3];
+  uint64_t totalPayloadBytes;
+  uint8_t reserved1[580];
+  uint32_t headerChecksum;  // CRC32 of bytes [0, 1020)
+};
+static_assert(sizeof(FileHeaderV1) == 1024, "header size");
+static_assert(offsetof(FileHeaderV1, version) == 8, "layout");
+static_assert(offsetof(FileHeaderV1, endianTag) == 12, "layout");
+static_assert(offsetof(FileHeaderV1, headerSize) == 16, "layout");
+static_assert(offsetof(FileHeaderV1, entrySize) == 20, "layout");
+static_assert(offsetof(FileHeaderV1, dims) == 24, "layout");
+static_assert(offsetof(FileHeaderV1, origin) == 48, "layout");
+static_assert(offsetof(FileHeaderV1, spacing) == 72, "layout");
+static_assert(offsetof(FileHeaderV1, valueMin) == 96, "layout");
+static_assert(offsetof(FileHeaderV1, valueMax) == 104, "layout");
+static_assert(offsetof(FileHeaderV1, errorBound) == 112, "layout");
+static_assert(offsetof(FileHeaderV1, levels) == 120, "layout");
+static_assert(offsetof(FileHeaderV1, blocksPerAxis) == 124, "layout");
+static_assert(offsetof(FileHeaderV1, degree) == 128, "layout");
+static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
+static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
+static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
+static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
+static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
+static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
+static_assert(offsetof(FileHeaderV1, payloadOffset) == 160, "layout");
+static_assert(offsetof(FileHeaderV1, fileSize) == 168, "layout");
+static_assert(offsetof(FileHeaderV1, scalarName) == 176, "layout");
+static_assert(offsetof(FileHeaderV1, levelBlocks) == 240, "layout");
+static_assert(offsetof(FileHeaderV1, totalPayloadBytes) == 432, "layout");
+static_assert(offsetof(FileHeaderV1, reserved1) == 440, "layout");
+static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
+
+// On-disk index entry, version 1: 80 bytes.
+struct IndexEntryV1 {
+  uint64_t offset;
+  uint64_t size;
+  int32_t level;
+  int32_t block[3];
+  int32_t ncp[3];
+  int32_t samples[3];
+  uint8_t degree[3];
+  uint8_t flags;  // 0
+  float minValue;
+  float maxValue;
+  float rmse;
+  float maxError;
+  uint32_t checksum;
+};
+static_assert(sizeof(IndexEntryV1) == 80, "entry size");
+static_assert(offsetof(IndexEntryV1, size) == 8, "layout");
+static_assert(offsetof(IndexEntryV1, level) == 16, "layout");
+static_assert(offsetof(IndexEntryV1, block) == 20, "layout");
+static_assert(offsetof(IndexEntryV1, ncp) == 32, "layout");
+static_assert(offsetof(IndexEntryV1, samples) == 44, "layout");
+static_assert(offsetof(IndexEntryV1, degree) == 56, "layout");
+static_assert(offsetof(IndexEntryV1, flags) == 59, "layout");
+static_assert(offsetof(IndexEntryV1, minValue) == 60, "layout");
+static_assert(offsetof(IndexEntryV1, maxValue) == 64, "layout");
+static_assert(offsetof(IndexEntryV1, rmse) == 68, "layout");
+static_assert(offsetof(IndexEntryV1, maxError) == 72, "layout");
+static_assert(offsetof(IndexEntryV1, checksum) == 76, "layout");
+
+struct CrcTables {
+  uint32_t t[8][256];
+  CrcTables() {
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[0][i] = c;
+    }
+    for (uint32_t i = 0; i < 256; ++i)
+      for (int s = 1; s < 8; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xFFu];
+  }
+};
+const CrcTables& crcTables() {
+  static const CrcTables tables;
+  return tables;
+}
+
+uint64_t alignUp(uint64_t v) { return (v + kAlign - 1) / kAlign * kAlign; }
+
+std::string sysError() { return std::strerror(errno); }
+
+std::string blockName(int level, const Int3& b) {
+  std::ostringstream s;
+  s << "level " << level << " block (" << b[0] << ", " << b[1] << ", " << b[2] << ")";
+  return s.str();
+}
+
+void preadAll(int fd, void* out, uint64_t bytes, uint64_t offset, const std::string& path,
+              const std::string& what) {
+  auto* p = static_cast<char*>(out);
+  uint64_t done = 0;
+  while (done < bytes) {
+    const ssize_t r = ::pread(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                              static_cast<off_t>(offset + done));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(path + ": cannot read " + what + ": " + sysError());
+    }
+    if (r == 0)
+      throw FormatError(path + ": truncated: " + what + " ends at byte " +
+                        std::to_string(offset + bytes) + " past the end of the file");
+    done += static_cast<uint64_t>(r);
+  }
+}
+
+void pwriteAll(int fd, const void* data, uint64_t bytes, uint64_t offset, const std::string& path) {
+  const auto* p = static_cast<const char*>(data);
+  uint64_t done = 0;
+  while (done < bytes) {
+    const ssize_t r = ::pwrite(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                               static_cast<off_t>(offset + done));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(path + ": write failed: " + sysError());
+    }
+    done += static_cast<uint64_t>(r);
+  }
+}
+
+// Checked product of three non-negative ints times 4 (payload bytes); false on overflow.
+bool checkedPayloadBytes(const int32_t ncp[3], uint64_t& out) {
+  uint64_t v = 4;
+  for (int a = 0; a < 3; ++a) {
+    if (ncp[a] < 1) return false;
+    const uint64_t f = static_cast<uint64_t>(ncp[a]);
+    if (v > std::numeric_limits<uint64_t>::max() / f) return false;
+    v *= f;
+  }
+  out = v;
+  return true;
+}
+
+int effDegree(int degree, int samples) { return std::max(0, std::min(degree, samples - 1)); }
+
+}  // namespace
+
+uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
+  const auto& T = crcTables().t;
+  const auto* p = static_cast<const uint8_t*>(data);
+  crc = ~crc;
+  while (bytes >= 8) {
+    uint32_t lo, hi;
+    std::memcpy(&lo, p, 4);
+    std::memcpy(&hi, p + 4, 4);
+    lo ^= crc;
+    crc = T[7][lo & 0xFF] ^ T[6][(lo >> 8) & 0xFF] ^ T[5][(lo >> 16) & 0xFF] ^ T[4][lo >> 24] ^
+          T[3][hi & 0xFF] ^ T[2][(hi >> 8) & 0xFF] ^ T[1][(hi >> 16) & 0xFF] ^ T[0][hi >> 24];
+    p += 8;
+    bytes -= 8;
+  }
+  while (bytes--) crc = T[0][(crc ^ *p++) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+uint64_t payloadBytes(const Int3& ncp) {
+  const int32_t n[3] = {ncp[0], ncp[1], ncp[2]};
+  uint64_t out = 0;
+  if (!checkedPayloadBytes(n, out)) throw InvalidArgument("payload size: invalid or overflowing NCP");
+  return out;
+}
+
+uint64_t paperModelBytes(const Int3& ncp, const Int3& degree) {
+  uint64_t knots = 0;
+  for (int a = 0; a < 3; ++a) knots += static_cast<uint64_t>(ncp[a] + degree[a]);
+  return 1 + (knots + uint64_t(ncp[0]) * uint64_t(ncp[1]) * uint64_t(ncp[2])) * 4;
+}
+
+const char* modeName(EncodingMode mode) {
+  switch (mode) {
+    case EncodingMode::Adaptive: return "adaptive";
+    case EncodingMode::InLevel: return "inlevel";
+    case EncodingMode::Fixed: return "fixed";
+    case EncodingMode::Downsampled: return "ds";
+  }
+  return "unknown";
+}
+
+EncodingMode parseMode(const std::string& name) {
+  if (name == "adaptive") return EncodingMode::Adaptive;
+  if (name == "inlevel") return EncodingMode::InLevel;
+  if (name == "fixed") return EncodingMode::Fixed;
+  if (name == "ds") return EncodingMode::Downsampled;
+  throw InvalidArgument("unknown mode '" + name + "' (expected adaptive, inlevel, fixed or ds)");
+}
+
+// ------------------------------------------------------------------------------------------------
+// Reader
+
+AfamFile::~AfamFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
+  std::shared_ptr<AfamFile> f(new AfamFile());
+  f->path_ = path;
+  f->fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (f->fd_ < 0) throw IoError(path + ": cannot open: " + sysError());
+  struct stat st {};
+  if (::fstat(f->fd_, &st) != 0) throw IoError(path + ": cannot stat: " + sysError());
+  if (!S_ISREG(st.st_mode)) throw IoError(path + ": not a regular file");
+  f->fileSize_ = static_cast<uint64_t>(st.st_size);
+  const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
+
+  if (f->fileSize_ < sizeof(FileHeaderV1)) {
+    if (f->fileSize_ >= 8) {
+      char m[8];
+      preadAll(f->fd_, m, 8, 0, path, "magic");
+      if (std::memcmp(m, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
+    }
+    throw bad("truncated: " + std::to_string(f->fileSize_) + " bytes, the header alone needs " +
+              std::to_string(sizeof(FileHeaderV1)));
+  }
+  FileHeaderV1 h{};
+  preadAll(f->fd_, &h, sizeof h, 0, path, "header");
+  if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
+  if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
+  if (h.version != kVersion)
+    throw bad("unknown format version " + std::to_string(h.version) + " (this reader knows version " +
+              std::to_string(kVersion) + ")");
+  if (crc32(&h, offsetof(FileHeaderV1, headerChecksum)) != h.headerChecksum)
+    throw bad("header checksum mismatch (header damaged)");
+  if (h.headerSize != sizeof(FileHeaderV1) || h.entrySize != sizeof(IndexEntryV1))
+    throw bad("header or index entry size does not match version 1");
+  if (h.fileSize != f->fileSize_)
+    throw bad(h.fileSize > f->fileSize_
+                  ? "truncated: " + std::to_string(f->fileSize_) + " bytes, header says " +
+                        std::to_string(h.fileSize)
+                  : "file has " + std::to_string(f->fileSize_) + " bytes, header says " +
+                        std::to_string(h.fileSize) + " (trailing garbage)");
+
+  VolumeHeader& vh = f->header_;
+  for (int a = 0; a < 3; ++a) {
+    if (h.dims[a] < 1 || h.dims[a] > std::numeric_limits<int32_t>::max())
+      throw bad("absurd dimension " + std::to_string(h.dims[a]) + " on axis " + std::to_string(a));
+    vh.dims[a] = h.dims[a];
+    vh.origin[a] = h.origin[a];
+    vh.spacing[a] = h.spacing[a];
+  }
+  if (h.levels < 1 || h.levels > kMaxLevels)
+    throw bad("absurd level count " + std::to_string(h.levels));
+  if (h.blocksPerAxis < 1 || h.blocksPerAxis > 65535)
+    throw bad("absurd blocks per axis " + std::to_string(h.blocksPerAxis));
+  if (h.degree < 1 || h.degree > 5) throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
+  if (h.mode > static_cast<uint8_t>(EncodingMode::Downsampled))
+    throw bad("unknown encoding mode " + std::to_string(h.mode));
+  vh.valueMin = h.valueMin;
+  vh.valueMax = h.valueMax;
+  vh.levels = h.levels;
+  vh.blocksPerAxis = h.blocksPerAxis;
+  vh.degree = h.degree;
+  vh.errorBound = h.errorBound;
+  vh.relativeBound = h.relativeBound != 0;
+  vh.mode = static_cast<EncodingMode>(h.mode);
+  vh.fixedNcp = h.fixedNcp;
+  vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
+  f->version_ = h.version;
+
+  f->partition_ = Partition(vh.dims, vh.levels, vh.blocksPerAxis);
+  const Partition& part = f->partition_;
+  for (int l = 0; l < vh.levels; ++l) {
+    const Int3 b = part.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a)
+      if (h.levelBlocks[l][a] != b[a])
+        throw bad("blocks per axis of level " + std::to_string(l) + " disagree with the partition");
+  }
+  const uint64_t expected = static_cast<uint64_t>(part.totalBlockCount());
+  if (h.entryCount != expected)
+    throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
+              std::to_string(expected) + " blocks of the partition");
+  if (h.indexOffset != sizeof(FileHeaderV1)) throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
+  // Overflow-safe: the index must fit between its offset and the payload start, inside the file.
+  if (h.entryCount > (f->fileSize_ - h.indexOffset) / sizeof(IndexEntryV1))
+    throw bad("truncated: index of " + std::to_string(h.entryCount) + " entries runs past the end of the file");
+  const uint64_t indexBytes = h.entryCount * sizeof(IndexEntryV1);
+  if (h.payloadOffset < h.indexOffset + indexBytes || h.payloadOffset > f->fileSize_ ||
+      h.payloadOffset % kAlign != 0)
+    throw bad("payload offset " + std::to_string(h.payloadOffset) + " invalid");
+  f->payloadOffset_ = h.payloadOffset;
+
+  std::vector<IndexEntryV1> raw(h.entryCount);
+  preadAll(f->fd_, raw.data(), indexBytes, h.indexOffset, path, "index");
+  if (crc32(raw.data(), indexBytes) != h.indexChecksum) throw bad("index checksum mismatch (index damaged)");
+
+  f->levelStart_.resize(static_cast<size_t>(vh.levels) + 1);
+  f->levelStart_[0] = 0;
+  for (int l = 0; l < vh.levels; ++l)
+    f->levelStart_[static_cast<size_t>(l) + 1] = f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
+
+  const bool ds = vh.mode == EncodingMode::Downsampled;
+  f->entries_.resize(raw.size());
+  uint64_t payloadSum = 0;
+  int level = 0;
+  for (size_t i = 0; i < raw.size(); ++i) {
+    while (static_cast<int64_t>(i) >= f->levelStart_[static_cast<size_t>(level) + 1]) ++level;
+    const IndexEntryV1& r = raw[i];
+    const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
+    const std::string where = "index entry " + std::to_string(i) + " (" + blockName(level, ijk) + ")";
+    if (r.level != level || r.block[0] != ijk[0] || r.block[1] != ijk[1] || r.block[2] != ijk[2])
+      throw bad(where + ": names " + blockName(r.level, {r.block[0], r.block[1], r.block[2]}) +
+                ", index out of order");
+    const BlockExtent e = part.extent(level, ijk);
+    ModelEntry& m = f->entries_[i];
+    m.level = level;
+    m.block = ijk;
+    for (int a = 0; a < 3; ++a) {
+      if (r.samples[a] != e.samples[a])
+        throw bad(where + ": " + std::to_string(r.samples[a]) + " samples on axis " + std::to_string(a) +
+                  ", the partition says " + std::to_string(e.samples[a]));
+      if (ds) {
+        if (r.ncp[a] != e.samples[a] + 2 || r.degree[a] != 1)
+          throw bad(where + ": downsampled block must hold samples + 2 values and degree 1 per axis");
+      } else {
+        const int p = effDegree(vh.degree, e.samples[a]);
+        if (r.degree[a] != p) throw bad(where + ": degree " + std::to_string(r.degree[a]) + " on axis " +
+                                        std::to_string(a) + ", expected " + std::to_string(p));
+        if (r.ncp[a] < p + 1 || r.ncp[a] > e.samples[a])
+          throw bad(where + ": NCP " + std::to_string(r.ncp[a]) + " on axis " + std::to_string(a) +
+                    " outside [" + std::to_string(p + 1) + ", " + std::to_string(e.samples[a]) + "]");
+      }
+      m.ncp[a] = r.ncp[a];
+      m.degree[a] = r.degree[a];
+      m.samples[a] = r.samples[a];
+    }
+    uint64_t bytes = 0;
+    if (!checkedPayloadBytes(r.ncp, bytes) || bytes != r.size)
+      throw bad(where + ": payload size " + std::to_string(r.size) + " does not match its NCP");
+    if (r.offset < h.payloadOffset || r.offset % kAlign != 0 || r.offset > f->fileSize_ ||
+        r.size > f->fileSize_ - r.offset)
+      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(r.size) +
+                ") lies outside the payload area (file size " + std::to_string(f->fileSize_) + ")");
+    payloadSum += r.size;
+    m.offset = r.offset;
+    m.size = r.size;
+    m.minValue = r.minValue;
+    m.maxValue = r.maxValue;
+    m.rmse = r.rmse;
+    m.maxError = r.maxError;
+    m.checksum = r.checksum;
+  }
+  if (payloadSum != h.totalPayloadBytes) throw bad("payload sizes do not add up to the header's total");
+  return f;
+}
+
+int64_t AfamFile::entryIndex(int level, Int3 ijk) const {
+  if (level < 0 || level >= header_.levels) return -1;
+  const Int3 b = partition_.blocksPerAxis(level);
+  for (int a = 0; a < 3; ++a)
+    if (ijk[a] < 0 || ijk[a] >= b[a]) return -1;
+  return levelStart_[static_cast<size_t>(level)] + partition_.linearIndex(level, ijk);
+}
+
+void AfamFile::readPayload(int64_t entry, void* out) const {
+  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
+    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
+  const ModelEntry& e = entries_[static_cast<size_t>(entry)];
+  preadAll(fd_, out, e.size, e.offset, path_, "payload of " + blockName(e.level, e.block));
+  if (crc32(out, e.size) != e.checksum)
+    throw FormatError(path_ + ": payload checksum mismatch at " + blockName(e.level, e.block));
+}
+
+std::vector<float> AfamFile::readPayload(int64_t entry) const {
+  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
+    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
+  std::vector<float> out(entries_[static_cast<size_t>(entry)].size / 4);
+  readPayload(entry, out.data());
+  return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Writer
+
+AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
+    : path_(path), header_(header) {
+  if (header.degree < 1 || header.degree > 5)
+    throw InvalidArgument("writer: degree " + std::to_string(header.degree) + " outside [1, 5]");
+  if (header.levels > kMaxLevels) throw InvalidArgument("writer: more than 16 levels");
+  partition_ = Partition(header.dims, header.levels, header.blocksPerAxis);
+  const int64_t total = partition_.totalBlockCount();
+  if (total > (int64_t(1) << 31)) throw InvalidArgument("writer: more than 2^31 micro-blocks");
+  levelStart_.resize(static_cast<size_t>(header.levels) + 1, 0);
+  for (int l = 0; l < header.levels; ++l)
+    levelStart_[static_cast<size_t>(l) + 1] = levelStart_[static_cast<size_t>(l)] + partition_.blockCount(l);
+  entries_.resize(static_cast<size_t>(total));
+  present_.assign(static_cast<size_t>(total), 0);
+  payloadOffset_ = alignUp(sizeof(FileHeaderV1) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
+  end_ = payloadOffset_;
+
+  std::string tmpl = path + ".tmp-XXXXXX";
+  std::vector<char> buf(tmpl.begin(), tmpl.end());
+  buf.push_back('\0');
+  fd_ = ::mkstemp(buf.data());
+  if (fd_ < 0) throw IoError(path + ": cannot create temporary file " + tmpl + ": " + sysError());
+  tmpPath_ = buf.data();
+  ::fchmod(fd_, 0644);
+}
+
+AfamWriter::~AfamWriter() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !tmpPath_.empty()) ::unlink(tmpPath_.c_str());
+}
+
+uint64_t AfamWriter::bytesWritten() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return end_;
+}
+
+void AfamWriter::add(const ModelEntry& in, const float* payload) {
+  if (in.level < 0 || in.level >= header_.levels)
+    throw InvalidArgument(path_ + ": level " + std::to_string(in.level) + " out of range");
+  const Int3 b = partition_.blocksPerAxis(in.level);
+  for (int a = 0; a < 3; ++a)
+    if (in.block[a] < 0 || in.block[a] >= b[a])
+      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " out of range");
+  const BlockExtent e = partition_.extent(in.level, in.block);
+  const bool ds = header_.mode == EncodingMode::Downsampled;
+  for (int a = 0; a < 3; ++a) {
+    if (in.samples[a] != e.samples[a])
+      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": samples disagree with the partition");
+    const int p = effDegree(header_.degree, e.samples[a]);
+    const bool ok = ds ? (in.ncp[a] == e.samples[a] + 2 && in.degree[a] == 1)
+                       : (in.degree[a] == p && in.ncp[a] >= p + 1 && in.ncp[a] <= e.samples[a]);
+    if (!ok)
+      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": NCP/degree invalid on axis " +
+                            std::to_string(a));
+  }
+  const uint64_t bytes = payloadBytes(in.ncp);
+  const uint32_t crc = crc32(payload, bytes);
+  const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
+                                          partition_.linearIndex(in.level, in.block));
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
+  if (present_[slot]) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " added twice");
+  const uint64_t offset = end_;
+  pwriteAll(fd_, payload, bytes, offset, tmpPath_);
+  end_ = alignUp(offset + bytes);
+  ModelEntry& m = entries_[slot];
+  m = in;
+  m.offset = offset;
+  m.size = bytes;
+  m.checksum = crc;
+  present_[slot] = 1;
+}
+
+void AfamWriter::commit() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_) return;
+  for (size_t i = 0; i < present_.size(); ++i)
+    if (!present_[i]) {
+      int level = 0;
+      while (static_cast<int64_t>(i) >= levelStart_[static_cast<size_t>(level) + 1]) ++level;
+      const Int3 ijk = partition_.blockFromLinear(level, static_cast<int64_t>(i) - levelStart_[static_cast<size_t>(level)]);
+      throw InvalidArgument(path_ + ": commit without " + blockName(level, ijk));
+    }
+  std::vector<IndexEntryV1> raw(entries_.size());
+  uint64_t payloadSum = 0;
+  for (size_t i = 0; i < entries_.size(); ++i) {
+    const ModelEntry& m = entries_[i];
+    IndexEntryV1& r = raw[i];
+    std::memset(&r, 0, sizeof r);
+    r.offset = m.offset;
+    r.size = m.size;
+    r.level = m.level;
+    for (int a = 0; a < 3; ++a) {
+      r.block[a] = m.block[a];
+      r.ncp[a] = m.ncp[a];
+      r.samples[a] = m.samples[a];
+      r.degree[a] = static_cast<uint8_t>(m.degree[a]);
+    }
+    r.minValue = m.minValue;
+    r.maxValue = m.maxValue;
+    r.rmse = m.rmse;
+    r.maxError = m.maxError;
+    r.checksum = m.checksum;
+    payloadSum += m.size;
+  }
+  const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
+  // The last payload is padded to 64 bytes too, so the file size is a multiple of 64.
+  uint64_t fileSize = end_;
+  FileHeaderV1 h;
+  std::memset(&h, 0, sizeof h);
+  std::memcpy(h.magic, kMagic, 8);
+  h.version = kVersion;
+  h.endianTag = kEndianTag;
+  h.headerSize = sizeof(FileHeaderV1);
+  h.entrySize = sizeof(IndexEntryV1);
+  for (int a = 0; a < 3; ++a) {
+    h.dims[a] = header_.dims[a];
+    h.origin[a] = header_.origin[a];
+    h.spacing[a] = header_.spacing[a];
+  }
+  h.valueMin = header_.valueMin;
+  h.valueMax = header_.valueMax;
+  h.errorBound = header_.errorBound;
+  h.levels = header_.levels;
+  h.blocksPerAxis = header_.blocksPerAxis;
+  h.degree = header_.degree;
+  h.fixedNcp = header_.fixedNcp;
+  h.mode = static_cast<uint8_t>(header_.mode);
+  h.relativeBound = header_.relativeBound ? 1 : 0;
+  h.indexChecksum = crc32(raw.data(), indexBytes);
+  h.entryCount = raw.size();
+  h.indexOffset = sizeof(FileHeaderV1);
+  h.payloadOffset = payloadOffset_;
+  h.fileSize = fileSize;
+  std::strncpy(h.scalarName, header_.scalarName.c_str(), sizeof h.scalarName - 1);
+  for (int l = 0; l < header_.levels; ++l) {
+    const Int3 b = partition_.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a) h.levelBlocks[l][a] = b[a];
+  }
+  h.totalPayloadBytes = payloadSum;
+  h.headerChecksum = crc32(&h, offsetof(FileHeaderV1, headerChecksum));
+  try {
+    if (::ftruncate(fd_, static_cast<off_t>(fileSize)) != 0)
+      throw IoError(tmpPath_ + ": cannot set file size: " + sysError());
+    pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeaderV1), tmpPath_);
+    pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
+    if (::fsync(fd_) != 0) throw IoError(tmpPath_ + ": fsync failed: " + sysError());
+    if (::close(fd_) != 0) {
+      fd_ = -1;
+      throw IoError(tmpPath_ + ": close failed: " + sysError());
+    }
+    fd_ = -1;
+    if (::rename(tmpPath_.c_str(), path_.c_str()) != 0)
+      throw IoError(path_ + ": cannot rename the temporary file onto it: " + sysError());
+  } catch (...) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmpPath_.c_str());
+    tmpPath_.clear();
+    throw;
+  }
+  committed_ = true;
+  // Make the rename durable: fsync the directory (best effort).
+  const size_t slash = path_.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path_.substr(0, slash));
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+}  // namespace afam

@@ -49,11 +49,12 @@ std::string gpuDescription(int device) {
     (void)cudaGetLastError();
     return {};
   }
-  char text[256];
-  std::snprintf(text, sizeof(text), "%s (sm_%d%d, %d SMs, %.1f GiB)", prop.name, prop.major,
-                prop.minor, prop.multiProcessorCount,
+  char memory[32];
+  std::snprintf(memory, sizeof(memory), "%.1f",
                 double(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0));
-  return text;
+  return std::string(prop.name) + " (sm_" + std::to_string(prop.major) +
+         std::to_string(prop.minor) + ", " + std::to_string(prop.multiProcessorCount) + " SMs, " +
+         memory + " GiB)";
 }
 
 }  // namespace afam

@@ -1,0 +1,180 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// GPU image == CPU reference image (same FrameView, same castRay) on Marschner-Lobb and two corpus
+// volumes, degrees 1..3, shaded and unshaded; the GPU image is poisoned with NaN first so an
+// unwritten pixel fails. Pool behaviour on the GPU over a replay. Skipped, with the reason, where
+// no GPU is usable (CI).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <tuple>
+
+#include "afam/cpu_raycaster.hpp"
+#include "afam/cuda/gpu_renderer.hpp"
+#include "gpu_scene.hpp"
+
+namespace afam::gputest {
+namespace {
+
+#define AFAM_SKIP_WITHOUT_GPU()                                         \
+  do {                                                                  \
+    std::string why;                                                    \
+    if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;  \
+  } while (0)
+
+const EncodedVolume* encoded(const std::string& name, int degree) {
+  static std::map<std::pair<std::string, int>, std::unique_ptr<EncodedVolume>> cache;
+  auto& slot = cache[{name, degree}];
+  if (slot) return slot.get();
+  Volume v;
+  if (name == "marschner_lobb") {
+    v = marschnerLobbVolume(65);
+  } else {
+    const std::string dir = dataDirectory();
+    if (dir.empty()) return nullptr;
+    if (name == "neghip")
+      v = loadRawVolume(dir + "/volumes/neghip_66x66x66_uint8.raw", {66, 66, 66}, "uint8");
+    else
+      v = loadRawVolume(dir + "/volumes/ironProt_68x68x68_uint8.raw", {68, 68, 68}, "uint8");
+  }
+  slot = std::make_unique<EncodedVolume>(encodeVolume(v, 3, 8, degree, 0.75));
+  return slot.get();
+}
+
+using Case = std::tuple<std::string, int, bool>;
+
+class GpuMatchesCpu : public ::testing::TestWithParam<Case> {};
+
+TEST_P(GpuMatchesCpu, ImagesAgree) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const auto& [name, degree, shaded] = GetParam();
+  const EncodedVolume* e = encoded(name, degree);
+  if (!e) GTEST_SKIP() << "corpus volume " << name << " not found (set AFAM_GPU_DATA)";
+  GpuRenderer gpu(size_t(256) << 20);
+  gpu.setPoisonOutput(true);
+  // One view from outside (mixed LOD by distance bands) and one from inside the volume.
+  const Pose poses[2] = {{2.6, 55.0, 30.0}, {1.25, 70.0, 200.0}};
+  for (const Pose& pose : poses) {
+    const Camera camera = Camera::fromPose(pose, 301, 256);  // awkward width on purpose
+    Frame frame;
+    FrameOptions options;
+    options.shaded = shaded;
+    options.sampleDistance = 0.005f;
+    buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
+    ImageRGBA cpu;
+    renderCpu(frame.view, cpu, 0);
+    std::vector<float> image(cpu.rgba.size());
+    gpu.render(frame.view, frame.keys.data(), image.data());
+    const ImageDiff d = compareImages(cpu.rgba, image);
+    std::printf("[gpu-vs-cpu] %-14s p=%d %-8s pose(%.2f,%.0f,%.0f) slots=%d: max |diff| %d/255, "
+                "%lld of %lld pixels differ, max float diff %.2e, unwritten %lld  (%s)\n",
+                name.c_str(), degree, shaded ? "shaded" : "unshaded", pose.distance,
+                pose.thetaDeg, pose.phiDeg, frame.view.slotCount, d.maxAbs8,
+                (long long)d.differing, (long long)d.pixels, d.maxAbsFloat,
+                (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
+    EXPECT_EQ(d.nonFinite, 0);
+    EXPECT_LE(d.maxAbs8, 2);
+    // The image is not empty: the comparison means something.
+    double alpha = 0;
+    for (size_t i = 3; i < cpu.rgba.size(); i += 4) alpha += cpu.rgba[i];
+    EXPECT_GT(alpha, 100.0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Volumes, GpuMatchesCpu,
+    ::testing::Combine(::testing::Values("marschner_lobb", "neghip", "ironProt"),
+                       ::testing::Values(1, 2, 3), ::testing::Bool()),
+    [](const ::testing::TestParamInfo<Case>& param) {
+      return std::get<0>(param.param) + "_p" + std::to_string(std::get<1>(param.param)) +
+             (std::get<2>(param.param) ? "_shaded" : "_unshaded");
+    });
+
+TEST(GpuRenderer, GenericDegreePathMatchesSpecialised) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume* e = encoded("marschner_lobb", 2);
+  const Camera camera = Camera::fromPose({2.4, 40.0, 120.0}, 200, 160);
+  Frame frame;
+  buildFrame(*e, distanceBands(e->partition, camera), camera, FrameOptions{}, frame);
+  GpuRenderer gpu(size_t(64) << 20);
+  gpu.setPoisonOutput(true);
+  std::vector<float> a(size_t(200) * 160 * 4), b(a.size());
+  gpu.render(frame.view, frame.keys.data(), a.data());
+  gpu.setDegreeSpecialisation(false);
+  gpu.render(frame.view, frame.keys.data(), b.data());
+  const ImageDiff d = compareImages(a, b);
+  EXPECT_EQ(d.nonFinite, 0);
+  EXPECT_LE(d.maxAbs8, 1);
+  std::printf("[generic-vs-p2] max |diff| %d/255, %lld pixels differ, max float diff %.2e\n",
+              d.maxAbs8, (long long)d.differing, d.maxAbsFloat);
+}
+
+TEST(GpuModelPool, ReplayUploadsMatchLedgerAndStayUnderBudget) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume* e = encoded("marschner_lobb", 2);
+  const std::string path = trajectoryPath("user_1.dat");
+  std::vector<Pose> poses;
+  if (!path.empty()) {
+    const std::vector<Pose> all = loadTrajectory(path);
+    for (size_t i = 0; i < all.size(); i += 10) poses.push_back(all[i]);
+  } else {
+    for (int i = 0; i < 40; ++i) poses.push_back({1.2 + 0.02 * i, 30.0 + 3.0 * i, 9.0 * i});
+  }
+  // Budget: 60% of all models of all levels, so the replay must evict.
+  size_t total = 0;
+  for (const auto& level : e->models)
+    for (const FitResult& m : level) total += ((m.control.size() * 4 + 255) / 256) * 256;
+  const size_t budget = total * 6 / 10;
+  GpuRenderer gpu(budget);
+  PoolLedger reference(budget, 256);
+  uint64_t expectedUploads = 0;
+  Frame frame;
+  std::vector<float> image;
+  for (const Pose& pose : poses) {
+    const Camera camera = Camera::fromPose(pose, 64, 64);
+    buildFrame(*e, distanceBands(e->partition, camera), camera, FrameOptions{}, frame);
+    reference.beginFrame();
+    for (size_t s = 0; s < frame.slots.size(); ++s)
+      reference.acquire(frame.keys[s], GpuRenderer::slotFloats(frame.slots[s]) * 4);
+    image.resize(size_t(64) * 64 * 4);
+    GpuFrameTimes t;
+    gpu.render(frame.view, frame.keys.data(), image.data(), &t);
+    expectedUploads = reference.stats().uploads;
+    ASSERT_EQ(gpu.pool().stats().uploads, expectedUploads);
+    ASSERT_EQ(gpu.pool().stats().evictions, reference.stats().evictions);
+    ASSERT_LE(gpu.pool().stats().residentBytes, budget);
+    // The same frame again uploads nothing.
+    gpu.render(frame.view, frame.keys.data(), image.data(), &t);
+    ASSERT_EQ(t.modelsUploaded, 0u);
+  }
+  const PoolStats& s = gpu.pool().stats();
+  std::printf("[pool] %zu frames, budget %zu B (60%% of %zu): %llu uploads, %llu hits, %llu "
+              "evictions, %.1f MB uploaded, peak resident %zu B\n",
+              poses.size(), budget, total, (unsigned long long)s.uploads,
+              (unsigned long long)s.hits, (unsigned long long)s.evictions,
+              double(s.bytesUploaded) / 1e6, s.peakResidentBytes);
+  EXPECT_LE(s.peakResidentBytes, budget);
+  EXPECT_GT(s.evictions, 0u);
+}
+
+TEST(GpuModelPool, OutOfBudgetIsRecoverable) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume* e = encoded("marschner_lobb", 2);
+  const Camera camera = Camera::fromPose({2.6, 55.0, 30.0}, 64, 64);
+  Frame big, small;
+  buildFrame(*e, wholeLevel(e->partition, 2), camera, FrameOptions{}, big);
+  buildFrame(*e, wholeLevel(e->partition, 0), camera, FrameOptions{}, small);
+  size_t smallBytes = 0;
+  for (const FrameSlot& s : small.slots) smallBytes += ((GpuRenderer::slotFloats(s) * 4 + 255) / 256) * 256;
+  GpuRenderer gpu(smallBytes * 2);
+  std::vector<float> image(size_t(64) * 64 * 4);
+  EXPECT_THROW(gpu.render(big.view, big.keys.data(), image.data()), GpuOutOfMemory);
+  // The renderer is still usable for a frame that fits.
+  EXPECT_NO_THROW(gpu.render(small.view, small.keys.data(), image.data()));
+  // A device allocation far beyond the card is an error, not a crash.
+  EXPECT_THROW(GpuRenderer(size_t(1) << 50), GpuOutOfMemory);
+}
+
+}  // namespace
+}  // namespace afam::gputest

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Cameras in the normalised frame (the volume spans [-1, 1]^3) and the recorded trajectories of
+// ../shared/data/trajectories (see its README for the convention, reproduced here).
+//
+// Trajectory file: 3 N little-endian float32: N distances, N theta (degrees), N phi (degrees).
+// A pose puts the eye at distance * (sin t cos p, sin t sin p, cos t), looking at the origin, with
+// the frame R = Rz(phi) Ry(theta):
+//   right   = (cos t cos p, cos t sin p, -sin t)
+//   up      = (-sin p, cos p, 0)
+//   forward = -(sin t cos p, sin t sin p, cos t)
+// and the authors' pinhole: a pixel's camera-space direction is normalize(u, v, -8), u, v in
+// [-1, 1] (tanHalfX = tanHalfY = 1/8, a full view angle of about 14.25 degrees).
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "afam/raycast.hpp"
+
+namespace afam {
+
+using Vec3 = std::array<double, 3>;
+
+/// One recorded point of view (the trajectory file's three numbers).
+struct Pose {
+  double distance = 1.5, thetaDeg = 0, phiDeg = 0;
+};
+
+/// Pinhole camera with an explicit orthonormal frame in the normalised frame.
+struct Camera {
+  Vec3 eye{0, 0, 5};
+  Vec3 right{1, 0, 0};
+  Vec3 up{0, 1, 0};
+  Vec3 forward{0, 0, -1};
+  double tanHalfX = 0.125, tanHalfY = 0.125;
+  double nearDistance = 0.01;  ///< rays start no closer to the eye (near plane inside the volume)
+  int width = 256, height = 256;
+
+  /// The authors' camera for a recorded pose (tanHalf = 1/8 on both axes, any image size).
+  static Camera fromPose(const Pose& pose, int width, int height);
+  /// General look-at camera; viewAngleDeg is the full vertical angle, the horizontal one follows
+  /// the aspect ratio. Throws InvalidArgument when eye == focal or up is parallel to the view.
+  static Camera lookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp, double viewAngleDeg,
+                       int width, int height);
+  /// The trivially copyable form castRay uses.
+  RayCamera toRayCamera() const;
+  /// Re-orthonormalises right/up against forward (after extrapolation, for example).
+  void orthonormalize();
+};
+
+/// Reads a trajectory file. Throws IoError (cannot open/read) or FormatError (size not a multiple
+/// of 12 bytes, empty, non-finite value, distance <= 0), naming the file and the offending index.
+std::vector<Pose> loadTrajectory(const std::string& path);
+
+}  // namespace afam

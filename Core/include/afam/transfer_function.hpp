@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Piecewise-linear colour and opacity transfer functions, sampled into the RGBA table that
+// raycast.hpp interpolates, and the maximum opacity over a value interval (for culling blocks
+// from the index's min/max without reading their payloads).
+#pragma once
+
+#include <vector>
+
+namespace afam {
+
+struct ColorPoint {
+  double value, r, g, b;
+};
+struct OpacityPoint {
+  double value, alpha;  ///< alpha per TransferFunction::referenceDistance of ray
+};
+
+class TransferFunction {
+ public:
+  /// Points may come in any order; they are sorted. Outside the points the end values hold.
+  std::vector<ColorPoint> colors;
+  std::vector<OpacityPoint> opacities;
+  double referenceDistance = 0.01;  ///< normalised-frame length the opacities refer to
+
+  double opacity(double value) const;
+  void color(double value, double rgb[3]) const;
+
+  /// tableSize RGBA entries (interleaved) spanning [lo, hi]; lo == hi gives a constant table.
+  std::vector<float> table(int tableSize, double lo, double hi) const;
+
+  /// Highest opacity the renderer can produce for a value in [vmin, vmax], computed on the table
+  /// (what the ray caster actually interpolates): entries floor(index(vmin)) .. ceil(index(vmax)).
+  static float maxOpacity(const std::vector<float>& table, double lo, double hi, double vmin,
+                          double vmax);
+
+  /// Default for a value range: a warm colour ramp and three translucent opacity bands at 20-30%,
+  /// 45-55% and 70-80% of the range (isosurface-like shells, as in the paper's quality figure),
+  /// opaque nowhere else. Values below 15% of the range are fully transparent (cullable).
+  static TransferFunction preset(double lo, double hi);
+};
+
+}  // namespace afam

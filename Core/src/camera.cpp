@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/camera.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "afam/errors.hpp"
+
+namespace afam {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+bool normalize(Vec3& a) {
+  const double n = std::sqrt(dot(a, a));
+  if (!(n > 1e-300)) return false;
+  for (double& x : a) x /= n;
+  return true;
+}
+
+}  // namespace
+
+Camera Camera::fromPose(const Pose& pose, int width, int height) {
+  if (width < 1 || height < 1) throw InvalidArgument("camera: image size must be at least 1x1");
+  const double t = pose.thetaDeg * kPi / 180.0, p = pose.phiDeg * kPi / 180.0;
+  Camera c;
+  const Vec3 dir{std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+  c.eye = {pose.distance * dir[0], pose.distance * dir[1], pose.distance * dir[2]};
+  c.right = {std::cos(t) * std::cos(p), std::cos(t) * std::sin(p), -std::sin(t)};
+  c.up = {-std::sin(p), std::cos(p), 0.0};
+  c.forward = {-dir[0], -dir[1], -dir[2]};
+  c.tanHalfX = c.tanHalfY = 0.125;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+Camera Camera::lookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp, double viewAngleDeg,
+                      int width, int height) {
+  if (width < 1 || height < 1) throw InvalidArgument("camera: image size must be at least 1x1");
+  if (!(viewAngleDeg > 0 && viewAngleDeg < 179))
+    throw InvalidArgument("camera: view angle must be in (0, 179) degrees");
+  Camera c;
+  c.eye = eye;
+  c.forward = sub(focal, eye);
+  if (!normalize(c.forward)) throw InvalidArgument("camera: eye and focal point coincide");
+  c.right = cross(c.forward, viewUp);
+  if (!normalize(c.right)) throw InvalidArgument("camera: view up is parallel to the view direction");
+  c.up = cross(c.right, c.forward);
+  c.tanHalfY = std::tan(0.5 * viewAngleDeg * kPi / 180.0);
+  c.tanHalfX = c.tanHalfY * double(width) / double(height);
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+void Camera::orthonormalize() {
+  if (!normalize(forward)) forward = {0, 0, -1};
+  right = cross(forward, up);
+  if (!normalize(right)) {
+    right = cross(forward, Vec3{0, 0, 1});
+    if (!normalize(right)) right = cross(forward, Vec3{0, 1, 0}), normalize(right);
+  }
+  up = cross(right, forward);
+  normalize(up);
+}
+
+RayCamera Camera::toRayCamera() const {
+  RayCamera r;
+  for (int a = 0; a < 3; ++a) {
+    r.eye[a] = float(eye[a]);
+    r.right[a] = float(right[a]);
+    r.up[a] = float(up[a]);
+    r.forward[a] = float(forward[a]);
+  }
+  r.tanHalfX = float(tanHalfX);
+  r.tanHalfY = float(tanHalfY);
+  r.nearDistance = float(nearDistance);
+  r.width = width;
+  r.height = height;
+  return r;
+}
+
+std::vector<Pose> loadTrajectory(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("trajectory " + path + ": cannot open");
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw IoError("trajectory " + path + ": read failed");
+  if (bytes.empty()) throw FormatError("trajectory " + path + ": empty file");
+  if (bytes.size() % 12 != 0)
+    throw FormatError("trajectory " + path + ": " + std::to_string(bytes.size()) +
+                      " bytes is not 3 float32 per point of view (a multiple of 12)");
+  const size_t n = bytes.size() / 12;
+  std::vector<float> f(3 * n);
+  std::memcpy(f.data(), bytes.data(), bytes.size());  // little-endian host assumed (x86/ARM)
+  std::vector<Pose> poses(n);
+  for (size_t i = 0; i < n; ++i) {
+    const float d = f[i], t = f[n + i], p = f[2 * n + i];
+    if (!std::isfinite(d) || !std::isfinite(t) || !std::isfinite(p))
+      throw FormatError("trajectory " + path + ": point of view " + std::to_string(i) +
+                        " has a non-finite value");
+    if (!(d > 0))
+      throw FormatError("trajectory " + path + ": point of view " + std::to_string(i) +
+                        " has distance " + std::to_string(d) + " (must be > 0)");
+    poses[i] = Pose{d, t, p};
+  }
+  return poses;
+}
+
+}  // namespace afam

@@ -1,0 +1,110 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/prefetch.hpp"
+
+#include "afam/errors.hpp"
+
+namespace afam {
+
+bool LinearPredictor::predict(const std::vector<Camera>& h, Camera& next) const {
+  if (h.size() < 2) return false;
+  const Camera& a = h[h.size() - 2];
+  const Camera& b = h.back();
+  next = b;
+  for (int i = 0; i < 3; ++i) {
+    next.eye[i] = 2 * b.eye[i] - a.eye[i];
+    next.forward[i] = 2 * b.forward[i] - a.forward[i];
+    next.up[i] = 2 * b.up[i] - a.up[i];
+  }
+  next.orthonormalize();
+  return true;
+}
+
+std::unique_ptr<Predictor> makePredictor(const std::string& name) {
+  if (name == "none") return std::make_unique<NoPredictor>();
+  if (name == "linear") return std::make_unique<LinearPredictor>();
+  if (name == "appa" || name == "forecache" || name == "lstm")
+    throw InvalidArgument("prefetch: predictor '" + name +
+                          "' is not available yet (the prefetching issue adds it); use none or linear");
+  throw InvalidArgument("prefetch: unknown predictor '" + name +
+                        "' (expected none, linear, appa, forecache or lstm)");
+}
+
+Prefetcher::Prefetcher() : thread_([this] { run(); }) {}
+
+Prefetcher::~Prefetcher() {
+  {
+    std::lock_guard<std::mutex> g(mutex_);
+    quit_ = true;
+    stop_ = true;
+  }
+  cv_.notify_all();
+  thread_.join();
+}
+
+void Prefetcher::start(Job job) {
+  finish();
+  {
+    std::lock_guard<std::mutex> g(mutex_);
+    job_ = std::move(job);
+    hasJob_ = true;
+    stop_ = false;
+  }
+  cv_.notify_all();
+}
+
+void Prefetcher::finish() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  stop_ = true;
+  if (hasJob_ && !running_) {  // not picked up yet: drop it
+    hasJob_ = false;
+    job_ = nullptr;
+  }
+  cv_.wait(lock, [this] { return !running_; });
+}
+
+bool Prefetcher::busy() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return running_ || hasJob_;
+}
+
+PrefetchStats Prefetcher::stats() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return stats_;
+}
+
+void Prefetcher::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    cv_.wait(lock, [this] { return quit_ || hasJob_; });
+    if (quit_) return;
+    Job job = std::move(job_);
+    job_ = nullptr;
+    hasJob_ = false;
+    running_ = true;
+    lock.unlock();
+    uint64_t loaded = 0;
+    try {
+      if (job) job(stop_, loaded);
+    } catch (...) {
+      // A failed prefetch read is not fatal: the frame that needs the block reads it again and
+      // reports the error there.
+    }
+    lock.lock();
+    running_ = false;
+    stats_.jobs++;
+    stats_.blocksLoaded += loaded;
+    if (stop_) stats_.stoppedEarly++;
+    cv_.notify_all();
+  }
+}
+
+Prefetcher::Job Prefetcher::loadJob(LruCache& cache, std::vector<int64_t> entries) {
+  return [&cache, entries = std::move(entries)](const std::atomic<bool>& stop, uint64_t& loaded) {
+    for (int64_t e : entries) {
+      if (stop.load(std::memory_order_acquire)) return;
+      if (cache.prefetch(e)) ++loaded;
+    }
+  };
+}
+
+}  // namespace afam

@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/renderer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include "afam/cpu_raycaster.hpp"
+#include "afam/errors.hpp"
+
+namespace afam {
+
+using Clock = std::chrono::steady_clock;
+
+static double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+void PreparedFrame::bind() {
+  view.slots = slots.data();
+  view.slotCount = int32_t(slots.size());
+  view.pool = pool.data();
+  view.cellSlot = cellSlot.data();
+  for (int a = 0; a < 3; ++a) view.cellBounds[a] = cellBounds[a].data();
+  view.tf = tf.data();
+  view.tfSize = int32_t(tf.size() / 4);
+}
+
+Renderer::Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options)
+    : file_(std::move(file)), options_(std::move(options)), lod_(options_.lod) {
+  if (!file_) throw InvalidArgument("renderer: no file");
+  if (!(options_.sampleDistance > 0))
+    throw InvalidArgument("renderer: sample distance must be > 0");
+  cache_ = std::make_unique<LruCache>(file_, options_.cache);
+  if (options_.storageMBps > 0) cache_->setBandwidthCap(options_.storageMBps * 1e6);
+  predictor_ = makePredictor(options_.prefetch);
+  prefetcher_ = std::make_unique<Prefetcher>();
+  const VolumeHeader& h = file_->header();
+  tfLo_ = h.valueMin;
+  tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
+  const TransferFunction tf =
+      options_.hasTransferFunction ? options_.transferFunction : TransferFunction::preset(tfLo_, tfHi_);
+  options_.transferFunction = tf;
+  tf_ = tf.table(std::max(2, options_.tfTableSize), tfLo_, tfHi_);
+  // Finest boundaries per axis (voxel coordinates) from the partition's finest level.
+  const Partition& p = file_->partition();
+  const int finest = p.levels() - 1;
+  const Int3 bf = p.blocksPerAxis(finest);
+  for (int a = 0; a < 3; ++a) {
+    bounds_[a].resize(size_t(bf[a]) + 1);
+    for (int i = 0; i < bf[a]; ++i) {
+      Int3 ijk{0, 0, 0};
+      ijk[a] = i;
+      const BlockExtent e = p.extent(finest, ijk);
+      bounds_[a][size_t(i)] = float(e.lo[a]);
+      bounds_[a][size_t(i) + 1] = float(e.hi[a]);
+    }
+  }
+}
+
+Renderer::~Renderer() {
+  if (prefetcher_) prefetcher_->finish();
+}
+
+Selection Renderer::select(const Camera& camera) const {
+  return lod_.select(*file_, camera, tf_, tfLo_, tfHi_);
+}
+
+void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
+  const Partition& p = file_->partition();
+  const Int3 bf = p.blocksPerAxis(p.levels() - 1);
+  FrameView& v = fr.view;
+  v = FrameView{};
+  v.camera = camera.toRayCamera();
+  for (int a = 0; a < 3; ++a) {
+    const double n1 = double(p.dims()[a] - 1);
+    v.boxLo[a] = -1.f;
+    v.boxHi[a] = 1.f;
+    v.voxelPerUnit[a] = float(n1 / 2.0);
+    v.voxelMax[a] = float(n1);
+    v.gridDims[a] = bf[a];
+    v.cellPerVoxel[a] = n1 > 0 ? float(double(bf[a]) / n1) : 0.f;
+    fr.cellBounds[a] = bounds_[a];
+  }
+  fr.cellSlot.assign(size_t(bf[0]) * bf[1] * bf[2], -1);
+  fr.slots.clear();
+  fr.pool.clear();
+  fr.entries.clear();
+  fr.tf = tf_;
+  v.tfMin = float(tfLo_);
+  v.tfMax = float(tfHi_);
+  v.tfReferenceDistance = float(options_.transferFunction.referenceDistance);
+  v.sampleDistance = options_.sampleDistance;
+  v.shading = options_.shading ? 1 : 0;
+  v.ambient = options_.ambient;
+  v.diffuse = options_.diffuse;
+  v.specular = options_.specular;
+  v.specularPower = options_.specularPower;
+  fr.bind();
+}
+
+void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
+  const auto t0 = Clock::now();
+  const CacheStats before = cache_->stats();
+  const Selection sel = select(camera);
+  st.culled = sel.counts;
+  prepareEmpty(camera, fr);
+  const Partition& p = file_->partition();
+  const bool raw = file_->header().mode == EncodingMode::Downsampled;
+  const auto& entries = file_->entries();
+  const int finest = p.levels() - 1;
+  const Int3 bf = p.blocksPerAxis(finest);
+  uint64_t poolFloats = 0;
+  for (const BlockRef& b : sel.visible) poolFloats += entries[size_t(b.entry)].size / sizeof(float);
+  fr.pool.resize(poolFloats);
+  fr.slots.reserve(sel.visible.size());
+  std::vector<int64_t> pins;
+  pins.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
+  cache_->setPinned(pins);
+  uint64_t offset = 0;
+  for (const BlockRef& b : sel.visible) {
+    const ModelEntry& e = entries[size_t(b.entry)];
+    const Payload data = cache_->get(b.entry, LruCache::Purpose::Frame);
+    std::memcpy(fr.pool.data() + offset, data->data(), data->size() * sizeof(float));
+    FrameSlot s;
+    s.kind = raw ? kSlotRaw : kSlotSpline;
+    s.level = b.level;
+    const BlockExtent ext = p.extent(b.level, b.ijk);
+    for (int a = 0; a < 3; ++a) {
+      if (raw) {
+        s.knots[a] = Knots{};
+        s.knots[a].ncp = e.ncp[a];
+        s.knots[a].degree = 1;
+      } else {
+        s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
+      }
+      s.lo[a] = float(ext.lo[a]);
+      s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
+    }
+    s.offset = offset;
+    offset += data->size();
+    const int32_t slot = int32_t(fr.slots.size());
+    fr.slots.push_back(s);
+    fr.entries.push_back(b.entry);
+    // Finest cells covered by this block.
+    const int r = p.stride(b.level);
+    int c0[3], c1[3];
+    for (int a = 0; a < 3; ++a) {
+      c0[a] = b.ijk[a] * r;
+      c1[a] = std::min((b.ijk[a] + 1) * r, bf[a]);
+    }
+    for (int z = c0[2]; z < c1[2]; ++z)
+      for (int y = c0[1]; y < c1[1]; ++y)
+        for (int x = c0[0]; x < c1[0]; ++x)
+          fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+  }
+  fr.bind();
+  const CacheStats after = cache_->stats();
+  st.hits = after.hits - before.hits;
+  st.misses = after.misses - before.misses;
+  st.slots = int64_t(fr.slots.size());
+  st.poolBytes = fr.pool.size() * sizeof(float);
+  st.cachingMs = msSince(t0);
+}
+
+ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st) {
+  st = FrameStats{};
+  if (options_.cold) cache_->dropOsCache();
+  const CacheStats before = cache_->stats();
+  PreparedFrame fr;
+  prepare(camera, fr, st);
+  history_.push_back(camera);
+  if (history_.size() > 16) history_.erase(history_.begin());
+  // Prefetch the predicted next view while this one renders.
+  Camera next;
+  if (predictor_->predict(history_, next)) {
+    LruCache* cache = cache_.get();
+    const Renderer* self = this;
+    prefetcher_->start([cache, self, next](const std::atomic<bool>& stop, uint64_t& loaded) {
+      const Selection s = self->select(next);
+      for (const BlockRef& b : s.visible) {
+        if (stop.load(std::memory_order_acquire)) return;
+        if (cache->prefetch(b.entry)) ++loaded;
+      }
+    });
+  }
+  const auto t0 = Clock::now();
+  ImageRGBA image;
+  renderCpu(fr.view, image, options_.threads);
+  st.renderMs = msSince(t0);
+  prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
+  cache_->clearPinned();
+  const CacheStats after = cache_->stats();
+  st.bytesRead = after.bytesRead - before.bytesRead;
+  st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;
+  st.prefetchedBytes = after.prefetchBytes - before.prefetchBytes;
+  st.latencyMs = st.cachingMs + st.renderMs;
+  return image;
+}
+
+}  // namespace afam

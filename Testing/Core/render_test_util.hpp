@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Helpers of the renderer tests: small Marschner-Lobb encodings written to temporary files.
+#pragma once
+
+#include <cstdio>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "afam/afam_file.hpp"
+#include "afam/encoder.hpp"
+#include "afam/marschner_lobb.hpp"
+
+namespace afam_test {
+
+inline std::string tempPath(const std::string& stem) {
+  return "/tmp/afam_render_test_" + std::to_string(::getpid()) + "_" + stem + ".afam";
+}
+
+/// ML (default parameters, [-1, 1]^3) sampled on n^3, encoded with the given mode; cached per
+/// process so several tests share one encoding.
+inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode mode, int levels = 3,
+                                                      int blocks = 4, double bound = 1e-3,
+                                                      int fixedNcp = 0) {
+  const std::string path = tempPath(std::to_string(n) + "_" + afam::modeName(mode) + "_" +
+                                    std::to_string(levels) + "_" + std::to_string(blocks) + "_" +
+                                    std::to_string(fixedNcp));
+  if (::access(path.c_str(), R_OK) != 0) {
+    std::vector<float> data(size_t(n) * n * n);
+    afam::MarschnerLobb ml;
+    afam::marschnerLobbSlab(ml, {n, n, n}, 0, n, data.data());
+    afam::ArraySource src(data.data(), {n, n, n});
+    afam::EncoderOptions o;
+    o.levels = levels;
+    o.blocksPerAxis = blocks;
+    o.degree = 2;
+    o.errorBound = bound;
+    o.mode = mode;
+    o.fixedNcp = fixedNcp;
+    o.threads = 2;
+    afam::encodeVolume(src, o, path);
+  }
+  return afam::AfamFile::open(path);
+}
+
+}  // namespace afam_test

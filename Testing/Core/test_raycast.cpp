@@ -1,0 +1,165 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include <gtest/gtest.h>
+
+#include <random>
+#include <type_traits>
+
+#include "afam/partition.hpp"
+#include "afam/raycast.hpp"
+
+using namespace afam;
+
+static_assert(std::is_trivially_copyable<FrameView>::value, "FrameView goes to kernels by value");
+static_assert(std::is_trivially_copyable<FrameSlot>::value, "FrameSlot goes to the device as bytes");
+
+TEST(Raycast, ConstantTimeLookupEqualsBruteForce) {
+  for (const Index3 dims : {Index3{65, 65, 65}, Index3{50, 33, 71}, Index3{100, 7, 2}}) {
+    const Partition p(dims, 3, 16);
+    const int finest = p.levels() - 1;
+    const Int3 bf = p.blocksPerAxis(finest);
+    std::vector<float> bounds[3];
+    FrameView f;
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < bf[a]; ++i) {
+        Int3 ijk{0, 0, 0};
+        ijk[a] = i;
+        const BlockExtent e = p.extent(finest, ijk);
+        if (i == 0) bounds[a].push_back(float(e.lo[a]));
+        bounds[a].push_back(float(e.hi[a]));
+      }
+      f.gridDims[a] = bf[a];
+      f.cellPerVoxel[a] = float(bf[a]) / float(dims[a] - 1);
+      f.cellBounds[a] = bounds[a].data();
+      f.voxelMax[a] = float(dims[a] - 1);
+    }
+    std::vector<int32_t> cells(size_t(bf[0]) * bf[1] * bf[2]);
+    for (size_t i = 0; i < cells.size(); ++i) cells[i] = int32_t(i);
+    f.cellSlot = cells.data();
+    std::mt19937 rng(5);
+    for (int k = 0; k < 20000; ++k) {
+      float x[3];
+      int brute[3];
+      for (int a = 0; a < 3; ++a) {
+        // Half the points exactly on a boundary, half uniform.
+        if (k % 2) {
+          x[a] = bounds[a][std::uniform_int_distribution<size_t>(0, bounds[a].size() - 1)(rng)];
+        } else {
+          x[a] = std::uniform_real_distribution<float>(0.f, float(dims[a] - 1))(rng);
+        }
+        int c = 0;  // brute force: last cell whose lower bound <= x
+        for (int i = 0; i < bf[a]; ++i)
+          if (x[a] >= bounds[a][size_t(i)]) c = i;
+        brute[a] = c;
+      }
+      const int32_t got = lookupSlot(f, x);
+      ASSERT_EQ(got, int32_t((brute[2] * bf[1] + brute[1]) * bf[0] + brute[0]));
+    }
+  }
+}
+
+TEST(Raycast, RawSlotIsExactForLinearFunctions) {
+  // Padded 4 x 5 x 3 block (real samples 2 x 3 x 1), f = 1 + 2x + 3y (voxel units), extent
+  // lo = (10, 20, 5), hi = (14, 28, 5): sample spacing 4 and 4 voxels.
+  FrameSlot s;
+  s.kind = kSlotRaw;
+  const int n[3] = {4, 5, 3};
+  for (int a = 0; a < 3; ++a) s.knots[a].ncp = n[a];
+  s.lo[0] = 10, s.lo[1] = 20, s.lo[2] = 5;
+  s.invExtent[0] = 1.f / 4, s.invExtent[1] = 1.f / 8, s.invExtent[2] = 0;
+  std::vector<float> data(4 * 5 * 3);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 5; ++j)
+      for (int i = 0; i < 4; ++i) {
+        const float x = 10 + (i - 1) * 4.f, y = 20 + (j - 1) * 4.f;
+        data[size_t((k * 5 + j) * 4 + i)] = 1 + 2 * x + 3 * y;
+      }
+  const float x[3] = {11.5f, 25.f, 5.f};
+  float g[3];
+  const float v = sampleRawSlot<true>(s, data.data(), x, g);
+  EXPECT_NEAR(v, 1 + 2 * 11.5f + 3 * 25.f, 1e-4);
+  EXPECT_NEAR(g[0], 2.f, 1e-5);
+  EXPECT_NEAR(g[1], 3.f, 1e-5);
+  EXPECT_NEAR(g[2], 0.f, 1e-6);
+}
+
+TEST(Raycast, SplineSlotMatchesEvaluateModelAndScalesTheGradient) {
+  FrameSlot s;
+  s.kind = kSlotSpline;
+  for (int a = 0; a < 3; ++a) s.knots[a] = Knots::make(4, 2);
+  s.lo[0] = 2, s.lo[1] = 4, s.lo[2] = 8;
+  s.invExtent[0] = 1.f / 8, s.invExtent[1] = 1.f / 16, s.invExtent[2] = 1.f / 4;
+  std::vector<float> cp(64);
+  for (size_t i = 0; i < cp.size(); ++i) cp[i] = float(std::sin(0.7 * double(i)));
+  const float x[3] = {5.f, 9.f, 10.f};
+  float g[3];
+  const float v = sampleSplineSlot<true>(s, cp.data(), x, g);
+  ModelView m;
+  for (int a = 0; a < 3; ++a) m.knots[a] = s.knots[a];
+  m.control = cp.data();
+  float gu[3];
+  const float ref = evaluateModel<true>(m, 3.f / 8, 5.f / 16, 2.f / 4, gu);
+  EXPECT_FLOAT_EQ(v, ref);
+  EXPECT_FLOAT_EQ(g[0], gu[0] / 8);
+  EXPECT_FLOAT_EQ(g[1], gu[1] / 16);
+  EXPECT_FLOAT_EQ(g[2], gu[2] / 4);
+  EXPECT_FLOAT_EQ(sampleSplineSlot<false>(s, cp.data(), x, nullptr), ref);
+}
+
+TEST(Raycast, ClassifyCompositeAndTerminate) {
+  FrameView f;
+  const float tf[8] = {0, 0, 0, 0, 1, 0.5f, 0.25f, 1};
+  f.tf = tf;
+  f.tfSize = 2;
+  f.tfMin = 0;
+  f.tfMax = 2;
+  const RGBA c = classify(f, 1.f);
+  EXPECT_FLOAT_EQ(c.r, 0.5f);
+  EXPECT_FLOAT_EQ(c.g, 0.25f);
+  EXPECT_FLOAT_EQ(c.a, 0.5f);
+  EXPECT_FLOAT_EQ(classify(f, 5.f).a, 1.f);
+  EXPECT_FLOAT_EQ(classify(f, -5.f).a, 0.f);
+  // Opacity correction: two half-distance samples compose to one full-distance sample.
+  const float half = correctOpacity(0.5f, 0.5f);
+  EXPECT_NEAR(1 - (1 - half) * (1 - half), 0.5f, 1e-6);
+  RGBA acc;
+  compositeFrontToBack(acc, RGBA{1, 0, 0, 0.5f});
+  compositeFrontToBack(acc, RGBA{0, 1, 0, 0.5f});
+  EXPECT_FLOAT_EQ(acc.r, 0.5f);
+  EXPECT_FLOAT_EQ(acc.g, 0.25f);
+  EXPECT_FLOAT_EQ(acc.a, 0.75f);
+}
+
+namespace {
+/// A constant-field sampler: opaque everywhere inside the box, counts its calls.
+struct CountingSampler {
+  mutable int calls = 0;
+  template <bool G>
+  bool sample(const FrameView&, const float*, float& v, float* g) const {
+    ++calls;
+    v = 1.f;
+    if (G) g[0] = g[1] = g[2] = 0.f;
+    return true;
+  }
+};
+}  // namespace
+
+TEST(Raycast, EarlyTerminationAndNearPlaneInsideTheBox) {
+  FrameView f;
+  const float tf[8] = {0, 0, 0, 0.2f, 1, 1, 1, 0.2f};
+  f.tf = tf;
+  f.tfSize = 2;
+  f.sampleDistance = 0.01f;
+  f.tfReferenceDistance = 0.01f;
+  f.camera.eye[2] = 0.f;  // inside the box, looking down -z
+  f.camera.width = f.camera.height = 1;
+  CountingSampler s;
+  const RGBA c = castRayWith<false>(f, s, 0, 0);
+  EXPECT_GE(c.a, 0.95f);
+  EXPECT_LE(s.calls, 14);  // 1 - 0.8^n >= 0.95 at n = 14
+  EXPECT_GE(s.calls, 13);
+  f.camera.eye[2] = 5.f;
+  f.camera.forward[2] = 1.f;  // looking away: misses the box
+  CountingSampler s2;
+  EXPECT_EQ(castRayWith<true>(f, s2, 0, 0).a, 0.f);
+  EXPECT_EQ(s2.calls, 0);
+}

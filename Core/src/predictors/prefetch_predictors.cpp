@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/predictors/prefetch_predictors.hpp"
+
+#include <cmath>
+#include <unordered_set>
+
+#include "afam/afam_file.hpp"
+#include "afam/errors.hpp"
+#include "afam/predictors/lstm.hpp"
+
+namespace afam {
+
+namespace {
+Pose poseOf(const Camera& c) { return poseFromPosition(c.eye); }
+
+std::string appaContext(const PredictorContext& ctx) {
+  // Everything that changes which blocks a pose sees.
+  std::string s = "lod:" + std::to_string(int(ctx.lod.policy)) + ":" + std::to_string(ctx.lod.bandWidth) +
+                  ":" + std::to_string(ctx.lod.pixelBudget) + ":" + std::to_string(ctx.lod.frustumCulling) +
+                  ":" + std::to_string(ctx.lod.tfCulling) + ";tf:" + std::to_string(ctx.tfLo) + ":" +
+                  std::to_string(ctx.tfHi) + ":";
+  const uint64_t tfHash = fnv1a64(ctx.tfTable.data(), ctx.tfTable.size() * sizeof(float));
+  return s + std::to_string(tfHash) + ";camera:fromPose-256";
+}
+}  // namespace
+
+bool isPrefetchPredictorName(const std::string& name) {
+  return name == "appa" || name == "forecache" || name == "lstm";
+}
+
+BlockSignature entrySignature(const AfamFile& file, int64_t entry) {
+  const ModelEntry& e = file.entries().at(static_cast<std::size_t>(entry));
+  const VolumeHeader& h = file.header();
+  const double lo = h.valueMin, range = h.valueMax > h.valueMin ? h.valueMax - h.valueMin : 1.0;
+  const double ncp = double(e.ncp[0]) * e.ncp[1] * e.ncp[2];
+  return {float((0.5 * (e.minValue + e.maxValue) - lo) / range), float((e.maxValue - e.minValue) / range),
+          float(std::log2(std::max(1.0, ncp)) / 15.0), float(e.rmse / range)};
+}
+
+std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx) {
+  if (name == "lstm") {
+    return std::make_unique<PosePredictorAdapter>(std::make_unique<LstmPosePredictor>(
+        ctx.lstmWeights.empty() ? defaultLstmWeightsPath() : ctx.lstmWeights));
+  }
+  if (name == "appa" || name == "forecache") {
+    if (!ctx.file) throw InvalidArgument("prefetch: predictor '" + name + "' needs the .afam file");
+    if (name == "forecache") return std::make_unique<ForeCachePredictor>(ctx);
+    const LodSelector selector(ctx.lod);
+    const auto visible = makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
+    const std::string path = ctx.appaTablePath.empty() ? ctx.file->path() + ".appa" : ctx.appaTablePath;
+    AppaTable table = AppaTable::loadOrBuild(path, appaSourceKey(*ctx.file, appaContext(ctx)), ctx.appaGrid,
+                                             visible, ctx.appaReport, ctx.appaThreads);
+    return std::make_unique<AppaPredictor>(std::move(table));
+  }
+  throw InvalidArgument("prefetch: unknown predictor '" + name + "' (expected appa, forecache or lstm)");
+}
+
+void PosePredictorAdapter::update(const std::vector<Camera>& history) const {
+  if (history.size() == 1) pose_->reset();
+  pose_->observe(poseOf(history.back()));
+}
+
+bool PosePredictorAdapter::predict(const std::vector<Camera>& history, Camera& next) const {
+  if (history.empty()) return false;
+  std::lock_guard<std::mutex> g(mutex_);
+  update(history);
+  if (history.size() < 2) return false;
+  const Camera& last = history.back();
+  next = Camera::fromPose(pose_->predictNext(), last.width, last.height);
+  return true;
+}
+
+bool AppaPredictor::predict(const std::vector<Camera>& history, Camera& next) const {
+  if (history.empty()) return false;
+  const Camera& last = history.back();
+  const Pose p = table_.grid().samplePose(table_.grid().cellOf(poseOf(last)));
+  next = Camera::fromPose(p, last.width, last.height);
+  return true;
+}
+
+bool AppaPredictor::predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const {
+  if (history.empty()) return false;
+  auto [b, e] = table_.lookup(poseOf(history.back()));
+  entries.assign(b, e);
+  return true;
+}
+
+ForeCachePredictor::ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options)
+    : PosePredictorAdapter(nullptr) {
+  const LodSelector selector(ctx.lod);
+  visible_ = makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
+  ForeCacheDataSource data;
+  data.visibleBlocks = visible_;
+  std::shared_ptr<const AfamFile> file = ctx.file;
+  data.signature = [file](int64_t entry) { return entrySignature(*file, entry); };
+  pose_ = std::make_unique<ForeCachePosePredictor>(options, std::move(data));
+  name_ = "forecache";
+}
+
+ForeCachePhase ForeCachePredictor::phase() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return static_cast<const ForeCachePosePredictor&>(*pose_).phase();
+}
+
+bool ForeCachePredictor::predictEntries(const std::vector<Camera>& history,
+                                        std::vector<int64_t>& entries) const {
+  if (history.empty()) return false;
+  std::lock_guard<std::mutex> g(mutex_);
+  update(history);
+  if (history.size() < 2) return false;
+  const auto& fc = static_cast<const ForeCachePosePredictor&>(*pose_);
+  const std::vector<Pose> cands = fc.candidatePoses(2);
+  entries = visible_(cands.front());
+  if (fc.phase() == ForeCachePhase::Sensemaking && cands.size() > 1) {
+    // SB: the blocks the other likely views would add, most similar to the dwell signature first.
+    std::unordered_set<int64_t> have(entries.begin(), entries.end());
+    std::vector<int64_t> extra;
+    for (int64_t e : visible_(cands[1]))
+      if (!have.count(e)) extra.push_back(e);
+    for (int64_t e : fc.rankBySignature(extra)) entries.push_back(e);
+  } else {
+    // AB: the Markov chain's second most likely move next.
+    std::unordered_set<int64_t> have(entries.begin(), entries.end());
+    for (std::size_t i = 1; i < cands.size(); ++i)
+      for (int64_t e : visible_(cands[i]))
+        if (have.insert(e).second) entries.push_back(e);
+  }
+  return true;
+}
+
+}  // namespace afam

@@ -12,6 +12,7 @@
 #include "vtkIntArray.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkNew.h"
+#include "vtkPointData.h"
 #include "vtkStringArray.h"
 #include "vtkTypeInt64Array.h"
 
@@ -50,7 +51,7 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Parti
 {
   out->Initialize();
   const int levels = partition.levels();
-  out->SetNumberOfBlocks(static_cast<unsigned>(levels));
+  out->SetNumberOfBlocks(static_cast<unsigned>(levels + 1));
 
   // Coarsest blocks are split into numPieces contiguous linear ranges (z-major slabs).
   const int64_t coarse = partition.blockCount(0);
@@ -115,6 +116,30 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Parti
       }
     }
   }
+  // Last block: a 2x2x2 probe spanning the volume whose point array holds the value range, so that
+  // ParaView's colour-map machinery (array list, range, transfer functions) has an array to bind
+  // to; the leaves above carry no samples. Present on piece 0 only.
+  if (piece == 0)
+  {
+    vtkNew<vtkImageData> probe;
+    probe->SetDimensions(2, 2, 2);
+    probe->SetOrigin(header.origin.data());
+    double spacing[3];
+    for (int a = 0; a < 3; ++a)
+    {
+      spacing[a] = header.spacing[a] * static_cast<double>(std::max<int64_t>(1, header.dims[a] - 1));
+    }
+    probe->SetSpacing(spacing);
+    vtkNew<vtkDoubleArray> range;
+    range->SetName(header.scalarName.empty() ? "scalars" : header.scalarName.c_str());
+    range->SetNumberOfTuples(8);
+    range->FillValue(header.valueMax);
+    range->SetValue(0, header.valueMin);
+    probe->GetPointData()->SetScalars(range);
+    out->SetBlock(static_cast<unsigned>(levels), probe);
+  }
+  out->GetMetaData(static_cast<unsigned>(levels))->Set(vtkCompositeDataSet::NAME(), "Value range");
+
   vtkFieldData* fd = out->GetFieldData();
   AddString(fd, FileNameArray, path);
   AddTuple<vtkTypeInt64Array, vtkTypeInt64>(

@@ -33,7 +33,7 @@ constexpr const char* EntryArray = "AFAM_EntryIndex";      // leaves: index entr
 constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves
 constexpr const char* DimensionsArray = "AFAM_Dimensions"; // root: volume samples per axis
 
-/// Fills `out`. Piece `piece` of `numPieces` keeps the leaves whose coarsest-level ancestor lies in
+/// Fills `out` (blocks 0..levels-1 = levels, block `levels` = "Value range" probe). Piece `piece` of `numPieces` keeps the leaves whose coarsest-level ancestor lies in
 /// its contiguous range of coarsest blocks (z-major slabs: spatially coherent); other leaves are
 /// null, so every rank has the same structure. `progress` gets fractions in [0, 1].
 void Build(const afam::VolumeHeader& header, const afam::Partition& partition,

@@ -5,6 +5,10 @@ get_filename_component(_afam_root "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
 
 set(_afam_classes
   Readers/vtkAFAMReader
+  Readers/vtkAFAMWriter
+  Filters/vtkAFAMEncoder
+  Mapper/vtkAFAMVolumeMapper
+  Mapper/vtkAFAMVolumeRepresentation
   )
 
 set(_afam_sources)
@@ -17,6 +21,7 @@ endforeach ()
 # Private helpers: compiled in, neither wrapped nor installed.
 set(_afam_private
   Readers/vtkAFAMModelTree
+  Mapper/vtkAFAMCoreRenderer
   )
 set(_afam_private_headers)
 foreach (_helper IN LISTS _afam_private)

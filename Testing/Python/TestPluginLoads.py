@@ -17,7 +17,8 @@ if not os.path.isfile(plugin):
 LoadPlugin(plugin, remote=False, ns=globals())
 
 pxm = servermanager.ProxyManager()
-expected = [("sources", "AFAMReader")]
+expected = [("sources", "AFAMReader"), ("filters", "AFAMEncoder"), ("writers", "AFAMWriter"),
+            ("representations", "AFAMVolumeRepresentation")]
 missing = [(g, n) for g, n in expected if pxm.GetPrototypeProxy(g, n) is None]
 if missing:
     print("AFAM-TEST-FAIL: proxies not registered: %s" % missing)

@@ -1,0 +1,155 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkAFAMEncoder.h"
+
+#include "vtkAFAMModelTree.h"
+
+#include "afam/afam_file.hpp"
+#include "afam/encoder.hpp"
+
+#include "vtkDataArray.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMultiBlockDataSet.h"
+#include "vtkObjectFactory.h"
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+vtkStandardNewMacro(vtkAFAMEncoder);
+
+vtkAFAMEncoder::vtkAFAMEncoder()
+{
+  this->SetInputArrayToProcess(
+    0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS);
+}
+
+vtkAFAMEncoder::~vtkAFAMEncoder()
+{
+  this->RemoveModelFile();
+}
+
+void vtkAFAMEncoder::RemoveModelFile()
+{
+  if (!this->ModelFile.empty())
+  {
+    std::error_code ignored;
+    std::filesystem::remove(this->ModelFile, ignored);
+    this->ModelFile.clear();
+  }
+}
+
+int vtkAFAMEncoder::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
+  return 1;
+}
+
+int vtkAFAMEncoder::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
+  vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
+  vtkDataArray* array = this->GetInputArrayToProcess(0, inputVector);
+  if (!input || !output)
+  {
+    vtkErrorMacro(<< "needs a vtkImageData input");
+    return 0;
+  }
+  if (!array || array->GetNumberOfComponents() != 1)
+  {
+    vtkErrorMacro(<< "select a point-data array with one component to encode");
+    return 0;
+  }
+  int dims[3];
+  input->GetDimensions(dims);
+  if (array->GetNumberOfTuples() != static_cast<vtkIdType>(dims[0]) * dims[1] * dims[2])
+  {
+    vtkErrorMacro(<< "array '" << (array->GetName() ? array->GetName() : "") << "' has "
+                  << array->GetNumberOfTuples() << " values for " << dims[0] << "x" << dims[1]
+                  << "x" << dims[2] << " points");
+    return 0;
+  }
+
+  // Any scalar type -> float32 (no copy when it already is).
+  vtkSmartPointer<vtkFloatArray> values = vtkFloatArray::SafeDownCast(array);
+  if (!values)
+  {
+    values = vtkSmartPointer<vtkFloatArray>::New();
+    values->DeepCopy(array);
+  }
+  double origin[3], spacing[3];
+  input->GetOrigin(origin);
+  input->GetSpacing(spacing);
+  afam::ArraySource source(values->GetPointer(0), afam::Index3{ dims[0], dims[1], dims[2] },
+    array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
+    { spacing[0], spacing[1], spacing[2] });
+
+  afam::EncoderOptions options;
+  options.levels = this->Levels;
+  options.blocksPerAxis = this->BlocksPerAxis;
+  options.degree = this->Degree;
+  options.errorBound = this->ErrorBound;
+  options.relativeBound = this->RelativeBound;
+  options.mode = static_cast<afam::EncodingMode>(this->Mode);
+  options.fixedNcp = this->FixedNcp;
+  options.threads = this->NumberOfThreads;
+  options.progress = [this](double f) {
+    this->UpdateProgress(0.95 * f);
+    return !this->CheckAbort();
+  };
+
+  static std::atomic<int> counter{ 0 };
+  const std::string path = (std::filesystem::temp_directory_path() /
+    ("afam-encoder-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".afam"))
+                             .string();
+  this->RemoveModelFile();
+  try
+  {
+    const afam::EncodeStats stats = afam::encodeVolume(source, options, path);
+    this->ModelFile = path;
+    this->LastEncodeSeconds = stats.seconds;
+    this->LastMaxRmse = stats.maxRmse;
+    this->LastCompressionRatio =
+      stats.bytesOut > 0 ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut) : 0;
+    auto file = afam::AfamFile::open(path);
+    vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), 0, 1,
+      output, [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
+  }
+  catch (const afam::Cancelled&)
+  {
+    output->Initialize();
+    vtkWarningMacro(<< "encoding cancelled");
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    output->Initialize();
+    this->RemoveModelFile();
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "ErrorBound: " << this->ErrorBound << "\n";
+  os << indent << "RelativeBound: " << this->RelativeBound << "\n";
+  os << indent << "Levels: " << this->Levels << "\n";
+  os << indent << "BlocksPerAxis: " << this->BlocksPerAxis << "\n";
+  os << indent << "Degree: " << this->Degree << "\n";
+  os << indent << "Mode: " << this->Mode << "\n";
+  os << indent << "FixedNcp: " << this->FixedNcp << "\n";
+  os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "ModelFile: " << this->ModelFile << "\n";
+  os << indent << "LastEncodeSeconds: " << this->LastEncodeSeconds << "\n";
+  os << indent << "LastMaxRmse: " << this->LastMaxRmse << "\n";
+  os << indent << "LastCompressionRatio: " << this->LastCompressionRatio << "\n";
+}

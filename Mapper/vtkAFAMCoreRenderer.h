@@ -1,0 +1,57 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+// Private helper of vtkAFAMVolumeMapper (not wrapped, not installed): the ONE place where the
+// mapper calls Core's out-of-core renderer. Everything VTK-specific (reading the camera, the
+// transfer functions, compositing) stays in the mapper; everything numeric stays in Core.
+#ifndef vtkAFAMCoreRenderer_h
+#define vtkAFAMCoreRenderer_h
+
+#include "afam/camera.hpp"
+#include "afam/image.hpp"
+#include "afam/transfer_function.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+struct vtkAFAMFrameRequest
+{
+  afam::Camera Camera;              ///< normalised frame ([-1, 1]^3 volume)
+  afam::TransferFunction Transfer;  ///< values in data units
+  bool Shading = false;
+  double SampleDistance = 0.0;      ///< normalised-frame units; <= 0: Core's default
+  int LodPolicy = 0;                ///< 0 distance bands, 1 screen-space error
+  double CacheBudgetMB = 512;
+  int Prefetcher = 0;               ///< 0 none, 1 linear
+  bool UseGpu = true;
+  int Threads = 0;
+};
+
+struct vtkAFAMFrameStats
+{
+  double CachingSeconds = 0, RenderSeconds = 0;
+  int64_t CacheHits = 0, CacheMisses = 0, CulledBlocks = 0, VisibleBlocks = 0;
+  uint64_t BytesRead = 0;
+  bool UsedGpu = false;
+};
+
+class vtkAFAMCoreRenderer
+{
+public:
+  vtkAFAMCoreRenderer();
+  ~vtkAFAMCoreRenderer();
+  /// Opens (or keeps) the .afam file; throws afam::Error with a readable message.
+  void Open(const std::string& path);
+  const std::string& Path() const { return this->OpenPath; }
+  /// Volume header values the mapper needs for bounds and the normalised frame.
+  void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
+  /// Renders one frame (premultiplied RGBA, row 0 = top). Throws afam::Error.
+  void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
+
+private:
+  struct Internals;
+  std::unique_ptr<Internals> Impl;
+  std::string OpenPath;
+};
+
+#endif

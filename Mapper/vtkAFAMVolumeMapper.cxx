@@ -1,0 +1,280 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkAFAMVolumeMapper.h"
+
+#include "vtkAFAMCoreRenderer.h"
+#include "vtkAFAMModelTree.h"
+
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkInformation.h"
+#include "vtkMultiBlockDataSet.h"
+#include "vtkObjectFactory.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLState.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkRenderer.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+#include "vtk_glew.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+vtkStandardNewMacro(vtkAFAMVolumeMapper);
+
+vtkAFAMVolumeMapper::vtkAFAMVolumeMapper()
+  : Core(new vtkAFAMCoreRenderer)
+{
+}
+
+vtkAFAMVolumeMapper::~vtkAFAMVolumeMapper()
+{
+  this->SetFileName(nullptr);
+}
+
+int vtkAFAMVolumeMapper::FillInputPortInformation(int, vtkInformation* info)
+{
+  // The input only names the file (field data of the reader's/encoder's multiblock); optional,
+  // since FileName can be set directly.
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataObject");
+  info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  return 1;
+}
+
+std::string vtkAFAMVolumeMapper::ResolveFileName()
+{
+  if (this->FileName && *this->FileName)
+  {
+    return this->FileName;
+  }
+  if (this->GetNumberOfInputConnections(0) > 0)
+  {
+    this->UpdateInformation();
+    this->GetInputAlgorithm()->Update();
+    return vtkAFAMModelTree::FileName(vtkMultiBlockDataSet::SafeDownCast(this->GetInputDataObject(0, 0)));
+  }
+  return {};
+}
+
+bool vtkAFAMVolumeMapper::EnsureOpen()
+{
+  const std::string path = this->ResolveFileName();
+  if (path.empty())
+  {
+    vtkErrorMacro(<< "No .afam file: set FileName or connect the output of vtkAFAMReader/vtkAFAMEncoder.");
+    return false;
+  }
+  try
+  {
+    this->Core->Open(path);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return false;
+  }
+  return true;
+}
+
+double* vtkAFAMVolumeMapper::GetBounds()
+{
+  vtkMath::UninitializeBounds(this->Bounds);
+  if (this->Core->Path().empty())
+  {
+    const std::string path = this->ResolveFileName();
+    if (path.empty())
+    {
+      return this->Bounds;
+    }
+    try
+    {
+      this->Core->Open(path);
+    }
+    catch (const std::exception&)
+    {
+      return this->Bounds; // reported by Render
+    }
+  }
+  int64_t dims[3];
+  double origin[3], spacing[3], range[2];
+  this->Core->Volume(dims, origin, spacing, range);
+  for (int a = 0; a < 3; ++a)
+  {
+    const double end = origin[a] + spacing[a] * static_cast<double>(dims[a] - 1);
+    this->Bounds[2 * a] = std::min(origin[a], end);
+    this->Bounds[2 * a + 1] = std::max(origin[a], end);
+  }
+  return this->Bounds;
+}
+
+void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
+{
+  const auto start = std::chrono::steady_clock::now();
+  if (!this->EnsureOpen())
+  {
+    return;
+  }
+  auto* renWin = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
+  vtkCamera* cam = ren->GetActiveCamera();
+  vtkVolumeProperty* property = vol->GetProperty();
+  if (!renWin || !cam || !property)
+  {
+    vtkErrorMacro(<< "needs an OpenGL render window, an active camera and a volume property");
+    return;
+  }
+  if (cam->GetParallelProjection())
+  {
+    vtkErrorMacro(<< "parallel projection is not supported by the Adaptive-FAM renderer");
+    return;
+  }
+  const int* size = ren->GetSize();
+  const int width = size[0], height = size[1];
+  if (width < 1 || height < 1)
+  {
+    return;
+  }
+
+  // World -> normalised frame: the volume's box maps to [-1, 1]^3, each axis on its own (paper).
+  double* b = this->GetBounds();
+  double center[3], half[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    center[a] = 0.5 * (b[2 * a] + b[2 * a + 1]);
+    half[a] = 0.5 * (b[2 * a + 1] - b[2 * a]);
+    if (!(half[a] > 0))
+    {
+      half[a] = 1;
+    }
+  }
+  const double meanHalf = (half[0] + half[1] + half[2]) / 3.0;
+  double pos[3], focal[3], up[3];
+  cam->GetPosition(pos);
+  cam->GetFocalPoint(focal);
+  cam->GetViewUp(up);
+  afam::Vec3 eyeN, focalN, upN;
+  for (int a = 0; a < 3; ++a)
+  {
+    eyeN[a] = (pos[a] - center[a]) / half[a];
+    focalN[a] = (focal[a] - center[a]) / half[a];
+    upN[a] = up[a] / half[a];
+  }
+
+  vtkAFAMFrameRequest request;
+  try
+  {
+    request.Camera = afam::Camera::lookAt(eyeN, focalN, upN, cam->GetViewAngle(), width, height);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return;
+  }
+  double clip[2];
+  cam->GetClippingRange(clip);
+  request.Camera.nearDistance = std::max(1e-4, clip[0] / meanHalf);
+
+  // Transfer functions and shading from the volume property (component 0).
+  if (vtkColorTransferFunction* ctf = property->GetRGBTransferFunction(0))
+  {
+    double node[6];
+    for (int i = 0; i < ctf->GetSize(); ++i)
+    {
+      ctf->GetNodeValue(i, node);
+      request.Transfer.colors.push_back({ node[0], node[1], node[2], node[3] });
+    }
+  }
+  if (vtkPiecewiseFunction* pwf = property->GetScalarOpacity(0))
+  {
+    double node[4];
+    for (int i = 0; i < pwf->GetSize(); ++i)
+    {
+      pwf->GetNodeValue(i, node);
+      request.Transfer.opacities.push_back({ node[0], node[1] });
+    }
+  }
+  const double unitDistance = property->GetScalarOpacityUnitDistance(0);
+  request.Transfer.referenceDistance = std::max(1e-6, unitDistance / meanHalf);
+  request.Shading = property->GetShade(0) != 0;
+  const double sampleWorld = this->SampleDistance > 0 ? this->SampleDistance : 0.5 * unitDistance;
+  request.SampleDistance = sampleWorld / meanHalf;
+  request.LodPolicy = this->LodPolicy;
+  request.CacheBudgetMB = this->CacheBudgetMB;
+  request.Prefetcher = this->Prefetcher;
+  request.UseGpu = this->UseGpu;
+  request.Threads = this->NumberOfThreads;
+
+  afam::ImageRGBA image;
+  vtkAFAMFrameStats stats;
+  try
+  {
+    this->Core->Render(request, image, stats);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return;
+  }
+  if (image.width != width || image.height != height)
+  {
+    vtkErrorMacro(<< "Core returned a " << image.width << "x" << image.height << " image for a "
+                  << width << "x" << height << " viewport");
+    return;
+  }
+
+  // Core's row 0 is the top; OpenGL's is the bottom.
+  std::vector<float> flipped(image.rgba.size());
+  const size_t row = static_cast<size_t>(width) * 4;
+  for (int y = 0; y < height; ++y)
+  {
+    std::copy_n(&image.rgba[static_cast<size_t>(height - 1 - y) * row], row, &flipped[y * row]);
+  }
+
+  // Blend the premultiplied image over the viewport's content.
+  vtkOpenGLState* state = renWin->GetState();
+  vtkOpenGLState::ScopedglEnableDisable blendSaver(state, GL_BLEND);
+  vtkOpenGLState::ScopedglEnableDisable depthSaver(state, GL_DEPTH_TEST);
+  vtkOpenGLState::ScopedglBlendFuncSeparate blendFuncSaver(state);
+  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
+  state->vtkglEnable(GL_BLEND);
+  state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+  state->vtkglDisable(GL_DEPTH_TEST);
+  state->vtkglDepthMask(GL_FALSE);
+  renWin->DrawPixels(width, height, 4, VTK_FLOAT, flipped.data());
+
+  this->LastCachingTime = stats.CachingSeconds;
+  this->LastRenderTime = stats.RenderSeconds;
+  this->LastCacheHits = stats.CacheHits;
+  this->LastCacheMisses = stats.CacheMisses;
+  this->LastCulledBlocks = stats.CulledBlocks;
+  this->LastVisibleBlocks = stats.VisibleBlocks;
+  this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
+  this->LastUsedGpu = stats.UsedGpu;
+  ++this->NumberOfFrames;
+  this->LastTotalTime =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "LodPolicy: " << this->LodPolicy << "\n";
+  os << indent << "CacheBudgetMB: " << this->CacheBudgetMB << "\n";
+  os << indent << "Prefetcher: " << this->Prefetcher << "\n";
+  os << indent << "UseGpu: " << this->UseGpu << "\n";
+  os << indent << "SampleDistance: " << this->SampleDistance << "\n";
+  os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
+  os << indent << "LastRenderTime: " << this->LastRenderTime << "\n";
+  os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";
+  os << indent << "LastCacheHits: " << this->LastCacheHits << "\n";
+  os << indent << "LastCacheMisses: " << this->LastCacheMisses << "\n";
+  os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";
+  os << indent << "LastVisibleBlocks: " << this->LastVisibleBlocks << "\n";
+  os << indent << "LastBytesRead: " << this->LastBytesRead << "\n";
+  os << indent << "LastUsedGpu: " << this->LastUsedGpu << "\n";
+  os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
+}

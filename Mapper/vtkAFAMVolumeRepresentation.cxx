@@ -1,0 +1,170 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkAFAMVolumeRepresentation.h"
+
+#include "vtkAFAMModelTree.h"
+#include "vtkAFAMVolumeMapper.h"
+
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkPointData.h"
+
+#include <algorithm>
+#include "vtkInformationVector.h"
+#include "vtkMath.h"
+#include "vtkMultiBlockDataSet.h"
+#include "vtkMultiProcessController.h"
+#include "vtkObjectFactory.h"
+#include "vtkOutlineSource.h"
+#include "vtkPVLODVolume.h"
+#include "vtkPVRenderView.h"
+#include "vtkPolyDataMapper.h"
+#include "vtkRenderer.h"
+#include "vtkVolumeProperty.h"
+
+vtkStandardNewMacro(vtkAFAMVolumeRepresentation);
+
+vtkAFAMVolumeRepresentation::vtkAFAMVolumeRepresentation()
+{
+  this->Actor->SetProperty(this->Property);
+  this->Actor->SetMapper(this->Mapper);
+  this->Actor->SetLODMapper(this->OutlineMapper);
+  vtkMath::UninitializeBounds(this->DataBounds);
+}
+
+vtkAFAMVolumeRepresentation::~vtkAFAMVolumeRepresentation() = default;
+
+int vtkAFAMVolumeRepresentation::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkMultiBlockDataSet");
+  info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  return 1;
+}
+
+int vtkAFAMVolumeRepresentation::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkMath::UninitializeBounds(this->DataBounds);
+  this->FileName.clear();
+  if (inputVector[0]->GetNumberOfInformationObjects() == 1)
+  {
+    auto* tree = vtkMultiBlockDataSet::GetData(inputVector[0], 0);
+    this->FileName = vtkAFAMModelTree::FileName(tree);
+    if (this->FileName.empty())
+    {
+      vtkErrorMacro(<< "The input is not an Adaptive-FAM model set (no "
+                    << vtkAFAMModelTree::FileNameArray << " field data).");
+    }
+  }
+  // Every rank knows the file; only rank 0 renders it (see class documentation).
+  auto* controller = vtkMultiProcessController::GetGlobalController();
+  const bool renders = !controller || controller->GetLocalProcessId() == 0;
+  this->RendersHere = renders && !this->FileName.empty();
+  this->Mapper->SetFileName(this->RendersHere ? this->FileName.c_str() : nullptr);
+  this->Actor->SetVisibility(this->GetVisibility() && this->RendersHere);
+  if (!this->FileName.empty())
+  {
+    vtkNew<vtkAFAMVolumeMapper> probe; // bounds from the file's header, identical on every rank
+    probe->SetFileName(this->FileName.c_str());
+    probe->GetBounds(this->DataBounds);
+  }
+  if (vtkMath::AreBoundsInitialized(this->DataBounds))
+  {
+    this->OutlineSource->SetBounds(this->DataBounds);
+    this->OutlineSource->Update();
+    this->StandIn->SetDimensions(2, 2, 2);
+    this->StandIn->SetOrigin(this->DataBounds[0], this->DataBounds[2], this->DataBounds[4]);
+    this->StandIn->SetSpacing(std::max(1e-12, this->DataBounds[1] - this->DataBounds[0]),
+      std::max(1e-12, this->DataBounds[3] - this->DataBounds[2]),
+      std::max(1e-12, this->DataBounds[5] - this->DataBounds[4]));
+    vtkNew<vtkFloatArray> scalars;
+    scalars->SetName("AFAM_StandIn");
+    scalars->SetNumberOfTuples(8);
+    scalars->FillValue(0.f);
+    this->StandIn->GetPointData()->SetScalars(scalars);
+  }
+  return this->Superclass::RequestData(request, inputVector, outputVector);
+}
+
+int vtkAFAMVolumeRepresentation::ProcessViewRequest(
+  vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo)
+{
+  if (!this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo))
+  {
+    return 0;
+  }
+  if (request_type == vtkPVView::REQUEST_UPDATE())
+  {
+    // Only the outline travels through the delivery path; the mapper reads the file itself.
+    vtkPVView::SetPiece(inInfo, this, this->OutlineSource->GetOutputDataObject(0));
+    outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
+    if (vtkMath::AreBoundsInitialized(this->DataBounds))
+    {
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, this->DataBounds);
+    }
+  }
+  else if (request_type == vtkPVView::REQUEST_RENDER())
+  {
+    vtkDataObject* outline = vtkPVView::GetDeliveredPiece(inInfo, this);
+    this->OutlineMapper->SetInputDataObject(outline);
+    // vtkPVLODVolume::CanRender() renders a vtkVolumeMapper only when its input is image data
+    // with scalars: a 2x2x2 stand-in spanning the volume (the mapper reads the .afam file).
+    this->Mapper->SetInputDataObject(this->StandIn);
+    this->Actor->SetMapper(this->Mapper);
+  }
+  return 1;
+}
+
+void vtkAFAMVolumeRepresentation::SetVisibility(bool visible)
+{
+  this->Superclass::SetVisibility(visible);
+  this->Actor->SetVisibility(visible && this->RendersHere);
+}
+
+bool vtkAFAMVolumeRepresentation::AddToView(vtkView* view)
+{
+  if (auto* rview = vtkPVRenderView::SafeDownCast(view))
+  {
+    rview->GetRenderer()->AddActor(this->Actor);
+    return this->Superclass::AddToView(view);
+  }
+  return false;
+}
+
+bool vtkAFAMVolumeRepresentation::RemoveFromView(vtkView* view)
+{
+  if (auto* rview = vtkPVRenderView::SafeDownCast(view))
+  {
+    rview->GetRenderer()->RemoveActor(this->Actor);
+    return this->Superclass::RemoveFromView(view);
+  }
+  return false;
+}
+
+void vtkAFAMVolumeRepresentation::SetShade(bool v) { this->Property->SetShade(v); }
+void vtkAFAMVolumeRepresentation::SetAmbient(double v) { this->Property->SetAmbient(v); }
+void vtkAFAMVolumeRepresentation::SetDiffuse(double v) { this->Property->SetDiffuse(v); }
+void vtkAFAMVolumeRepresentation::SetSpecular(double v) { this->Property->SetSpecular(v); }
+void vtkAFAMVolumeRepresentation::SetSpecularPower(double v) { this->Property->SetSpecularPower(v); }
+void vtkAFAMVolumeRepresentation::SetLodPolicy(int v) { this->Mapper->SetLodPolicy(v); }
+void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v) { this->Mapper->SetCacheBudgetMB(v); }
+void vtkAFAMVolumeRepresentation::SetPrefetcher(int v) { this->Mapper->SetPrefetcher(v); }
+void vtkAFAMVolumeRepresentation::SetUseGpu(bool v) { this->Mapper->SetUseGpu(v); }
+void vtkAFAMVolumeRepresentation::SetSampleDistance(double v) { this->Mapper->SetSampleDistance(v); }
+void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v) { this->Mapper->SetNumberOfThreads(v); }
+double vtkAFAMVolumeRepresentation::GetLastCachingTime() { return this->Mapper->GetLastCachingTime(); }
+double vtkAFAMVolumeRepresentation::GetLastRenderTime() { return this->Mapper->GetLastRenderTime(); }
+double vtkAFAMVolumeRepresentation::GetLastTotalTime() { return this->Mapper->GetLastTotalTime(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheHits() { return this->Mapper->GetLastCacheHits(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheMisses() { return this->Mapper->GetLastCacheMisses(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks() { return this->Mapper->GetLastCulledBlocks(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastVisibleBlocks() { return this->Mapper->GetLastVisibleBlocks(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames() { return this->Mapper->GetNumberOfFrames(); }
+
+void vtkAFAMVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << this->FileName << "\n";
+  this->Mapper->PrintSelf(os, indent.GetNextIndent());
+}

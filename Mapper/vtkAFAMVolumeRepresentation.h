@@ -1,0 +1,97 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkAFAMVolumeRepresentation
+ * @brief   ParaView representation "Adaptive-FAM Volume": renders .afam micro-models with
+ *          vtkAFAMVolumeMapper.
+ *
+ * Its input is the metadata multiblock of vtkAFAMReader or vtkAFAMEncoder. Only the outline is
+ * delivered through ParaView's data-delivery path; the mapper opens the .afam file named in the
+ * input's field data itself and streams payloads through Core's cache (out of core). Colour and
+ * opacity transfer functions, shading and the opacity unit distance arrive through the properties
+ * inherited from vtkVolumeRepresentation, exactly as for ParaView's own "Volume".
+ *
+ * Under MPI only rank 0 renders the volume (the other ranks contribute empty images to the
+ * ordered compositing), so the image equals the one-rank image.
+ */
+#ifndef vtkAFAMVolumeRepresentation_h
+#define vtkAFAMVolumeRepresentation_h
+
+#include "vtkAFAMModule.h" // for export macro
+#include "vtkImageData.h"  // for vtkNew<vtkImageData>
+#include "vtkNew.h"        // for vtkNew
+#include "vtkVolumeRepresentation.h"
+
+#include <string> // for std::string
+
+class vtkAFAMVolumeMapper;
+class vtkImageData;
+class vtkPolyDataMapper;
+
+class VTKAFAM_EXPORT vtkAFAMVolumeRepresentation : public vtkVolumeRepresentation
+{
+public:
+  static vtkAFAMVolumeRepresentation* New();
+  vtkTypeMacro(vtkAFAMVolumeRepresentation, vtkVolumeRepresentation);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  int ProcessViewRequest(vtkInformationRequestKey* request_type, vtkInformation* inInfo,
+    vtkInformation* outInfo) override;
+
+  /// Shows or hides the volume (hidden on ranks other than 0, see above).
+  void SetVisibility(bool visible) override;
+
+  ///@{
+  /// Forwarded to vtkVolumeProperty.
+  void SetShade(bool);
+  void SetAmbient(double);
+  void SetDiffuse(double);
+  void SetSpecular(double);
+  void SetSpecularPower(double);
+  ///@}
+
+  ///@{
+  /// Forwarded to vtkAFAMVolumeMapper (see there for defaults and ranges).
+  void SetLodPolicy(int);
+  void SetCacheBudgetMB(double);
+  void SetPrefetcher(int);
+  void SetUseGpu(bool);
+  void SetSampleDistance(double);
+  void SetNumberOfThreads(int);
+  ///@}
+
+  ///@{
+  /// Statistics of the last frame rendered by this process (read from the mapper).
+  double GetLastCachingTime();
+  double GetLastRenderTime();
+  double GetLastTotalTime();
+  vtkTypeInt64 GetLastCacheHits();
+  vtkTypeInt64 GetLastCacheMisses();
+  vtkTypeInt64 GetLastCulledBlocks();
+  vtkTypeInt64 GetLastVisibleBlocks();
+  vtkTypeInt64 GetNumberOfFrames();
+  ///@}
+
+  vtkAFAMVolumeMapper* GetVolumeMapper() { return this->Mapper; }
+
+protected:
+  vtkAFAMVolumeRepresentation();
+  ~vtkAFAMVolumeRepresentation() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  bool AddToView(vtkView* view) override;
+  bool RemoveFromView(vtkView* view) override;
+
+  vtkNew<vtkAFAMVolumeMapper> Mapper;
+  vtkNew<vtkPolyDataMapper> OutlineMapper;
+  vtkNew<vtkImageData> StandIn;
+  std::string FileName;
+  bool RendersHere = false;
+
+private:
+  vtkAFAMVolumeRepresentation(const vtkAFAMVolumeRepresentation&) = delete;
+  void operator=(const vtkAFAMVolumeRepresentation&) = delete;
+};
+
+#endif

@@ -1,0 +1,43 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkAFAMWriter
+ * @brief   Saves Adaptive-FAM micro-models (the output of vtkAFAMEncoder or vtkAFAMReader) to .afam.
+ *
+ * The input multiblock names the .afam file that holds its models (field data); the writer
+ * validates that file through Core (header, index and every payload's checksum) and copies it to
+ * FileName atomically (temporary file + rename): a failed write leaves no half file.
+ */
+#ifndef vtkAFAMWriter_h
+#define vtkAFAMWriter_h
+
+#include "vtkAFAMModule.h" // for export macro
+#include "vtkWriter.h"
+
+class VTKAFAM_EXPORT vtkAFAMWriter : public vtkWriter
+{
+public:
+  static vtkAFAMWriter* New();
+  vtkTypeMacro(vtkAFAMWriter, vtkWriter);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /// Destination .afam path. Default: none.
+  vtkSetFilePathMacro(FileName);
+  vtkGetFilePathMacro(FileName);
+  ///@}
+
+protected:
+  vtkAFAMWriter();
+  ~vtkAFAMWriter() override;
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  void WriteData() override;
+
+  char* FileName = nullptr;
+
+private:
+  vtkAFAMWriter(const vtkAFAMWriter&) = delete;
+  void operator=(const vtkAFAMWriter&) = delete;
+};
+
+#endif

@@ -296,6 +296,13 @@ struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
   std::vector<double> bufZ, bufY, line, bufX, bufEY, plane;
 
+  /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
+  /// between them: clearing inside axis() destroyed the system the caller's earlier reference
+  /// pointed to (a segfault once an NCP search had used 64 shapes).
+  void trimCache() {
+    if (cache.size() + 3 > 64) cache.clear();  // encoders use a handful of shapes
+  }
+
   const AxisSystem& axis(int n, int ncp, int p, bool needFactor) {
     AxisSystem* found = nullptr;
     for (auto& s : cache)
@@ -304,7 +311,6 @@ struct BlockFitter::Impl {
         break;
       }
     if (!found) {
-      if (cache.size() >= 64) cache.clear();  // encoders use a handful of shapes
       cache.push_back(std::make_unique<AxisSystem>());
       found = cache.back().get();
       buildCollocation(*found, n, ncp, p);
@@ -345,6 +351,7 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
   checkFinite(samples, n);
 
   Impl& im = *impl_;
+  im.trimCache();
   const AxisSystem& ax = im.axis(n[0], ncp[0], p[0], true);
   const AxisSystem& ay = im.axis(n[1], ncp[1], p[1], true);
   const AxisSystem& az = im.axis(n[2], ncp[2], p[2], true);
@@ -413,6 +420,7 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
         << mx * my * mz;
     throw InvalidArgument(msg.str());
   }
+  trimCache();
   const AxisSystem& ax = axis(n[0], model.ncp[0], model.degree[0], false);
   const AxisSystem& ay = axis(n[1], model.ncp[1], model.degree[1], false);
   const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);

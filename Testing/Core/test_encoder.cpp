@@ -1,0 +1,418 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Encoder: fast == exhaustive NCP* on the corpus and Marschner-Lobb, mode equivalences, error
+// bounds, DS payloads, streaming sources, cancellation and errors.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "afam/afam_file.hpp"
+#include "afam/encoder.hpp"
+#include "afam/fit.hpp"
+#include "afam/marschner_lobb.hpp"
+
+using namespace afam;
+
+namespace {
+
+const std::string kVolumes = std::string(AFAM_SHARED_DATA_DIR) + "/volumes/";
+const char* kCorpus[] = {
+    "neghip_66x66x66_uint8.raw",          "ironProt_68x68x68_uint8.raw",
+    "headsq_quarter_64x64x93_int16.raw",  "HeadMRVolume_48x62x42_uint8.raw",
+    "hydrogen_3d_orbital_64x64x64_float32.raw", "chi_field_50x50x50_float32.raw",
+    "bucky_32x32x32_uint8.raw",
+};
+
+std::vector<float> loadRaw(const std::string& name, Index3& dims) {
+  ScalarType type;
+  EXPECT_TRUE(parseRawName(name, dims, type));
+  RawFileSource src(kVolumes + name, dims, type);
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+  src.readSlab(0, dims[2], v.data());
+  return v;
+}
+
+std::vector<float> mlVolume(int n) {
+  std::vector<float> v(size_t(n) * n * n);
+  marschnerLobbSlab(MarschnerLobb{}, {n, n, n}, 0, n, v.data());
+  return v;
+}
+
+std::string tmpPath(const std::string& name) { return "/tmp/afam_enc_test_" + std::to_string(getpid()) + "_" + name; }
+
+InMemoryModels encode(const std::vector<float>& v, Index3 dims, EncoderOptions opt, EncodeStats* stats = nullptr) {
+  ArraySource src(v.data(), dims);
+  InMemoryModels models;
+  opt.threads = opt.threads ? opt.threads : 2;
+  const EncodeStats s = encodeVolume(src, opt, models);
+  if (stats) *stats = s;
+  return models;
+}
+
+// Compares the NCP* of every block: in-level search, fast vs exhaustive.
+void expectFastEqualsExhaustive(const std::vector<float>& v, Index3 dims, int levels, int blocks, double bound,
+                                bool relative, int64_t* fitsFast = nullptr, int64_t* fitsExh = nullptr) {
+  EncoderOptions opt;
+  opt.levels = levels;
+  opt.blocksPerAxis = blocks;
+  opt.errorBound = bound;
+  opt.relativeBound = relative;
+  opt.mode = EncodingMode::InLevel;
+  EncodeStats sf, se;
+  opt.search = SearchMethod::Fast;
+  const InMemoryModels fast = encode(v, dims, opt, &sf);
+  opt.search = SearchMethod::Exhaustive;
+  const InMemoryModels exh = encode(v, dims, opt, &se);
+  ASSERT_EQ(fast.entries.size(), exh.entries.size());
+  int mismatches = 0;
+  for (size_t i = 0; i < fast.entries.size(); ++i) {
+    if (fast.entries[i].ncp != exh.entries[i].ncp) {
+      if (++mismatches < 5)
+        ADD_FAILURE() << "block " << i << " level " << fast.entries[i].level << ": fast NCP " << fast.entries[i].ncp[0]
+                      << " exhaustive " << exh.entries[i].ncp[0];
+    }
+    EXPECT_EQ(fast.payloads[i], exh.payloads[i]);
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_LE(sf.fits, se.fits);
+  if (fitsFast) *fitsFast += sf.fits;
+  if (fitsExh) *fitsExh += se.fits;
+}
+
+}  // namespace
+
+TEST(Encoder, ParseRawName) {
+  Index3 d;
+  ScalarType t;
+  ASSERT_TRUE(parseRawName("/a/b/headsq_quarter_64x64x93_int16.raw", d, t));
+  EXPECT_EQ(d, (Index3{64, 64, 93}));
+  EXPECT_EQ(t, ScalarType::Int16);
+  EXPECT_FALSE(parseRawName("volume.raw", d, t));
+  EXPECT_THROW(parseScalarType("int64"), InvalidArgument);
+}
+
+TEST(Encoder, RawFileSourceConvertsTypes) {
+  const Index3 dims{3, 2, 2};
+  const std::vector<int16_t> i16 = {-5, 0, 7, 32767, -32768, 1, 2, 3, 4, 5, 6, 7};
+  const std::string p = tmpPath("t_3x2x2_int16.raw");
+  std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(i16.data()), std::streamsize(i16.size() * 2));
+  RawFileSource src(p, dims, ScalarType::Int16);
+  std::vector<float> out(6);
+  src.readSlab(1, 1, out.data());
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(out[size_t(i)], float(i16[size_t(6 + i)]));
+  const std::vector<double> f64 = {1.5, -2.25, 3, 4, 5, 6, 7, 8, 9, 10, 11, 1e300};
+  const std::string q = tmpPath("d.raw");
+  std::ofstream(q, std::ios::binary).write(reinterpret_cast<const char*>(f64.data()), std::streamsize(f64.size() * 8));
+  RawFileSource s2(q, dims, ScalarType::Float64);
+  s2.readSlab(0, 1, out.data());
+  EXPECT_EQ(out[1], -2.25f);
+  EXPECT_THROW(RawFileSource(q, {5, 5, 5}, ScalarType::Float64), InvalidArgument);  // size mismatch
+  EXPECT_THROW(RawFileSource(tmpPath("missing.raw"), dims, ScalarType::UInt8), IoError);
+  std::remove(p.c_str());
+  std::remove(q.c_str());
+}
+
+TEST(Encoder, FastEqualsExhaustiveOnCorpus) {
+  int64_t fitsFast = 0, fitsExh = 0;
+  for (const char* name : kCorpus) {
+    SCOPED_TRACE(name);
+    Index3 dims;
+    const std::vector<float> v = loadRaw(name, dims);
+    // The paper's layout (small blocks here), and large blocks with long NCP ranges.
+    for (double rel : {1e-2, 1e-3}) {
+      expectFastEqualsExhaustive(v, dims, 4, 16, rel, true, &fitsFast, &fitsExh);
+      expectFastEqualsExhaustive(v, dims, 2, 2, rel, true, &fitsFast, &fitsExh);
+      expectFastEqualsExhaustive(v, dims, 3, 4, rel, true, &fitsFast, &fitsExh);
+    }
+    expectFastEqualsExhaustive(v, dims, 4, 16, 1e-4, false, &fitsFast, &fitsExh);  // the paper's bound
+  }
+  std::printf("corpus fits: fast %lld, exhaustive %lld\n", (long long)fitsFast, (long long)fitsExh);
+}
+
+TEST(Encoder, FastEqualsExhaustiveOnMarschnerLobb128) {
+  const std::vector<float> v = mlVolume(128);
+  int64_t fitsFast = 0, fitsExh = 0;
+  expectFastEqualsExhaustive(v, {128, 128, 128}, 4, 16, 1e-4, false, &fitsFast, &fitsExh);
+  expectFastEqualsExhaustive(v, {128, 128, 128}, 3, 4, 1e-4, false, &fitsFast, &fitsExh);
+  expectFastEqualsExhaustive(v, {128, 128, 128}, 2, 2, 1e-4, false, &fitsFast, &fitsExh);
+  std::printf("ML 128 fits: fast %lld, exhaustive %lld\n", (long long)fitsFast, (long long)fitsExh);
+}
+
+TEST(Encoder, SearchPicksSmallestPassingNcp) {
+  // Against a direct scan with the fitter.
+  const std::vector<float> v = mlVolume(33);
+  BlockFitter fitter;
+  for (double bound : {1e-1, 1e-2, 1e-3, 1e-4, 1e-9}) {
+    int expected = 33;
+    for (int k = 3; k <= 33; ++k)
+      if (fitter.fit(v.data(), {33, 33, 33}, {k, k, k}, 2).error.rmse <= bound) {
+        expected = k;
+        break;
+      }
+    for (SearchMethod m : {SearchMethod::Fast, SearchMethod::Exhaustive}) {
+      FitResult r;
+      int64_t fits = 0;
+      EXPECT_EQ(searchNcp(fitter, v.data(), {33, 33, 33}, 2, bound, m, 3, r, fits), expected) << bound;
+      EXPECT_EQ(r.ncp, (Int3{expected, expected, expected}));
+      if (m == SearchMethod::Exhaustive) {
+        EXPECT_EQ(fits, 31);
+      } else {
+        EXPECT_LE(fits, 31);
+      }
+    }
+  }
+}
+
+TEST(Encoder, AdaptiveIsInLevelWhereSearched) {
+  for (const char* name : {"neghip_66x66x66_uint8.raw", "headsq_quarter_64x64x93_int16.raw"}) {
+    SCOPED_TRACE(name);
+    Index3 dims;
+    const std::vector<float> v = loadRaw(name, dims);
+    for (auto cfg : {std::array<int, 2>{4, 16}, std::array<int, 2>{3, 4}}) {
+      EncoderOptions opt;
+      opt.levels = cfg[0];
+      opt.blocksPerAxis = cfg[1];
+      opt.errorBound = 1e-2;
+      opt.relativeBound = true;
+      opt.mode = EncodingMode::InLevel;
+      EncodeStats si, sa;
+      const InMemoryModels in = encode(v, dims, opt, &si);
+      opt.mode = EncodingMode::Adaptive;
+      const InMemoryModels ad = encode(v, dims, opt, &sa);
+      const Partition& part = ad.partition;
+      int64_t searched = 0, simpleKept = 0;
+      for (int l = 0; l < opt.levels; ++l)
+        for (int64_t li = 0; li < part.blockCount(l); ++li) {
+          const Int3 ijk = part.blockFromLinear(l, li);
+          const ModelEntry& a = ad.entries[size_t(ad.entryIndex(l, ijk))];
+          const ModelEntry& b = in.entries[size_t(in.entryIndex(l, ijk))];
+          const int nmax = std::max({a.samples[0], a.samples[1], a.samples[2]});
+          const int lo = std::min(opt.degree + 1, nmax);
+          bool parentComplex = true;
+          if (l > 0) {
+            const ModelEntry& p = ad.entries[size_t(ad.entryIndex(l - 1, part.parent(l, ijk)))];
+            const int pn = std::max({p.samples[0], p.samples[1], p.samples[2]});
+            parentComplex = std::max({p.ncp[0], p.ncp[1], p.ncp[2]}) > std::min(opt.degree + 1, pn);
+          }
+          if (parentComplex) {
+            ++searched;
+            EXPECT_EQ(a.ncp, b.ncp) << "searched blocks take the in-level decision";
+          } else {
+            EXPECT_EQ(std::max({a.ncp[0], a.ncp[1], a.ncp[2]}), lo) << "children of simple blocks get p+1";
+            if (std::max({b.ncp[0], b.ncp[1], b.ncp[2]}) == lo) ++simpleKept;
+          }
+        }
+      int64_t stSearched = 0;
+      for (const auto& ls : sa.levels) stSearched += ls.searched;
+      EXPECT_EQ(stSearched, searched);
+      EXPECT_LE(sa.fits, si.fits);
+      EXPECT_LE(sa.payloadBytes, si.payloadBytes + 0u * simpleKept);
+    }
+  }
+}
+
+TEST(Encoder, ErrorBoundMetAndReportedHonestly) {
+  const std::vector<float> v = mlVolume(65);
+  const Index3 dims{65, 65, 65};
+  EncoderOptions opt;
+  opt.levels = 3;
+  opt.blocksPerAxis = 4;
+  opt.errorBound = 1e-3;
+  opt.mode = EncodingMode::InLevel;
+  const InMemoryModels m = encode(v, dims, opt);
+  BlockFitter fitter;
+  std::vector<float> decoded;
+  for (size_t i = 0; i < m.entries.size(); ++i) {
+    const ModelEntry& e = m.entries[i];
+    const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
+    if (std::max({e.ncp[0], e.ncp[1], e.ncp[2]}) < nmax) {
+      EXPECT_LE(e.rmse, opt.errorBound);
+    }
+    // The stored RMSE and max error are those of the stored float32 model on the block's samples.
+    const std::vector<float> s = extractBlock(m.partition, v.data(), e.level, e.block);
+    decodeBlockSamples(e, m.payloads[i].data(), m.header.mode, decoded);
+    double sum = 0, mx = 0, lo = 1e30, hi = -1e30;
+    for (size_t k = 0; k < s.size(); ++k) {
+      const double d = double(decoded[k]) - s[k];
+      sum += d * d;
+      mx = std::max(mx, std::fabs(d));
+      lo = std::min(lo, double(decoded[k]));
+      hi = std::max(hi, double(decoded[k]));
+    }
+    EXPECT_NEAR(std::sqrt(sum / double(s.size())), e.rmse, 1e-6 + 1e-3 * e.rmse);
+    EXPECT_NEAR(mx, e.maxError, 1e-6);
+    EXPECT_NEAR(lo, e.minValue, 1e-6);
+    EXPECT_NEAR(hi, e.maxValue, 1e-6);
+  }
+}
+
+TEST(Encoder, FixedModeUsesNOrNcp) {
+  Index3 dims;
+  const std::vector<float> v = loadRaw("bucky_32x32x32_uint8.raw", dims);
+  EncoderOptions opt;
+  opt.levels = 2;
+  opt.blocksPerAxis = 2;
+  opt.mode = EncodingMode::Fixed;
+  InMemoryModels m = encode(v, dims, opt);
+  for (const auto& e : m.entries) EXPECT_EQ(e.ncp, e.samples);
+  opt.fixedNcp = 6;
+  m = encode(v, dims, opt);
+  for (const auto& e : m.entries) EXPECT_EQ(e.ncp, (Int3{6, 6, 6}));
+}
+
+TEST(Encoder, DownsampledPayloadHasClampedGhostLayer) {
+  // A volume whose value encodes its voxel index: v = x + 100 y + 10000 z.
+  const Index3 dims{33, 17, 9};
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+  for (int z = 0; z < dims[2]; ++z)
+    for (int y = 0; y < dims[1]; ++y)
+      for (int x = 0; x < dims[0]; ++x) v[size_t((z * dims[1] + y) * dims[0] + x)] = float(x + 100 * y + 10000 * z);
+  EncoderOptions opt;
+  opt.levels = 2;
+  opt.blocksPerAxis = 4;
+  opt.mode = EncodingMode::Downsampled;
+  const InMemoryModels m = encode(v, dims, opt);
+  const Partition& part = m.partition;
+  for (size_t i = 0; i < m.entries.size(); ++i) {
+    const ModelEntry& e = m.entries[i];
+    const BlockExtent ext = part.extent(e.level, e.block);
+    ASSERT_EQ(e.ncp, (Int3{e.samples[0] + 2, e.samples[1] + 2, e.samples[2] + 2}));
+    EXPECT_EQ(e.degree, (Int3{1, 1, 1}));
+    const auto& p = m.payloads[i];
+    ASSERT_EQ(p.size(), size_t(e.ncp[0]) * e.ncp[1] * e.ncp[2]);
+    for (int z = 0; z < e.ncp[2]; ++z)
+      for (int y = 0; y < e.ncp[1]; ++y)
+        for (int x = 0; x < e.ncp[0]; ++x) {
+          const int k[3] = {x - 1, y - 1, z - 1};
+          double pos[3];
+          for (int a = 0; a < 3; ++a) {
+            const int n = ext.samples[a];
+            const double step = n > 1 ? double(ext.hi[a] - ext.lo[a]) / (n - 1) : 0;
+            pos[a] = std::min(std::max(double(ext.lo[a]) + k[a] * step, 0.0), double(dims[a] - 1));
+          }
+          const double expected = pos[0] + 100 * pos[1] + 10000 * pos[2];  // linear: exact
+          EXPECT_NEAR(p[size_t((z * e.ncp[1] + y) * e.ncp[0] + x)], expected, 1e-2)
+              << "level " << e.level << " block " << e.block[0] << "," << e.block[1] << "," << e.block[2];
+        }
+    // The min/max cover the block's own samples only.
+    EXPECT_EQ(e.minValue, float(ext.lo[0] + 100 * ext.lo[1] + 10000 * ext.lo[2]));
+    EXPECT_EQ(e.maxValue, float(ext.hi[0] + 100 * ext.hi[1] + 10000 * ext.hi[2]));
+  }
+}
+
+TEST(Encoder, OddDimsAndSlabsRoundTripThroughAFile) {
+  for (Index3 dims : {Index3{64, 64, 93}, Index3{50, 50, 50}, Index3{40, 30, 1}, Index3{1, 1, 70}, Index3{2, 3, 4}}) {
+    SCOPED_TRACE(testing::Message() << dims[0] << "x" << dims[1] << "x" << dims[2]);
+    std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+    for (size_t i = 0; i < v.size(); ++i) v[i] = float(std::sin(0.05 * double(i)));
+    ArraySource src(v.data(), dims, "wave");
+    EncoderOptions opt;
+    opt.errorBound = 1e-3;
+    const std::string path = tmpPath("odd.afam");
+    const EncodeStats s = encodeVolume(src, opt, path);
+    auto f = AfamFile::open(path);
+    EXPECT_EQ(f->header().dims, dims);
+    EXPECT_EQ(f->header().scalarName, "wave");
+    EXPECT_EQ(int64_t(f->entries().size()), s.blocks);
+    EXPECT_EQ(f->fileSize(), s.bytesOut);
+    for (size_t i = 0; i < f->entries().size(); ++i) {
+      const auto& e = f->entries()[i];
+      EXPECT_LE(e.rmse, std::max(1e-3, double(e.rmse) * (std::max({e.ncp[0], e.ncp[1], e.ncp[2]}) ==
+                                                           std::max({e.samples[0], e.samples[1], e.samples[2]}))));
+      f->readPayload(int64_t(i));
+    }
+    std::remove(path.c_str());
+  }
+}
+
+TEST(Encoder, StreamingSourceEqualsInMemory) {
+  const int n = 40;
+  const std::vector<float> v = mlVolume(n);
+  const std::string raw = tmpPath("ml.raw");
+  std::ofstream(raw, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
+  EncoderOptions opt;
+  opt.levels = 3;
+  opt.blocksPerAxis = 4;
+  RawFileSource fileSrc(raw, {n, n, n}, ScalarType::Float32);
+  MarschnerLobbSource mlSrc({n, n, n});
+  InMemoryModels a, b;
+  encodeVolume(fileSrc, opt, a);
+  encodeVolume(mlSrc, opt, b);
+  const InMemoryModels c = encode(v, {n, n, n}, opt);
+  EXPECT_EQ(a.payloads, c.payloads);
+  EXPECT_EQ(b.payloads, c.payloads);
+  std::remove(raw.c_str());
+}
+
+TEST(Encoder, ThreadCountDoesNotChangeTheResult) {
+  const std::vector<float> v = mlVolume(49);
+  EncoderOptions opt;
+  opt.levels = 3;
+  opt.blocksPerAxis = 8;
+  opt.threads = 1;
+  const InMemoryModels a = encode(v, {49, 49, 49}, opt);
+  opt.threads = 3;
+  const InMemoryModels b = encode(v, {49, 49, 49}, opt);
+  EXPECT_EQ(a.payloads, b.payloads);
+}
+
+TEST(Encoder, CancellationThrowsAndLeavesNoFile) {
+  const std::vector<float> v = mlVolume(64);
+  ArraySource src(v.data(), {64, 64, 64});
+  EncoderOptions opt;
+  int calls = 0;
+  double last = -1;
+  bool monotone = true;
+  opt.progress = [&](double f) {
+    monotone = monotone && f >= last - 1e-12;
+    last = f;
+    return ++calls < 3;
+  };
+  const std::string path = tmpPath("cancel.afam");
+  EXPECT_THROW(encodeVolume(src, opt, path), Cancelled);
+  EXPECT_NE(access(path.c_str(), F_OK), 0);
+  EXPECT_TRUE(monotone);
+  // Without cancelling, progress reaches 1.
+  opt.progress = [&](double f) {
+    last = f;
+    return true;
+  };
+  encodeVolume(src, opt, path);
+  EXPECT_DOUBLE_EQ(last, 1.0);
+  std::remove(path.c_str());
+}
+
+TEST(Encoder, NonFiniteInputNamesTheBlock) {
+  std::vector<float> v(size_t(33 * 33 * 33), 1.f);
+  v[size_t((20 * 33 + 5) * 33 + 30)] = std::nanf("");
+  ArraySource src(v.data(), {33, 33, 33}, "bad");
+  InMemoryModels m;
+  try {
+    encodeVolume(src, EncoderOptions{}, m);
+    FAIL();
+  } catch (const NumericError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("(30, 5, 20)"), std::string::npos) << w;
+    EXPECT_NE(w.find("block (14, 2, 9) of level 3"), std::string::npos) << w;
+    EXPECT_NE(w.find("NaN"), std::string::npos) << w;
+  }
+}
+
+TEST(Encoder, InvalidOptions) {
+  std::vector<float> v(27, 1.f);
+  ArraySource src(v.data(), {3, 3, 3});
+  InMemoryModels m;
+  EncoderOptions opt;
+  opt.degree = 0;
+  EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
+  opt = EncoderOptions{};
+  opt.levels = 0;
+  EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
+  opt = EncoderOptions{};
+  opt.errorBound = -1;
+  EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
+}

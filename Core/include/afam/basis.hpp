@@ -92,7 +92,8 @@ AFAM_HD void basisOfDegree(const Knots& k, int s, Real u, int deg, Real* N) {
     Real saved = Real(0);
     for (int r = 0; r < j; ++r) {
       const Real denom = right[r + 1] + left[j - r];
-      const Real temp = denom != Real(0) ? N[r] / denom : Real(0);  // > 0 on a non-empty span
+      // Multiply by the reciprocal (not divide) so this matches the derivative path bit for bit.
+      const Real temp = denom != Real(0) ? N[r] * (Real(1) / denom) : Real(0);
       N[r] = saved + right[r + 1] * temp;
       saved = left[j - r] * temp;
     }
@@ -107,9 +108,9 @@ AFAM_HD void basisFunctions(const Knots& k, int s, Real u, Real* N) {
 }
 
 /// Basis functions N[0..p] and their first derivatives dN[0..p] with respect to u, in one
-/// triangular pass (The NURBS Book A2.3, first derivative only). Each knot difference is inverted
-/// once and reused by the derivative (p(p+1)/2 divisions in all): on a non-empty span every such
-/// difference is positive.
+/// triangular pass (The NURBS Book A2.3, first derivative only): the degree p-1 functions, then
+/// the last Cox-de Boor step whose inverted knot differences the derivative reuses
+/// (p(p+1)/2 divisions in all; on a non-empty span every such difference is positive).
 template <typename Real>
 AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const int p = k.degree;
@@ -118,25 +119,22 @@ AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N
     dN[0] = Real(0);
     return;
   }
-  Real left[kMaxOrder], right[kMaxOrder];
   Real lower[kMaxOrder];  // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
-  Real inv[kMaxOrder];    // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
-  N[0] = Real(1);
-  for (int j = 1; j <= p; ++j) {
-    left[j] = u - k.knot<Real>(s + 1 - j);
-    right[j] = k.knot<Real>(s + j) - u;
-    if (j == p)
-      for (int r = 0; r < p; ++r) lower[r] = N[r];
+  Real inv[kMaxOrder] = {};  // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
+  basisOfDegree(k, s, u, p - 1, lower);
+  // Last step of Cox-de Boor (degree p-1 -> p), keeping the reciprocals for the derivative.
+  {
     Real saved = Real(0);
-    for (int r = 0; r < j; ++r) {
-      const Real denom = right[r + 1] + left[j - r];
-      const Real invDenom = denom != Real(0) ? Real(1) / denom : Real(0);
-      if (j == p) inv[r] = invDenom;
-      const Real temp = N[r] * invDenom;
-      N[r] = saved + right[r + 1] * temp;
-      saved = left[j - r] * temp;
+    for (int r = 0; r < p; ++r) {
+      const Real right = k.knot<Real>(s + r + 1) - u;     // right[r+1]
+      const Real left = u - k.knot<Real>(s + r + 1 - p);  // left[p-r]
+      const Real denom = right + left;
+      inv[r] = denom != Real(0) ? Real(1) / denom : Real(0);
+      const Real temp = lower[r] * inv[r];
+      N[r] = saved + right * temp;
+      saved = left * temp;
     }
-    N[j] = saved;
+    N[p] = saved;
   }
   // dN_r = p (N_{r-1,p-1} / (t[s+r] - t[s+r-p]) - N_{r,p-1} / (t[s+r+1] - t[s+r+1-p])).
   const Real deg = Real(p);

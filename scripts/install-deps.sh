@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libgtest-dev libbenchmark-dev libpng-dev zlib1g-dev
   paraview paraview-dev python3-paraview python3-numpy python3-matplotlib
   xvfb xauth mesa-utils openmpi-bin libopenmpi-dev
+  libzfp-dev libfpzip-dev
   # -dev packages ParaView's CMake config needs but paraview-dev does not declare
   qtbase5-dev qttools5-dev libqt5svg5-dev libutfcpp-dev libhdf5-mpi-dev libnetcdf-dev libgdal-dev
   libtiff-dev liblz4-dev libglew-dev libgl2ps-dev libtheora-dev libogg-dev libavformat-dev

@@ -12,14 +12,15 @@
 namespace afam::cli {
 
 int runVerify(int argc, char** argv) {
-  Args args(argc, argv, {"against", "dims", "type", "level"}, {"progress"});
-  const char* usage = "afam verify FILE.afam [--against IN.raw [--dims X,Y,Z] [--type T] [--level K]]";
+  Args args(argc, argv, {"against", "dims", "type", "level", "max-rmse"}, {"progress"});
+  const char* usage = "afam verify FILE.afam [--against IN.raw [--dims X,Y,Z] [--type T] [--level K] [--max-rmse E]]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
         "Reads every micro-model and checks its CRC32. With --against, also decodes the finest level\n"
         "(or --level K) on its sample grid and compares it with the raw volume at the same sample\n"
         "positions, each sample once, streaming; prints rmse=<number> and max_error=<number>.\n"
+        "With --max-rmse E the exit status is 1 when the RMSE is above E.\n"
         "Exit status 1 on any checksum mismatch or error.\n",
         usage);
     return 0;
@@ -80,6 +81,8 @@ int runVerify(int argc, char** argv) {
   bar.finish();
   const double rmse = std::sqrt(sumSq / double(std::max<int64_t>(count, 1)));
   std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)count, rmse, maxErr);
+  if (args.has("max-rmse") && !(rmse <= args.real("max-rmse", 0)))
+    throw Error("rmse " + std::to_string(rmse) + " is above --max-rmse " + args.str("max-rmse"));
   return 0;
 }
 

@@ -59,11 +59,11 @@ int main(int argc, char** argv) {
     try {
       return c.run(argc - 1, argv + 1);
     } catch (const afam::Error& e) {
-      std::fprintf(stderr, "\nafam %s: error: %s\n", c.name, e.what());
+      std::fprintf(stderr, "afam %s: error: %s\n", c.name, e.what());
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "\nafam %s: error: %s\n", c.name, e.what());
+      std::fprintf(stderr, "afam %s: error: %s\n", c.name, e.what());
     } catch (...) {
-      std::fprintf(stderr, "\nafam %s: error: unknown exception\n", c.name);
+      std::fprintf(stderr, "afam %s: error: unknown exception\n", c.name);
     }
     return 1;
   }

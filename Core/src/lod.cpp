@@ -24,6 +24,7 @@ void blockBox(const Partition& p, int level, Int3 ijk, double lo[3], double hi[3
 
 int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Camera& c) const {
   const int finest = p.levels() - 1;
+  if (options_.forceLevel >= 0) return std::min(options_.forceLevel, finest);
   double lo[3], hi[3];
   blockBox(p, level, ijk, lo, hi);
   if (options_.policy == LodPolicy::Distance) {

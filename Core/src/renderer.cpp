@@ -7,6 +7,7 @@
 
 #include "afam/cpu_raycaster.hpp"
 #include "afam/errors.hpp"
+#include "afam/predictors/prefetch_predictors.hpp"
 
 namespace afam {
 
@@ -33,7 +34,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options)
     throw InvalidArgument("renderer: sample distance must be > 0");
   cache_ = std::make_unique<LruCache>(file_, options_.cache);
   if (options_.storageMBps > 0) cache_->setBandwidthCap(options_.storageMBps * 1e6);
-  predictor_ = makePredictor(options_.prefetch);
+  if (!isPrefetchPredictorName(options_.prefetch)) predictor_ = makePredictor(options_.prefetch);
   prefetcher_ = std::make_unique<Prefetcher>();
   const VolumeHeader& h = file_->header();
   tfLo_ = h.valueMin;
@@ -42,6 +43,15 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options)
       options_.hasTransferFunction ? options_.transferFunction : TransferFunction::preset(tfLo_, tfHi_);
   options_.transferFunction = tf;
   tf_ = tf.table(std::max(2, options_.tfTableSize), tfLo_, tfHi_);
+  if (!predictor_) {  // appa | forecache | lstm (issue 5): they need the file and the view settings
+    PredictorContext ctx;
+    ctx.file = file_;
+    ctx.lod = options_.lod;
+    ctx.tfTable = tf_;
+    ctx.tfLo = tfLo_;
+    ctx.tfHi = tfHi_;
+    predictor_ = makePrefetchPredictor(options_.prefetch, ctx);
+  }
   // Finest boundaries per axis (voxel coordinates) from the partition's finest level.
   const Partition& p = file_->partition();
   const int finest = p.levels() - 1;
@@ -86,10 +96,14 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.slots.clear();
   fr.pool.clear();
   fr.entries.clear();
+  // Opacity corrected for the sample distance once per frame, not per sample.
   fr.tf = tf_;
+  const float ratio =
+      float(double(options_.sampleDistance) / options_.transferFunction.referenceDistance);
+  for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
   v.tfMin = float(tfLo_);
   v.tfMax = float(tfHi_);
-  v.tfReferenceDistance = float(options_.transferFunction.referenceDistance);
+  v.tfReferenceDistance = options_.sampleDistance;
   v.sampleDistance = options_.sampleDistance;
   v.shading = options_.shading ? 1 : 0;
   v.ambient = options_.ambient;
@@ -172,16 +186,25 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st) {
   prepare(camera, fr, st);
   history_.push_back(camera);
   if (history_.size() > 16) history_.erase(history_.begin());
-  // Prefetch the predicted next view while this one renders.
-  Camera next;
-  if (predictor_->predict(history_, next)) {
+  // Prefetch the predicted next view while this one renders. The prediction itself runs in the
+  // prefetch thread (off the frame's critical path); predictors that know the blocks directly
+  // (APPA's table, ForeCache's signature ranking) hand them over without a view selection.
+  if (options_.prefetch != "none") {
     LruCache* cache = cache_.get();
     const Renderer* self = this;
-    prefetcher_->start([cache, self, next](const std::atomic<bool>& stop, uint64_t& loaded) {
-      const Selection s = self->select(next);
-      for (const BlockRef& b : s.visible) {
+    const Predictor* predictor = predictor_.get();
+    prefetcher_->start([cache, self, predictor, history = history_](const std::atomic<bool>& stop,
+                                                                    uint64_t& loaded) {
+      std::vector<int64_t> entries;
+      const auto* direct = dynamic_cast<const EntryPredictor*>(predictor);
+      if (!(direct && direct->predictEntries(history, entries))) {
+        Camera next;
+        if (!predictor->predict(history, next)) return;
+        for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
+      }
+      for (int64_t e : entries) {
         if (stop.load(std::memory_order_acquire)) return;
-        if (cache->prefetch(b.entry)) ++loaded;
+        if (cache->prefetch(e)) ++loaded;
       }
     });
   }

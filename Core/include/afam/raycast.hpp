@@ -67,7 +67,10 @@
 //      c_out = c * (ambient + diffuse * |n.L|) + specular * |n.H|^specularPower * specularColor
 //  (H = L for a headlight). Where |gradient| < 1e-12 the sample is unshaded (c_out = c).
 //  With Shaded = false no gradient is ever computed (the evaluation is compiled with
-//  WithGradient = false).
+//  WithGradient = false); with Shaded = true it is computed only for samples whose classified
+//  opacity is non-zero (value first, then value + gradient).
+//  A table whose alpha is already corrected for the sample distance is signalled by
+//  tfReferenceDistance == sampleDistance: no pow() per sample then (the Renderer does this).
 //  Compositing is front to back with premultiplied colour; the ray stops once the accumulated
 //  opacity reaches terminationOpacity (0.95). castRay returns premultiplied RGBA; compose it over a
 //  background with c + (1 - a) * background.
@@ -415,11 +418,15 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
                         f.camera.eye[2] + t * d[2]};
     float value = 0.f;
     float g[3] = {0.f, 0.f, 0.f};
-    if (!sampler.template sample<Shaded>(f, p, value, g)) continue;
+    // Value first; the gradient only for samples the transfer function makes visible.
+    if (!sampler.template sample<false>(f, p, value, g)) continue;
     RGBA c = classify(f, value);
     if (c.a <= 0.f) continue;
-    c.a = correctOpacity(c.a, ratio);
-    if (Shaded) shadePhong(f, d, g, c);
+    if (ratio != 1.f) c.a = correctOpacity(c.a, ratio);
+    if (Shaded) {
+      sampler.template sample<true>(f, p, value, g);
+      shadePhong(f, d, g, c);
+    }
     compositeFrontToBack(acc, c);
     if (acc.a >= f.terminationOpacity) break;
   }

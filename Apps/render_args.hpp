@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Options shared by `afam render` and `afam replay` (renderer settings, image size, trajectory).
+#pragma once
+
+#include <string>
+#include <utility>
+
+#include "afam/predictors/prefetch_predictors.hpp"
+#include "afam/renderer.hpp"
+#include "cli.hpp"
+
+namespace afam::cli {
+
+inline const char* renderOptionsHelp() {
+  return "  --size W,H             image size (or N for N x N; default 256,256)\n"
+         "  --cache-blocks N       RAM cache budget in micro-models (default 200, the paper's)\n"
+         "  --cache-bytes B        RAM cache budget in bytes (instead of, or with, --cache-blocks)\n"
+         "  --prefetch P           none | linear | appa | forecache | lstm\n"
+         "  --cold                 evict the file from the OS page cache before each point of view\n"
+         "  --storage-mbps R       emulate storage of R MB/s (1 MB = 1e6 B; sleeps after reads)\n"
+         "  --sample-distance D    ray sample spacing in the normalised [-1,1]^3 frame (default 0.005)\n"
+         "  --shading on|off       Phong shading from the model's gradient (default on)\n"
+         "  --lod distance|screen  the paper's distance bands (default) or projected sample size\n"
+         "  --pixel-budget P       screen policy: allowed projected sample spacing in pixels (1)\n"
+         "  --no-culling           disable frustum and transfer-function culling\n"
+         "  --threads N            ray-casting threads (default: all cores)\n";
+}
+
+inline const std::set<std::string>& renderValueOptions() {
+  static const std::set<std::string> s = {"size", "cache-blocks", "cache-bytes", "prefetch",
+                                          "storage-mbps", "sample-distance", "shading", "lod",
+                                          "pixel-budget", "threads", "trajectory"};
+  return s;
+}
+
+inline std::pair<int, int> parseSize(const std::string& s) {
+  const size_t c = s.find_first_of(",x");
+  const long long w = Args::parseInt(s.substr(0, c), "--size");
+  const long long h = c == std::string::npos ? w : Args::parseInt(s.substr(c + 1), "--size");
+  if (w < 1 || h < 1 || w > 16384 || h > 16384)
+    throw InvalidArgument("--size: width and height must be in [1, 16384]");
+  return {int(w), int(h)};
+}
+
+inline RenderOptions parseRenderOptions(const Args& a) {
+  RenderOptions o;
+  o.threads = int(a.integer("threads", 0));
+  if (o.threads < 0) throw InvalidArgument("--threads must be >= 0");
+  o.sampleDistance = float(a.real("sample-distance", 0.005));
+  if (!(o.sampleDistance > 0)) throw InvalidArgument("--sample-distance must be > 0");
+  const std::string sh = a.str("shading", "on");
+  if (sh != "on" && sh != "off") throw InvalidArgument("--shading must be on or off");
+  o.shading = sh == "on";
+  const std::string lod = a.str("lod", "distance");
+  if (lod == "distance") o.lod.policy = LodPolicy::Distance;
+  else if (lod == "screen") o.lod.policy = LodPolicy::Screen;
+  else throw InvalidArgument("--lod must be distance or screen");
+  o.lod.pixelBudget = a.real("pixel-budget", 1.0);
+  if (!(o.lod.pixelBudget > 0)) throw InvalidArgument("--pixel-budget must be > 0");
+  if (a.has("no-culling")) o.lod.frustumCulling = o.lod.tfCulling = false;
+  const long long blocks = a.integer("cache-blocks", a.has("cache-bytes") ? 0 : 200);
+  const long long bytes = a.integer("cache-bytes", 0);
+  if (blocks < 0 || bytes < 0) throw InvalidArgument("cache budgets must be >= 0");
+  o.cache = CacheBudget{uint64_t(bytes), uint64_t(blocks)};
+  o.prefetch = a.str("prefetch", "none");
+  o.cold = a.has("cold");
+  o.storageMBps = a.real("storage-mbps", 0);
+  if (o.storageMBps < 0) throw InvalidArgument("--storage-mbps must be >= 0");
+  if (!isPrefetchPredictorName(o.prefetch)) (void)makePredictor(o.prefetch);  // validates the name
+  return o;
+}
+
+}  // namespace afam::cli

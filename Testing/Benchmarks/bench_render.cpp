@@ -1,0 +1,130 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Renderer benchmarks (issue 4). Run by hand; numbers and commands in docs/BENCHMARKS.md.
+//
+//  * BM_LookupVisibleBlocks/<level>: O(1) model lookup. A FAM (fixed NCP) encoding of ML 129^3
+//    with 8 finest blocks per axis and 4 levels is rendered with every block forced to one level:
+//    level 1 = 8 visible blocks, level 2 = 64, level 3 = 512. Image size, camera, sample distance
+//    and the transfer function (constant low opacity, so no early termination and every sample
+//    classified and shaded) are fixed, so every variant evaluates the same number of samples; only
+//    the number of visible models changes. A linear scan of the visible list would grow ~64x.
+//  * BM_LinearScanReference/<level>: the same frames with the authors' design (scan the visible
+//    block list for every sample), as the side-by-side baseline.
+// The encoding is written once to $TMPDIR (or /tmp).
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "afam/cpu_raycaster.hpp"
+#include "afam/encoder.hpp"
+#include "afam/marschner_lobb.hpp"
+#include "afam/renderer.hpp"
+
+using namespace afam;
+
+namespace {
+
+std::shared_ptr<const AfamFile> lookupFile() {
+  static std::shared_ptr<const AfamFile> file = [] {
+    const char* tmp = std::getenv("TMPDIR");
+    const std::string path = std::string(tmp ? tmp : "/tmp") + "/afam_bench_lookup_129_fixed.afam";
+    if (::access(path.c_str(), R_OK) != 0) {
+      const int n = 129;
+      std::vector<float> data(size_t(n) * n * n);
+      marschnerLobbSlab(MarschnerLobb{}, {n, n, n}, 0, n, data.data());
+      ArraySource src(data.data(), {n, n, n});
+      EncoderOptions o;
+      o.levels = 4;
+      o.blocksPerAxis = 8;
+      o.mode = EncodingMode::Fixed;
+      o.fixedNcp = 8;
+      encodeVolume(src, o, path);
+    }
+    return AfamFile::open(path);
+  }();
+  return file;
+}
+
+RenderOptions lookupOptions(int level) {
+  RenderOptions o;
+  o.threads = 1;
+  o.sampleDistance = 0.01f;
+  o.cache = CacheBudget{};
+  o.lod.forceLevel = level;
+  o.lod.frustumCulling = o.lod.tfCulling = false;
+  o.hasTransferFunction = true;
+  o.transferFunction.colors = {{0.0, 0.2, 0.4, 0.9}, {1.0, 0.9, 0.5, 0.1}};
+  o.transferFunction.opacities = {{0.0, 0.002}, {1.0, 0.002}};
+  return o;
+}
+
+Camera lookupCamera() { return Camera::lookAt({3.2, 2.4, 2.0}, {0, 0, 0}, {0, 0, 1}, 40, 96, 96); }
+
+/// The authors' design: scan the visible blocks for the one containing the sample.
+struct LinearScanSampler {
+  const std::vector<std::array<float, 6>>* boxes;  // voxel lo/hi per slot
+  template <bool G>
+  bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
+    float x[3];
+    toVoxel(f, p, x);
+    int32_t slot = -1;
+    for (size_t s = 0; s < boxes->size(); ++s) {
+      const auto& b = (*boxes)[s];
+      if (x[0] >= b[0] && x[0] <= b[3] && x[1] >= b[1] && x[1] <= b[4] && x[2] >= b[2] && x[2] <= b[5]) {
+        slot = int32_t(s);
+        break;
+      }
+    }
+    if (slot < 0) return false;
+    const FrameSlot& s = f.slots[slot];
+    float gv[3] = {0, 0, 0};
+    value = sampleSplineSlot<G>(s, f.pool, x, gv);
+    if (G)
+      for (int a = 0; a < 3; ++a) gradient[a] = gv[a] * f.voxelPerUnit[a];
+    return true;
+  }
+};
+
+void BM_LookupVisibleBlocks(benchmark::State& state) {
+  Renderer r(lookupFile(), lookupOptions(int(state.range(0))));
+  PreparedFrame fr;
+  FrameStats st;
+  r.prepare(lookupCamera(), fr, st);
+  ImageRGBA img;
+  for (auto _ : state) {
+    renderCpu(fr.view, img, 1);
+    benchmark::DoNotOptimize(img.rgba.data());
+  }
+  state.counters["visible_blocks"] = double(st.slots);
+}
+BENCHMARK(BM_LookupVisibleBlocks)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_LinearScanReference(benchmark::State& state) {
+  Renderer r(lookupFile(), lookupOptions(int(state.range(0))));
+  PreparedFrame fr;
+  FrameStats st;
+  r.prepare(lookupCamera(), fr, st);
+  std::vector<std::array<float, 6>> boxes;
+  const Partition& p = r.file().partition();
+  for (int64_t e : fr.entries) {
+    const ModelEntry& m = r.file().entries()[size_t(e)];
+    const BlockExtent x = p.extent(m.level, m.block);
+    boxes.push_back({float(x.lo[0]), float(x.lo[1]), float(x.lo[2]), float(x.hi[0]), float(x.hi[1]),
+                     float(x.hi[2])});
+  }
+  LinearScanSampler s{&boxes};
+  ImageRGBA img;
+  for (auto _ : state) {
+    renderCpuWith(fr.view, s, img, 1);
+    benchmark::DoNotOptimize(img.rgba.data());
+  }
+  state.counters["visible_blocks"] = double(st.slots);
+}
+BENCHMARK(BM_LinearScanReference)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

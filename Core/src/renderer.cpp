@@ -210,7 +210,10 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st) {
   }
   const auto t0 = Clock::now();
   ImageRGBA image;
-  renderCpu(fr.view, image, options_.threads);
+  if (caster_)
+    caster_(fr, image);
+  else
+    renderCpu(fr.view, image, options_.threads);
   st.renderMs = msSince(t0);
   prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
   cache_->clearPinned();

@@ -56,8 +56,24 @@ std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const 
 }
 
 void PosePredictorAdapter::update(const std::vector<Camera>& history) const {
-  if (history.size() == 1) pose_->reset();
-  pose_->observe(poseOf(history.back()));
+  // The renderer's history is bounded and a frame's job may be dropped before it runs (a very fast
+  // frame), so align the history with the cameras already seen and feed only the new ones.
+  const std::size_t n = history.size();
+  std::size_t fresh = n;
+  for (std::size_t m = 1; m <= n; ++m) {
+    const std::size_t keep = n - m;
+    if (keep > seen_.size()) continue;
+    bool same = true;
+    for (std::size_t i = 0; i < keep && same; ++i) same = history[i].eye == seen_[seen_.size() - keep + i];
+    if (same) {
+      fresh = m;
+      break;
+    }
+  }
+  if (fresh == n) pose_->reset();  // a new trajectory (or no overlap with what was seen)
+  for (std::size_t i = n - fresh; i < n; ++i) pose_->observe(poseOf(history[i]));
+  seen_.clear();
+  for (const Camera& c : history) seen_.push_back(c.eye);
 }
 
 bool PosePredictorAdapter::predict(const std::vector<Camera>& history, Camera& next) const {
@@ -107,7 +123,8 @@ bool ForeCachePredictor::predictEntries(const std::vector<Camera>& history,
   if (history.empty()) return false;
   std::lock_guard<std::mutex> g(mutex_);
   update(history);
-  if (history.size() < 2) return false;
+  entries.clear();
+  if (history.size() < 2) return true;  // learnt from it; nothing to predict yet
   const auto& fc = static_cast<const ForeCachePosePredictor&>(*pose_);
   const std::vector<Pose> cands = fc.candidatePoses(2);
   entries = visible_(cands.front());

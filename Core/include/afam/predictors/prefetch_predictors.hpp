@@ -2,9 +2,9 @@
 // The issue-5 predictors behind the renderer's Predictor interface (prefetch.hpp): appa, forecache
 // and lstm, run live in the prefetch thread.
 //
-// The renderer calls predict(history, next) once per frame, after appending the frame's camera to
-// its (bounded) history; the stateful predictors here learn from history.back() at each call and
-// start over when the history holds a single camera (a new trajectory).
+// The renderer calls predict(history, next) (or predictEntries) once per frame in the prefetch
+// thread, with its bounded history of cameras; the stateful predictors here learn from the cameras
+// they have not seen yet and start over when the history does not continue the previous one.
 // Predictors that know the blocks to fetch without a visibility computation (APPA's table,
 // ForeCache's signature ranking) also implement EntryPredictor; the renderer's prefetch job asks
 // for it first and falls back to selecting the predicted camera's view.
@@ -58,11 +58,13 @@ class PosePredictorAdapter : public Predictor {
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
 
  protected:
-  /// Feeds history.back() (resetting on a one-camera history). Caller holds mutex_.
+  /// Feeds the cameras of `history` not seen at the previous call (all of them, after a reset,
+  /// when the history does not continue the previous one). Caller holds mutex_.
   void update(const std::vector<Camera>& history) const;
   std::unique_ptr<PosePredictor> pose_;
   std::string name_ = pose_ ? pose_->name() : std::string("?");
   mutable std::mutex mutex_;
+  mutable std::vector<Vec3> seen_;
 };
 
 class AppaPredictor : public Predictor, public EntryPredictor {

@@ -69,8 +69,10 @@ int runEncode(int argc, char** argv) {
               (long long)d[0], (long long)d[1], (long long)d[2], scalarTypeName(source->type()),
               modeName(opt.mode), search.c_str(), opt.levels, opt.blocksPerAxis, opt.degree, s.bound,
               opt.relativeBound ? " (relative)" : "");
-  std::printf("seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g fits=%lld blocks=%lld\n", s.seconds,
-              s.threads, s.voxelsPerSecondPerThread(), (long long)s.fits, (long long)s.blocks);
+  std::printf("seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
+              "fits=%lld blocks=%lld\n",
+              s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
+              (long long)s.fits, (long long)s.blocks);
   std::printf("bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
               (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
               double(s.bytesIn) / double(s.bytesOut), double(s.inputVoxels) * 4.0 / double(s.bytesOut),

@@ -25,7 +25,8 @@ namespace {
 constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
 constexpr uint32_t kVersion = 1;
 constexpr uint32_t kEndianTag = 0x01020304u;
-constexpr uint64_t kAlign = 64;
+constexpr uint64_t kAlign = 64;         // start of the payload area
+constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
 
 // On-disk header, version 1: 1024 bytes, every member at a fixed offset (asserted below).
@@ -56,7 +57,8 @@ struct FileHeaderV1 {
   char scalarName[64];
   int32_t levelBlocks[kMaxLevels][3];
   uint64_t totalPayloadBytes;
-  uint8_t reserved1[580];
+  uint32_t payloadAlignment;  // power of two in [4, 4096]: every payload offset is a multiple
+  uint8_t reserved1[576];
   uint32_t headerChecksum;  // CRC32 of bytes [0, 1020)
 };
 static_assert(sizeof(FileHeaderV1) == 1024, "header size");
@@ -84,38 +86,34 @@ static_assert(offsetof(FileHeaderV1, fileSize) == 168, "layout");
 static_assert(offsetof(FileHeaderV1, scalarName) == 176, "layout");
 static_assert(offsetof(FileHeaderV1, levelBlocks) == 240, "layout");
 static_assert(offsetof(FileHeaderV1, totalPayloadBytes) == 432, "layout");
-static_assert(offsetof(FileHeaderV1, reserved1) == 440, "layout");
+static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
+static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
 static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
 
-// On-disk index entry, version 1: 80 bytes.
+// On-disk index entry, version 1: 40 bytes. Level, block ijk, samples and degree are implied by
+// the entry's position (the index is complete and ordered) and the header; the payload size by
+// the NCP. Keeping the entry this small is what makes the file smaller than the paper's layout
+// even for the smallest models (NCP 3: 108 + 40 bytes against 169).
 struct IndexEntryV1 {
   uint64_t offset;
-  uint64_t size;
-  int32_t level;
-  int32_t block[3];
-  int32_t ncp[3];
-  int32_t samples[3];
-  uint8_t degree[3];
-  uint8_t flags;  // 0
+  uint16_t ncp[3];
+  uint16_t flags;  // 0; any other value is an unknown feature
   float minValue;
   float maxValue;
   float rmse;
   float maxError;
   uint32_t checksum;
+  uint32_t reserved;  // 0
 };
-static_assert(sizeof(IndexEntryV1) == 80, "entry size");
-static_assert(offsetof(IndexEntryV1, size) == 8, "layout");
-static_assert(offsetof(IndexEntryV1, level) == 16, "layout");
-static_assert(offsetof(IndexEntryV1, block) == 20, "layout");
-static_assert(offsetof(IndexEntryV1, ncp) == 32, "layout");
-static_assert(offsetof(IndexEntryV1, samples) == 44, "layout");
-static_assert(offsetof(IndexEntryV1, degree) == 56, "layout");
-static_assert(offsetof(IndexEntryV1, flags) == 59, "layout");
-static_assert(offsetof(IndexEntryV1, minValue) == 60, "layout");
-static_assert(offsetof(IndexEntryV1, maxValue) == 64, "layout");
-static_assert(offsetof(IndexEntryV1, rmse) == 68, "layout");
-static_assert(offsetof(IndexEntryV1, maxError) == 72, "layout");
-static_assert(offsetof(IndexEntryV1, checksum) == 76, "layout");
+static_assert(sizeof(IndexEntryV1) == 40, "entry size");
+static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
+static_assert(offsetof(IndexEntryV1, flags) == 14, "layout");
+static_assert(offsetof(IndexEntryV1, minValue) == 16, "layout");
+static_assert(offsetof(IndexEntryV1, maxValue) == 20, "layout");
+static_assert(offsetof(IndexEntryV1, rmse) == 24, "layout");
+static_assert(offsetof(IndexEntryV1, maxError) == 28, "layout");
+static_assert(offsetof(IndexEntryV1, checksum) == 32, "layout");
+static_assert(offsetof(IndexEntryV1, reserved) == 36, "layout");
 
 struct CrcTables {
   uint32_t t[8][256];
@@ -134,7 +132,7 @@ const CrcTables& crcTables() {
   return tables;
 }
 
-uint64_t alignUp(uint64_t v) { return (v + kAlign - 1) / kAlign * kAlign; }
+uint64_t alignUp(uint64_t v, uint64_t a = kAlign) { return (v + a - 1) / a * a; }
 
 std::string sysError() { return std::strerror(errno); }
 
@@ -177,7 +175,8 @@ void pwriteAll(int fd, const void* data, uint64_t bytes, uint64_t offset, const 
 }
 
 // Checked product of three non-negative ints times 4 (payload bytes); false on overflow.
-bool checkedPayloadBytes(const int32_t ncp[3], uint64_t& out) {
+template <typename Int>
+bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
   uint64_t v = 4;
   for (int a = 0; a < 3; ++a) {
     if (ncp[a] < 1) return false;
@@ -280,6 +279,8 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     throw bad("header checksum mismatch (header damaged)");
   if (h.headerSize != sizeof(FileHeaderV1) || h.entrySize != sizeof(IndexEntryV1))
     throw bad("header or index entry size does not match version 1");
+  if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 || (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
+    throw bad("payload alignment " + std::to_string(h.payloadAlignment) + " is not a power of two in [4, 4096]");
   if (h.fileSize != f->fileSize_)
     throw bad(h.fileSize > f->fileSize_
                   ? "truncated: " + std::to_string(f->fileSize_) + " bytes, header says " +
@@ -354,42 +355,35 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     const IndexEntryV1& r = raw[i];
     const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
     const std::string where = "index entry " + std::to_string(i) + " (" + blockName(level, ijk) + ")";
-    if (r.level != level || r.block[0] != ijk[0] || r.block[1] != ijk[1] || r.block[2] != ijk[2])
-      throw bad(where + ": names " + blockName(r.level, {r.block[0], r.block[1], r.block[2]}) +
-                ", index out of order");
+    if (r.flags != 0 || r.reserved != 0) throw bad(where + ": unknown entry flags");
     const BlockExtent e = part.extent(level, ijk);
     ModelEntry& m = f->entries_[i];
     m.level = level;
     m.block = ijk;
     for (int a = 0; a < 3; ++a) {
-      if (r.samples[a] != e.samples[a])
-        throw bad(where + ": " + std::to_string(r.samples[a]) + " samples on axis " + std::to_string(a) +
-                  ", the partition says " + std::to_string(e.samples[a]));
+      m.samples[a] = e.samples[a];
       if (ds) {
-        if (r.ncp[a] != e.samples[a] + 2 || r.degree[a] != 1)
-          throw bad(where + ": downsampled block must hold samples + 2 values and degree 1 per axis");
+        m.degree[a] = 1;
+        if (r.ncp[a] != e.samples[a] + 2)
+          throw bad(where + ": downsampled block must hold samples + 2 values per axis");
       } else {
         const int p = effDegree(vh.degree, e.samples[a]);
-        if (r.degree[a] != p) throw bad(where + ": degree " + std::to_string(r.degree[a]) + " on axis " +
-                                        std::to_string(a) + ", expected " + std::to_string(p));
+        m.degree[a] = p;
         if (r.ncp[a] < p + 1 || r.ncp[a] > e.samples[a])
           throw bad(where + ": NCP " + std::to_string(r.ncp[a]) + " on axis " + std::to_string(a) +
                     " outside [" + std::to_string(p + 1) + ", " + std::to_string(e.samples[a]) + "]");
       }
       m.ncp[a] = r.ncp[a];
-      m.degree[a] = r.degree[a];
-      m.samples[a] = r.samples[a];
     }
     uint64_t bytes = 0;
-    if (!checkedPayloadBytes(r.ncp, bytes) || bytes != r.size)
-      throw bad(where + ": payload size " + std::to_string(r.size) + " does not match its NCP");
-    if (r.offset < h.payloadOffset || r.offset % kAlign != 0 || r.offset > f->fileSize_ ||
-        r.size > f->fileSize_ - r.offset)
-      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(r.size) +
-                ") lies outside the payload area (file size " + std::to_string(f->fileSize_) + ")");
-    payloadSum += r.size;
+    if (!checkedPayloadBytes(r.ncp, bytes)) throw bad(where + ": payload size overflows");
+    if (r.offset < h.payloadOffset || r.offset % h.payloadAlignment != 0 || r.offset > f->fileSize_ ||
+        bytes > f->fileSize_ - r.offset)
+      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(bytes) +
+                ") lies outside the payload area or is misaligned (file size " + std::to_string(f->fileSize_) + ")");
+    payloadSum += bytes;
     m.offset = r.offset;
-    m.size = r.size;
+    m.size = bytes;
     m.minValue = r.minValue;
     m.maxValue = r.maxValue;
     m.rmse = r.rmse;
@@ -442,6 +436,10 @@ AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
   entries_.resize(static_cast<size_t>(total));
   present_.assign(static_cast<size_t>(total), 0);
   payloadOffset_ = alignUp(sizeof(FileHeaderV1) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
+  for (int a = 0; a < 3; ++a)
+    if (partition_.extent(header.levels - 1, {0, 0, 0}).samples[a] > 65533 ||
+        partition_.extent(0, {0, 0, 0}).samples[a] > 65533)
+      throw InvalidArgument("writer: micro-blocks of more than 65533 samples per axis (use more blocks)");
   end_ = payloadOffset_;
 
   std::string tmpl = path + ".tmp-XXXXXX";
@@ -476,8 +474,9 @@ void AfamWriter::add(const ModelEntry& in, const float* payload) {
     if (in.samples[a] != e.samples[a])
       throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": samples disagree with the partition");
     const int p = effDegree(header_.degree, e.samples[a]);
-    const bool ok = ds ? (in.ncp[a] == e.samples[a] + 2 && in.degree[a] == 1)
-                       : (in.degree[a] == p && in.ncp[a] >= p + 1 && in.ncp[a] <= e.samples[a]);
+    const bool ok = (ds ? (in.ncp[a] == e.samples[a] + 2 && in.degree[a] == 1)
+                        : (in.degree[a] == p && in.ncp[a] >= p + 1 && in.ncp[a] <= e.samples[a])) &&
+                    in.ncp[a] <= 65535;
     if (!ok)
       throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": NCP/degree invalid on axis " +
                             std::to_string(a));
@@ -491,7 +490,7 @@ void AfamWriter::add(const ModelEntry& in, const float* payload) {
   if (present_[slot]) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " added twice");
   const uint64_t offset = end_;
   pwriteAll(fd_, payload, bytes, offset, tmpPath_);
-  end_ = alignUp(offset + bytes);
+  end_ = alignUp(offset + bytes, kPayloadAlign);
   ModelEntry& m = entries_[slot];
   m = in;
   m.offset = offset;
@@ -517,14 +516,7 @@ void AfamWriter::commit() {
     IndexEntryV1& r = raw[i];
     std::memset(&r, 0, sizeof r);
     r.offset = m.offset;
-    r.size = m.size;
-    r.level = m.level;
-    for (int a = 0; a < 3; ++a) {
-      r.block[a] = m.block[a];
-      r.ncp[a] = m.ncp[a];
-      r.samples[a] = m.samples[a];
-      r.degree[a] = static_cast<uint8_t>(m.degree[a]);
-    }
+    for (int a = 0; a < 3; ++a) r.ncp[a] = static_cast<uint16_t>(m.ncp[a]);
     r.minValue = m.minValue;
     r.maxValue = m.maxValue;
     r.rmse = m.rmse;
@@ -533,8 +525,7 @@ void AfamWriter::commit() {
     payloadSum += m.size;
   }
   const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
-  // The last payload is padded to 64 bytes too, so the file size is a multiple of 64.
-  uint64_t fileSize = end_;
+  const uint64_t fileSize = end_;
   FileHeaderV1 h;
   std::memset(&h, 0, sizeof h);
   std::memcpy(h.magic, kMagic, 8);
@@ -567,6 +558,7 @@ void AfamWriter::commit() {
     for (int a = 0; a < 3; ++a) h.levelBlocks[l][a] = b[a];
   }
   h.totalPayloadBytes = payloadSum;
+  h.payloadAlignment = kPayloadAlign;
   h.headerChecksum = crc32(&h, offsetof(FileHeaderV1, headerChecksum));
   try {
     if (::ftruncate(fd_, static_cast<off_t>(fileSize)) != 0)

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <limits>
 #include <mutex>
@@ -27,6 +28,12 @@ namespace afam {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -561,6 +568,7 @@ void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode 
 
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
   const auto t0 = Clock::now();
+  const double cpu0 = processCpuSeconds();
   if (opt.degree < 1 || opt.degree > 5) throw InvalidArgument("encode: degree " + std::to_string(opt.degree) + " outside [1, 5]");
   if (!(opt.errorBound >= 0) || !std::isfinite(opt.errorBound))
     throw InvalidArgument("encode: error bound must be finite and >= 0");
@@ -824,8 +832,9 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
     stats.maxError = std::max(stats.maxError, ls.maxError);
   }
   stats.fitSeconds = secondsSince(tFit0);
-  stats.bytesOut = 1024 + uint64_t(stats.blocks) * 80 + stats.payloadBytes;
+  stats.bytesOut = 1024 + uint64_t(stats.blocks) * 40 + stats.payloadBytes;  // file layout, no padding
   stats.seconds = secondsSince(t0);
+  stats.cpuSeconds = processCpuSeconds() - cpu0;
   report(0);
   return stats;
 }
@@ -833,9 +842,11 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath) {
   FileSink sink(outPath);
   const auto t0 = Clock::now();
+  const double cpu0 = processCpuSeconds();
   EncodeStats stats = encodeVolume(source, options, sink);
   stats.bytesOut = sink.commit();
   stats.seconds = secondsSince(t0);
+  stats.cpuSeconds = processCpuSeconds() - cpu0;
   return stats;
 }
 

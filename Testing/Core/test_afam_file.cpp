@@ -179,7 +179,7 @@ TEST(AfamFile, RoundTripAnyOrder) {
       EXPECT_EQ(g.relativeBound, h.relativeBound);
       EXPECT_EQ(g.mode, h.mode);
       ASSERT_EQ(f->entries().size(), m.entries.size());
-      EXPECT_EQ(f->fileSize() % 64, 0u);
+      EXPECT_EQ(f->payloadOffset() % 64, 0u);
       for (size_t i = 0; i < m.entries.size(); ++i) {
         const ModelEntry& a = m.entries[i];
         const int64_t idx = f->entryIndex(a.level, a.block);
@@ -190,7 +190,7 @@ TEST(AfamFile, RoundTripAnyOrder) {
         EXPECT_EQ(b.samples, a.samples);
         EXPECT_EQ(b.rmse, a.rmse);
         EXPECT_EQ(b.maxValue, a.maxValue);
-        EXPECT_EQ(b.offset % 64, 0u) << "payloads aligned to 64 bytes";
+        EXPECT_EQ(b.offset % 4, 0u) << "payloads aligned for float32";
         EXPECT_EQ(b.size, m.payloads[i].size() * 4);
         const std::vector<float> back = f->readPayload(idx);
         EXPECT_EQ(back, m.payloads[i]);
@@ -267,7 +267,7 @@ class CorruptFile : public testing::Test {
 };
 
 TEST_F(CorruptFile, TruncationAtManyOffsets) {
-  std::vector<size_t> cuts = {0, 1, 7, 8, 100, 1019, 1023, 1024, 1025, 1104, 2000, size_ / 2, size_ - 64, size_ - 1};
+  std::vector<size_t> cuts = {0, 1, 7, 8, 100, 1019, 1023, 1024, 1025, 1064, 2000, size_ / 2, size_ - 64, size_ - 4, size_ - 1};
   for (size_t c = 1024; c < size_; c += 997) cuts.push_back(c);
   for (size_t cut : cuts) {
     if (cut >= size_) continue;
@@ -308,7 +308,7 @@ TEST_F(CorruptFile, HeaderChecksum) {
 }
 
 TEST_F(CorruptFile, IndexChecksum) {
-  for (size_t off : {1024 + 3, 1024 + 40, 1024 + 80 * 5 + 70}) {
+  for (size_t off : {1024 + 3, 1024 + 40, 1024 + 40 * 5 + 30}) {
     const std::string w = expectFormatError(path_, [&](std::vector<char>& b) { b[off] ^= 0x01; });
     EXPECT_NE(w.find("index checksum"), std::string::npos) << w;
   }
@@ -335,8 +335,8 @@ void patchHeader(std::vector<char>& b, size_t off, const void* v, size_t n) {
 void patchIndex(std::vector<char>& b, size_t entry, size_t field, const void* v, size_t n) {
   uint64_t count;
   std::memcpy(&count, &b[144], 8);
-  std::memcpy(&b[1024 + entry * 80 + field], v, n);
-  const uint32_t icrc = crc32(&b[1024], size_t(count) * 80);
+  std::memcpy(&b[1024 + entry * 40 + field], v, n);
+  const uint32_t icrc = crc32(&b[1024], size_t(count) * 40);
   std::memcpy(&b[140], &icrc, 4);
   const uint32_t crc = crc32(b.data(), 1020);
   std::memcpy(&b[1020], &crc, 4);
@@ -365,7 +365,7 @@ TEST_F(CorruptFile, AbsurdCountsAndSizes) {
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 136, &mode, 1); });
   const int32_t degree = 0;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 128, &degree, 4); });
-  const uint32_t entrySize = 96;
+  const uint32_t entrySize = 80;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 20, &entrySize, 4); });
   const uint64_t fileSize = uint64_t(size_) + 4096;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 168, &fileSize, 8); });
@@ -380,16 +380,23 @@ TEST_F(CorruptFile, OffsetsPastTheEnd) {
   EXPECT_NE(w.find("outside"), std::string::npos) << w;
   const uint64_t wrap = ~uint64_t(0) - 63;
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &wrap, 8); });
-  const uint64_t hugeSize = uint64_t(1) << 62;
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 8, &hugeSize, 8); });
-  const uint64_t misaligned = 1024 + 8;
+  uint64_t payloadOffset;
+  std::memcpy(&payloadOffset, &readAll(path_)[160], 8);
+  const uint64_t misaligned = payloadOffset + 2;
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 0, 0, &misaligned, 8); });
-  const int32_t hugeNcp[3] = {1 << 30, 1 << 30, 1 << 30};
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 32, hugeNcp, 12); });
-  const int32_t level = 5;
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 16, &level, 4); });
-  const int32_t block[3] = {1000, 0, 0};
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 20, block, 12); });
+  const uint64_t before = payloadOffset - 64;  // inside the index
+  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 0, 0, &before, 8); });
+  const uint16_t hugeNcp[3] = {65535, 65535, 65535};
+  const std::string n = expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, hugeNcp, 6); });
+  EXPECT_NE(n.find("NCP 65535"), std::string::npos) << n;
+  const uint16_t zeroNcp[3] = {0, 1, 1};
+  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, zeroNcp, 6); });
+  const uint16_t flags = 1;
+  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
+  const uint32_t alignment = 3;
+  expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 440, &alignment, 4); });
+  const uint64_t total = 12345;
+  expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 432, &total, 8); });
 }
 
 TEST_F(CorruptFile, RandomByteFlipsNeverCrash) {

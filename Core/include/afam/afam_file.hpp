@@ -3,12 +3,14 @@
 //
 // Layout (byte-exact description in docs/FORMAT.md), little-endian, offsets not pointers:
 //   [0, 1024)                   FileHeader (fixed size, CRC32 over its bytes)
-//   [1024, 1024 + 80 E)         index: E = one IndexEntry per micro-block of every level, ordered by
-//                               level (0 = coarsest) then by the block's linear index (x fastest);
-//                               CRC32 of the whole index stored in the header
-//   [payloadOffset, fileSize)   payloads, each starting on a 64-byte boundary, each with its CRC32
-//                               in its index entry
-// Because the index is complete and ordered, entryIndex(level, ijk) is O(1) arithmetic.
+//   [1024, 1024 + 40 E)         index: E = one 40-byte entry per micro-block of every level, ordered
+//                               by level (0 = coarsest) then by the block's linear index (x
+//                               fastest); CRC32 of the whole index stored in the header
+//   [payloadOffset, fileSize)   payloads (payloadOffset a multiple of 64; each payload offset a
+//                               multiple of 4, the float32 alignment), each with its CRC32 in its
+//                               index entry
+// Because the index is complete and ordered, entryIndex(level, ijk) is O(1) arithmetic, and level,
+// block, samples and degree of an entry are implied (not stored).
 //
 // Opening reads and validates the header and the index only (every count and offset is checked
 // against the file size before anything is allocated); a payload is one pread.
@@ -122,6 +124,7 @@ class AfamWriter {
   AfamWriter& operator=(const AfamWriter&) = delete;
 
   /// entry's offset/size/checksum are filled in here; payload holds payloadBytes(entry.ncp) bytes.
+  /// Payloads are stored in the order they are added, 4-byte aligned (no padding for float32).
   /// Throws InvalidArgument for a block out of range, added twice, or whose samples do not match
   /// the partition; IoError when the write fails.
   void add(const ModelEntry& entryWithoutOffsets, const float* payload);

@@ -76,14 +76,18 @@ struct EncodeStats {
   uint64_t paperBytes = 0;     ///< the paper's layout: sum of 1 + ((NCP+p)*3 + NCP^3)*4
   double seconds = 0;          ///< wall time of the whole encode
   double fitSeconds = 0;       ///< wall time of the fitting phases
+  double cpuSeconds = 0;       ///< process CPU time (user + system) spent in the encode
   double maxRmse = 0, maxError = 0;
   double bound = 0;            ///< absolute RMSE bound used
   double valueMin = 0, valueMax = 0;
   int threads = 1;
-  /// Input voxels per second per thread over the whole encode.
+  /// Input voxels per second per thread over the whole encode (wall clock / threads).
   double voxelsPerSecondPerThread() const {
     return seconds > 0 ? double(inputVoxels) / seconds / threads : 0;
   }
+  /// Input voxels per CPU-second: the per-thread rate that other processes sharing the cores
+  /// do not distort.
+  double voxelsPerCpuSecond() const { return cpuSeconds > 0 ? double(inputVoxels) / cpuSeconds : 0; }
 };
 
 /// A scalar volume read by whole z-planes. Implementations: ArraySource, RawFileSource,

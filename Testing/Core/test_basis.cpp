@@ -249,3 +249,40 @@ TEST(Evaluate, GradientMatchesFiniteDifferencesOfValue) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(Basis, UniformSpanClosedFormMatchesRecurrence) {
+  // Interior spans take the cardinal B-spline closed form; compare with the recurrence (which a
+  // degree-5 Knots copy would use) by evaluating the recurrence directly.
+  for (int p = 1; p <= 3; ++p)
+    for (int ncp : {2 * p + 2, 9, 32, 128}) {
+      const Knots k = Knots::make(ncp, p);
+      for (int i = 0; i <= 400; ++i) {
+        const double u = i / 400.0;
+        const int s = k.span(u);
+        double N[kMaxOrder], dN[kMaxOrder], R[kMaxOrder], lower[kMaxOrder];
+        afam::basisFunctionsAndDerivatives(k, s, u, N, dN);
+        afam::basisOfDegree(k, s, u, p, R);
+        afam::basisOfDegree(k, s, u, p - 1, lower);
+        for (int r = 0; r <= p; ++r) {
+          EXPECT_NEAR(N[r], R[r], 1e-13) << "p=" << p << " ncp=" << ncp << " u=" << u;
+          // Derivative from the degree p-1 functions (The NURBS Book eq. 2.9).
+          const int g = s - p + r;
+          const double a = r >= 1 ? lower[r - 1] : 0.0, b = r <= p - 1 ? lower[r] : 0.0;
+          const double da = k.knot<double>(g + p) - k.knot<double>(g);
+          const double db = k.knot<double>(g + p + 1) - k.knot<double>(g + 1);
+          const double ref = p * ((da != 0 ? a / da : 0.0) - (db != 0 ? b / db : 0.0));
+          EXPECT_NEAR(dN[r], ref, 1e-11 * ncp) << "p=" << p << " ncp=" << ncp << " u=" << u;
+        }
+        float Nf[kMaxOrder], dNf[kMaxOrder];
+        afam::basisFunctionsAndDerivatives(k, k.span(float(u)), float(u), Nf, dNf);
+        // float(u) carries a rounding of ~6e-8 that the basis amplifies by up to p / h.
+        if (k.span(float(u)) == s) {
+          for (int r = 0; r <= p; ++r) EXPECT_NEAR(Nf[r], N[r], 1e-6 + 2e-7 * ncp);
+        }
+      }
+    }
+}
+
+}  // namespace

@@ -210,6 +210,19 @@ TEST(Fit, FitterReuseAcrossShapesMatchesFreshFitter) {
     }
 }
 
+TEST(Fit, HundredsOfShapesKeepEveryFitCorrect) {
+  // Regression: the per-axis cache was once cleared between the three look-ups of one fit.
+  afam::BlockFitter fitter;
+  for (int n = 4; n < 40; ++n)
+    for (int ncp = 3; ncp <= std::min(n, 8); ++ncp) {
+      const Int3 shape{n, ncp + 1, 3 + n % 5};
+      const auto d = sampleBlock(shape, [](double u, double v, double w) { return u + 2 * v - w; });
+      const Int3 m = afam::clampNcp(ncp, shape, {2, 2, 2});
+      const auto fit = fitter.fit(d.data(), shape, m, 2);
+      ASSERT_LT(fit.error.maxError, 1e-5) << n << " " << ncp;
+    }
+}
+
 TEST(Fit, InvalidArgumentsAreRejectedWithReadableMessages) {
   std::vector<float> d(8 * 8 * 8, 1.f);
   afam::BlockFitter fitter;

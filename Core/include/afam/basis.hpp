@@ -101,9 +101,56 @@ AFAM_HD void basisOfDegree(const Knots& k, int s, Real u, int deg, Real* N) {
   }
 }
 
+/// Closed-form basis (and derivative) on spans whose 2p surrounding knots are all interior, where
+/// the implied knots are uniform: the cardinal B-spline of degree p at t = (u - t[s]) / h.
+/// Returns false (and writes nothing) for degrees above 3 and for spans near the clamped ends,
+/// which take the Cox-de Boor recurrence. Agrees with it to rounding (tested).
+template <typename Real>
+AFAM_HD bool uniformSpanBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
+  const int p = k.degree;
+  if (p < 1 || p > 3 || s < 2 * p || s + p > k.ncp - 1) return false;
+  const Real scale = Real(k.ncp - 1);  // 1 / h
+  const Real t = (u - k.knot<Real>(s)) * scale;
+  const Real t1 = Real(1) - t;
+  if (p == 1) {
+    N[0] = t1;
+    N[1] = t;
+    if (dN) {
+      dN[0] = -scale;
+      dN[1] = scale;
+    }
+  } else if (p == 2) {
+    const Real half = Real(0.5);
+    N[0] = half * t1 * t1;
+    N[2] = half * t * t;
+    N[1] = Real(1) - N[0] - N[2];
+    if (dN) {
+      dN[0] = -t1 * scale;
+      dN[2] = t * scale;
+      dN[1] = (t1 - t) * scale;
+    }
+  } else {
+    const Real sixth = Real(1) / Real(6);
+    const Real t2 = t * t, t12 = t1 * t1;
+    N[0] = sixth * t12 * t1;
+    N[3] = sixth * t2 * t;
+    N[1] = sixth * (Real(3) * t2 * t - Real(6) * t2 + Real(4));
+    N[2] = Real(1) - N[0] - N[1] - N[3];
+    if (dN) {
+      const Real half = Real(0.5);
+      dN[0] = -half * t12 * scale;
+      dN[3] = half * t2 * scale;
+      dN[1] = (Real(1.5) * t2 - Real(2) * t) * scale;
+      dN[2] = -(dN[0] + dN[1] + dN[3]);
+    }
+  }
+  return true;
+}
+
 /// Non-zero basis functions N[0..p] of span s at u: N[i] = N_{s-p+i, p}(u).
 template <typename Real>
 AFAM_HD void basisFunctions(const Knots& k, int s, Real u, Real* N) {
+  if (uniformSpanBasis<Real>(k, s, u, N, nullptr)) return;
   basisOfDegree(k, s, u, k.degree, N);
 }
 
@@ -119,6 +166,7 @@ AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N
     dN[0] = Real(0);
     return;
   }
+  if (uniformSpanBasis<Real>(k, s, u, N, dN)) return;
   Real lower[kMaxOrder];  // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
   Real inv[kMaxOrder] = {};  // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
   basisOfDegree(k, s, u, p - 1, lower);

@@ -1,0 +1,78 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""pvbatch: load the plugin; a wrong file gives an error, not a crash; encode a Wavelet with the
+Adaptive-FAM Encoder, save it with the writer, reopen it with OpenDataFile, render it with the
+"Adaptive-FAM Volume" representation, compare with the baseline and read the frame statistics.
+Leaves wavelet.afam in the shared test folder for the MPI and GUI tests."""
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import afam_test_util as u  # noqa: E402
+
+from paraview.simple import (CreateView, OpenDataFile, Render, SaveData, SaveScreenshot,  # noqa: E402
+                             Show, Wavelet)
+from paraview import servermanager  # noqa: E402
+
+u.load_plugin(globals())
+out = u.out_dir()
+
+# 1. A wrong file: an error message and an empty output, and the process goes on.
+bad = os.path.join(out, "not_an_afam.afam")
+with open(bad, "wb") as f:
+    f.write(b"this is not an afam file" * 10)
+try:
+    OpenDataFile(bad)
+    u.fail("OpenDataFile accepted a file that is not .afam")
+except RuntimeError as e:  # File > Open's check (vtkAFAMReader::CanReadFile) refuses it
+    print("OpenDataFile refused the wrong file: %s" % str(e).strip())
+# Forced through the reader itself: vtkErrorMacro + a failed request, empty output, no crash.
+reader = AdaptiveFAMReader(FileName=bad)  # noqa: F821
+reader.UpdatePipeline()
+if reader.GetDataInformation().GetNumberOfDataSets() != 0:
+    u.fail("a corrupt file produced data")
+print("wrong file: error reported, no data, no crash")
+
+# 2. Encode, save, reopen.
+wavelet = Wavelet(WholeExtent=[-20, 20, -20, 20, -20, 20])
+encoder = AdaptiveFAMEncoder(Input=wavelet, Levels=3, BlocksPerAxis=4, ErrorBound=0.005)  # noqa: F821
+encoder.Scalars = ["POINTS", "RTData"]
+encoder.UpdatePipeline()
+leaves = encoder.GetDataInformation().GetNumberOfDataSets()
+expected = 4 ** 3 + 2 ** 3 + 1 + 1  # levels 2, 1, 0 and the value-range probe
+if leaves != expected:
+    u.fail("encoder produced %d leaves, expected %d" % (leaves, expected))
+path = os.path.join(u.shared_dir(), "wavelet.afam")
+if os.path.exists(path):
+    os.remove(path)
+SaveData(path, proxy=encoder)
+if not os.path.isfile(path) or os.path.getsize(path) < 1024:
+    u.fail("the writer did not produce %s" % path)
+model = OpenDataFile(path)
+model.UpdatePipeline()
+if model.GetDataInformation().GetNumberOfDataSets() != expected:
+    u.fail("reopened file has %d leaves" % model.GetDataInformation().GetNumberOfDataSets())
+
+# 3. Render with the representation and compare.
+view = CreateView("RenderView")
+u.setup_view(view)
+display = Show(model, view)
+if "Adaptive-FAM Volume" not in display.Representation.Available:
+    u.fail("representation not offered: %s" % display.Representation.Available)
+display.Representation = "Adaptive-FAM Volume"
+u.apply_transfer_function(display)
+Render(view)
+png = os.path.join(out, "TestAFAMPipeline.png")
+SaveScreenshot(png, view, ImageResolution=[301, 300])
+
+display.UpdatePropertyInformation()
+frames = display.GetPropertyValue("AFAMNumberOfFrames")
+total = display.GetPropertyValue("AFAMLastTotalTime")
+render = display.GetPropertyValue("AFAMLastRenderTime")
+visible = display.GetPropertyValue("AFAMLastVisibleBlocks")
+print("statistics: frames=%s total=%.4fs raycast=%.4fs caching=%.4fs visible=%s culled=%s hits=%s misses=%s" % (
+    frames, total, render, display.GetPropertyValue("AFAMLastCachingTime"), visible,
+    display.GetPropertyValue("AFAMLastCulledBlocks"), display.GetPropertyValue("AFAMLastCacheHits"),
+    display.GetPropertyValue("AFAMLastCacheMisses")))
+if not frames or frames < 1 or not visible or visible < 1 or not total or total <= 0:
+    u.fail("the mapper did not render (statistics above)")
+u.compare_with_baseline(png, "TestAFAMPipeline.png")

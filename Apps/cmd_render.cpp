@@ -13,6 +13,7 @@
 #include "afam/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "gpu_device.hpp"
 #include "render_args.hpp"
 
 using namespace afam;
@@ -20,7 +21,7 @@ using namespace afam::cli;
 
 int runRender(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
-  values.insert({"view", "out", "gt-out"});
+  values.insert({"view", "out", "gt-out", "device", "gpu-budget-mb"});
   Args args(argc, argv, values, {"ground-truth-ml", "cold", "no-culling"});
   const char* usage =
       "afam render FILE --trajectory T.dat --view I --size W,H --out IMG.png [--ground-truth-ml]";
@@ -36,8 +37,8 @@ int runRender(int argc, char** argv) {
         "  --out IMG.png          output image (required)\n"
         "  --ground-truth-ml      FILE encodes `afam ml` output: also ray-cast the analytic\n"
         "                         Marschner-Lobb function and print psnr=<x> ssim=<y>\n"
-        "  --gt-out GT.png        write the ground-truth image too\n%s",
-        usage, renderOptionsHelp());
+        "  --gt-out GT.png        write the ground-truth image too\n%s%s",
+        usage, renderOptionsHelp(), deviceOptionHelp());
     return 0;
   }
   args.expectPositional(1, usage);
@@ -52,6 +53,8 @@ int runRender(int argc, char** argv) {
                           std::to_string(poses.size()) + ")");
   auto file = AfamFile::open(args.positional()[0]);
   Renderer renderer(file, opts);
+  const DeviceChoice device =
+      useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));
   const Camera camera = Camera::fromPose(poses[size_t(view)], size.first, size.second);
   FrameStats st;
   const ImageRGBA image = renderer.renderFrame(camera, st);
@@ -63,6 +66,8 @@ int runRender(int argc, char** argv) {
               (unsigned long long)st.poolBytes, st.cachingMs, (unsigned long long)st.hits,
               (unsigned long long)st.misses, (long long)st.culled.frustumBlocks,
               (long long)st.culled.tfBlocks);
+  std::printf("device=%s%s%s\n", device.used.c_str(), device.description.empty() ? "" : " ",
+              device.description.c_str());
   std::printf("render_ms=%.3f\n", st.renderMs);
   if (args.has("ground-truth-ml")) {
     PreparedFrame fr;

@@ -14,6 +14,7 @@
 #include "afam/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "gpu_device.hpp"
 #include "render_args.hpp"
 
 using namespace afam;
@@ -30,7 +31,7 @@ double median(std::vector<double> v) {
 
 int runReplay(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
-  values.insert({"csv", "frames"});
+  values.insert({"csv", "frames", "device", "gpu-budget-mb"});
   Args args(argc, argv, values, {"cold", "no-culling", "quiet"});
   const char* usage =
       "afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B] "
@@ -49,8 +50,8 @@ int runReplay(int argc, char** argv) {
         "  --csv OUT.csv          per point of view: pov,caching_ms,render_ms,latency_ms,hits,misses,\n"
         "                         bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks\n"
         "  --frames N             replay only the first N points of view\n"
-        "  --quiet                no per-view lines on stdout\n%s",
-        usage, renderOptionsHelp());
+        "  --quiet                no per-view lines on stdout\n%s%s",
+        usage, renderOptionsHelp(), deviceOptionHelp());
     return 0;
   }
   args.expectPositional(1, usage);
@@ -65,6 +66,8 @@ int runReplay(int argc, char** argv) {
   }
   auto file = AfamFile::open(args.positional()[0]);
   Renderer renderer(file, opts);
+  const DeviceChoice device =
+      useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));
   std::ofstream csv;
   if (args.has("csv")) {
     csv.open(args.str("csv"));
@@ -103,6 +106,8 @@ int runReplay(int argc, char** argv) {
               modeName(file->header().mode), poses.size(), size.first, size.second,
               (unsigned long long)opts.cache.blocks, (unsigned long long)opts.cache.bytes,
               opts.prefetch.c_str(), opts.cold ? 1 : 0, opts.storageMBps);
+  std::printf("device=%s%s%s\n", device.used.c_str(), device.description.empty() ? "" : " ",
+              device.description.c_str());
   std::printf("%-12s %10s\n", "median", "ms");
   std::printf("%-12s %10.3f\n%-12s %10.3f\n%-12s %10.3f\n", "latency", median(lat), "caching",
               median(cach), "rendering", median(rend));

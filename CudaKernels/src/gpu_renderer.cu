@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// CUDA ray caster: one thread per pixel calling the shared afam::castRay / castRayWith
-// (Core/include/afam/raycast.hpp). Nothing of the ray's math is written here.
+// Host side of the CUDA ray caster: model pool, frame tables, image, timing. The kernels are in
+// kernels.cuh (one thread per pixel calling the shared afam::castRay), built once per
+// floating-point contract (kernels_exact.cu, kernels_fma.cu, kernels_fast.cu).
 #include "afam/cuda/gpu_renderer.hpp"
 
 #include <cuda_runtime.h>
@@ -10,136 +11,11 @@
 #include <vector>
 
 #include "cuda_check.hpp"
+#include "kernel_launch.hpp"
 
 namespace afam {
 
 namespace {
-
-constexpr int kTileX = 16;
-constexpr int kTileY = 8;
-
-/// raycast.hpp's ModelSampler with the spline degree fixed at compile time. When every spline slot
-/// of a frame has degree P on all axes, copying the slot's knots with `degree = P` lets the
-/// compiler unroll the basis and tensor loops of evaluateModel and keep their small arrays in
-/// registers; the values computed are those of ModelSampler (same functions, same operations).
-template <int P>
-struct FixedDegreeSampler {
-  template <bool WithGradient>
-  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
-                                         float* gradient) const {
-    float x[3];
-    toVoxel(f, p, x);
-    const int32_t slot = lookupSlot(f, x);
-    if (slot < 0) return false;
-    const FrameSlot& stored = f.slots[slot];
-    float gv[3] = {0.f, 0.f, 0.f};
-    if (stored.kind == kSlotRaw) {
-      value = sampleRawSlot<WithGradient>(stored, f.pool, x, gv);
-    } else {
-      FrameSlot s = stored;
-      s.knots[0].degree = P;
-      s.knots[1].degree = P;
-      s.knots[2].degree = P;
-      value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
-    }
-    if (WithGradient) {
-      gradient[0] = gv[0] * f.voxelPerUnit[0];
-      gradient[1] = gv[1] * f.voxelPerUnit[1];
-      gradient[2] = gv[2] * f.voxelPerUnit[2];
-    }
-    return true;
-  }
-};
-
-template <int P>
-struct SamplerFor {
-  using type = FixedDegreeSampler<P>;
-};
-template <>
-struct SamplerFor<-1> {
-  using type = ModelSampler;
-};
-
-/// Wraps a sampler and counts the samples it evaluated (untimed launches only).
-template <typename Inner>
-struct CountingSampler {
-  Inner inner;
-  unsigned* count;
-  template <bool WithGradient>
-  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
-                                         float* gradient) const {
-    const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
-    if (ok) ++*count;
-    return ok;
-  }
-};
-
-template <bool Shaded, int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
-    fullKernel(const FrameView f, float4* __restrict__ image) {
-  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
-  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
-  if (px >= f.camera.width || py >= f.camera.height) return;
-  const RGBA c = castRayWith<Shaded>(f, typename SamplerFor<P>::type{}, px, py);
-  image[int64_t(py) * f.camera.width + px] = make_float4(c.r, c.g, c.b, c.a);
-}
-
-template <bool Shaded, int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
-    countingKernel(const FrameView f, unsigned long long* total) {
-  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
-  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
-  if (px >= f.camera.width || py >= f.camera.height) return;
-  unsigned count = 0;
-  CountingSampler<typename SamplerFor<P>::type> sampler{{}, &count};
-  (void)castRayWith<Shaded>(f, sampler, px, py);
-  atomicAdd(total, (unsigned long long)count);
-}
-
-/// Baseline: the same rays and sample positions as castRayWith, but every sample in the box is
-/// only looked up and evaluated (value + gradient); no TF, shading, compositing or early exit.
-template <int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
-    bareKernel(const FrameView f, float* __restrict__ sink, unsigned long long* total) {
-  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
-  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
-  if (px >= f.camera.width || py >= f.camera.height) return;
-  const typename SamplerFor<P>::type sampler{};
-  float d[3];
-  rayDirection(f.camera, px, py, d);
-  float tEnter, tExit, sum = 0.f;
-  unsigned count = 0;
-  if (intersectBox(f.camera.eye, d, f.boxLo, f.boxHi, tEnter, tExit)) {
-    const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
-    const float dt = f.sampleDistance;
-    if (tExit >= tStart && dt > 0.f) {
-      int64_t k = int64_t(ceilf(tStart / dt));
-      const int64_t kEnd = int64_t(floorf(tExit / dt));
-      for (; k <= kEnd; ++k) {
-        const float t = float(k) * dt;
-        const float p[3] = {f.camera.eye[0] + t * d[0], f.camera.eye[1] + t * d[1],
-                            f.camera.eye[2] + t * d[2]};
-        float value = 0.f, g[3] = {0.f, 0.f, 0.f};
-        if (!sampler.template sample<true>(f, p, value, g)) continue;
-        sum += value + g[0] + g[1] + g[2];
-        ++count;
-      }
-    }
-  }
-  sink[int64_t(py) * f.camera.width + px] = sum;
-  if (total) atomicAdd(total, (unsigned long long)count);
-}
-
-template <typename Kernel>
-std::string describe(Kernel kernel, const char* name) {
-  cudaFuncAttributes a{};
-  if (cudaFuncGetAttributes(&a, kernel) != cudaSuccess) {
-    (void)cudaGetLastError();
-    return name;
-  }
-  return std::string(name) + ": " + std::to_string(a.numRegs) + " registers, " +
-         std::to_string(a.localSizeBytes) + " bytes local";
-}
 
 /// Degree shared by all spline slots on all axes, or -1 (mixed, or degree outside 1..5).
 int uniformDegree(const FrameView& v) {
@@ -321,81 +197,31 @@ struct GpuRenderer::Impl {
 
 namespace {
 
-struct LaunchConfig {
-  dim3 grid, block;
-};
-LaunchConfig config(const FrameView& v) {
-  return {dim3(unsigned((v.camera.width + kTileX - 1) / kTileX),
-               unsigned((v.camera.height + kTileY - 1) / kTileY)),
-          dim3(kTileX, kTileY)};
-}
-
-template <bool Shaded, int P>
-std::string launchFullT(const FrameView& d, float4* image, cudaStream_t stream, bool describeIt) {
-  const LaunchConfig c = config(d);
-  fullKernel<Shaded, P><<<c.grid, c.block, 0, stream>>>(d, image);
-  AFAM_CUDA_CHECK(cudaGetLastError());
-  if (!describeIt) return {};
-  const std::string name = std::string("full<") + (Shaded ? "shaded" : "unshaded") +
-                           ",p=" + (P < 0 ? std::string("any") : std::to_string(P)) + ">";
-  return describe(fullKernel<Shaded, P>, name.c_str());
-}
-
-template <bool Shaded, int P>
-void launchCountT(const FrameView& d, unsigned long long* total, cudaStream_t stream) {
-  const LaunchConfig c = config(d);
-  countingKernel<Shaded, P><<<c.grid, c.block, 0, stream>>>(d, total);
-  AFAM_CUDA_CHECK(cudaGetLastError());
-}
-
-template <int P>
-std::string launchBareT(const FrameView& d, float* sink, unsigned long long* total,
-                        cudaStream_t stream, bool describeIt) {
-  const LaunchConfig c = config(d);
-  bareKernel<P><<<c.grid, c.block, 0, stream>>>(d, sink, total);
-  AFAM_CUDA_CHECK(cudaGetLastError());
-  if (!describeIt) return {};
-  const std::string name = "bare<p=" + (P < 0 ? std::string("any") : std::to_string(P)) + ">";
-  return describe(bareKernel<P>, name.c_str());
-}
-
-std::string launchFull(bool shaded, int p, const FrameView& d, float4* image, cudaStream_t s,
-                       bool describeIt) {
-  if (shaded) {
-    switch (p) {
-      case 1: return launchFullT<true, 1>(d, image, s, describeIt);
-      case 2: return launchFullT<true, 2>(d, image, s, describeIt);
-      case 3: return launchFullT<true, 3>(d, image, s, describeIt);
-      case 4: return launchFullT<true, 4>(d, image, s, describeIt);
-      case 5: return launchFullT<true, 5>(d, image, s, describeIt);
-      default: return launchFullT<true, -1>(d, image, s, describeIt);
-    }
-  }
-  switch (p) {
-    case 1: return launchFullT<false, 1>(d, image, s, describeIt);
-    case 2: return launchFullT<false, 2>(d, image, s, describeIt);
-    case 3: return launchFullT<false, 3>(d, image, s, describeIt);
-    case 4: return launchFullT<false, 4>(d, image, s, describeIt);
-    case 5: return launchFullT<false, 5>(d, image, s, describeIt);
-    default: return launchFullT<false, -1>(d, image, s, describeIt);
+std::string launchFull(GpuFloatMode m, bool shaded, int p, const FrameView& d, float* image,
+                       cudaStream_t s, bool describe, int minBlocks) {
+  switch (m) {
+    case GpuFloatMode::Fma:
+      return kernels_fma::launchFull(shaded, p, d, image, s, describe, minBlocks);
+    case GpuFloatMode::Fast:
+      return kernels_fast::launchFull(shaded, p, d, image, s, describe, minBlocks);
+    default: return kernels_exact::launchFull(shaded, p, d, image, s, describe, minBlocks);
   }
 }
-
-void launchCount(bool shaded, int p, const FrameView& d, unsigned long long* total,
+void launchCount(GpuFloatMode m, bool shaded, int p, const FrameView& d, unsigned long long* total,
                  cudaStream_t s) {
-  // Counting is for benchmarks: the common degree 2 and the generic path are enough.
-  if (shaded) {
-    if (p == 2) return launchCountT<true, 2>(d, total, s);
-    return launchCountT<true, -1>(d, total, s);
+  switch (m) {
+    case GpuFloatMode::Fma: return kernels_fma::launchCount(shaded, p, d, total, s);
+    case GpuFloatMode::Fast: return kernels_fast::launchCount(shaded, p, d, total, s);
+    default: return kernels_exact::launchCount(shaded, p, d, total, s);
   }
-  if (p == 2) return launchCountT<false, 2>(d, total, s);
-  return launchCountT<false, -1>(d, total, s);
 }
-
-std::string launchBare(int p, const FrameView& d, float* sink, unsigned long long* total,
-                       cudaStream_t s, bool describeIt) {
-  if (p == 2) return launchBareT<2>(d, sink, total, s, describeIt);
-  return launchBareT<-1>(d, sink, total, s, describeIt);
+std::string launchBare(GpuFloatMode m, int p, const FrameView& d, float* sink,
+                       unsigned long long* total, cudaStream_t s, bool describe) {
+  switch (m) {
+    case GpuFloatMode::Fma: return kernels_fma::launchBare(p, d, sink, total, s, describe);
+    case GpuFloatMode::Fast: return kernels_fast::launchBare(p, d, sink, total, s, describe);
+    default: return kernels_exact::launchBare(p, d, sink, total, s, describe);
+  }
 }
 
 float elapsed(cudaEvent_t a, cudaEvent_t b) {
@@ -426,7 +252,8 @@ void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float*
   if (poison_)
     AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceImage, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
-  kernelInfo_ = launchFull(view.shading != 0, p, d, m.deviceImage, m.stream, true);
+  kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, reinterpret_cast<float*>(m.deviceImage),
+                           m.stream, true, minBlocks_);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[2], m.stream));
   AFAM_CUDA_CHECK(cudaMemcpyAsync(m.hostImage, m.deviceImage, pixels * sizeof(float4),
                                   cudaMemcpyDeviceToHost, m.stream));
@@ -455,9 +282,9 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   // Untimed launch that counts the evaluated samples.
   AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceCounter, 0, 8, m.stream));
   if (kind == GpuKernelKind::Full)
-    launchCount(shaded, p, d, m.deviceCounter, m.stream);
+    launchCount(mode_, shaded, p, d, m.deviceCounter, m.stream);
   else
-    (void)launchBare(p, d, sink, m.deviceCounter, m.stream, false);
+    (void)launchBare(mode_, p, d, sink, m.deviceCounter, m.stream, false);
   unsigned long long count = 0;
   AFAM_CUDA_CHECK(cudaMemcpyAsync(&count, m.deviceCounter, 8, cudaMemcpyDeviceToHost, m.stream));
   AFAM_CUDA_CHECK(cudaStreamSynchronize(m.stream));
@@ -465,8 +292,8 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   for (int r = -1; r < repetitions; ++r) {  // r = -1: warm-up
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
     const std::string info = kind == GpuKernelKind::Full
-                                 ? launchFull(shaded, p, d, m.deviceImage, m.stream, r == -1)
-                                 : launchBare(p, d, sink, nullptr, m.stream, r == -1);
+                                 ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_)
+                                 : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1);
     if (r == -1) kernelInfo_ = info;
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[1], m.stream));
     AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[1]));

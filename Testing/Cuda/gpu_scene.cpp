@@ -227,11 +227,15 @@ void buildFrame(const EncodedVolume& e, const std::vector<BlockId>& blocks, cons
   v.pool = f.pool.data();
   const TransferFunction tf = TransferFunction::preset(e.minValue, e.maxValue);
   f.tf = tf.table(options.tfSize, e.minValue, e.maxValue);
+  // As Core's Renderer does: opacity corrected for the sample distance once per frame, which
+  // castRay recognises by tfReferenceDistance == sampleDistance (no pow() per sample).
+  const float ratio = float(double(options.sampleDistance) / tf.referenceDistance);
+  for (size_t i = 3; i < f.tf.size(); i += 4) f.tf[i] = correctOpacity(f.tf[i], ratio);
   v.tf = f.tf.data();
   v.tfSize = options.tfSize;
   v.tfMin = e.minValue;
   v.tfMax = e.maxValue;
-  v.tfReferenceDistance = float(tf.referenceDistance);
+  v.tfReferenceDistance = options.sampleDistance;
   v.sampleDistance = options.sampleDistance;
   v.shading = options.shaded ? 1 : 0;
 }

@@ -75,6 +75,20 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
                 (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
     EXPECT_EQ(d.nonFinite, 0);
     EXPECT_LE(d.maxAbs8, 2);
+    // The faster floating-point contracts, reported (the bar applies to the default, Exact).
+    for (GpuFloatMode mode : {GpuFloatMode::Fma, GpuFloatMode::Fast}) {
+      gpu.setFloatMode(mode);
+      std::vector<float> other(image.size());
+      gpu.render(frame.view, frame.keys.data(), other.data());
+      const ImageDiff o = compareImages(cpu.rgba, other);
+      std::printf("[gpu-vs-cpu:%s] %-14s p=%d %-8s: max |diff| %d/255, %lld pixels differ, "
+                  "unwritten %lld\n",
+                  mode == GpuFloatMode::Fma ? "fma" : "fast", name.c_str(), degree,
+                  shaded ? "shaded" : "unshaded", o.maxAbs8, (long long)o.differing,
+                  (long long)o.nonFinite);
+      EXPECT_EQ(o.nonFinite, 0);
+    }
+    gpu.setFloatMode(GpuFloatMode::Exact);
     // The image is not empty: the comparison means something.
     double alpha = 0;
     for (size_t i = 3; i < cpu.rgba.size(); i += 4) alpha += cpu.rgba[i];

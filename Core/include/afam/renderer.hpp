@@ -13,6 +13,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -87,6 +88,11 @@ class Renderer {
   /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
   ImageRGBA renderFrame(const Camera& camera, FrameStats& stats);
 
+  /// Replaces renderFrame's CPU ray casting (the CUDA path of `--device gpu` plugs in here): the
+  /// caster fills `image` (premultiplied RGBA of frame.view's size) from the prepared frame.
+  using RayCaster = std::function<void(const PreparedFrame& frame, ImageRGBA& image)>;
+  void setRayCaster(RayCaster caster) { caster_ = std::move(caster); }
+
  private:
   std::shared_ptr<const AfamFile> file_;
   RenderOptions options_;
@@ -98,6 +104,7 @@ class Renderer {
   std::vector<float> tf_;
   double tfLo_ = 0, tfHi_ = 1;
   std::array<std::vector<float>, 3> bounds_;
+  RayCaster caster_;  ///< empty: renderCpu
 };
 
 }  // namespace afam

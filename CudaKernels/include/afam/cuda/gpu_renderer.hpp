@@ -34,6 +34,13 @@ enum class GpuKernelKind {
   BareValueGradient ///< baseline: lookup + value + gradient at every sample of the same rays
 };
 
+/// Floating-point contract of the kernels.
+enum class GpuFloatMode {
+  Exact,  ///< no FMA contraction, IEEE division/sqrt: the CPU caster's roundings (default)
+  Fma,    ///< nvcc's default: multiply-adds contracted to FMA
+  Fast    ///< -use_fast_math: FMA, approximate division, sqrt and powf
+};
+
 /// Result of timeKernel(): per-launch milliseconds and the number of model evaluations per launch.
 struct GpuKernelTiming {
   std::vector<double> ms;
@@ -65,6 +72,11 @@ class GpuRenderer {
   void setPoisonOutput(bool on) { poison_ = on; }
   /// Use kernels specialised on the frame's degree when all spline slots share one (default on).
   void setDegreeSpecialisation(bool on) { specialise_ = on; }
+  /// Floating-point contract of the kernels used from the next call on.
+  void setFloatMode(GpuFloatMode mode) { mode_ = mode; }
+  GpuFloatMode floatMode() const { return mode_; }
+  /// Benchmark knob: 8 asks for the degree-2 kernels limited to 64 registers (8 blocks per SM).
+  void setMinBlocksPerSm(int blocks) { minBlocks_ = blocks; }
   /// "full<shaded,p=2>: 40 registers, 0 bytes local" for the kernel the last frame used.
   std::string lastKernelInfo() const { return kernelInfo_; }
 
@@ -81,6 +93,8 @@ class GpuRenderer {
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;
   bool specialise_ = true;
+  GpuFloatMode mode_ = GpuFloatMode::Exact;
+  int minBlocks_ = 1;
   std::string kernelInfo_;
 };
 

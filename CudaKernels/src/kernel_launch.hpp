@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal: launchers of the ray-casting kernels, one set per floating-point contract.
+//   exact: nvcc -fmad=false, IEEE division and square root: the same roundings as the CPU caster
+//          (g++ on x86-64 contracts nothing), so images agree to the last bits but powf.
+//   fma:   nvcc's default (multiply-adds contracted to FMA).
+//   fast:  -use_fast_math (FMA, approximate division, square root, powf; flush to zero).
+#pragma once
+
+#include <cuda_runtime_api.h>
+
+#include <string>
+
+#include "afam/raycast.hpp"
+
+#define AFAM_DECLARE_KERNEL_SET(NS)                                                            \
+  namespace afam::NS {                                                                        \
+  /* Full ray caster (castRayWith<Shaded>), specialised on degree p in 1..5 (else generic).  \
+     Returns the kernel's register / local-memory use when describe is set. minBlocks = 8     \
+     picks the variant limited to 64 registers (degree 2 only), anything else the default. */ \
+  std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cudaStream_t s, \
+                         bool describe, int minBlocks);                                       \
+  /* Untimed launch that counts evaluated samples into *total. */                             \
+  void launchCount(bool shaded, int p, const FrameView& d, unsigned long long* total,          \
+                   cudaStream_t s);                                                           \
+  /* Bare value+gradient baseline along the same rays; counts samples when total != null. */  \
+  std::string launchBare(int p, const FrameView& d, float* sink, unsigned long long* total,    \
+                         cudaStream_t s, bool describe);                                      \
+  }
+
+AFAM_DECLARE_KERNEL_SET(kernels_exact)
+AFAM_DECLARE_KERNEL_SET(kernels_fma)
+AFAM_DECLARE_KERNEL_SET(kernels_fast)

@@ -1,0 +1,231 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal: the kernels and their launchers, compiled three times with different floating-point
+// contracts (see kernel_launch.hpp): each .cu that includes this defines AFAM_KERNEL_NS first.
+// The kernels call the shared afam::castRay / castRayWith (Core/include/afam/raycast.hpp); nothing
+// of the ray's math is written here.
+#include <cuda_runtime.h>
+
+#include <string>
+
+#include "afam/raycast.hpp"
+#include "cuda_check.hpp"
+#include "kernel_launch.hpp"
+
+#ifndef AFAM_KERNEL_NS
+#error "define AFAM_KERNEL_NS before including kernels.cuh"
+#endif
+
+namespace afam::AFAM_KERNEL_NS {
+
+constexpr int kTileX = 16;
+constexpr int kTileY = 8;
+
+/// raycast.hpp's ModelSampler with the spline degree fixed at compile time. When every spline slot
+/// of a frame has degree P on all axes, copying the slot's knots with `degree = P` lets the
+/// compiler unroll the basis and tensor loops of evaluateModel and keep their small arrays in
+/// registers; the values computed are those of ModelSampler (same functions, same operations).
+template <int P>
+struct FixedDegreeSampler {
+  template <bool WithGradient>
+  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
+                                         float* gradient) const {
+    float x[3];
+    toVoxel(f, p, x);
+    const int32_t slot = lookupSlot(f, x);
+    if (slot < 0) return false;
+    const FrameSlot& stored = f.slots[slot];
+    float gv[3] = {0.f, 0.f, 0.f};
+    if (stored.kind == kSlotRaw) {
+      value = sampleRawSlot<WithGradient>(stored, f.pool, x, gv);
+    } else {
+      FrameSlot s = stored;
+      s.knots[0].degree = P;
+      s.knots[1].degree = P;
+      s.knots[2].degree = P;
+      value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
+    }
+    if (WithGradient) {
+      gradient[0] = gv[0] * f.voxelPerUnit[0];
+      gradient[1] = gv[1] * f.voxelPerUnit[1];
+      gradient[2] = gv[2] * f.voxelPerUnit[2];
+    }
+    return true;
+  }
+};
+
+template <int P>
+struct SamplerFor {
+  using type = FixedDegreeSampler<P>;
+};
+template <>
+struct SamplerFor<-1> {
+  using type = ModelSampler;
+};
+
+/// Wraps a sampler and counts the ray samples that hit a model (untimed launches only).
+template <typename Inner>
+struct CountingSampler {
+  Inner inner;
+  unsigned* count;
+  template <bool WithGradient>
+  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
+                                         float* gradient) const {
+    const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
+    // castRayWith evaluates each sample's value, then value + gradient again for visible samples
+    // when shaded: count ray samples (the value evaluations) only.
+    if (ok && !WithGradient) ++*count;
+    return ok;
+  }
+};
+
+template <bool Shaded, int P, int MinBlocks = 0>
+__global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
+    fullKernel(const FrameView f, float4* __restrict__ image) {
+  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
+  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
+  if (px >= f.camera.width || py >= f.camera.height) return;
+  const RGBA c = castRayWith<Shaded>(f, typename SamplerFor<P>::type{}, px, py);
+  image[int64_t(py) * f.camera.width + px] = make_float4(c.r, c.g, c.b, c.a);
+}
+
+template <bool Shaded, int P>
+__global__ void __launch_bounds__(kTileX * kTileY)
+    countingKernel(const FrameView f, unsigned long long* total) {
+  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
+  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
+  if (px >= f.camera.width || py >= f.camera.height) return;
+  unsigned count = 0;
+  CountingSampler<typename SamplerFor<P>::type> sampler{{}, &count};
+  (void)castRayWith<Shaded>(f, sampler, px, py);
+  atomicAdd(total, (unsigned long long)count);
+}
+
+/// Baseline: the same rays and sample positions as castRayWith, but every sample in the box is
+/// only looked up and evaluated (value + gradient); no TF, shading, compositing or early exit.
+template <int P>
+__global__ void __launch_bounds__(kTileX * kTileY)
+    bareKernel(const FrameView f, float* __restrict__ sink, unsigned long long* total) {
+  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
+  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
+  if (px >= f.camera.width || py >= f.camera.height) return;
+  const typename SamplerFor<P>::type sampler{};
+  float d[3];
+  rayDirection(f.camera, px, py, d);
+  float tEnter, tExit, sum = 0.f;
+  unsigned count = 0;
+  if (intersectBox(f.camera.eye, d, f.boxLo, f.boxHi, tEnter, tExit)) {
+    const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
+    const float dt = f.sampleDistance;
+    if (tExit >= tStart && dt > 0.f) {
+      int64_t k = int64_t(ceilf(tStart / dt));
+      const int64_t kEnd = int64_t(floorf(tExit / dt));
+      for (; k <= kEnd; ++k) {
+        const float t = float(k) * dt;
+        const float p[3] = {f.camera.eye[0] + t * d[0], f.camera.eye[1] + t * d[1],
+                            f.camera.eye[2] + t * d[2]};
+        float value = 0.f, g[3] = {0.f, 0.f, 0.f};
+        if (!sampler.template sample<true>(f, p, value, g)) continue;
+        sum += value + g[0] + g[1] + g[2];
+        ++count;
+      }
+    }
+  }
+  sink[int64_t(py) * f.camera.width + px] = sum;
+  if (total) atomicAdd(total, (unsigned long long)count);
+}
+
+template <typename Kernel>
+std::string describe(Kernel kernel, const char* name) {
+  cudaFuncAttributes a{};
+  if (cudaFuncGetAttributes(&a, kernel) != cudaSuccess) {
+    (void)cudaGetLastError();
+    return name;
+  }
+  return std::string(name) + ": " + std::to_string(a.numRegs) + " registers, " +
+         std::to_string(a.localSizeBytes) + " bytes local";
+}
+
+struct LaunchConfig {
+  dim3 grid, block;
+};
+LaunchConfig config(const FrameView& v) {
+  return {dim3(unsigned((v.camera.width + kTileX - 1) / kTileX),
+               unsigned((v.camera.height + kTileY - 1) / kTileY)),
+          dim3(kTileX, kTileY)};
+}
+
+template <bool Shaded, int P, int MinBlocks = 0>
+std::string launchFullT(const FrameView& d, float* image, cudaStream_t stream, bool describeIt) {
+  const LaunchConfig c = config(d);
+  fullKernel<Shaded, P, MinBlocks>
+      <<<c.grid, c.block, 0, stream>>>(d, reinterpret_cast<float4*>(image));
+  AFAM_CUDA_CHECK(cudaGetLastError());
+  if (!describeIt) return {};
+  const std::string name = std::string("full<") + (Shaded ? "shaded" : "unshaded") + ",p=" +
+                           (P < 0 ? std::string("any") : std::to_string(P)) +
+                           (MinBlocks > 1 ? ",minBlocks=" + std::to_string(MinBlocks) : "") + ">";
+  return describe(fullKernel<Shaded, P, MinBlocks>, name.c_str());
+}
+
+template <bool Shaded, int P>
+void launchCountT(const FrameView& d, unsigned long long* total, cudaStream_t stream) {
+  const LaunchConfig c = config(d);
+  countingKernel<Shaded, P><<<c.grid, c.block, 0, stream>>>(d, total);
+  AFAM_CUDA_CHECK(cudaGetLastError());
+}
+
+template <int P>
+std::string launchBareT(const FrameView& d, float* sink, unsigned long long* total,
+                        cudaStream_t stream, bool describeIt) {
+  const LaunchConfig c = config(d);
+  bareKernel<P><<<c.grid, c.block, 0, stream>>>(d, sink, total);
+  AFAM_CUDA_CHECK(cudaGetLastError());
+  if (!describeIt) return {};
+  const std::string name = "bare<p=" + (P < 0 ? std::string("any") : std::to_string(P)) + ">";
+  return describe(bareKernel<P>, name.c_str());
+}
+
+std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cudaStream_t s,
+                       bool describeIt, int minBlocks) {
+  // Occupancy variant (8 blocks of 128 threads per SM: at most 64 registers), degree 2 only.
+  if (minBlocks == 8 && p == 2)
+    return shaded ? launchFullT<true, 2, 8>(d, image, s, describeIt)
+                  : launchFullT<false, 2, 8>(d, image, s, describeIt);
+  if (shaded) {
+    switch (p) {
+      case 1: return launchFullT<true, 1>(d, image, s, describeIt);
+      case 2: return launchFullT<true, 2>(d, image, s, describeIt);
+      case 3: return launchFullT<true, 3>(d, image, s, describeIt);
+      case 4: return launchFullT<true, 4>(d, image, s, describeIt);
+      case 5: return launchFullT<true, 5>(d, image, s, describeIt);
+      default: return launchFullT<true, -1>(d, image, s, describeIt);
+    }
+  }
+  switch (p) {
+    case 1: return launchFullT<false, 1>(d, image, s, describeIt);
+    case 2: return launchFullT<false, 2>(d, image, s, describeIt);
+    case 3: return launchFullT<false, 3>(d, image, s, describeIt);
+    case 4: return launchFullT<false, 4>(d, image, s, describeIt);
+    case 5: return launchFullT<false, 5>(d, image, s, describeIt);
+    default: return launchFullT<false, -1>(d, image, s, describeIt);
+  }
+}
+
+void launchCount(bool shaded, int p, const FrameView& d, unsigned long long* total,
+                 cudaStream_t s) {
+  // Counting is for benchmarks: the common degree 2 and the generic path are enough.
+  if (shaded) {
+    if (p == 2) return launchCountT<true, 2>(d, total, s);
+    return launchCountT<true, -1>(d, total, s);
+  }
+  if (p == 2) return launchCountT<false, 2>(d, total, s);
+  return launchCountT<false, -1>(d, total, s);
+}
+
+std::string launchBare(int p, const FrameView& d, float* sink, unsigned long long* total,
+                       cudaStream_t s, bool describeIt) {
+  if (p == 2) return launchBareT<2>(d, sink, total, s, describeIt);
+  return launchBareT<-1>(d, sink, total, s, describeIt);
+}
+
+}  // namespace afam::AFAM_KERNEL_NS

@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# GPU check of issue 6, for the GPU machine (CUDA, no VTK): configure Core + CudaKernels + Apps,
+# build, run the GPU tests, compute-sanitizer memcheck + racecheck on one frame, the GPU
+# benchmarks, and print a short table LAST.
+#   scripts/gpu_check.sh [BUILD_DIR]
+# Corpus volumes and trajectories are read from $AFAM_GPU_DATA, else gpu-data/ in the repository
+# (a git-ignored copy of ../shared/data/{volumes,trajectories} carried to the GPU machine), else
+# ../shared/data. Logs go to $OUT when set (device tool), else to BUILD_DIR/gpu_check/.
+set -uo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+build="${1:-$root/build-gpu}"
+logs="${OUT:-$build/gpu_check}"
+mkdir -p "$logs"
+jobs="${AFAM_JOBS:-16}"
+status() { printf '%-28s %s\n' "$1" "$2" >>"$logs/summary.txt"; }
+: >"$logs/summary.txt"
+
+gpu="$(nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null | head -1)"
+echo "GPU: ${gpu:-none}  nvcc: $(nvcc --version 2>/dev/null | tail -1)"
+
+# --- Configure and build (keep going past failures elsewhere; our targets are checked below).
+t0=$(date +%s)
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DAFAM_ENABLE_PARAVIEW=OFF -DAFAM_ENABLE_CUDA=ON >"$logs/configure.log" 2>&1
+rc=$?
+if [ $rc -ne 0 ]; then tail -30 "$logs/configure.log"; status configure "FAILED"; cat "$logs/summary.txt"; exit 1; fi
+ninja -C "$build" -j "$jobs" -k 0 >"$logs/build.log" 2>&1
+build_rc=$?
+grep -E "error|FAILED" "$logs/build.log" | head -20
+grep -E "registers|spill" "$logs/build.log" | head -5
+status "build (ninja -j$jobs)" "$([ $build_rc -eq 0 ] && echo ok || echo "rc=$build_rc (see build.log)") in $(( $(date +%s) - t0 )) s"
+tests="$build/Testing/Cuda/afam_cuda_tests"
+bench="$build/Testing/Cuda/bench_gpu"
+if [ ! -x "$tests" ] || [ ! -x "$bench" ]; then
+  status "GPU targets" "NOT BUILT"; cat "$logs/summary.txt"; exit 1
+fi
+
+# --- GPU tests.
+"$tests" --gtest_color=no >"$logs/tests.log" 2>&1
+test_rc=$?
+grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
+status "GPU tests" "$(grep -E '^\[  PASSED  \]' "$logs/tests.log" | head -1) $(grep -E '^\[  FAILED  \] [0-9]' "$logs/tests.log" | head -1) $(grep -E '^\[  SKIPPED \] [0-9]' "$logs/tests.log" | head -1)"
+worst=$(grep -E '^\[gpu-vs-cpu\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
+status "GPU vs CPU worst diff" "${worst:-?}/255 over $(grep -c '^\[gpu-vs-cpu\]' "$logs/tests.log") images (bar <= 2/255, exact kernels)"
+for m in fma fast; do
+  w=$(grep -E "^\[gpu-vs-cpu:$m\]" "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
+  status "  same, $m kernels" "${w:-?}/255 (reported, not a bar)"
+done
+
+# --- Sanitizers on one frame.
+for tool in memcheck racecheck; do
+  compute-sanitizer --tool $tool --error-exitcode 9 "$bench" --sanitize >"$logs/sanitizer_$tool.log" 2>&1
+  src=$?
+  tail -3 "$logs/sanitizer_$tool.log"
+  status "compute-sanitizer $tool" "$([ $src -eq 0 ] && echo clean || echo "rc=$src: $(grep -m1 -E 'ERROR SUMMARY|Error' "$logs/sanitizer_$tool.log")")"
+done
+
+# --- Benchmarks.
+"$bench" --table "$logs/bench_table.md" 2>&1 | tee "$logs/bench.log"
+bench_rc=$?
+status "bench_gpu" "$([ $bench_rc -eq 0 ] && echo ok || echo "rc=$bench_rc")"
+
+# --- End to end through the command line: afam ml -> encode (Adaptive-FAM, paper settings) ->
+# render the anchor views and replay user_1.dat with --device gpu and --device cpu.
+afam="$build/Apps/afam"
+traj="${AFAM_GPU_DATA:-$root/gpu-data}/trajectories/user_1.dat"
+[ -f "$traj" ] || traj="$root/../shared/data/trajectories/user_1.dat"
+e2e="$build/gpu_check_e2e"; mkdir -p "$e2e"
+if [ -x "$afam" ] && [ -f "$traj" ]; then
+  n="${AFAM_GPU_ML:-512}"
+  t0=$(date +%s)
+  "$afam" ml --size "$n" "$e2e/ml.raw" >/dev/null &&
+    "$afam" encode "$e2e/ml.raw" "$e2e/ml.afam" --dims "$n,$n,$n" --type float32 >"$e2e/encode.log" 2>&1
+  status "afam ml+encode ${n}^3" "rc=$? in $(( $(date +%s) - t0 )) s (levels 4, blocks 16, p=2, bound 1e-4)"
+  for view in 0 100 200 300; do
+    for dev in gpu cpu; do
+      "$afam" render "$e2e/ml.afam" --trajectory "$traj" --view $view --size 512,512 \
+        --device $dev --out "$e2e/view${view}_$dev.png" >"$e2e/render_${view}_$dev.log" 2>&1
+    done
+    g=$(grep -o 'render_ms=[0-9.]*' "$e2e/render_${view}_gpu.log" | cut -d= -f2)
+    c=$(grep -o 'render_ms=[0-9.]*' "$e2e/render_${view}_cpu.log" | cut -d= -f2)
+    b=$(grep -o 'blocks=[0-9]*' "$e2e/render_${view}_gpu.log" | head -1 | cut -d= -f2)
+    d=$(python3 -c "
+from PIL import Image; import numpy as np
+a=np.asarray(Image.open('$e2e/view${view}_gpu.png'),dtype=int); b=np.asarray(Image.open('$e2e/view${view}_cpu.png'),dtype=int)
+print('max diff %d/255, %d px differ' % (abs(a-b).max(), (abs(a-b).max(axis=2)>0).sum()))" 2>&1 | tail -1)
+    status "afam render view $view" "blocks=$b gpu ${g} ms (upload+kernel+readback), cpu ${c} ms; $d"
+  done
+  grep -h "device=" "$e2e/render_0_gpu.log"
+  "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device gpu --quiet >"$e2e/replay_gpu.log" 2>&1
+  status "afam replay user_1 gpu" "$(tail -1 "$e2e/replay_gpu.log")"
+  "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device cpu --frames 12 --quiet >"$e2e/replay_cpu.log" 2>&1
+  status "afam replay user_1 cpu (12)" "$(tail -1 "$e2e/replay_cpu.log")"
+  "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device gpu --frames 12 --quiet >"$e2e/replay_gpu12.log" 2>&1
+  status "afam replay user_1 gpu (12)" "$(tail -1 "$e2e/replay_gpu12.log")"
+else
+  status "afam end to end" "skipped (no afam binary or trajectory)"
+fi
+
+echo
+echo "================ gpu_check summary ================"
+echo "GPU: ${gpu:-none}"
+cat "$logs/summary.txt"
+[ -f "$logs/bench_table.md" ] && cat "$logs/bench_table.md"
+[ $test_rc -eq 0 ] && [ $bench_rc -eq 0 ]

@@ -18,7 +18,9 @@
 //
 // Memory: the encoder never holds the volume. Per level it walks the rows of blocks along z, reads
 // only the z-planes its sample positions need (one or two per sample, via VolumeSource::readSlab),
-// and keeps the samples of the blocks being fitted (for 512^3 with 16 blocks: ~40 MB).
+// and keeps the samples of the blocks being fitted: rows of blocks are gathered up to ~24 M samples
+// (96 MB) per batch, at least one row. Measured peak RSS of `afam encode`: 174 MB at 512^3,
+// 497 MB at 1024^3 (2 threads).
 #pragma once
 
 #include <array>

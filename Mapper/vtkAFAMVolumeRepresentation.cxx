@@ -102,6 +102,19 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(
     if (vtkMath::AreBoundsInitialized(this->DataBounds))
     {
       vtkPVRenderView::SetGeometryBounds(inInfo, this, this->DataBounds);
+      // Ordered compositing needs disjoint boxes per rank; building a kd-tree from the (identical)
+      // outlines aborts in DIY. Each rank declares a z-slab of the volume: only rank 0 draws the
+      // volume, the others are transparent, so any blending order yields rank 0's image.
+      auto* controller = vtkMultiProcessController::GetGlobalController();
+      const int ranks = controller ? std::max(1, controller->GetNumberOfProcesses()) : 1;
+      const int rank = controller ? controller->GetLocalProcessId() : 0;
+      double slab[6];
+      std::copy(this->DataBounds, this->DataBounds + 6, slab);
+      const double dz = (this->DataBounds[5] - this->DataBounds[4]) / ranks;
+      slab[4] = this->DataBounds[4] + rank * dz;
+      slab[5] = this->DataBounds[4] + (rank + 1) * dz;
+      vtkPVRenderView::SetOrderedCompositingConfiguration(
+        inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, slab);
     }
   }
   else if (request_type == vtkPVView::REQUEST_RENDER())

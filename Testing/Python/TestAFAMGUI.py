@@ -4,7 +4,7 @@ TestAFAMPipeline, show it with "Adaptive-FAM Volume", take a screenshot, check i
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))  # the GUI defines no __file__
 import afam_test_util as u  # noqa: E402
 
 from paraview.simple import GetActiveViewOrCreate, OpenDataFile, Render, SaveScreenshot, Show  # noqa: E402

@@ -6,7 +6,7 @@ Leaves wavelet.afam in the shared test folder for the MPI and GUI tests."""
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))  # the GUI defines no __file__
 import afam_test_util as u  # noqa: E402
 
 from paraview.simple import (CreateView, OpenDataFile, Render, SaveData, SaveScreenshot,  # noqa: E402

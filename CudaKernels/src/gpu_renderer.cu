@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <unordered_map>
 #include <vector>
 
 #include "cuda_check.hpp"
@@ -80,6 +81,16 @@ struct GpuRenderer::Impl {
   size_t imageCapacity = 0;  // pixels
   unsigned long long* deviceCounter = nullptr;
   cudaEvent_t events[4] = {nullptr, nullptr, nullptr, nullptr};
+  // DS baseline through 3D textures: one CUDA array + texture object per raw model, kept across
+  // frames (no budget: a benchmark baseline), and this frame's handles in slot order.
+  struct Texture {
+    cudaArray_t array = nullptr;
+    cudaTextureObject_t object = 0;
+  };
+  std::unordered_map<uint64_t, Texture> textures;
+  unsigned long long* hostHandles = nullptr;
+  unsigned long long* deviceHandles = nullptr;
+  size_t handleCapacity = 0;
 
   Impl(size_t budget, int device) : pool(budget, device) {
     stream = static_cast<cudaStream_t>(pool.stream());
@@ -102,6 +113,14 @@ struct GpuRenderer::Impl {
     if (deviceImage) (void)cudaFree(deviceImage);
     if (hostImage) (void)cudaFreeHost(hostImage);
     if (deviceCounter) (void)cudaFree(deviceCounter);
+    for (auto& t : textures) {
+      if (t.second.object) (void)cudaDestroyTextureObject(t.second.object);
+      if (t.second.array) (void)cudaFreeArray(t.second.array);
+    }
+    textures.clear();
+    if (hostHandles) (void)cudaFreeHost(hostHandles);
+    if (deviceHandles) (void)cudaFree(deviceHandles);
+    hostHandles = deviceHandles = nullptr;
     hostTables = deviceTables = nullptr;
     deviceImage = hostImage = nullptr;
     deviceCounter = nullptr;
@@ -131,6 +150,60 @@ struct GpuRenderer::Impl {
     AFAM_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&deviceImage), pixels * sizeof(float4)));
     AFAM_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&hostImage), pixels * sizeof(float4)));
     imageCapacity = pixels;
+  }
+
+  /// Texture handles of this frame's raw slots on the device (creating missing textures; the
+  /// copies into CUDA arrays are synchronous: this is the baseline, not the product path).
+  const unsigned long long* textureHandles(const FrameView& v, const uint64_t* keys) {
+    const size_t n = size_t(std::max(v.slotCount, 1));
+    if (n > handleCapacity) {
+      AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
+      if (hostHandles) AFAM_CUDA_CHECK(cudaFreeHost(hostHandles));
+      if (deviceHandles) AFAM_CUDA_CHECK(cudaFree(deviceHandles));
+      hostHandles = deviceHandles = nullptr;
+      handleCapacity = 0;
+      AFAM_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&hostHandles), n * 8));
+      AFAM_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&deviceHandles), n * 8));
+      handleCapacity = n;
+    }
+    AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
+    for (int32_t s = 0; s < v.slotCount; ++s) {
+      const FrameSlot& slot = v.slots[s];
+      if (slot.kind != kSlotRaw)
+        throw InvalidArgument("GpuRenderer: the 3D-texture DS path needs raw (DS) slots only");
+      const uint64_t key = keys ? keys[s] : GpuRenderer::defaultSlotKey(slot);
+      auto it = textures.find(key);
+      if (it == textures.end()) {
+        Texture t;
+        const cudaExtent extent = make_cudaExtent(size_t(slot.knots[0].ncp),
+                                                  size_t(slot.knots[1].ncp),
+                                                  size_t(slot.knots[2].ncp));
+        const cudaChannelFormatDesc desc = cudaCreateChannelDesc<float>();
+        AFAM_CUDA_CHECK(cudaMalloc3DArray(&t.array, &desc, extent));
+        cudaMemcpy3DParms copy{};
+        copy.srcPtr = make_cudaPitchedPtr(const_cast<float*>(v.pool + slot.offset),
+                                          extent.width * sizeof(float), extent.width,
+                                          extent.height);
+        copy.dstArray = t.array;
+        copy.extent = extent;
+        copy.kind = cudaMemcpyHostToDevice;
+        AFAM_CUDA_CHECK(cudaMemcpy3D(&copy));
+        cudaResourceDesc res{};
+        res.resType = cudaResourceTypeArray;
+        res.res.array.array = t.array;
+        cudaTextureDesc td{};
+        for (auto& mode : td.addressMode) mode = cudaAddressModeClamp;
+        td.filterMode = cudaFilterModeLinear;
+        td.readMode = cudaReadModeElementType;
+        td.normalizedCoords = 0;
+        AFAM_CUDA_CHECK(cudaCreateTextureObject(&t.object, &res, &td, nullptr));
+        it = textures.emplace(key, t).first;
+      }
+      hostHandles[s] = (unsigned long long)it->second.object;
+    }
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(deviceHandles, hostHandles, size_t(v.slotCount) * 8,
+                                    cudaMemcpyHostToDevice, stream));
+    return deviceHandles;
   }
 
   /// Makes every slot's model resident, uploads the frame tables and returns the device view.
@@ -252,8 +325,13 @@ void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float*
   if (poison_)
     AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceImage, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
-  kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, reinterpret_cast<float*>(m.deviceImage),
-                           m.stream, true, minBlocks_);
+  if (dsTextures_)
+    kernelInfo_ = kernels_texture::launchDsTexture(
+        view.shading != 0, d, m.textureHandles(view, slotKeys),
+        reinterpret_cast<float*>(m.deviceImage), nullptr, m.stream, true);
+  else
+    kernelInfo_ = launchFull(mode_, view.shading != 0, p, d,
+                             reinterpret_cast<float*>(m.deviceImage), m.stream, true, minBlocks_);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[2], m.stream));
   AFAM_CUDA_CHECK(cudaMemcpyAsync(m.hostImage, m.deviceImage, pixels * sizeof(float4),
                                   cudaMemcpyDeviceToHost, m.stream));
@@ -281,7 +359,12 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   GpuKernelTiming timing;
   // Untimed launch that counts the evaluated samples.
   AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceCounter, 0, 8, m.stream));
-  if (kind == GpuKernelKind::Full)
+  const unsigned long long* handles =
+      dsTextures_ && kind == GpuKernelKind::Full ? m.textureHandles(view, slotKeys) : nullptr;
+  if (handles)
+    (void)kernels_texture::launchDsTexture(shaded, d, handles, sink, m.deviceCounter, m.stream,
+                                           false);
+  else if (kind == GpuKernelKind::Full)
     launchCount(mode_, shaded, p, d, m.deviceCounter, m.stream);
   else
     (void)launchBare(mode_, p, d, sink, m.deviceCounter, m.stream, false);
@@ -291,7 +374,10 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   timing.samples = count;
   for (int r = -1; r < repetitions; ++r) {  // r = -1: warm-up
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
-    const std::string info = kind == GpuKernelKind::Full
+    const std::string info =
+        handles ? kernels_texture::launchDsTexture(shaded, d, handles, sink, nullptr, m.stream,
+                                                   r == -1)
+        : kind == GpuKernelKind::Full
                                  ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_)
                                  : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1);
     if (r == -1) kernelInfo_ = info;

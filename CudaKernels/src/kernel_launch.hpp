@@ -30,3 +30,10 @@
 AFAM_DECLARE_KERNEL_SET(kernels_exact)
 AFAM_DECLARE_KERNEL_SET(kernels_fma)
 AFAM_DECLARE_KERNEL_SET(kernels_fast)
+
+namespace afam::kernels_texture {
+/// DS baseline: raw slots through 3D textures (textures[s]: cudaTextureObject_t of slot s, device
+/// memory). Counts ray samples into *total instead of writing the image when total != null.
+std::string launchDsTexture(bool shaded, const FrameView& d, const unsigned long long* textures,
+                            float* image, unsigned long long* total, cudaStream_t s, bool describe);
+}  // namespace afam::kernels_texture

@@ -179,6 +179,37 @@ int main(int argc, char** argv) {
       gpu.setMinBlocksPerSm(0);
     }
 
+    // --- DS baseline on view 0: raw blocks, castRay's software trilinear vs 3D textures.
+    std::ostringstream ds;
+    {
+      const EncodedVolume raw = rawBlocks(ml, 4, 16);
+      const Pose pose = !poses.empty() ? poses[0] : Pose{1.5, 40.0, 0.0};
+      const Camera camera = Camera::fromPose(pose, 512, 512);
+      Frame frame;
+      buildFrame(raw, distanceBands(raw.partition, camera), camera, FrameOptions{}, frame);
+      ImageRGBA cpu;
+      renderCpu(frame.view, cpu, 0);
+      std::vector<float> image(size_t(512) * 512 * 4);
+      ds << "| DS (raw blocks + ghosts, view 0, shaded) | blocks | kernel ms | G samples/s | "
+            "max diff /255 | px differ | kernel |\n|---|---|---|---|---|---|---|\n";
+      for (bool textures : {false, true}) {
+        gpu.setDsTextures(textures);
+        gpu.render(frame.view, frame.keys.data(), image.data());
+        const ImageDiff d = compareImages(cpu.rgba, image);
+        const GpuKernelTiming full =
+            gpu.timeKernel(frame.view, frame.keys.data(), GpuKernelKind::Full, reps);
+        char line[512];
+        std::snprintf(line, sizeof(line), "| %s | %d | %.3f | %.1f | %d | %lld | %s |\n",
+                      textures ? "3D textures, hardware trilinear" : "castRay, software trilinear",
+                      frame.view.slotCount, full.median(),
+                      double(full.samples) / (full.median() * 1e-3) / 1e9, d.maxAbs8,
+                      (long long)d.differing, gpu.lastKernelInfo().c_str());
+        ds << line;
+        std::printf("%s", line);
+      }
+      gpu.setDsTextures(false);
+    }
+
     // --- 8 vs 512 visible blocks: the same data at full resolution, one level each.
     std::vector<Row> blockRows;
     for (int blocks : {2, 8}) {
@@ -221,6 +252,7 @@ int main(int argc, char** argv) {
       table << line;
     }
     table << "\n" << variants.str();
+    table << "\n" << ds.str();
     table << "\n| 8 vs 512 visible blocks (same data, full resolution) | blocks | kernel ms | "
              "G samples/s |\n|---|---|---|---|\n";
     for (const Row& r : blockRows) {

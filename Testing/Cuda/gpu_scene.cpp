@@ -156,6 +156,63 @@ EncodedVolume encodeVolume(const Volume& v, int levels, int finestBlocks, int de
   return e;
 }
 
+EncodedVolume rawBlocks(const Volume& v, int levels, int finestBlocks) {
+  EncodedVolume e;
+  e.partition = Partition(v.dims, levels, finestBlocks);
+  e.degree = 1;
+  e.dims = v.dims;
+  e.minValue = v.minValue;
+  e.maxValue = v.maxValue;
+  e.raw = true;
+  e.models.resize(size_t(levels));
+  for (int l = 0; l < levels; ++l) {
+    e.models[size_t(l)].resize(size_t(e.partition.blockCount(l)));
+    for (int64_t b = 0; b < e.partition.blockCount(l); ++b) {
+      const Int3 ijk = e.partition.blockFromLinear(l, b);
+      const BlockExtent ext = e.partition.extent(l, ijk);
+      std::array<std::vector<int64_t>, 3> i0;
+      std::array<std::vector<float>, 3> fr;
+      std::array<int, 3> padded{};
+      for (int a = 0; a < 3; ++a) {
+        const int n = ext.samples[a];
+        padded[size_t(a)] = n + 2;
+        const double first = e.partition.samplePosition(ext, a, 0);
+        const double step =
+            n > 1 ? (e.partition.samplePosition(ext, a, n - 1) - first) / double(n - 1) : 0.0;
+        for (int k = -1; k <= n; ++k) {
+          double x = first + double(k) * step;
+          x = std::min(std::max(x, 0.0), double(v.dims[a] - 1));
+          int64_t i = int64_t(std::floor(x));
+          i = std::min<int64_t>(std::max<int64_t>(i, 0), std::max<int64_t>(v.dims[a] - 2, 0));
+          i0[size_t(a)].push_back(i);
+          fr[size_t(a)].push_back(v.dims[a] > 1 ? float(x - double(i)) : 0.f);
+        }
+      }
+      FitResult& m = e.models[size_t(l)][size_t(b)];
+      m.ncp = padded;
+      m.degree = {1, 1, 1};
+      m.control.resize(size_t(padded[0]) * padded[1] * padded[2]);
+      const int64_t sx = v.dims[0] > 1 ? 1 : 0;
+      const int64_t sy = v.dims[1] > 1 ? v.dims[0] : 0;
+      const int64_t sz = v.dims[2] > 1 ? v.dims[0] * v.dims[1] : 0;
+      for (int z = 0; z < padded[2]; ++z)
+        for (int y = 0; y < padded[1]; ++y)
+          for (int x = 0; x < padded[0]; ++x) {
+            const float* c = v.data.data() + (i0[2][size_t(z)] * v.dims[1] + i0[1][size_t(y)]) *
+                                                 v.dims[0] + i0[0][size_t(x)];
+            const float fx = fr[0][size_t(x)], fy = fr[1][size_t(y)], fz = fr[2][size_t(z)];
+            const float c00 = c[0] + fx * (c[sx] - c[0]);
+            const float c10 = c[sy] + fx * (c[sy + sx] - c[sy]);
+            const float c01 = c[sz] + fx * (c[sz + sx] - c[sz]);
+            const float c11 = c[sz + sy] + fx * (c[sz + sy + sx] - c[sz + sy]);
+            const float c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+            m.control[(size_t(z) * padded[1] + y) * padded[0] + x] = c0 + fz * (c1 - c0);
+          }
+    }
+  }
+  return e;
+}
+
 std::vector<BlockId> wholeLevel(const Partition& p, int level) {
   std::vector<BlockId> out;
   for (int64_t i = 0; i < p.blockCount(level); ++i) out.push_back({level, p.blockFromLinear(level, i)});
@@ -202,7 +259,7 @@ void buildFrame(const EncodedVolume& e, const std::vector<BlockId>& blocks, cons
     const FitResult& m = e.models[size_t(b.level)][size_t(p.linearIndex(b.level, b.ijk))];
     const BlockExtent ext = p.extent(b.level, b.ijk);
     FrameSlot s;
-    s.kind = kSlotSpline;
+    s.kind = e.raw ? kSlotRaw : kSlotSpline;
     s.level = b.level;
     for (int a = 0; a < 3; ++a) {
       s.knots[a] = Knots::make(m.ncp[size_t(a)], m.degree[size_t(a)]);

@@ -34,9 +34,14 @@ struct EncodedVolume {
   Index3 dims{};
   float minValue = 0, maxValue = 0;
   std::vector<std::vector<FitResult>> models;  ///< [level][linear block index]
+  bool raw = false;  ///< DS: models hold padded raw samples (ncp = samples + 2), kSlotRaw
 };
 EncodedVolume encodeVolume(const Volume& v, int levels, int finestBlocks, int degree,
                            double ncpFraction, int threads = 0);
+
+/// DS: every block of every level as raw samples with one ghost sample per side (clamped at the
+/// volume edge), the layout of raycast.hpp's kSlotRaw.
+EncodedVolume rawBlocks(const Volume& v, int levels, int finestBlocks);
 
 struct BlockId {
   int level = 0;

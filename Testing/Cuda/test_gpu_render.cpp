@@ -124,6 +124,37 @@ TEST(GpuRenderer, GenericDegreePathMatchesSpecialised) {
               d.maxAbs8, (long long)d.differing, d.maxAbsFloat);
 }
 
+TEST(GpuDsBaseline, RawBlocksMatchCpuAndTexturePathWritesEveryPixel) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume e = rawBlocks(marschnerLobbVolume(65), 3, 8);
+  GpuRenderer gpu(size_t(64) << 20);
+  gpu.setPoisonOutput(true);
+  for (bool shaded : {false, true}) {
+    const Camera camera = Camera::fromPose({2.6, 55.0, 30.0}, 301, 256);
+    Frame frame;
+    FrameOptions options;
+    options.shaded = shaded;
+    buildFrame(e, distanceBands(e.partition, camera), camera, options, frame);
+    ImageRGBA cpu;
+    renderCpu(frame.view, cpu, 0);
+    std::vector<float> image(cpu.rgba.size());
+    gpu.setDsTextures(false);
+    gpu.render(frame.view, frame.keys.data(), image.data());
+    const ImageDiff d = compareImages(cpu.rgba, image);
+    gpu.setDsTextures(true);
+    gpu.render(frame.view, frame.keys.data(), image.data());
+    const std::string info = gpu.lastKernelInfo();
+    const ImageDiff t = compareImages(cpu.rgba, image);
+    std::printf("[ds] %s: castRay raw slots vs CPU max |diff| %d/255 (%lld px); 3D textures vs "
+                "CPU max |diff| %d/255 (%lld px differ, hardware 8-bit filter weights) (%s)\n",
+                shaded ? "shaded" : "unshaded", d.maxAbs8, (long long)d.differing, t.maxAbs8,
+                (long long)t.differing, info.c_str());
+    EXPECT_EQ(d.nonFinite, 0);
+    EXPECT_LE(d.maxAbs8, 2);
+    EXPECT_EQ(t.nonFinite, 0);
+  }
+}
+
 TEST(GpuModelPool, ReplayUploadsMatchLedgerAndStayUnderBudget) {
   AFAM_SKIP_WITHOUT_GPU();
   const EncodedVolume* e = encoded("marschner_lobb", 2);

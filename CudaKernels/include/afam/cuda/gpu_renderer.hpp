@@ -75,6 +75,10 @@ class GpuRenderer {
   /// Floating-point contract of the kernels used from the next call on.
   void setFloatMode(GpuFloatMode mode) { mode_ = mode; }
   GpuFloatMode floatMode() const { return mode_; }
+  /// DS baseline: render raw (kSlotRaw) frames through 3D textures with hardware trilinear
+  /// filtering instead of castRay's software trilinear (Full kernels only; throws
+  /// InvalidArgument on spline slots).
+  void setDsTextures(bool on) { dsTextures_ = on; }
   /// Benchmark knob: 8 asks for the degree-2 kernels limited to 64 registers (8 blocks per SM).
   void setMinBlocksPerSm(int blocks) { minBlocks_ = blocks; }
   /// "full<shaded,p=2>: 40 registers, 0 bytes local" for the kernel the last frame used.
@@ -95,6 +99,7 @@ class GpuRenderer {
   bool specialise_ = true;
   GpuFloatMode mode_ = GpuFloatMode::Exact;
   int minBlocks_ = 1;
+  bool dsTextures_ = false;
   std::string kernelInfo_;
 };
 

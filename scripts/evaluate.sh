@@ -42,21 +42,24 @@ case $SIZE in
   smoke)
     ML_N=33; BLOCKS=8; IMG=48; FRAMES=12; PREFETCHERS="none linear"
     BOUNDS="1e-2 1e-3"; REL_BOUNDS="1e-2"; FIXED_NCPS="3 5"; VOLUMES="bucky_32x32x32_uint8.raw"
-    SDS="0.02,0.01"; ZFP_RATES="1.6 4"; FPZIP_PRECS="10 14"; QUALITY_BOUNDS="1e-3" ;;
+    SDS="0.02,0.01"; ZFP_RATES="1 4"; FPZIP_PRECS="8 14"; QUALITY_BOUNDS="1e-3"; REPLAY_IMG=24; REPLAY_SD=0.02 ;;
   small)
-    ML_N=129; BLOCKS=16; IMG=96; FRAMES=400; PREFETCHERS="none linear appa forecache lstm"
-    BOUNDS="1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="4 6 9"
+    ML_N=257; BLOCKS=16; IMG=96; FRAMES=400; PREFETCHERS="none linear appa forecache lstm"
+    BOUNDS="3e-2 1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="5 9 13"
     VOLUMES=$(cd "$DATA/volumes" && ls *.raw | tr '\n' ' ')
-    SDS="0.02,0.01,0.005,0.0025"; ZFP_RATES="0.5 1 1.6 2 4 8"; FPZIP_PRECS="8 10 12 14 16 20"
-    QUALITY_BOUNDS="1e-3 1e-4" ;;
+    SDS="0.02,0.01,0.005,0.0025"; ZFP_RATES="0.25 0.5 1 2 4 8"; FPZIP_PRECS="4 6 8 12 16 20"
+    QUALITY_BOUNDS="1e-3 1e-4"; REPLAY_IMG=32; REPLAY_SD=0.01 ;;
   full)
     ML_N=513; BLOCKS=16; IMG=512; FRAMES=400; PREFETCHERS="none linear appa forecache lstm"
-    BOUNDS="1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="5 9 17 33"
+    BOUNDS="3e-2 1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="5 9 17 25"
     VOLUMES=$(cd "$DATA/volumes" && ls *.raw | tr '\n' ' ')
-    SDS="0.01,0.005,0.0025,0.00125"; ZFP_RATES="0.5 1 1.6 2 4 8"; FPZIP_PRECS="8 10 12 14 16 20"
-    QUALITY_BOUNDS="1e-3 1e-4" ;;
+    SDS="0.01,0.005,0.0025,0.00125"; ZFP_RATES="0.25 0.5 1 2 4 8"; FPZIP_PRECS="4 6 8 12 16 20"
+    QUALITY_BOUNDS="1e-3 1e-4"; REPLAY_IMG=512; REPLAY_SD=0.005 ;;
 esac
 LEVELS=4
+# Replays run in the paper's regime: 200-model cache, OS page cache dropped before each point of
+# view, storage emulated at STORAGE_MBPS (the paper read from a 5400 rpm HDD).
+STORAGE_MBPS=${AFAM_STORAGE_MBPS:-100}
 
 mkdir -p "$OUT"/{encoding,quality,compressors,latency,stability,work,images}
 W=$OUT/work
@@ -70,12 +73,13 @@ LOG=$OUT/commands.log
 
 # run CMD...: logs the command, runs it, logs its wall time; stdout goes to the caller.
 run() {
-  local t0 t1
+  local t0 t1 rc=0
   echo "$*" >> "$LOG"
   t0=$(date +%s.%N)
-  "$@"
+  "$@" || rc=$?
   t1=$(date +%s.%N)
-  echo "#   wall_s=$(echo "$t1 - $t0" | bc)" >> "$LOG"
+  echo "#   wall_s=$(echo "$t1 - $t0" | bc) rc=$rc" >> "$LOG"
+  return $rc
 }
 stamp() { echo "[$(date +%T)] $*" >&2; }
 kv() { grep -o "$1=[^ ]*" | tail -1 | cut -d= -f2; }  # kv KEY < text
@@ -167,8 +171,9 @@ for traj in user_1 user_2; do
     esac
     for pf in $PREFETCHERS; do
       csv=$OUT/latency/replay_${traj}_${meth}_${pf}.csv
-      o=$(run "$AFAM" replay "$f" --trajectory "$DATA/trajectories/$traj.dat" --frames "$FRAMES" \
-            --size "$IMG,$IMG" --prefetch "$pf" --threads "$JOBS" --quiet --csv "$csv" 2>&1 | tail -1) || {
+      o=$(set -o pipefail; run "$AFAM" replay "$f" --trajectory "$DATA/trajectories/$traj.dat" --frames "$FRAMES" \
+            --size "$REPLAY_IMG,$REPLAY_IMG" --sample-distance "$REPLAY_SD" --cache-blocks 200 \
+            --cold --storage-mbps "$STORAGE_MBPS" --prefetch "$pf" --threads "$JOBS" --quiet --csv "$csv" 2>&1 | tail -1) || {
         echo "# replay $traj $meth $pf failed: $o" >> "$LOG"; continue; }
       echo "$traj,$meth,$f,$pf,$(echo "$o" | kv median_latency_ms),$(echo "$o" | kv median_caching_ms),$(echo "$o" | kv median_render_ms),$(echo "$o" | kv miss_rate),$csv" >> "$LAT_CSV"
     done

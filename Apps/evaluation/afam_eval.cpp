@@ -131,7 +131,7 @@ int runQuality(const Opts& o) {
   std::FILE* csv = std::fopen(o.str("csv").c_str(), "w");
   if (!csv) throw std::runtime_error("cannot write " + o.str("csv"));
   std::fprintf(csv,
-               "label,file,mode,view,levels_visible,sample_distance,blocks,payload_bytes,file_payload_bytes,"
+               "label,file,mode,view,levels_visible,sample_distance,blocks,payload_bytes,file_payload_bytes,raw_block_bytes,ratio,"
                "caching_ms,render_ms,mse,psnr,ssim\n");
   const std::string imgDir = o.str("images");
   for (double sd : sds) {
@@ -152,8 +152,11 @@ int runQuality(const Opts& o) {
     for (const auto& arg : o.pos) {
       const auto lf = labelled(arg);
       auto file = AfamFile::open(lf.second);
-      uint64_t filePayload = 0;
-      for (const auto& e : file->entries()) filePayload += e.size;
+      uint64_t filePayload = 0, rawBlocks = 0;
+      for (const auto& e : file->entries()) {
+        filePayload += e.size;
+        rawBlocks += uint64_t(e.samples[0]) * uint64_t(e.samples[1]) * uint64_t(e.samples[2]) * 4u;
+      }
       Renderer r(file, ro);
       FrameStats st;
       ImageRGBA img = r.renderFrame(cam, st);  // cold: loads the models
@@ -168,9 +171,10 @@ int runQuality(const Opts& o) {
       if (!imgDir.empty()) writePng(imgDir + "/" + lf.first + "_sd" + std::to_string(sd) + ".png", rgb);
       const ImageErrors e = compare(rgb, gtRgb);
       const int lv = levelsVisible(r.select(cam), file->header().levels);
-      std::fprintf(csv, "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%.4f,%.4f,%.8g,%.6f,%.6f\n", lf.first.c_str(),
+      std::fprintf(csv, "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%llu,%.4f,%.4f,%.4f,%.8g,%.6f,%.6f\n", lf.first.c_str(),
                    lf.second.c_str(), modeName(file->header().mode), view, lv, sd, (long long)st.slots,
-                   (unsigned long long)st.poolBytes, (unsigned long long)filePayload, caching, best, e.mse,
+                   (unsigned long long)st.poolBytes, (unsigned long long)filePayload,
+                   (unsigned long long)rawBlocks, double(rawBlocks) / double(std::max<uint64_t>(filePayload, 1)), caching, best, e.mse,
                    e.psnr, e.ssim);
       std::fflush(csv);
       std::printf("%s sd=%g view=%d levels=%d render_ms=%.2f psnr=%.3f ssim=%.4f\n", lf.first.c_str(), sd,

@@ -53,7 +53,7 @@ TEST(Renderer, AdaptiveFamMatchesTheAnalyticGroundTruth) {
   RecordProperty("psnr", std::to_string(p));
   std::printf("adaptive psnr=%.2f ssim=%.4f slots=%lld\n", p, compare(toRGB8(img), toRGB8(gt)).ssim,
               (long long)st.slots);
-  EXPECT_GT(p, 30.0);
+  EXPECT_GT(p, 37.0);  // measured 40.4 (65^3, bound 1e-3, preset TF, 64 x 64)
   EXPECT_GT(st.slots, 0);
   EXPECT_GT(st.misses, 0u);
   EXPECT_EQ(st.hits, 0u);
@@ -73,7 +73,7 @@ TEST(Renderer, DownsampledFileRendersWithRawSlots) {
   const ImageRGBA img = r.renderFrame(c, st);
   const double p = psnrOf(img, groundTruth(r, c));
   std::printf("ds psnr=%.2f\n", p);
-  EXPECT_GT(p, 20.0);  // measured 23.5: trilinear on 65^3 ML, central-difference normals
+  EXPECT_GT(p, 27.0);  // measured 30.0: trilinear on 65^3 ML, central-difference normals
 }
 
 TEST(Renderer, CulledRenderEqualsUnculledRender) {

@@ -33,9 +33,9 @@ class TransferFunction {
   static float maxOpacity(const std::vector<float>& table, double lo, double hi, double vmin,
                           double vmax);
 
-  /// Default for a value range: a warm colour ramp and three translucent opacity bands at 20-30%,
-  /// 45-55% and 70-80% of the range (isosurface-like shells, as in the paper's quality figure),
-  /// opaque nowhere else. Values below 15% of the range are fully transparent (cullable).
+  /// Default for a value range: three translucent shells (isosurface-like, as in the paper's
+  /// quality figure) at 20-30% (blue, faint), 45-55% (green) and 70-80% (orange, strongest) of
+  /// the range, transparent everywhere else (blocks entirely outside the shells are cullable).
   static TransferFunction preset(double lo, double hi);
 };
 

@@ -10,7 +10,7 @@ packages=(
   xvfb xauth mesa-utils openmpi-bin libopenmpi-dev
   libzfp-dev libfpzip-dev
   # -dev packages ParaView's CMake config needs but paraview-dev does not declare
-  qtbase5-dev qttools5-dev libqt5svg5-dev libutfcpp-dev libhdf5-mpi-dev libnetcdf-dev libgdal-dev
+  libqt5opengl5-dev qtbase5-dev qttools5-dev libqt5svg5-dev libutfcpp-dev libhdf5-mpi-dev libnetcdf-dev libgdal-dev
   libtiff-dev liblz4-dev libglew-dev libgl2ps-dev libtheora-dev libogg-dev libavformat-dev
   libavcodec-dev libavutil-dev libswscale-dev libdouble-conversion-dev
 )

@@ -373,7 +373,7 @@ void stabilityRow(std::FILE* csv, BlockFitter& fitter, const Case& c) {
 
 std::vector<float> mlBlock(std::array<int, 3> n, double scale, double offset) {
   MarschnerLobb ml;
-  std::vector<float> d(size_t(n[0]) * n[1] * n[2]);
+  std::vector<float> d(static_cast<size_t>(n[0]) * n[1] * n[2]);
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)
       for (int x = 0; x < n[0]; ++x) {

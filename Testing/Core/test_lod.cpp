@@ -14,7 +14,7 @@ namespace {
 std::vector<int> coverage(const Partition& p, const std::vector<BlockRef>& cut) {
   const int finest = p.levels() - 1;
   const Int3 bf = p.blocksPerAxis(finest);
-  std::vector<int> count(size_t(bf[0]) * bf[1] * bf[2], 0);
+  std::vector<int> count(static_cast<size_t>(bf[0]) * bf[1] * bf[2], 0);
   for (const BlockRef& b : cut) {
     const int r = p.stride(b.level);
     for (int z = b.ijk[2] * r; z < std::min((b.ijk[2] + 1) * r, bf[2]); ++z)

@@ -32,7 +32,7 @@ TEST(Raycast, ConstantTimeLookupEqualsBruteForce) {
       f.cellBounds[a] = bounds[a].data();
       f.voxelMax[a] = float(dims[a] - 1);
     }
-    std::vector<int32_t> cells(size_t(bf[0]) * bf[1] * bf[2]);
+    std::vector<int32_t> cells(static_cast<size_t>(bf[0]) * bf[1] * bf[2]);
     for (size_t i = 0; i < cells.size(); ++i) cells[i] = int32_t(i);
     f.cellSlot = cells.data();
     std::mt19937 rng(5);

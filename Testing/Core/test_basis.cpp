@@ -71,7 +71,7 @@ TEST(Basis, PartitionOfUnityAndNonNegativity) {
         afam::basisFunctionsAndDerivatives(k, s, u, N, dN);
         double sum = 0, dsum = 0;
         for (int r = 0; r <= p; ++r) {
-          EXPECT_GE(N[r], -1e-15);
+          EXPECT_GE(N[r], -1e-15) << "p=" << p << " ncp=" << ncp << " u=" << u << " r=" << r;
           sum += N[r];
           dsum += dN[r];
         }
@@ -252,11 +252,11 @@ TEST(Evaluate, GradientMatchesFiniteDifferencesOfValue) {
 
 namespace {
 
-TEST(Basis, UniformSpanClosedFormMatchesRecurrence) {
-  // Interior spans take the cardinal B-spline closed form; compare with the recurrence (which a
-  // degree-5 Knots copy would use) by evaluating the recurrence directly.
+TEST(Basis, ClosedFormMatchesRecurrence) {
+  // p = 1 and p = 2 take closed forms on every span (end spans included), p = 3 on interior
+  // spans; compare with the recurrence by evaluating it directly.
   for (int p = 1; p <= 3; ++p)
-    for (int ncp : {2 * p + 2, 9, 32, 128}) {
+    for (int ncp : {p + 1, p + 2, 2 * p + 2, 9, 32, 128}) {
       const Knots k = Knots::make(ncp, p);
       for (int i = 0; i <= 400; ++i) {
         const double u = i / 400.0;

@@ -101,16 +101,49 @@ AFAM_HD void basisOfDegree(const Knots& k, int s, Real u, int deg, Real* N) {
   }
 }
 
-/// Closed-form basis (and derivative) on spans whose 2p surrounding knots are all interior, where
-/// the implied knots are uniform: the cardinal B-spline of degree p at t = (u - t[s]) / h.
-/// Returns false (and writes nothing) for degrees above 3 and for spans near the clamped ends,
-/// which take the Cox-de Boor recurrence. Agrees with it to rounding (tested).
+/// Position of implied knot t[i] in units of h/2 for degree 2 (an integer: t[i] = K h / 2).
+AFAM_HD int degree2KnotHalfUnits(const Knots& k, int i) {
+  return i <= 2 ? 0 : (i >= k.ncp ? 2 * (k.ncp - 1) : 2 * i - 3);
+}
+
+/// Closed-form basis (and derivative) without the recurrence, where the implied knots allow it:
+///  * p = 1: every span (the knots are uniform);
+///  * p = 2: every span, the clamped end spans included: with U = 2 u / h and the knots in units
+///    of h/2 (integers K), N[0] = (K[s+1] - U)^2 / ((K[s+1] - K[s-1]) (K[s+1] - K[s])),
+///    N[2] = (U - K[s])^2 / ((K[s+2] - K[s]) (K[s+1] - K[s])), N[1] = 1 - N[0] - N[2] (clamped at 0)
+///    (two exact reciprocals of small integers instead of the recurrence's divisions, and no
+///    branch between interior and end spans, which matters on the GPU);
+///  * p = 3: spans whose 2p surrounding knots are all interior (the cardinal cubic).
+/// Returns false (and writes nothing) elsewhere; those take the Cox-de Boor recurrence.
+/// Agrees with it to rounding (tested).
 template <typename Real>
-AFAM_HD bool uniformSpanBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
+AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const int p = k.degree;
-  if (p < 1 || p > 3 || s < 2 * p || s + p > k.ncp - 1) return false;
   const Real scale = Real(k.ncp - 1);  // 1 / h
-  const Real t = (u - k.knot<Real>(s)) * scale;
+  if (p == 2) {
+    if (k.ncp < 3) return false;
+    const int k0 = degree2KnotHalfUnits(k, s - 1), k1 = degree2KnotHalfUnits(k, s);
+    const int k2 = degree2KnotHalfUnits(k, s + 1), k3 = degree2KnotHalfUnits(k, s + 2);
+    const Real U = Real(2) * scale * u;
+    const Real a = Real(k2) - U, b = U - Real(k1);
+    const Real i0 = Real(1) / Real((k2 - k0) * (k2 - k1));
+    const Real i2 = Real(1) / Real((k3 - k1) * (k2 - k1));
+    N[0] = a * a * i0;
+    N[2] = b * b * i2;
+    const Real middle = Real(1) - N[0] - N[2];
+    N[1] = middle > Real(0) ? middle : Real(0);  // rounding can leave -1e-16 where N[1] = 0
+    if (dN) {
+      const Real dU = Real(4) * scale;  // da/du = -2 / h, so dN[0]/du = -4 a i0 / h
+      dN[0] = -dU * a * i0;
+      dN[2] = dU * b * i2;
+      dN[1] = -(dN[0] + dN[2]);
+    }
+    return true;
+  }
+  if (p < 1 || p > 3) return false;
+  if (p == 3 && (s < 2 * p || s + p > k.ncp - 1)) return false;
+  Real t = (u - k.knot<Real>(s)) * scale;
+  t = t > Real(0) ? (t < Real(1) ? t : Real(1)) : Real(0);  // rounding at the span's ends
   const Real t1 = Real(1) - t;
   if (p == 1) {
     N[0] = t1;
@@ -118,16 +151,6 @@ AFAM_HD bool uniformSpanBasis(const Knots& k, int s, Real u, Real* N, Real* dN) 
     if (dN) {
       dN[0] = -scale;
       dN[1] = scale;
-    }
-  } else if (p == 2) {
-    const Real half = Real(0.5);
-    N[0] = half * t1 * t1;
-    N[2] = half * t * t;
-    N[1] = Real(1) - N[0] - N[2];
-    if (dN) {
-      dN[0] = -t1 * scale;
-      dN[2] = t * scale;
-      dN[1] = (t1 - t) * scale;
     }
   } else {
     const Real sixth = Real(1) / Real(6);
@@ -150,7 +173,7 @@ AFAM_HD bool uniformSpanBasis(const Knots& k, int s, Real u, Real* N, Real* dN) 
 /// Non-zero basis functions N[0..p] of span s at u: N[i] = N_{s-p+i, p}(u).
 template <typename Real>
 AFAM_HD void basisFunctions(const Knots& k, int s, Real u, Real* N) {
-  if (uniformSpanBasis<Real>(k, s, u, N, nullptr)) return;
+  if (closedFormBasis<Real>(k, s, u, N, nullptr)) return;
   basisOfDegree(k, s, u, k.degree, N);
 }
 
@@ -166,7 +189,7 @@ AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N
     dN[0] = Real(0);
     return;
   }
-  if (uniformSpanBasis<Real>(k, s, u, N, dN)) return;
+  if (closedFormBasis<Real>(k, s, u, N, dN)) return;
   Real lower[kMaxOrder];  // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
   Real inv[kMaxOrder] = {};  // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
   basisOfDegree(k, s, u, p - 1, lower);

@@ -7,6 +7,7 @@
 //   BM_FitDenseBaseline     baseline: per axis a dense A (n x ncp), dense LLT of A^T A, and per line
 //                           a dense A^T d and a dense solve; dense per-axis evaluation for the error
 //   BM_Evaluate / BM_EvaluateGradient   evaluateModel at random points, one thread (items/s)
+//   BM_EvaluateBatch / BM_EvaluateGradientBatch   the same points through evaluateModelBatch
 //
 // Run: build-core/Testing/Benchmarks/bench_fit --benchmark_repetitions=5
 //        --benchmark_report_aggregates_only=true
@@ -20,6 +21,7 @@
 
 #include "afam/basis.hpp"
 #include "afam/evaluate.hpp"
+#include "afam/evaluate_batch.hpp"
 #include "afam/fit.hpp"
 #include "afam/marschner_lobb.hpp"
 
@@ -136,17 +138,28 @@ void BM_FitDenseBaseline(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * int64_t(block.size()));
 }
 
+constexpr int kPoints = 1 << 16;
+
+/// The evaluation benchmarks' model (the ML block fitted at ncp = range(0), p = range(1)) and
+/// kPoints random parameter triples.
+struct EvaluationCase {
+  afam::FitResult model;
+  std::vector<float> uvw;
+  explicit EvaluationCase(const benchmark::State& state) : uvw(3 * kPoints) {
+    const int ncp = int(state.range(0)), p = int(state.range(1));
+    afam::BlockFitter fitter;
+    model = fitter.fit(mlBlock().data(), {kN, kN, kN}, {ncp, ncp, ncp}, p, false);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> uni(0.f, 1.f);
+    for (auto& x : uvw) x = uni(rng);
+  }
+};
+
 template <bool WithGradient>
 void BM_EvaluateT(benchmark::State& state) {
-  const int ncp = int(state.range(0)), p = int(state.range(1));
-  afam::BlockFitter fitter;
-  const afam::FitResult model = fitter.fit(mlBlock().data(), {kN, kN, kN}, {ncp, ncp, ncp}, p, false);
-  const afam::ModelView view = model.view();
-  constexpr int kPoints = 1 << 16;
-  std::vector<float> uvw(3 * kPoints);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> uni(0.f, 1.f);
-  for (auto& x : uvw) x = uni(rng);
+  const EvaluationCase c(state);
+  const afam::ModelView view = c.model.view();
+  const std::vector<float>& uvw = c.uvw;
   for (auto _ : state) {
     float acc = 0.f;
     float g[3];
@@ -156,6 +169,23 @@ void BM_EvaluateT(benchmark::State& state) {
       if (WithGradient) acc += g[0] + g[1] + g[2];
     }
     benchmark::DoNotOptimize(acc);
+  }
+  state.SetItemsProcessed(state.iterations() * kPoints);
+}
+
+/// The same points and model through evaluateModelBatch (bitwise equal results).
+template <bool WithGradient>
+void BM_EvaluateBatchT(benchmark::State& state) {
+  const EvaluationCase c(state);
+  const afam::ModelView view = c.model.view();
+  const std::vector<float>& uvw = c.uvw;
+  std::vector<float> value(kPoints), gradient(WithGradient ? 3 * kPoints : 0);
+  for (auto _ : state) {
+    afam::evaluateModelBatch(view, uvw.data(), kPoints, value.data(),
+                             WithGradient ? gradient.data() : nullptr);
+    benchmark::DoNotOptimize(value.data());
+    benchmark::DoNotOptimize(gradient.data());
+    benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * kPoints);
 }
@@ -185,5 +215,13 @@ BENCHMARK_TEMPLATE(BM_EvaluateT, true)
     ->ArgNames({"ncp", "p"})
     ->Args({32, 2})
     ->Args({32, 3});
+BENCHMARK_TEMPLATE(BM_EvaluateBatchT, false)
+    ->Name("BM_EvaluateBatch")
+    ->ArgNames({"ncp", "p"})
+    ->Args({32, 2});
+BENCHMARK_TEMPLATE(BM_EvaluateBatchT, true)
+    ->Name("BM_EvaluateGradientBatch")
+    ->ArgNames({"ncp", "p"})
+    ->Args({32, 2});
 
 BENCHMARK_MAIN();

@@ -9,6 +9,7 @@
 
 #include "afam/basis.hpp"
 #include "afam/evaluate.hpp"
+#include "small_model.hpp"
 
 namespace {
 
@@ -148,21 +149,6 @@ TEST(Basis, DegreeZeroSingleControlPoint) {
     EXPECT_EQ(dN[0], 0.f);
   }
 }
-
-struct SmallModel {
-  std::vector<float> control;
-  afam::ModelView view;
-  SmallModel(int nx, int ny, int nz, int px, int py, int pz, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> uni(-1.f, 1.f);
-    control.resize(size_t(nx) * ny * nz);
-    for (auto& x : control) x = uni(rng);
-    view.knots[0] = Knots::make(nx, px);
-    view.knots[1] = Knots::make(ny, py);
-    view.knots[2] = Knots::make(nz, pz);
-    view.control = control.data();
-  }
-};
 
 /// Reference tensor-product value and gradient in double straight from the definition.
 double referenceValue(const SmallModel& m, double u, double v, double w, double* g) {

@@ -18,3 +18,4 @@ int runCondition(int argc, char** argv);  // Apps/cmd_condition.cpp
 int runRender(int argc, char** argv);     // Apps/cmd_render.cpp
 int runReplay(int argc, char** argv);     // Apps/cmd_replay.cpp
 int runPredict(int argc, char** argv);    // Apps/cmd_predict.cpp
+int runCompare(int argc, char** argv);    // Apps/cmd_compare.cpp

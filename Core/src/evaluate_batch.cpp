@@ -6,70 +6,139 @@ namespace {
 
 constexpr int kBlock = 64;  // points per block: basis tables of a block stay in L1
 
-// Four points per SIMD vector (GCC/Clang vector extension: SSE2 on baseline x86-64, NEON on ARM).
-// Lane l performs exactly the scalar operations of point l, so the bits do not change.
+// SIMD across points with GCC/Clang vector extensions: four lanes (SSE2 on baseline x86-64, NEON
+// on ARM), and eight lanes in a copy compiled for AVX2 (not FMA) chosen at run time. Lane l
+// performs exactly the scalar operations of point l, so the bits do not change. Everything below
+// is force-inlined into the two entry points, so each is compiled for its own instruction set.
+#define AFAM_BATCH_INLINE __attribute__((always_inline)) inline
+// GCC and Clang warn that 32-byte vectors returned by functions without AVX change the ABI; all
+// of those are force-inlined into the AVX2 entry point and never called across an ABI boundary.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 typedef float Vec4 __attribute__((vector_size(16)));
-constexpr int kLanes = 4;
-
 typedef int Vec4i __attribute__((vector_size(16)));
+typedef float Vec8 __attribute__((vector_size(32)));
+typedef int Vec8i __attribute__((vector_size(32)));
 
-inline Vec4 loadRow(const float* p) {
-  Vec4 v;
+template <typename V>
+AFAM_BATCH_INLINE V load(const void* p) {
+  V v;
   __builtin_memcpy(&v, p, sizeof v);
   return v;
 }
 
-inline Vec4i loadRow4i(const int* p) {
-  Vec4i v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
+/// Row (x0, x1, x2) of a point as four floats: one unaligned load (Padded: the caller checked
+/// that x3 is in bounds) or three.
+template <bool Padded>
+AFAM_BATCH_INLINE Vec4 loadRow(const float* row) {
+  return Padded ? load<Vec4>(row) : Vec4{row[0], row[1], row[2], 0.f};
 }
 
-/// Degree-2 span and basis (and derivatives) on one axis for `padded` parameters u[i], four at a
-/// time, into structure-of-arrays tables: first[i] = (s_i - 2) * stride and
+/// A SIMD width: float and int lane vectors of kCount points.
+template <typename FloatVector, typename IntVector, int Count>
+struct LaneTypes {
+  using F = FloatVector;
+  using I = IntVector;
+  static constexpr int kCount = Count;
+};
+
+/// Four lanes: one point per lane.
+struct Lanes4 : LaneTypes<Vec4, Vec4i, 4> {
+  /// Rows (x0, x1, x2) of the four points as three vectors (lane l = point l): a 4x4 transpose.
+  template <bool Padded>
+  static AFAM_BATCH_INLINE void rows(const float* const* row, int offset, F& r0, F& r1, F& r2) {
+    const F p0 = loadRow<Padded>(row[0] + offset), p1 = loadRow<Padded>(row[1] + offset);
+    const F p2 = loadRow<Padded>(row[2] + offset), p3 = loadRow<Padded>(row[3] + offset);
+    const F t0 = __builtin_shufflevector(p0, p1, 0, 4, 1, 5);
+    const F t1 = __builtin_shufflevector(p2, p3, 0, 4, 1, 5);
+    const F t2 = __builtin_shufflevector(p0, p1, 2, 6, 3, 7);
+    const F t3 = __builtin_shufflevector(p2, p3, 2, 6, 3, 7);
+    r0 = __builtin_shufflevector(t0, t1, 0, 1, 4, 5);
+    r1 = __builtin_shufflevector(t0, t1, 2, 3, 6, 7);
+    r2 = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
+  }
+  /// (gu, gv, gw) of the four points interleaved into out[0..11].
+  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw,
+                                              float* out) {
+    const F uv01 = __builtin_shufflevector(gu, gv, 0, 4, 1, 5);
+    const F vw12 = __builtin_shufflevector(gv, gw, 1, 5, 2, 6);
+    const F uv33 = __builtin_shufflevector(gu, gv, 3, 7, 3, 7);
+    const F g[3] = {__builtin_shufflevector(uv01, gw, 0, 1, 4, 2),
+                    __builtin_shufflevector(vw12, gu, 0, 1, 6, 2),
+                    __builtin_shufflevector(gw, uv33, 2, 4, 5, 3)};
+    __builtin_memcpy(out, g, sizeof g);
+  }
+};
+
+/// Eight lanes: two four-lane halves (points 0-3 and 4-7).
+struct Lanes8 : LaneTypes<Vec8, Vec8i, 8> {
+  template <bool Padded>
+  static AFAM_BATCH_INLINE void rows(const float* const* row, int offset, F& r0, F& r1, F& r2) {
+    Vec4 lo[3], hi[3];
+    Lanes4::rows<Padded>(row, offset, lo[0], lo[1], lo[2]);
+    Lanes4::rows<Padded>(row + 4, offset, hi[0], hi[1], hi[2]);
+    r0 = __builtin_shufflevector(lo[0], hi[0], 0, 1, 2, 3, 4, 5, 6, 7);
+    r1 = __builtin_shufflevector(lo[1], hi[1], 0, 1, 2, 3, 4, 5, 6, 7);
+    r2 = __builtin_shufflevector(lo[2], hi[2], 0, 1, 2, 3, 4, 5, 6, 7);
+  }
+  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw,
+                                              float* out) {
+    Lanes4::storeGradient(__builtin_shufflevector(gu, gu, 0, 1, 2, 3),
+                          __builtin_shufflevector(gv, gv, 0, 1, 2, 3),
+                          __builtin_shufflevector(gw, gw, 0, 1, 2, 3), out);
+    Lanes4::storeGradient(__builtin_shufflevector(gu, gu, 4, 5, 6, 7),
+                          __builtin_shufflevector(gv, gv, 4, 5, 6, 7),
+                          __builtin_shufflevector(gw, gw, 4, 5, 6, 7), out + 12);
+  }
+};
+
+/// Degree-2 span and basis (and derivatives) on one axis for `padded` parameters u[i], L::kCount
+/// at a time, into structure-of-arrays tables: first[i] = (s_i - 2) * stride and
 /// N[r][i] = N_{s_i-2+r}(u_i).
 /// Lane by lane these are the operations of clampParameter, Knots::span and closedFormBasis<float>
 /// for p = 2 (basis.hpp), in the same order, so the same bits; test_evaluate_batch.cpp asserts
 /// it, and a change to that closed form must be mirrored here.
-template <bool G>
-void axisBlock2(const Knots& k, int stride, const float* u, int padded, int* first,
-                float (*N)[kBlock], float (*dN)[kBlock]) {
+template <typename L, bool G>
+AFAM_BATCH_INLINE void axisBlock2(const Knots& k, int stride, const float* u, int padded,
+                                  int* first, float (*N)[kBlock], float (*dN)[kBlock]) {
+  using F = typename L::F;
+  using I = typename L::I;
   const int ncp = k.ncp;
   const float scale = float(ncp - 1), offset = k.offset;
   const float twoScale = 2.f * scale, dU = 4.f * scale, minusDU = -dU;
-  const Vec4 zero = {}, one = zero + 1.f, endKnot = zero + float(2 * (ncp - 1));
-  const Vec4i zeroI = {}, lastSpan = zeroI + (ncp - 3);
-  const Vec4 lastSpanF = __builtin_convertvector(lastSpan, Vec4);
-  for (int i = 0; i < padded; i += kLanes) {
-    Vec4 x = loadRow(u + i);
+  const F zero = {}, one = zero + 1.f, endKnot = zero + float(2 * (ncp - 1));
+  const I zeroI = {}, lastSpan = zeroI + (ncp - 3);
+  const F lastSpanF = __builtin_convertvector(lastSpan, F);
+  for (int i = 0; i < padded; i += L::kCount) {
+    F x = load<F>(u + i);
     x = x >= zero ? (x <= one ? x : one) : zero;  // clampParameter (NaN -> 0)
     // Knots::span: j = trunc((u - offset) (ncp - 1)) clamped to [0, ncp - 3]; s = 2 + j.
-    const Vec4 t = (x - offset) * scale;
-    Vec4i j = t > zero ? __builtin_convertvector(t, Vec4i) : zeroI;
+    const F t = (x - offset) * scale;
+    I j = t > zero ? __builtin_convertvector(t, I) : zeroI;
     j = j > lastSpan ? lastSpan : j;
-    const Vec4i corner = j * stride;
+    const I corner = j * stride;
     __builtin_memcpy(first + i, &corner, sizeof corner);
     // degree2KnotHalfUnits(k, s - 1 .. s + 2), knots in units of h/2: 0 up to t[2], 2 i - 3 on
     // the interior, 2 (ncp - 1) from t[ncp] on. Small integers, exact in float, as are their
     // differences and products below.
-    const Vec4 jf = __builtin_convertvector(j, Vec4), twoJ = jf + jf;
-    const Vec4 k0 = jf > 1.f ? twoJ - 1.f : zero;
-    const Vec4 k1 = jf > zero ? twoJ + 1.f : zero;
-    const Vec4 k2 = jf >= lastSpanF ? endKnot : twoJ + 3.f;
-    const Vec4 k3 = jf >= lastSpanF - 1.f ? endKnot : twoJ + 5.f;
-    const Vec4 U = twoScale * x;
-    const Vec4 a = k2 - U, b = U - k1;
-    const Vec4 i0 = one / ((k2 - k0) * (k2 - k1));
-    const Vec4 i2 = one / ((k3 - k1) * (k2 - k1));
-    const Vec4 n0 = a * a * i0, n2 = b * b * i2;
-    const Vec4 middle = one - n0 - n2;
-    const Vec4 n1 = middle > zero ? middle : zero;
+    const F jf = __builtin_convertvector(j, F), twoJ = jf + jf;
+    const F k0 = jf > 1.f ? twoJ - 1.f : zero;
+    const F k1 = jf > zero ? twoJ + 1.f : zero;
+    const F k2 = jf >= lastSpanF ? endKnot : twoJ + 3.f;
+    const F k3 = jf >= lastSpanF - 1.f ? endKnot : twoJ + 5.f;
+    const F U = twoScale * x;
+    const F a = k2 - U, b = U - k1;
+    const F i0 = one / ((k2 - k0) * (k2 - k1));
+    const F i2 = one / ((k3 - k1) * (k2 - k1));
+    const F n0 = a * a * i0, n2 = b * b * i2;
+    const F middle = one - n0 - n2;
+    const F n1 = middle > zero ? middle : zero;
     __builtin_memcpy(N[0] + i, &n0, sizeof n0);
     __builtin_memcpy(N[1] + i, &n1, sizeof n1);
     __builtin_memcpy(N[2] + i, &n2, sizeof n2);
     if (G) {
-      const Vec4 d0 = minusDU * a * i0, d2 = dU * b * i2;
-      const Vec4 d1 = -(d0 + d2);
+      const F d0 = minusDU * a * i0, d2 = dU * b * i2;
+      const F d1 = -(d0 + d2);
       __builtin_memcpy(dN[0] + i, &d0, sizeof d0);
       __builtin_memcpy(dN[1] + i, &d1, sizeof d1);
       __builtin_memcpy(dN[2] + i, &d2, sizeof d2);
@@ -77,66 +146,54 @@ void axisBlock2(const Knots& k, int stride, const float* u, int padded, int* fir
   }
 }
 
-/// Control points row[0..2] of four points as three vectors (lane l = point l): one unaligned
-/// load per point and a 4x4 transpose. Reads row[3] too, so the caller checks it is in bounds.
-template <bool Padded>
-inline void loadRows(const float* const* rows, int offset, Vec4& r0, Vec4& r1, Vec4& r2) {
-  Vec4 p[kLanes];
-  for (int l = 0; l < kLanes; ++l) {
-    const float* row = rows[l] + offset;
-    p[l] = Padded ? loadRow(row) : Vec4{row[0], row[1], row[2], 0.f};
-  }
-  const Vec4 t0 = __builtin_shufflevector(p[0], p[1], 0, 4, 1, 5);
-  const Vec4 t1 = __builtin_shufflevector(p[2], p[3], 0, 4, 1, 5);
-  const Vec4 t2 = __builtin_shufflevector(p[0], p[1], 2, 6, 3, 7);
-  const Vec4 t3 = __builtin_shufflevector(p[2], p[3], 2, 6, 3, 7);
-  r0 = __builtin_shufflevector(t0, t1, 0, 1, 4, 5);
-  r1 = __builtin_shufflevector(t0, t1, 2, 3, 6, 7);
-  r2 = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
-}
+/// Basis tables of a block (three axes).
+struct BlockBasis {
+  alignas(32) int first[3][kBlock];
+  alignas(32) float N[3][3][kBlock];
+  alignas(32) float dN[3][3][kBlock];
+};
 
-/// Degree-2 contraction of four points (lanes) whose bases start at Nx[a] + i etc.
-template <bool G, bool Padded>
-inline void contract4(const float* const* corners, int nx, int ny, const float (*Nx)[kBlock],
-                      const float (*dNx)[kBlock], const float (*Ny)[kBlock],
-                      const float (*dNy)[kBlock], const float (*Nz)[kBlock],
-                      const float (*dNz)[kBlock], int i, Vec4* out) {
-  auto at = [i](const float (*t)[kBlock], int r) { return loadRow(t[r] + i); };
-  const Vec4 nx0 = at(Nx, 0), nx1 = at(Nx, 1), nx2 = at(Nx, 2);
-  Vec4 dnx0 = {}, dnx1 = {}, dnx2 = {};
+/// Degree-2 contraction of the L::kCount points starting at i; out = value, d/du, d/dv, d/dw.
+template <typename L, bool G, bool Padded>
+AFAM_BATCH_INLINE void contract(const float* const* corners, int nx, int ny, const BlockBasis& t,
+                                int i, typename L::F* out) {
+  using F = typename L::F;
+  auto at = [i](const float (*table)[kBlock], int r) { return load<F>(table[r] + i); };
+  const F nx0 = at(t.N[0], 0), nx1 = at(t.N[0], 1), nx2 = at(t.N[0], 2);
+  F dnx0 = {}, dnx1 = {}, dnx2 = {};
   if (G) {
-    dnx0 = at(dNx, 0);
-    dnx1 = at(dNx, 1);
-    dnx2 = at(dNx, 2);
+    dnx0 = at(t.dN[0], 0);
+    dnx1 = at(t.dN[0], 1);
+    dnx2 = at(t.dN[0], 2);
   }
   // The loop nest and operation order of detail::evaluateModelGeneric.
-  Vec4 val = {}, gu = {}, gv = {}, gw = {};
+  F val = {}, gu = {}, gv = {}, gw = {};
   for (int c = 0; c <= 2; ++c) {
-    Vec4 yzValue = {}, yzDu = {}, yzDv = {};
+    F yzValue = {}, yzDu = {}, yzDv = {};
     for (int b = 0; b <= 2; ++b) {
-      Vec4 r0, r1, r2;
-      loadRows<Padded>(corners, (c * ny + b) * nx, r0, r1, r2);
-      Vec4 xValue = {};
+      F r0, r1, r2;
+      L::template rows<Padded>(corners, (c * ny + b) * nx, r0, r1, r2);
+      F xValue = {};
       xValue += nx0 * r0;
       xValue += nx1 * r1;
       xValue += nx2 * r2;
-      const Vec4 nyb = at(Ny, b);
+      const F nyb = at(t.N[1], b);
       yzValue += nyb * xValue;
       if (G) {
-        Vec4 xDu = {};
+        F xDu = {};
         xDu += dnx0 * r0;
         xDu += dnx1 * r1;
         xDu += dnx2 * r2;
         yzDu += nyb * xDu;
-        yzDv += at(dNy, b) * xValue;
+        yzDv += at(t.dN[1], b) * xValue;
       }
     }
-    const Vec4 nzc = at(Nz, c);
+    const F nzc = at(t.N[2], c);
     val += nzc * yzValue;
     if (G) {
       gu += nzc * yzDu;
       gv += nzc * yzDv;
-      gw += at(dNz, c) * yzValue;
+      gw += at(t.dN[2], c) * yzValue;
     }
   }
   out[0] = val;
@@ -145,53 +202,47 @@ inline void contract4(const float* const* corners, int nx, int ny, const float (
   out[3] = gw;
 }
 
-template <int P, bool G>
-void evaluateBlock(const ModelView& m, const float* uvw, int count, float* value,
-                   float* gradient) {
-  static_assert(P == 2, "the contraction is written for degree 2");
+template <typename L, bool G>
+AFAM_BATCH_INLINE void evaluateBlock(const ModelView& m, const float* uvw, int count,
+                                     float* value, float* gradient) {
+  using F = typename L::F;
+  using I = typename L::I;
+  constexpr int kLanes = L::kCount;
   // Parameters per axis; lanes past `count` evaluate u = 0 and are never stored.
   const int padded = (count + kLanes - 1) / kLanes * kLanes;
-  alignas(16) float u[3][kBlock];
+  alignas(32) float u[3][kBlock];
   for (int i = 0; i < count; ++i) {
     u[0][i] = uvw[3 * i];
     u[1][i] = uvw[3 * i + 1];
     u[2][i] = uvw[3 * i + 2];
   }
   for (int i = count; i < padded; ++i) u[0][i] = u[1][i] = u[2][i] = 0.f;
-  alignas(16) int fx[kBlock], fy[kBlock], fz[kBlock];
-  alignas(16) float Nx[P + 1][kBlock], Ny[P + 1][kBlock], Nz[P + 1][kBlock];
-  alignas(16) float dNx[P + 1][kBlock], dNy[P + 1][kBlock], dNz[P + 1][kBlock];
+  BlockBasis t;
   const int nx = m.knots[0].ncp, ny = m.knots[1].ncp;
-  axisBlock2<G>(m.knots[0], 1, u[0], padded, fx, Nx, dNx);
-  axisBlock2<G>(m.knots[1], nx, u[1], padded, fy, Ny, dNy);
-  axisBlock2<G>(m.knots[2], nx * ny, u[2], padded, fz, Nz, dNz);
+  const int stride[3] = {1, nx, nx * ny};
+  for (int a = 0; a < 3; ++a)
+    axisBlock2<L, G>(m.knots[a], stride[a], u[a], padded, t.first[a], t.N[a], t.dN[a]);
   // Corners whose 4-wide row loads could read past the last control point take 3-wide loads.
-  const int lastSafeCorner = m.knots[2].ncp * ny * nx - 1 - ((P * ny + P) * nx + 3);
+  const int lastSafeCorner = m.knots[2].ncp * ny * nx - 1 - ((2 * ny + 2) * nx + 3);
   for (int i = 0; i < padded; i += kLanes) {
-    Vec4i corner = loadRow4i(fx + i) + loadRow4i(fy + i) + loadRow4i(fz + i);
-    const Vec4i outside = corner > lastSafeCorner;
-    long long outsideBits[2];
-    __builtin_memcpy(outsideBits, &outside, sizeof outside);
+    const I corner =
+        load<I>(t.first[0] + i) + load<I>(t.first[1] + i) + load<I>(t.first[2] + i);
+    const I outside = corner > lastSafeCorner;
     const float* corners[kLanes];
-    for (int l = 0; l < kLanes; ++l) corners[l] = m.control + corner[l];
-    Vec4 out[4];
-    if ((outsideBits[0] | outsideBits[1]) == 0) {
-      contract4<G, true>(corners, nx, ny, Nx, dNx, Ny, dNy, Nz, dNz, i, out);
+    bool inBounds = true;
+    for (int l = 0; l < kLanes; ++l) {
+      corners[l] = m.control + corner[l];
+      inBounds = inBounds && outside[l] == 0;
+    }
+    F out[4];
+    if (inBounds) {
+      contract<L, G, true>(corners, nx, ny, t, i, out);
     } else {
-      contract4<G, false>(corners, nx, ny, Nx, dNx, Ny, dNy, Nz, dNz, i, out);
+      contract<L, G, false>(corners, nx, ny, t, i, out);
     }
     if (i + kLanes <= count) {
       __builtin_memcpy(value + i, &out[0], sizeof out[0]);
-      if (G) {  // interleave (gu, gv, gw) of four points into three vectors
-        const Vec4 gu = out[1], gv = out[2], gw = out[3];
-        const Vec4 uv01 = __builtin_shufflevector(gu, gv, 0, 4, 1, 5);
-        const Vec4 vw12 = __builtin_shufflevector(gv, gw, 1, 5, 2, 6);
-        const Vec4 uv33 = __builtin_shufflevector(gu, gv, 3, 7, 3, 7);
-        const Vec4 g[3] = {__builtin_shufflevector(uv01, gw, 0, 1, 4, 2),
-                           __builtin_shufflevector(vw12, gu, 0, 1, 6, 2),
-                           __builtin_shufflevector(gw, uv33, 2, 4, 5, 3)};
-        __builtin_memcpy(gradient + 3 * i, g, sizeof g);
-      }
+      if (G) L::storeGradient(out[1], out[2], out[3], gradient + 3 * i);
     } else {
       for (int l = 0; l < count - i; ++l) {
         value[i + l] = out[0][l];
@@ -205,26 +256,60 @@ void evaluateBlock(const ModelView& m, const float* uvw, int count, float* value
   }
 }
 
-template <int P, bool G>
-void evaluateBlocked(const ModelView& m, const float* uvw, std::size_t n, float* value,
-                     float* gradient) {
+template <typename L, bool G>
+AFAM_BATCH_INLINE void evaluateBlocked(const ModelView& m, const float* uvw, std::size_t n,
+                                       float* value, float* gradient) {
   for (std::size_t i0 = 0; i0 < n; i0 += kBlock) {
     const int count = n - i0 < std::size_t(kBlock) ? int(n - i0) : kBlock;
-    evaluateBlock<P, G>(m, uvw + 3 * i0, count, value + i0, G ? gradient + 3 * i0 : nullptr);
+    evaluateBlock<L, G>(m, uvw + 3 * i0, count, value + i0, G ? gradient + 3 * i0 : nullptr);
   }
+}
+
+template <bool G>
+void evaluateDegree2Lanes4(const ModelView& m, const float* uvw, std::size_t n, float* value,
+                           float* gradient) {
+  evaluateBlocked<Lanes4, G>(m, uvw, n, value, gradient);
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define AFAM_BATCH_AVX2 1
+template <bool G>
+__attribute__((target("avx2"))) void evaluateDegree2Lanes8(const ModelView& m, const float* uvw,
+                                                            std::size_t n, float* value,
+                                                            float* gradient) {
+  evaluateBlocked<Lanes8, G>(m, uvw, n, value, gradient);
+}
+#endif
+
+template <bool G>
+void evaluateDegree2(int lanes, const ModelView& m, const float* uvw, std::size_t n, float* value,
+                     float* gradient) {
+#if defined(AFAM_BATCH_AVX2)
+  if (lanes == 8) return evaluateDegree2Lanes8<G>(m, uvw, n, value, gradient);
+#endif
+  (void)lanes;
+  evaluateDegree2Lanes4<G>(m, uvw, n, value, gradient);
 }
 
 }  // namespace
 
-void evaluateModelBatch(const ModelView& m, const float* uvw, std::size_t n, float* value,
-                        float* gradient) {
+int detail::batchLanes() {
+#if defined(AFAM_BATCH_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return 8;
+#endif
+  return 4;
+}
+
+void detail::evaluateModelBatchLanes(int lanes, const ModelView& m, const float* uvw,
+                                     std::size_t n, float* value, float* gradient) {
   const int p = m.knots[0].degree;
   if (p == 2 && m.knots[1].degree == 2 && m.knots[2].degree == 2 && m.knots[0].ncp >= 3 &&
       m.knots[1].ncp >= 3 && m.knots[2].ncp >= 3) {
     if (gradient) {
-      evaluateBlocked<2, true>(m, uvw, n, value, gradient);
+      evaluateDegree2<true>(lanes, m, uvw, n, value, gradient);
     } else {
-      evaluateBlocked<2, false>(m, uvw, n, value, nullptr);
+      evaluateDegree2<false>(lanes, m, uvw, n, value, nullptr);
     }
     return;
   }
@@ -233,6 +318,11 @@ void evaluateModelBatch(const ModelView& m, const float* uvw, std::size_t n, flo
     value[i] = gradient ? evaluateModel<true>(m, x[0], x[1], x[2], gradient + 3 * i)
                         : evaluateModel<false>(m, x[0], x[1], x[2], nullptr);
   }
+}
+
+void evaluateModelBatch(const ModelView& m, const float* uvw, std::size_t n, float* value,
+                        float* gradient) {
+  detail::evaluateModelBatchLanes(detail::batchLanes(), m, uvw, n, value, gradient);
 }
 
 }  // namespace afam

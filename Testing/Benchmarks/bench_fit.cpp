@@ -7,7 +7,8 @@
 //   BM_FitDenseBaseline     baseline: per axis a dense A (n x ncp), dense LLT of A^T A, and per line
 //                           a dense A^T d and a dense solve; dense per-axis evaluation for the error
 //   BM_Evaluate / BM_EvaluateGradient   evaluateModel at random points, one thread (items/s)
-//   BM_EvaluateBatch / BM_EvaluateGradientBatch   the same points through evaluateModelBatch
+//   BM_EvaluateBatch / BM_EvaluateGradientBatch   the same points through evaluateModelBatch,
+//                           4 lanes (SSE2) and 8 lanes (AVX2, the default where the CPU has it)
 //
 // Run: build-core/Testing/Benchmarks/bench_fit --benchmark_repetitions=5
 //        --benchmark_report_aggregates_only=true
@@ -173,16 +174,22 @@ void BM_EvaluateT(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * kPoints);
 }
 
-/// The same points and model through evaluateModelBatch (bitwise equal results).
+/// The same points and model through evaluateModelBatch (bitwise equal results), with the SIMD
+/// width range(2): 4 lanes (baseline x86-64) or 8 (AVX2, what evaluateModelBatch picks there).
 template <bool WithGradient>
 void BM_EvaluateBatchT(benchmark::State& state) {
+  const int lanes = int(state.range(2));
+  if (lanes > afam::detail::batchLanes()) {
+    state.SkipWithError("this CPU has no AVX2");
+    return;
+  }
   const EvaluationCase c(state);
   const afam::ModelView view = c.model.view();
   const std::vector<float>& uvw = c.uvw;
   std::vector<float> value(kPoints), gradient(WithGradient ? 3 * kPoints : 0);
   for (auto _ : state) {
-    afam::evaluateModelBatch(view, uvw.data(), kPoints, value.data(),
-                             WithGradient ? gradient.data() : nullptr);
+    afam::detail::evaluateModelBatchLanes(lanes, view, uvw.data(), kPoints, value.data(),
+                                          WithGradient ? gradient.data() : nullptr);
     benchmark::DoNotOptimize(value.data());
     benchmark::DoNotOptimize(gradient.data());
     benchmark::ClobberMemory();
@@ -217,11 +224,11 @@ BENCHMARK_TEMPLATE(BM_EvaluateT, true)
     ->Args({32, 3});
 BENCHMARK_TEMPLATE(BM_EvaluateBatchT, false)
     ->Name("BM_EvaluateBatch")
-    ->ArgNames({"ncp", "p"})
-    ->Args({32, 2});
+    ->ArgNames({"ncp", "p", "lanes"})
+    ->ArgsProduct({{32}, {2}, {4, 8}});
 BENCHMARK_TEMPLATE(BM_EvaluateBatchT, true)
     ->Name("BM_EvaluateGradientBatch")
-    ->ArgNames({"ncp", "p"})
-    ->Args({32, 2});
+    ->ArgNames({"ncp", "p", "lanes"})
+    ->ArgsProduct({{32}, {2}, {4, 8}});
 
 BENCHMARK_MAIN();

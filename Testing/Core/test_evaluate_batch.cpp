@@ -50,11 +50,12 @@ void expectClose(float batch, float single, const char* what, size_t i) {
       << what << " at point " << i << ": batch " << a << ", single " << b;
 }
 
-void expectBatchMatchesSinglePoint(const afam::ModelView& m, const std::vector<float>& uvw) {
+void expectWidthMatchesSinglePoint(int lanes, const afam::ModelView& m,
+                                   const std::vector<float>& uvw) {
   const size_t n = uvw.size() / 3;
   std::vector<float> value(n), gradient(3 * n), valueOnly(n);
-  afam::evaluateModelBatch(m, uvw.data(), n, value.data(), gradient.data());
-  afam::evaluateModelBatch(m, uvw.data(), n, valueOnly.data(), nullptr);
+  afam::detail::evaluateModelBatchLanes(lanes, m, uvw.data(), n, value.data(), gradient.data());
+  afam::detail::evaluateModelBatchLanes(lanes, m, uvw.data(), n, valueOnly.data(), nullptr);
   for (size_t i = 0; i < n; ++i) {
     const float* x = &uvw[3 * i];
     float g[3];
@@ -66,6 +67,14 @@ void expectBatchMatchesSinglePoint(const afam::ModelView& m, const std::vector<f
     ASSERT_FALSE(::testing::Test::HasFailure())
         << "p " << m.knots[0].degree << ", ncp " << m.knots[0].ncp << " x " << m.knots[1].ncp
         << " x " << m.knots[2].ncp;
+  }
+}
+
+/// Every SIMD width this CPU runs (4, and 8 with AVX2), each against evaluateModel.
+void expectBatchMatchesSinglePoint(const afam::ModelView& m, const std::vector<float>& uvw) {
+  for (int lanes = 4; lanes <= afam::detail::batchLanes(); lanes *= 2) {
+    SCOPED_TRACE(testing::Message() << lanes << " lanes");
+    expectWidthMatchesSinglePoint(lanes, m, uvw);
   }
 }
 

@@ -15,8 +15,17 @@ namespace afam {
 /// Each result is bitwise equal to evaluateModel<gradient != nullptr>(m, u, v, w, ...) in the
 /// default (no -march) build. Degree 2 on all axes (the encoder's default) takes a blocked path:
 /// span and basis per axis for a block of points first, then the 3x3x3 contraction across points
-/// in SIMD lanes; any other degree loops over evaluateModel.
+/// in SIMD lanes (8 with AVX2, chosen at run time, else 4); any other degree loops over
+/// evaluateModel.
 void evaluateModelBatch(const ModelView& m, const float* uvw, std::size_t n, float* value,
                         float* gradient);
+
+namespace detail {
+/// SIMD width evaluateModelBatch uses on this CPU: 8 (x86-64 with AVX2) or 4.
+int batchLanes();
+/// evaluateModelBatch with the width forced (4, or 8 where batchLanes() is 8), for tests.
+void evaluateModelBatchLanes(int lanes, const ModelView& m, const float* uvw, std::size_t n,
+                             float* value, float* gradient);
+}  // namespace detail
 
 }  // namespace afam

@@ -35,43 +35,21 @@ int runDecode(int argc, char** argv) {
     throw InvalidArgument("--level " + std::to_string(level) + " outside [0, " + std::to_string(h.levels - 1) + "]");
   const Int3 nb = part.blocksPerAxis(level);
   // Output grid: per axis the blocks' samples joined on shared boundaries.
-  std::array<std::vector<int64_t>, 3> start;
-  Index3 od{};
-  for (int a = 0; a < 3; ++a) {
-    Int3 ijk{0, 0, 0};
-    int64_t pos = 0;
-    for (int i = 0; i < nb[a]; ++i) {
-      ijk[a] = i;
-      start[size_t(a)].push_back(pos);
-      pos += part.extent(level, ijk).samples[a] - 1;
-    }
-    od[a] = pos + 1;
-  }
+  const LevelGrid grid = levelGrid(part, level);
+  const Index3 od = grid.dims;
+  const auto& start = grid.start;
   const std::string out = args.positional()[1], tmp = out + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw IoError(tmp + ": cannot create: " + std::strerror(errno));
   ProgressBar bar("decode", args.has("progress"));
   try {
-    std::vector<float> slab, payload, dec;
+    std::vector<float> slab;
     for (int kz = 0; kz < nb[2]; ++kz) {
       const int nz = part.extent(level, {0, 0, kz}).samples[2];
       const int64_t z0 = start[2][size_t(kz)];
       const int64_t planes = kz + 1 < nb[2] ? nz - 1 : nz;  // the shared plane goes with the next row
-      slab.assign(size_t(od[0] * od[1] * nz), 0.f);
-      for (int j = 0; j < nb[1]; ++j)
-        for (int i = 0; i < nb[0]; ++i) {
-          const int64_t ei = f->entryIndex(level, {i, j, kz});
-          const ModelEntry& m = f->entries()[size_t(ei)];
-          payload.resize(m.size / 4);
-          f->readPayload(ei, payload.data());
-          decodeBlockSamples(m, payload.data(), h.mode, dec);
-          const int64_t x0 = start[0][size_t(i)], y0 = start[1][size_t(j)];
-          for (int z = 0; z < m.samples[2]; ++z)
-            for (int y = 0; y < m.samples[1]; ++y)
-              std::memcpy(slab.data() + (size_t(z) * size_t(od[1]) + size_t(y0 + y)) * size_t(od[0]) + size_t(x0),
-                          dec.data() + (size_t(z) * size_t(m.samples[1]) + size_t(y)) * size_t(m.samples[0]),
-                          size_t(m.samples[0]) * sizeof(float));
-        }
+      slab.resize(size_t(od[0] * od[1] * planes));
+      decodeLevelBox(*f, level, {0, 0, z0}, {od[0] - 1, od[1] - 1, z0 + planes - 1}, slab.data());
       const size_t bytes = size_t(planes * od[0] * od[1]) * sizeof(float);
       const off_t off = off_t(size_t(z0 * od[0] * od[1]) * sizeof(float));
       const char* p = reinterpret_cast<const char*>(slab.data());

@@ -8,13 +8,12 @@
 #include <cstdio>
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "afam/cpu_raycaster.hpp"
 #include "afam/errors.hpp"
 #include "afam/renderer.hpp"
 #if defined(AFAM_HAVE_CUDA)
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/gpu_caster.hpp"
 #endif
 
 namespace afam::cli {
@@ -39,40 +38,16 @@ inline DeviceChoice useDevice(Renderer& renderer, const std::string& device, lon
   if (device != "gpu") throw InvalidArgument("--device must be cpu or gpu, not '" + device + "'");
   if (budgetMiB < 16) throw InvalidArgument("--gpu-budget-mb must be >= 16");
 #if defined(AFAM_HAVE_CUDA)
-  std::string why;
-  if (!gpuAvailable(&why)) {
-    std::fprintf(stderr, "afam: --device gpu: %s; rendering on the CPU\n", why.c_str());
-    return choice;
-  }
-  std::shared_ptr<GpuRenderer> gpu;
-  for (size_t budget = size_t(budgetMiB) << 20; !gpu && budget >= (size_t(16) << 20); budget /= 2) {
-    try {
-      gpu = std::make_shared<GpuRenderer>(budget);
-    } catch (const GpuOutOfMemory& e) {
-      std::fprintf(stderr, "afam: GPU pool of %zu MiB: %s; trying half\n", budget >> 20, e.what());
-    }
-  }
-  if (!gpu) {
-    std::fprintf(stderr, "afam: --device gpu: no GPU memory for a model pool; rendering on the CPU\n");
-    return choice;
-  }
-  const int threads = renderer.options().threads;
-  auto warned = std::make_shared<bool>(false);
-  renderer.setRayCaster([gpu, threads, warned](const PreparedFrame& frame, ImageRGBA& image) {
-    image.resize(frame.view.camera.width, frame.view.camera.height);
-    std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
-    try {
-      gpu->render(frame.view, keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr,
-                  image.rgba.data());
-    } catch (const GpuOutOfMemory& e) {
-      if (!*warned) std::fprintf(stderr, "afam: %s; this frame on the CPU\n", e.what());
-      *warned = true;
-      renderCpu(frame.view, image, threads);
-    }
+  GpuCaster gpu = installGpuCaster(renderer, size_t(budgetMiB) << 20, [](const std::string& why) {
+    std::fprintf(stderr, "afam: --device gpu: %s\n", why.c_str());
   });
+  if (!gpu) {
+    std::fprintf(stderr, "afam: --device gpu: rendering on the CPU\n");
+    return choice;
+  }
   choice.used = "gpu";
-  choice.description = gpuDescription(0);
-  choice.state = gpu;
+  choice.description = gpu.description;
+  choice.state = gpu.gpu;
 #else
   std::fprintf(stderr, "afam: --device gpu: this build has no CUDA support; rendering on the CPU\n");
 #endif

@@ -4,7 +4,11 @@
 
 #include "afam/afam_file.hpp"
 #include "afam/renderer.hpp"
+#if defined(AFAM_HAVE_CUDA)
+#include "afam/cuda/gpu_caster.hpp" // plain C++: the CUDA renderer behind Core's caster hook
+#endif
 
+#include <algorithm>
 #include <cmath>
 
 struct vtkAFAMCoreRenderer::Internals
@@ -14,6 +18,45 @@ struct vtkAFAMCoreRenderer::Internals
   // The settings the Renderer was built with; Core's Renderer takes its options at construction,
   // so a change of transfer function or settings builds a new one (and a new cache).
   afam::RenderOptions Options;
+  // GPU: the renderer kept alive while Renderer casts through it, whether it was asked for with
+  // the current Renderer, and (once the GPU proved unusable) why, so it is not probed again.
+  std::shared_ptr<void> Gpu;
+  bool GpuWanted = false;
+  std::string GpuUnusable;
+  std::vector<std::string> Messages; // filled by the GPU caster, drained into each frame's stats
+
+  void InstallGpu(double budgetMB)
+  {
+    this->Gpu.reset();
+#if defined(AFAM_HAVE_CUDA)
+    if (!this->GpuUnusable.empty())
+    {
+      return; // known unusable: not probed again (Render reports GpuUnusable)
+    }
+    std::string notes;
+    Internals* self = this; // outlives the caster, which the Renderer below owns
+    afam::GpuCaster gpu = afam::installGpuCaster(*this->Renderer,
+      static_cast<size_t>(std::max(16.0, budgetMB) * 1e6),
+      [self](const std::string& message) { self->Messages.push_back(message); });
+    if (gpu)
+    {
+      this->Gpu = gpu.gpu;
+      return;
+    }
+    for (const std::string& m : this->Messages)
+    {
+      this->GpuUnusable += (this->GpuUnusable.empty() ? "" : "; ") + m;
+    }
+    this->Messages.clear();
+    if (this->GpuUnusable.empty())
+    {
+      this->GpuUnusable = "the GPU could not be set up";
+    }
+#else
+    (void)budgetMB;
+    this->GpuUnusable = "this build has no CUDA renderer (built without nvcc)";
+#endif
+  }
 };
 
 namespace
@@ -102,13 +145,22 @@ void vtkAFAMCoreRenderer::Render(
     !request.Transfer.colors.empty() && !request.Transfer.opacities.empty();
   options.transferFunction = request.Transfer;
 
-  if (!this->Impl->Renderer || !SameOptions(options, this->Impl->Options))
+  const bool wantGpu = request.Device != 1;
+  Internals& m = *this->Impl;
+  m.Messages.clear();
+  if (!m.Renderer || !SameOptions(options, m.Options) || wantGpu != m.GpuWanted)
   {
-    this->Impl->Renderer = std::make_unique<afam::Renderer>(this->Impl->File, options);
-    this->Impl->Options = options;
+    m.Gpu.reset();
+    m.Renderer = std::make_unique<afam::Renderer>(m.File, options);
+    m.Options = options;
+    m.GpuWanted = wantGpu;
+    if (wantGpu)
+    {
+      m.InstallGpu(request.CacheBudgetMB);
+    }
   }
   afam::FrameStats frame;
-  image = this->Impl->Renderer->renderFrame(request.Camera, frame);
+  image = m.Renderer->renderFrame(request.Camera, frame, request.MaxDistance);
   stats.CachingSeconds = frame.cachingMs * 1e-3;
   stats.RenderSeconds = frame.renderMs * 1e-3;
   stats.CacheHits = static_cast<int64_t>(frame.hits);
@@ -116,5 +168,19 @@ void vtkAFAMCoreRenderer::Render(
   stats.CulledBlocks = frame.culled.frustumBlocks + frame.culled.tfBlocks;
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
-  stats.UsedGpu = false; // the CUDA path is not wired into the mapper yet
+  stats.UsedGpu = m.Gpu != nullptr;
+  stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)
+  if (wantGpu && !m.Gpu)
+  {
+    stats.DeviceMessages.push_back(m.GpuUnusable); // every CPU frame says why
+  }
+}
+
+bool vtkAFAMCoreRenderer::HasCuda()
+{
+#if defined(AFAM_HAVE_CUDA)
+  return true;
+#else
+  return false;
+#endif
 }

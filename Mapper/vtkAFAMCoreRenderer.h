@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 struct vtkAFAMFrameRequest
 {
@@ -23,8 +24,11 @@ struct vtkAFAMFrameRequest
   int LodPolicy = 0;                ///< 0 distance bands, 1 screen-space error
   double CacheBudgetMB = 512;
   int Prefetcher = 0;               ///< 0 none, 1 linear
-  bool UseGpu = true;
+  int Device = 0;                   ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
   int Threads = 0;
+  /// Optional per-pixel ray length limit from opaque geometry (normalised-frame distance from the
+  /// eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
+  const float* MaxDistance = nullptr;
 };
 
 struct vtkAFAMFrameStats
@@ -33,6 +37,10 @@ struct vtkAFAMFrameStats
   int64_t CacheHits = 0, CacheMisses = 0, CulledBlocks = 0, VisibleBlocks = 0;
   uint64_t BytesRead = 0;
   bool UsedGpu = false;
+  /// Why the GPU is not (or not always) used, in words, from the frame that found out (e.g. "no
+  /// usable GPU: CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)"); empty
+  /// otherwise. Only set when the GPU was asked for (Device 0 or 2).
+  std::vector<std::string> DeviceMessages;
 };
 
 class vtkAFAMCoreRenderer
@@ -45,6 +53,8 @@ public:
   const std::string& Path() const { return this->OpenPath; }
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
+  /// True when this build has the CUDA renderer (afam_cuda linked in).
+  static bool HasCuda();
   /// Renders one frame (premultiplied RGBA, row 0 = top). Throws afam::Error.
   void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
 

@@ -8,7 +8,10 @@
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkInformation.h"
+#include "vtkLogger.h"
+#include "vtkMatrix4x4.h"
 #include "vtkMultiBlockDataSet.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLState.h"
@@ -21,6 +24,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 vtkStandardNewMacro(vtkAFAMVolumeMapper);
@@ -77,6 +81,81 @@ bool vtkAFAMVolumeMapper::EnsureOpen()
     return false;
   }
   return true;
+}
+
+void vtkAFAMVolumeMapper::SetRenderDevice(int device)
+{
+  device = std::min(std::max(device, static_cast<int>(DEVICE_AUTO)), static_cast<int>(DEVICE_GPU));
+  if (device != this->RenderDevice)
+  {
+    this->RenderDevice = device;
+    this->WarnedDevice = false; // a new choice reports its fallback again, once
+    this->Modified();
+  }
+}
+
+bool vtkAFAMVolumeMapper::HasCudaRenderer()
+{
+  return vtkAFAMCoreRenderer::HasCuda();
+}
+
+bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double center[3],
+  const double half[3], const double eyeN[3], int width, int height, std::vector<float>& limits)
+{
+  int w = 0, h = 0, x0 = 0, y0 = 0;
+  ren->GetTiledSizeAndOrigin(&w, &h, &x0, &y0);
+  if (w != width || h != height)
+  {
+    return false;
+  }
+  std::vector<float> depth(static_cast<size_t>(width) * static_cast<size_t>(height));
+  if (ren->GetRenderWindow()->GetZbufferData(x0, y0, x0 + w - 1, y0 + h - 1, depth.data()) !=
+    VTK_OK)
+  {
+    vtkWarningMacro(<< "cannot read the z-buffer; the volume is blended over opaque geometry");
+    return false;
+  }
+  // Window depth -> world point: inverse of the camera's composite projection (NDC z in [-1, 1]),
+  // which linearises the perspective depth exactly; -> normalised frame -> distance from the eye.
+  vtkNew<vtkMatrix4x4> inverse;
+  vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
+                         ren->GetTiledAspectRatio(), -1, 1),
+    inverse);
+  const double* m = inverse->GetData();
+  limits.assign(depth.size(), std::numeric_limits<float>::infinity());
+  bool any = false;
+  for (int y = 0; y < height; ++y) // y = 0: bottom row (OpenGL)
+  {
+    const double ny = 2.0 * (y + 0.5) / height - 1.0;
+    float* row = &limits[static_cast<size_t>(height - 1 - y) * width]; // Core: row 0 = top
+    for (int x = 0; x < width; ++x)
+    {
+      const float z = depth[static_cast<size_t>(y) * width + x];
+      if (!(z < 1.0f))
+      {
+        continue; // the far plane: nothing opaque here
+      }
+      const double ndc[4] = { 2.0 * (x + 0.5) / width - 1.0, ny, 2.0 * z - 1.0, 1.0 };
+      double p[4];
+      for (int r = 0; r < 4; ++r)
+      {
+        p[r] = m[4 * r] * ndc[0] + m[4 * r + 1] * ndc[1] + m[4 * r + 2] * ndc[2] + m[4 * r + 3];
+      }
+      if (!(std::abs(p[3]) > 0))
+      {
+        continue;
+      }
+      double t2 = 0;
+      for (int a = 0; a < 3; ++a)
+      {
+        const double d = (p[a] / p[3] - center[a]) / half[a] - eyeN[a];
+        t2 += d * d;
+      }
+      row[x] = static_cast<float>(std::sqrt(t2));
+      any = true;
+    }
+  }
+  return any;
 }
 
 double* vtkAFAMVolumeMapper::GetBounds()
@@ -203,8 +282,22 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   request.LodPolicy = this->LodPolicy;
   request.CacheBudgetMB = this->CacheBudgetMB;
   request.Prefetcher = this->Prefetcher;
-  request.UseGpu = this->UseGpu;
+  request.Device = this->RenderDevice;
   request.Threads = this->NumberOfThreads;
+
+  // Opaque geometry drawn so far stops the rays (see the class documentation).
+  std::vector<float> limits;
+  this->LastDepthLimitedPixels = 0;
+  if (this->DepthCompositing)
+  {
+    const double eye[3] = { eyeN[0], eyeN[1], eyeN[2] };
+    if (this->ReadDepthLimits(ren, center, half, eye, width, height, limits))
+    {
+      request.MaxDistance = limits.data();
+      this->LastDepthLimitedPixels = static_cast<vtkTypeInt64>(std::count_if(limits.begin(),
+        limits.end(), [](float t) { return t < std::numeric_limits<float>::infinity(); }));
+    }
+  }
 
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
@@ -252,6 +345,25 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   this->LastVisibleBlocks = stats.VisibleBlocks;
   this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
   this->LastUsedGpu = stats.UsedGpu;
+  this->LastDeviceMessage.clear();
+  for (const std::string& m : stats.DeviceMessages)
+  {
+    this->LastDeviceMessage += (this->LastDeviceMessage.empty() ? "" : "; ") + m;
+  }
+  if (!this->LastDeviceMessage.empty() && !this->WarnedDevice)
+  {
+    this->WarnedDevice = true;
+    if (this->RenderDevice == DEVICE_GPU)
+    {
+      vtkWarningMacro(<< "RenderDevice is GPU but " << this->LastDeviceMessage
+                      << (stats.UsedGpu ? "" : "; rendering with the CPU ray caster"));
+    }
+    else
+    {
+      vtkLog(INFO, "Adaptive-FAM: " << this->LastDeviceMessage
+                                    << (stats.UsedGpu ? "" : "; rendering with the CPU ray caster"));
+    }
+  }
   ++this->NumberOfFrames;
   this->LastTotalTime =
     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -264,7 +376,8 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LodPolicy: " << this->LodPolicy << "\n";
   os << indent << "CacheBudgetMB: " << this->CacheBudgetMB << "\n";
   os << indent << "Prefetcher: " << this->Prefetcher << "\n";
-  os << indent << "UseGpu: " << this->UseGpu << "\n";
+  os << indent << "RenderDevice: " << this->RenderDevice << "\n";
+  os << indent << "DepthCompositing: " << this->DepthCompositing << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
@@ -276,5 +389,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastVisibleBlocks: " << this->LastVisibleBlocks << "\n";
   os << indent << "LastBytesRead: " << this->LastBytesRead << "\n";
   os << indent << "LastUsedGpu: " << this->LastUsedGpu << "\n";
+  os << indent << "LastDepthLimitedPixels: " << this->LastDepthLimitedPixels << "\n";
+  os << indent << "LastDeviceMessage: " << this->LastDeviceMessage << "\n";
   os << indent << "NumberOfFrames: " << this->NumberOfFrames << "\n";
 }

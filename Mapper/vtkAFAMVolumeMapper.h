@@ -11,7 +11,14 @@
  * transfer functions, shading and sample distance to Core's types, asks Core for an RGBA image of
  * the viewport size and blends it (premultiplied alpha) over what the render window holds.
  *
- * Depth of opaque geometry is not yet passed to Core: the volume is blended over the scene.
+ * Depth compositing: before casting, the mapper reads the viewport's z-buffer (the opaque geometry
+ * VTK has drawn), converts every pixel's window depth back to the distance along that pixel's ray
+ * (inverse of the camera's composite projection: perspective depth linearised) and hands Core a
+ * per-pixel ray length limit, so no sample behind an opaque surface is composited.
+ *
+ * Render device: with RenderDevice Auto or GPU the frame is cast by the CUDA renderer when the
+ * build has it (afam_cuda) and a usable GPU is present, else by the CPU ray caster; GPU explicitly
+ * asked for but unusable gives one vtkWarning saying why (Auto says it once through vtkLog).
  */
 #ifndef vtkAFAMVolumeMapper_h
 #define vtkAFAMVolumeMapper_h
@@ -20,6 +27,8 @@
 #include "vtkVolumeMapper.h"
 
 #include <memory> // for std::unique_ptr
+#include <string> // for std::string
+#include <vector> // for std::vector
 
 class vtkAFAMCoreRenderer;
 
@@ -54,11 +63,31 @@ public:
   vtkGetMacro(Prefetcher, int);
   ///@}
 
+  enum RenderDevices
+  {
+    DEVICE_AUTO = 0, ///< the CUDA renderer when built and a GPU is usable, else the CPU
+    DEVICE_CPU = 1,  ///< always the CPU ray caster
+    DEVICE_GPU = 2   ///< the CUDA renderer; the CPU with one warning when it is unusable
+  };
+
   ///@{
-  /// Use the CUDA kernel when a usable GPU exists (default on); the CPU ray caster otherwise.
-  vtkSetMacro(UseGpu, bool);
-  vtkGetMacro(UseGpu, bool);
-  vtkBooleanMacro(UseGpu, bool);
+  /// Ray caster: DEVICE_AUTO (default), DEVICE_CPU or DEVICE_GPU (see above).
+  void SetRenderDevice(int device);
+  vtkGetMacro(RenderDevice, int);
+  void SetRenderDeviceToAuto() { this->SetRenderDevice(DEVICE_AUTO); }
+  void SetRenderDeviceToCPU() { this->SetRenderDevice(DEVICE_CPU); }
+  void SetRenderDeviceToGPU() { this->SetRenderDevice(DEVICE_GPU); }
+  ///@}
+
+  /// True when this build contains the CUDA renderer (whether or not a GPU is present).
+  static bool HasCudaRenderer();
+
+  ///@{
+  /// Stop rays at opaque geometry already in the z-buffer (default on). Off: the volume is
+  /// blended over the scene regardless of depth.
+  vtkSetMacro(DepthCompositing, bool);
+  vtkGetMacro(DepthCompositing, bool);
+  vtkBooleanMacro(DepthCompositing, bool);
   ///@}
 
   ///@{
@@ -85,7 +114,11 @@ public:
   vtkGetMacro(LastVisibleBlocks, vtkTypeInt64);
   vtkGetMacro(LastBytesRead, vtkTypeInt64);
   vtkGetMacro(LastUsedGpu, bool);
+  /// Pixels of the last frame whose rays were cut short by opaque geometry.
+  vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
   vtkGetMacro(NumberOfFrames, vtkTypeInt64);
+  /// Why the GPU was not used (empty when it was, or when the CPU was asked for).
+  const char* GetLastDeviceMessage() { return this->LastDeviceMessage.c_str(); }
   ///@}
 
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
@@ -102,12 +135,18 @@ protected:
   std::string ResolveFileName();
   /// Opens the file in Core when it changed; false (and an error) when it cannot.
   bool EnsureOpen();
+  /// Per-pixel ray length limits (normalised frame, row 0 = top) from the viewport's z-buffer;
+  /// false when no pixel holds opaque geometry (or the z-buffer cannot be read).
+  bool ReadDepthLimits(vtkRenderer* ren, const double center[3], const double half[3],
+    const double eyeN[3], int width, int height, std::vector<float>& limits);
 
   char* FileName = nullptr;
   int LodPolicy = 0;
   double CacheBudgetMB = 512;
   int Prefetcher = 0;
-  bool UseGpu = true;
+  int RenderDevice = DEVICE_AUTO;
+  bool DepthCompositing = true;
+  bool WarnedDevice = false;
   double SampleDistance = 0;
   int NumberOfThreads = 0;
 
@@ -115,6 +154,8 @@ protected:
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
   bool LastUsedGpu = false;
+  vtkTypeInt64 LastDepthLimitedPixels = 0;
+  std::string LastDeviceMessage;
 
   std::unique_ptr<vtkAFAMCoreRenderer> Core;
 

@@ -163,7 +163,8 @@ void vtkAFAMVolumeRepresentation::SetSpecularPower(double v) { this->Property->S
 void vtkAFAMVolumeRepresentation::SetLodPolicy(int v) { this->Mapper->SetLodPolicy(v); }
 void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v) { this->Mapper->SetCacheBudgetMB(v); }
 void vtkAFAMVolumeRepresentation::SetPrefetcher(int v) { this->Mapper->SetPrefetcher(v); }
-void vtkAFAMVolumeRepresentation::SetUseGpu(bool v) { this->Mapper->SetUseGpu(v); }
+void vtkAFAMVolumeRepresentation::SetRenderDevice(int v) { this->Mapper->SetRenderDevice(v); }
+void vtkAFAMVolumeRepresentation::SetDepthCompositing(bool v) { this->Mapper->SetDepthCompositing(v); }
 void vtkAFAMVolumeRepresentation::SetSampleDistance(double v) { this->Mapper->SetSampleDistance(v); }
 void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v) { this->Mapper->SetNumberOfThreads(v); }
 double vtkAFAMVolumeRepresentation::GetLastCachingTime() { return this->Mapper->GetLastCachingTime(); }
@@ -174,6 +175,9 @@ vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheMisses() { return this->Ma
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks() { return this->Mapper->GetLastCulledBlocks(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastVisibleBlocks() { return this->Mapper->GetLastVisibleBlocks(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames() { return this->Mapper->GetNumberOfFrames(); }
+int vtkAFAMVolumeRepresentation::GetLastUsedGpu() { return this->Mapper->GetLastUsedGpu() ? 1 : 0; }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastDepthLimitedPixels() { return this->Mapper->GetLastDepthLimitedPixels(); }
+const char* vtkAFAMVolumeRepresentation::GetLastDeviceMessage() { return this->Mapper->GetLastDeviceMessage(); }
 
 void vtkAFAMVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {

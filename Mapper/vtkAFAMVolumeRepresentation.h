@@ -55,7 +55,8 @@ public:
   void SetLodPolicy(int);
   void SetCacheBudgetMB(double);
   void SetPrefetcher(int);
-  void SetUseGpu(bool);
+  void SetRenderDevice(int);
+  void SetDepthCompositing(bool);
   void SetSampleDistance(double);
   void SetNumberOfThreads(int);
   ///@}
@@ -70,6 +71,9 @@ public:
   vtkTypeInt64 GetLastCulledBlocks();
   vtkTypeInt64 GetLastVisibleBlocks();
   vtkTypeInt64 GetNumberOfFrames();
+  int GetLastUsedGpu();
+  vtkTypeInt64 GetLastDepthLimitedPixels();
+  const char* GetLastDeviceMessage();
   ///@}
 
   vtkAFAMVolumeMapper* GetVolumeMapper() { return this->Mapper; }

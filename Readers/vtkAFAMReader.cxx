@@ -5,19 +5,50 @@
 #include "vtkAFAMModelTree.h"
 
 #include "afam/afam_file.hpp"
+#include "afam/encoder.hpp"
 #include "afam/errors.hpp"
 
+#include "vtkDataObject.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkMultiBlockDataSet.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkPointData.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <algorithm>
+#include <array>
+
 vtkStandardNewMacro(vtkAFAMReader);
+
+namespace
+{
+/// Origin and spacing of a level's decoded grid: it spans the volume's bounds.
+void LevelGeometry(const afam::VolumeHeader& h, const afam::Index3& dims, double origin[3],
+  double spacing[3])
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    origin[a] = h.origin[a];
+    const double extent = h.spacing[a] * static_cast<double>(std::max<int64_t>(0, h.dims[a] - 1));
+    spacing[a] = dims[a] > 1 ? extent / static_cast<double>(dims[a] - 1) : h.spacing[a];
+  }
+}
+}
 
 vtkAFAMReader::vtkAFAMReader()
 {
   this->SetNumberOfInputPorts(0);
+  this->SetNumberOfOutputPorts(2);
+}
+
+int vtkAFAMReader::FillOutputPortInformation(int port, vtkInformation* info)
+{
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), port == 0 ? "vtkMultiBlockDataSet" : "vtkImageData");
+  return 1;
 }
 
 vtkAFAMReader::~vtkAFAMReader()
@@ -52,6 +83,32 @@ int vtkAFAMReader::RequestInformation(
   }
   // Pieces are groups of coarsest blocks (see vtkAFAMModelTree::Build).
   outV->GetInformationObject(0)->Set(CAN_HANDLE_PIECE_REQUEST(), 1);
+  // Port 1: the decoded level's grid, or an empty extent when no level is asked for.
+  vtkInformation* imageInfo = outV->GetInformationObject(1);
+  int whole[6] = { 0, -1, 0, -1, 0, -1 };
+  if (this->DecodeLevel >= 0)
+  {
+    try
+    {
+      auto file = afam::AfamFile::open(this->FileName);
+      const afam::LevelGrid grid = afam::levelGrid(file->partition(), this->DecodeLevel);
+      double origin[3], spacing[3];
+      LevelGeometry(file->header(), grid.dims, origin, spacing);
+      for (int a = 0; a < 3; ++a)
+      {
+        whole[2 * a + 1] = static_cast<int>(grid.dims[a] - 1);
+      }
+      imageInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
+      imageInfo->Set(vtkDataObject::SPACING(), spacing, 3);
+      vtkDataObject::SetPointDataActiveScalarInfo(imageInfo, VTK_FLOAT, 1);
+    }
+    catch (const std::exception&)
+    {
+      // Reported by RequestData, which then leaves both outputs empty.
+    }
+  }
+  imageInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole, 6);
+  imageInfo->Set(CAN_PRODUCE_SUB_EXTENT(), 1);
   return 1;
 }
 
@@ -74,12 +131,45 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
   {
     // Opening reads and validates the header and the index only, never a payload.
     auto file = afam::AfamFile::open(this->FileName);
+    const bool decode = this->DecodeLevel >= 0;
+    const double treeShare = decode ? 0.1 : 1.0; // progress: the index is cheap, decoding is not
     vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), piece,
-      numPieces, output, [this](double f) { this->UpdateProgress(f); });
+      numPieces, output, [this, treeShare](double f) { this->UpdateProgress(treeShare * f); });
+    vtkImageData* image = vtkImageData::GetData(outV, 1);
+    if (image)
+    {
+      image->Initialize();
+    }
+    if (decode && image)
+    {
+      int ext[6];
+      outV->GetInformationObject(1)->Get(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), ext);
+      const afam::LevelGrid grid = afam::levelGrid(file->partition(), this->DecodeLevel);
+      double origin[3], spacing[3];
+      LevelGeometry(file->header(), grid.dims, origin, spacing);
+      image->SetOrigin(origin);
+      image->SetSpacing(spacing);
+      if (ext[0] <= ext[1] && ext[2] <= ext[3] && ext[4] <= ext[5])
+      {
+        image->SetExtent(ext);
+        vtkNew<vtkFloatArray> values;
+        const std::string& name = file->header().scalarName;
+        values->SetName(name.empty() ? "scalars" : name.c_str());
+        values->SetNumberOfTuples(image->GetNumberOfPoints());
+        afam::decodeLevelBox(*file, this->DecodeLevel, { ext[0], ext[2], ext[4] },
+          { ext[1], ext[3], ext[5] }, values->GetPointer(0),
+          [this, treeShare](double f) { this->UpdateProgress(treeShare + (1 - treeShare) * f); });
+        image->GetPointData()->SetScalars(values);
+      }
+    }
   }
   catch (const std::exception& e)
   {
     output->Initialize();
+    if (vtkImageData* image = vtkImageData::GetData(outV, 1))
+    {
+      image->Initialize();
+    }
     vtkErrorMacro(<< e.what());
     return 0;
   }
@@ -90,4 +180,5 @@ void vtkAFAMReader::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "DecodeLevel: " << this->DecodeLevel << "\n";
 }

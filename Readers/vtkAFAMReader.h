@@ -10,8 +10,15 @@
  * index, NCP, value range, achieved RMSE and max error, its index in the file and the file path.
  * No payload (control points) is read: renderers open the file themselves, out of core.
  *
- * Optionally (DecodeLevel >= 0) the reader decodes one level to a single vtkImageData instead, so
- * that ordinary filters (Slice, Contour, Plot Over Line) work on an .afam file.
+ * Output port 1 ("Decoded Level"): on request (DecodeLevel >= 0, 0 = coarsest) the reader decodes
+ * that level to a vtkImageData on the level's own sample grid (the finest level is the encoded
+ * volume's grid) with one float point array named like the encoded scalars, so that ordinary
+ * filters (Slice, Contour, Plot Over Line) work on an .afam file. It reads and evaluates only the
+ * micro-models of the requested update extent (sub-extents: each MPI rank decodes its own slab).
+ * With DecodeLevel = -1 (default) port 1 is an empty image and no payload is read.
+ *
+ * MPI pieces of port 0: piece p of n keeps the micro-models whose coarsest-level ancestor lies in
+ * its contiguous range of coarsest blocks (z-major slabs, spatially coherent).
  *
  * Anything that is not a valid .afam file is reported with vtkErrorMacro and a failed request.
  */
@@ -36,6 +43,13 @@ public:
   vtkGetFilePathMacro(FileName);
   ///@}
 
+  ///@{
+  /// Level decoded to image data on output port 1: -1 none (default), else 0 (coarsest) to
+  /// levels-1 (finest). A level the file does not have is an error.
+  vtkSetClampMacro(DecodeLevel, int, -1, 64);
+  vtkGetMacro(DecodeLevel, int);
+  ///@}
+
   /// 1 when `filename` starts with the .afam magic and its header parses, 0 otherwise. Never throws.
   static int CanReadFile(const char* filename);
 
@@ -45,8 +59,10 @@ protected:
 
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int FillOutputPortInformation(int port, vtkInformation* info) override;
 
   char* FileName = nullptr;
+  int DecodeLevel = -1;
 
 private:
   vtkAFAMReader(const vtkAFAMReader&) = delete;

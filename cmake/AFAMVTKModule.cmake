@@ -41,3 +41,9 @@ vtk_module_include(AFAM::vtkAFAM
     "$<BUILD_INTERFACE:${_afam_root}/Mapper>")
 # Core is VTK-free and static (PIC): linked into the module, nothing of it is exported.
 vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)
+# The CUDA renderer only when the project builds it (AFAM_ENABLE_CUDA): afam_cuda is static, PIC,
+# links cudart statically and brings AFAM_HAVE_CUDA=1 (its PUBLIC definition) to the module's
+# sources. The module includes its plain C++ headers only (afam/cuda/gpu_caster.hpp), never CUDA's.
+if (TARGET afam_cuda)
+  vtk_module_link(AFAM::vtkAFAM PRIVATE afam_cuda)
+endif ()

@@ -178,12 +178,13 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.cachingMs = msSince(t0);
 }
 
-ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st) {
+ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
   st = FrameStats{};
   if (options_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
   prepare(camera, fr, st);
+  fr.view.maxDistance = maxDistance;
   history_.push_back(camera);
   if (history_.size() > 16) history_.erase(history_.begin());
   // Prefetch the predicted next view while this one renders. The prediction itself runs in the

@@ -230,6 +230,9 @@ struct GpuRenderer::Impl {
     size = align256(size + sizeof(FrameSlot) * size_t(std::max(v.slotCount, 0)));
     const size_t tfOffset = size;
     size = align256(size + sizeof(float) * 4 * size_t(std::max(v.tfSize, 0)));
+    const size_t pixels = size_t(v.camera.width) * size_t(v.camera.height);
+    const size_t depthOffset = size;  // optional per-pixel ray length limit (opaque geometry)
+    if (v.maxDistance) size = align256(size + sizeof(float) * pixels);
     reserveTables(size);
     // Wait until the previous frame's table copy has left the pinned buffer.
     AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -240,6 +243,8 @@ struct GpuRenderer::Impl {
     if (v.cellSlot) std::memcpy(hostTables + cellOffset, v.cellSlot, sizeof(int32_t) * cells);
     if (v.tf && v.tfSize > 0)
       std::memcpy(hostTables + tfOffset, v.tf, sizeof(float) * 4 * size_t(v.tfSize));
+    if (v.maxDistance)
+      std::memcpy(hostTables + depthOffset, v.maxDistance, sizeof(float) * pixels);
     auto* slots = reinterpret_cast<FrameSlot*>(hostTables + slotOffset);
     for (int32_t s = 0; s < v.slotCount; ++s) {
       FrameSlot slot = v.slots[s];
@@ -263,6 +268,8 @@ struct GpuRenderer::Impl {
     d.cellSlot = reinterpret_cast<const int32_t*>(deviceTables + cellOffset);
     d.slots = reinterpret_cast<const FrameSlot*>(deviceTables + slotOffset);
     d.tf = reinterpret_cast<const float*>(deviceTables + tfOffset);
+    d.maxDistance =
+        v.maxDistance ? reinterpret_cast<const float*>(deviceTables + depthOffset) : nullptr;
     d.pool = static_cast<const float*>(pool.arena());
     return d;
   }

@@ -14,6 +14,7 @@
 #include "afam/encoder.hpp"
 #include "afam/fit.hpp"
 #include "afam/marschner_lobb.hpp"
+#include "render_test_util.hpp"
 
 using namespace afam;
 
@@ -415,4 +416,59 @@ TEST(Encoder, InvalidOptions) {
   opt = EncoderOptions{};
   opt.errorBound = -1;
   EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
+}
+
+TEST(Encoder, DecodeLevelBoxJoinsBlocksAndReadsSubBoxes) {
+  const int n = 33;
+  auto file = afam_test::encodeMl(n, EncodingMode::Adaptive, 3, 4, 1e-3);
+  const Partition& part = file->partition();
+  for (int level = 0; level < part.levels(); ++level) {
+    const LevelGrid g = levelGrid(part, level);
+    const Index3 d = g.dims;
+    std::vector<float> full(size_t(d[0] * d[1] * d[2]), NAN);
+    decodeLevelBox(*file, level, {0, 0, 0}, {d[0] - 1, d[1] - 1, d[2] - 1}, full.data());
+    // Every sample equals the decoded block that owns it (later block on a shared boundary).
+    const Int3 nb = part.blocksPerAxis(level);
+    std::vector<float> dec;
+    int64_t checked = 0;
+    for (int k = 0; k < nb[2]; ++k)
+      for (int j = 0; j < nb[1]; ++j)
+        for (int i = 0; i < nb[0]; ++i) {
+          const int64_t ei = file->entryIndex(level, {i, j, k});
+          const ModelEntry& m = file->entries()[size_t(ei)];
+          decodeBlockSamples(m, file->readPayload(ei).data(), file->header().mode, dec);
+          const int ijk[3] = {i, j, k};
+          int64_t own[3];
+          for (int a = 0; a < 3; ++a) own[a] = ijk[a] + 1 < nb[a] ? m.samples[a] - 1 : m.samples[a];
+          for (int64_t z = 0; z < own[2]; ++z)
+            for (int64_t y = 0; y < own[1]; ++y)
+              for (int64_t x = 0; x < own[0]; ++x, ++checked) {
+                const int64_t gx = g.start[0][size_t(i)] + x, gy = g.start[1][size_t(j)] + y,
+                              gz = g.start[2][size_t(k)] + z;
+                ASSERT_EQ(full[size_t((gz * d[1] + gy) * d[0] + gx)],
+                          dec[size_t((z * m.samples[1] + y) * m.samples[0] + x)]);
+              }
+        }
+    EXPECT_EQ(checked, d[0] * d[1] * d[2]);
+    // A sub-box straddling block boundaries equals the same region of the full decode.
+    const Index3 lo{1, d[1] / 3, d[2] / 2}, hi{d[0] - 2, d[1] - 1, std::min(d[2] - 1, d[2] / 2 + 2)};
+    std::vector<float> sub(size_t((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)));
+    decodeLevelBox(*file, level, lo, hi, sub.data());
+    size_t s = 0;
+    for (int64_t z = lo[2]; z <= hi[2]; ++z)
+      for (int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (int64_t x = lo[0]; x <= hi[0]; ++x) ASSERT_EQ(sub[s++], full[size_t((z * d[1] + y) * d[0] + x)]);
+    if (level == part.levels() - 1) {
+      // The finest level is the volume's own grid and approximates ML within the bound.
+      EXPECT_EQ(d, (Index3{n, n, n}));
+      std::vector<float> truth(size_t(n) * n * n);
+      MarschnerLobb ml;
+      marschnerLobbSlab(ml, {n, n, n}, 0, n, truth.data());
+      double se = 0;
+      for (size_t i = 0; i < truth.size(); ++i) se += double(full[i] - truth[i]) * (full[i] - truth[i]);
+      EXPECT_LT(std::sqrt(se / double(truth.size())), 2e-3);
+    }
+  }
+  EXPECT_THROW(decodeLevelBox(*file, 3, {0, 0, 0}, {0, 0, 0}, nullptr), InvalidArgument);
+  EXPECT_THROW(decodeLevelBox(*file, 0, {0, 0, 0}, {n, 0, 0}, nullptr), InvalidArgument);
 }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <type_traits>
 
@@ -141,17 +142,24 @@ struct CountingSampler {
     return true;
   }
 };
-}  // namespace
 
-TEST(Raycast, EarlyTerminationAndNearPlaneInsideTheBox) {
+/// A view of the constant field through a two-entry table `tf` (alpha per 0.01 sample step),
+/// eye at (0, 0, eyeZ) looking down -z, one pixel.
+FrameView constantFieldView(const float* tf, float eyeZ) {
   FrameView f;
-  const float tf[8] = {0, 0, 0, 0.2f, 1, 1, 1, 0.2f};
   f.tf = tf;
   f.tfSize = 2;
   f.sampleDistance = 0.01f;
   f.tfReferenceDistance = 0.01f;
-  f.camera.eye[2] = 0.f;  // inside the box, looking down -z
+  f.camera.eye[2] = eyeZ;
   f.camera.width = f.camera.height = 1;
+  return f;
+}
+}  // namespace
+
+TEST(Raycast, EarlyTerminationAndNearPlaneInsideTheBox) {
+  const float tf[8] = {0, 0, 0, 0.2f, 1, 1, 1, 0.2f};
+  FrameView f = constantFieldView(tf, 0.f);  // inside the box, looking down -z
   CountingSampler s;
   const RGBA c = castRayWith<false>(f, s, 0, 0);
   EXPECT_GE(c.a, 0.95f);
@@ -162,4 +170,31 @@ TEST(Raycast, EarlyTerminationAndNearPlaneInsideTheBox) {
   CountingSampler s2;
   EXPECT_EQ(castRayWith<true>(f, s2, 0, 0).a, 0.f);
   EXPECT_EQ(s2.calls, 0);
+}
+
+TEST(Raycast, MaxDistanceStopsTheRayAtOpaqueGeometry) {
+  // Faint constant field (alpha 0.01 per sample: no early termination within the box): eye at
+  // z = 5 looking down -z, the box spans t in [4, 6]. Three pixels: no geometry (+inf), a surface
+  // at t = 4.5 (a quarter of the box's depth), a surface in front of the box (t = 3).
+  const float tf[8] = {0, 0, 0, 0.01f, 1, 1, 1, 0.01f};
+  FrameView f = constantFieldView(tf, 5.f);
+  f.camera.tanHalfX = f.camera.tanHalfY = 1e-4f;  // all three rays nearly along the axis
+  f.camera.width = 3;
+  f.camera.height = 1;
+  CountingSampler free, limited, hidden, unset;
+  const RGBA noLimit = castRayWith<false>(f, unset, 0, 0);
+  const float depth[3] = {INFINITY, 4.5f, 3.f};
+  f.maxDistance = depth;
+  const RGBA a = castRayWith<false>(f, free, 0, 0);
+  const RGBA b = castRayWith<false>(f, limited, 1, 0);
+  const RGBA c = castRayWith<false>(f, hidden, 2, 0);
+  // +inf changes nothing.
+  EXPECT_EQ(free.calls, unset.calls);
+  EXPECT_FLOAT_EQ(a.a, noLimit.a);
+  EXPECT_NEAR(free.calls, 201, 1);     // t = 4.00 .. 6.00
+  EXPECT_NEAR(limited.calls, 51, 1);   // t = 4.00 .. 4.50
+  EXPECT_EQ(hidden.calls, 0);
+  EXPECT_EQ(c.a, 0.f);
+  EXPECT_NEAR(b.a, 1.f - std::pow(0.99f, float(limited.calls)), 1e-5);
+  EXPECT_LT(b.a, 0.7f * a.a);
 }

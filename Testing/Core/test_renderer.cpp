@@ -180,3 +180,43 @@ TEST(ImageMetrics, KnownValuesAndPngRoundTrip) {
   std::remove(path.c_str());
   EXPECT_THROW(readPng("/nonexistent.png"), IoError);
 }
+
+TEST(Renderer, MaxDistanceHidesTheVolumeBehindOpaqueGeometry) {
+  // Per-pixel ray limits as the VTK mapper passes them from the z-buffer: +inf changes nothing,
+  // a limit in front of the volume empties the pixel, a limit through the middle keeps only the
+  // front part (less opacity than the full ray), and the limited image is otherwise unchanged.
+  auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
+  const int n = 32;
+  const Camera cam = testCamera(n);
+  Renderer r(file, testOptions());
+  FrameStats st;
+  const ImageRGBA full = r.renderFrame(cam, st);
+  std::vector<float> limit(size_t(n) * n, INFINITY);
+  EXPECT_EQ(r.renderFrame(cam, st, limit.data()).rgba, full.rgba);
+  const double eyeToCenter = std::sqrt(1.1 * 1.1 + 1.3 * 1.3 + 0.9 * 0.9);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      float& t = limit[size_t(y) * n + size_t(x)];
+      if (x < n / 2) t = y < n / 2 ? 0.25f : float(eyeToCenter);  // in front (box is >= 0.32 away) / through the middle
+    }
+  const ImageRGBA cut = r.renderFrame(cam, st, limit.data());
+  double hiddenAlpha = 0, middleAlpha = 0, middleFullAlpha = 0, rightDiff = 0;
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const size_t i = (size_t(y) * n + size_t(x)) * 4;
+      if (x >= n / 2) {
+        for (int k = 0; k < 4; ++k) rightDiff += std::abs(cut.rgba[i + size_t(k)] - full.rgba[i + size_t(k)]);
+      } else if (y < n / 2) {
+        hiddenAlpha += cut.rgba[i + 3];
+      } else {
+        EXPECT_LE(cut.rgba[i + 3], full.rgba[i + 3] + 1e-6f);
+        middleAlpha += cut.rgba[i + 3];
+        middleFullAlpha += full.rgba[i + 3];
+      }
+    }
+  EXPECT_EQ(hiddenAlpha, 0.0);
+  EXPECT_EQ(rightDiff, 0.0);
+  EXPECT_GT(middleFullAlpha, 1.0);  // the volume is visible there at all
+  EXPECT_GT(middleAlpha, 0.05 * middleFullAlpha);
+  EXPECT_LT(middleAlpha, 0.9 * middleFullAlpha);
+}

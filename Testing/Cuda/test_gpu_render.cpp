@@ -5,6 +5,7 @@
 // no GPU is usable (CI).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -122,6 +123,55 @@ TEST(GpuRenderer, GenericDegreePathMatchesSpecialised) {
   EXPECT_LE(d.maxAbs8, 1);
   std::printf("[generic-vs-p2] max |diff| %d/255, %lld pixels differ, max float diff %.2e\n",
               d.maxAbs8, (long long)d.differing, d.maxAbsFloat);
+}
+
+TEST(GpuRenderer, MaxDistanceMatchesCpuAndHidesTheVolume) {
+  // Per-pixel ray limits (opaque geometry, as the VTK mapper passes them): the left half of the
+  // image is cut at the distance of the volume's centre, the top-right quarter in front of the
+  // volume. GPU == CPU, the top-right quarter is empty, the left half dimmer than unlimited.
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume* e = encoded("marschner_lobb", 2);
+  const int w = 201, h = 160;
+  const Camera camera = Camera::fromPose({2.4, 40.0, 120.0}, w, h);
+  Frame frame;
+  buildFrame(*e, distanceBands(e->partition, camera), camera, FrameOptions{}, frame);
+  std::vector<float> limit(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      limit[size_t(y) * w + size_t(x)] = x < w / 2 ? 2.4f : (y < h / 2 ? 0.5f : INFINITY);
+  GpuRenderer gpu(size_t(64) << 20);
+  gpu.setPoisonOutput(true);
+  std::vector<float> full(size_t(w) * h * 4), cut(full.size());
+  gpu.render(frame.view, frame.keys.data(), full.data());
+  frame.view.maxDistance = limit.data();
+  gpu.render(frame.view, frame.keys.data(), cut.data());
+  ImageRGBA cpu;
+  renderCpu(frame.view, cpu, 0);
+  const ImageDiff d = compareImages(cpu.rgba, cut);
+  double left = 0, leftFull = 0, hidden = 0, right = 0, rightFull = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = (size_t(y) * w + size_t(x)) * 4 + 3;
+      if (x < w / 2) {
+        left += cut[i];
+        leftFull += full[i];
+      } else if (y < h / 2) {
+        hidden += cut[i];
+      } else {
+        right += cut[i];
+        rightFull += full[i];
+      }
+    }
+  std::printf("[gpu-depth] max |diff| vs CPU %d/255, unwritten %lld; alpha left %.1f of %.1f, "
+              "hidden %.3f, right %.1f of %.1f\n",
+              d.maxAbs8, (long long)d.nonFinite, left, leftFull, hidden, right, rightFull);
+  EXPECT_EQ(d.nonFinite, 0);
+  EXPECT_LE(d.maxAbs8, 2);
+  EXPECT_EQ(hidden, 0.0);
+  EXPECT_GT(leftFull, 10.0);
+  EXPECT_LT(left, 0.9 * leftFull);
+  EXPECT_GT(left, 0.05 * leftFull);
+  EXPECT_NEAR(right, rightFull, 1e-3 * rightFull + 1e-6);
 }
 
 TEST(GpuDsBaseline, RawBlocksMatchCpuAndTexturePathWritesEveryPixel) {

@@ -1,80 +1,67 @@
 // SPDX-FileCopyrightText: Adaptive-FAM authors
 // SPDX-License-Identifier: BSD-3-Clause
 // Regression image test of vtkAFAMVolumeMapper: a 49^3 Marschner-Lobb volume (Core's generator)
-// encoded with vtkAFAMEncoder and rendered out of core in an awkward 301 x 300 window, blended
-// over an opaque sphere that sticks out of the volume.
-// Usage: TestAFAMVolumeMapper -V <baseline.png> -T <output folder>
-#include "vtkAFAMEncoder.h"
+// encoded with vtkAFAMEncoder and rendered out of core in an awkward 301 x 300 window, over an
+// opaque sphere that sticks out of the volume.
+// Usage: TestAFAMVolumeMapper [--device gpu] -V <baseline.png> -T <output folder>
+//   default: RenderDevice Auto, no warning may be issued;
+//   --device gpu: RenderDevice GPU. Where the CUDA renderer is unusable (built without CUDA, no
+//   GPU or driver) exactly one warning must say so across two frames and the frames must be cast
+//   on the CPU; where it is usable the frames must be cast on the GPU without a warning. Either
+//   way the image must match the same baseline.
+#include "AFAMTestScene.h"
 #include "vtkAFAMVolumeMapper.h"
 
-#include "afam/encoder.hpp"
-
 #include "vtkActor.h"
+#include "vtkCallbackCommand.h"
 #include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
-#include "vtkFloatArray.h"
-#include "vtkImageData.h"
-#include "vtkNew.h"
+#include "vtkCommand.h"
 #include "vtkOutlineFilter.h"
-#include "vtkProperty.h"
-#include "vtkPiecewiseFunction.h"
-#include "vtkPointData.h"
 #include "vtkPolyDataMapper.h"
+#include "vtkProperty.h"
 #include "vtkRegressionTestImage.h"
-#include "vtkRenderWindow.h"
 #include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
 #include "vtkSphereSource.h"
 #include "vtkVolume.h"
-#include "vtkVolumeProperty.h"
 
+#include <cstring>
 #include <iostream>
+#include <string>
+#include <vector>
+
+namespace
+{
+void CollectWarning(vtkObject*, unsigned long, void* clientData, void* callData)
+{
+  static_cast<std::vector<std::string>*>(clientData)->push_back(
+    callData ? static_cast<const char*>(callData) : "");
+}
+}
 
 int TestAFAMVolumeMapper(int argc, char* argv[])
 {
-  const int n = 49;
-  vtkNew<vtkImageData> image;
-  image->SetDimensions(n, n, n);
-  image->SetOrigin(-1, -1, -1);
-  image->SetSpacing(2.0 / (n - 1), 2.0 / (n - 1), 2.0 / (n - 1));
-  vtkNew<vtkFloatArray> values;
-  values->SetName("marschner_lobb");
-  values->SetNumberOfTuples(static_cast<vtkIdType>(n) * n * n);
-  afam::MarschnerLobbSource source(afam::Index3{ n, n, n });
-  source.readSlab(0, n, values->GetPointer(0));
-  image->GetPointData()->SetScalars(values);
-
-  vtkNew<vtkAFAMEncoder> encoder;
-  encoder->SetInputData(image);
-  encoder->SetLevels(3);
-  encoder->SetBlocksPerAxis(4);
-  encoder->SetErrorBound(0.01);
-  encoder->SetRelativeBound(true);
-  encoder->Update();
-  if (encoder->GetModelFileName()[0] == '\0')
+  bool gpu = false;
+  for (int i = 1; i + 1 < argc; ++i)
   {
-    std::cerr << "encoder produced no model file\n";
+    if (std::strcmp(argv[i], "--device") == 0)
+    {
+      gpu = std::strcmp(argv[i + 1], "gpu") == 0;
+    }
+  }
+  vtkSmartPointer<vtkImageData> image;
+  vtkSmartPointer<vtkAFAMVolumeMapper> mapper = afam_vtk_test::MarschnerLobbMapper(image);
+  if (!mapper)
+  {
     return EXIT_FAILURE;
   }
-
-  vtkNew<vtkAFAMVolumeMapper> mapper;
-  mapper->SetInputConnection(encoder->GetOutputPort());
-  mapper->SetLodPolicy(1); // screen-space error: finer levels at this distance than the bands
-
-  vtkNew<vtkColorTransferFunction> color;
-  color->AddRGBPoint(0.0, 0.05, 0.10, 0.60);
-  color->AddRGBPoint(0.5, 0.90, 0.90, 0.90);
-  color->AddRGBPoint(1.0, 0.85, 0.20, 0.05);
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(0.0, 0.0);
-  opacity->AddPoint(0.45, 0.0);
-  opacity->AddPoint(0.6, 0.1);
-  opacity->AddPoint(1.0, 0.4);
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(color);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(0.1);
-  property->ShadeOff();
+  mapper->SetRenderDevice(gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_AUTO);
+  std::vector<std::string> warnings;
+  vtkNew<vtkCallbackCommand> onWarning;
+  onWarning->SetCallback(CollectWarning);
+  onWarning->SetClientData(&warnings);
+  mapper->AddObserver(vtkCommand::WarningEvent, onWarning);
+  vtkSmartPointer<vtkVolumeProperty> property = afam_vtk_test::VolumeProperty();
 
   vtkNew<vtkVolume> volume;
   volume->SetMapper(mapper);
@@ -118,6 +105,7 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   camera->SetViewAngle(30);
   renderer->ResetCameraClippingRange();
   window->Render();
+  window->Render(); // a second frame: a fallback warning must not repeat
 
   std::cout << "frames " << mapper->GetNumberOfFrames() << " total " << mapper->GetLastTotalTime()
             << " s, ray cast " << mapper->GetLastRenderTime() << " s, caching "
@@ -127,6 +115,35 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   if (mapper->GetNumberOfFrames() < 1 || mapper->GetLastVisibleBlocks() < 1)
   {
     std::cerr << "the mapper did not render\n";
+    return EXIT_FAILURE;
+  }
+
+  std::cout << "device " << (gpu ? "gpu" : "auto") << ": CUDA renderer built "
+            << vtkAFAMVolumeMapper::HasCudaRenderer() << ", last frame on the GPU "
+            << mapper->GetLastUsedGpu() << ", warnings " << warnings.size() << ", message '"
+            << mapper->GetLastDeviceMessage() << "'\n";
+  for (const std::string& w : warnings)
+  {
+    std::cout << "warning: " << w << "\n";
+  }
+  if (gpu && !mapper->GetLastUsedGpu())
+  {
+    if (warnings.size() != 1 || warnings[0].find("CPU") == std::string::npos ||
+      std::string(mapper->GetLastDeviceMessage()).empty())
+    {
+      std::cerr << "GPU asked for and unusable: expected exactly one warning naming the CPU "
+                   "fallback and a device message\n";
+      return EXIT_FAILURE;
+    }
+  }
+  else if (!warnings.empty())
+  {
+    std::cerr << "unexpected warnings\n";
+    return EXIT_FAILURE;
+  }
+  if (!vtkAFAMVolumeMapper::HasCudaRenderer() && mapper->GetLastUsedGpu())
+  {
+    std::cerr << "a build without CUDA claims to have rendered on the GPU\n";
     return EXIT_FAILURE;
   }
 

@@ -53,6 +53,8 @@
 //      su = 2 (px + 0.5) / width - 1,  sv = 1 - 2 (py + 0.5) / height.
 //  The authors' camera (data README) is tanHalfX = tanHalfY = 1/8: direction normalize(u, v, -8).
 //  Rays start at max(box entry, nearDistance): a camera inside the volume starts at its near plane.
+//  They end at min(box exit, maxDistance[pixel]) when the frame carries the per-pixel distances of
+//  opaque geometry (depth compositing with a scene; no sample lies behind an opaque surface).
 //  Samples are taken at t = k * sampleDistance (k integer, t measured from the eye), so samples do
 //  not shimmer when the box entry moves and all samplers see the same positions.
 //
@@ -151,6 +153,11 @@ struct FrameView {
   float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
   float specularColor[3] = {1.f, 1.f, 1.f};
   int32_t shading = 1;  ///< informative: the caster picks castRay<true> or castRay<false> from it
+
+  // Opaque geometry (optional): per pixel, the largest ray distance t from the eye (normalised
+  // units, camera.width * camera.height floats, row 0 = top) at which samples are still taken;
+  // a ray stops where an opaque surface is. nullptr (default): no limit, no cost.
+  const float* maxDistance = nullptr;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -405,6 +412,7 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
   rayDirection(f.camera, px, py, d);
   float tEnter, tExit;
   if (!intersectBox(f.camera.eye, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
+  if (f.maxDistance) tExit = rc::minf(tExit, f.maxDistance[int64_t(py) * f.camera.width + px]);
   const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
   if (tExit < tStart || !(f.sampleDistance > 0.f)) return acc;
   const float dt = f.sampleDistance;

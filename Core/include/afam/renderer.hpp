@@ -86,7 +86,10 @@ class Renderer {
   void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
   /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
   /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
-  ImageRGBA renderFrame(const Camera& camera, FrameStats& stats);
+  /// maxDistance (optional, caller-owned, width * height floats, row 0 = top): per-pixel ray
+  /// length limit from opaque geometry (FrameView::maxDistance); the installed caster sees it too.
+  ImageRGBA renderFrame(const Camera& camera, FrameStats& stats,
+                        const float* maxDistance = nullptr);
 
   /// Replaces renderFrame's CPU ray casting (the CUDA path of `--device gpu` plugs in here): the
   /// caster fills `image` (premultiplied RGBA of frame.view's size) from the prepared frame.

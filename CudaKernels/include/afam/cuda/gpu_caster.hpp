@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Puts the CUDA ray caster into a Core Renderer (Renderer::setRayCaster): caching, LOD, culling
+// and prefetching stay the Renderer's; only the casting of a prepared frame runs on the GPU. One
+// place for every front end that offers a GPU switch (`afam render/replay --device gpu`, the VTK
+// mapper's RenderDevice). Plain C++: no CUDA header.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "afam/renderer.hpp"
+
+namespace afam {
+
+class GpuRenderer;
+
+/// What installGpuCaster did.
+struct GpuCaster {
+  std::shared_ptr<GpuRenderer> gpu;  ///< keep alive while the Renderer is used; null: CPU
+  std::string description;           ///< "NVIDIA H200 (sm_90, ...)" when installed
+  explicit operator bool() const { return gpu != nullptr; }
+};
+
+/// Tries the GPU for `renderer`: probes for a usable device, allocates a model pool of
+/// `budgetBytes` (halving down to 16 MiB while device memory is short) and installs the caster.
+/// Every reason to use the CPU goes to `report` in words, e.g. "no usable GPU: CUDA driver is
+/// missing or too old (cudaErrorInsufficientDriver, 35)"; when it returns an empty GpuCaster the
+/// renderer is untouched (CPU). A frame whose models exceed the pool is cast on the CPU (reported
+/// once). Never throws for a missing or full GPU.
+GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
+                           const std::function<void(const std::string&)>& report);
+
+}  // namespace afam

@@ -20,63 +20,9 @@ namespace afam::AFAM_KERNEL_NS {
 constexpr int kTileX = 16;
 constexpr int kTileY = 8;
 
-/// raycast.hpp's ModelSampler with the spline degree fixed at compile time. When every spline slot
-/// of a frame has degree P on all axes, copying the slot's knots with `degree = P` lets the
-/// compiler unroll the basis and tensor loops of evaluateModel and keep their small arrays in
-/// registers; the values computed are those of ModelSampler (same functions, same operations).
+/// raycast.hpp's sampler with the spline degree fixed at compile time (P = -1: any degree).
 template <int P>
-struct FixedDegreeSampler {
-  template <bool WithGradient>
-  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
-                                         float* gradient) const {
-    float x[3];
-    toVoxel(f, p, x);
-    const int32_t slot = lookupSlot(f, x);
-    if (slot < 0) return false;
-    const FrameSlot& stored = f.slots[slot];
-    float gv[3] = {0.f, 0.f, 0.f};
-    if (stored.kind == kSlotRaw) {
-      value = sampleRawSlot<WithGradient>(stored, f.pool, x, gv);
-    } else {
-      FrameSlot s = stored;
-      s.knots[0].degree = P;
-      s.knots[1].degree = P;
-      s.knots[2].degree = P;
-      value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
-    }
-    if (WithGradient) {
-      gradient[0] = gv[0] * f.voxelPerUnit[0];
-      gradient[1] = gv[1] * f.voxelPerUnit[1];
-      gradient[2] = gv[2] * f.voxelPerUnit[2];
-    }
-    return true;
-  }
-};
-
-template <int P>
-struct SamplerFor {
-  using type = FixedDegreeSampler<P>;
-};
-template <>
-struct SamplerFor<-1> {
-  using type = ModelSampler;
-};
-
-/// Wraps a sampler and counts the ray samples that hit a model (untimed launches only).
-template <typename Inner>
-struct CountingSampler {
-  Inner inner;
-  unsigned* count;
-  template <bool WithGradient>
-  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
-                                         float* gradient) const {
-    const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
-    // castRayWith evaluates each sample's value, then value + gradient again for visible samples
-    // when shaded: count ray samples (the value evaluations) only.
-    if (ok && !WithGradient) ++*count;
-    return ok;
-  }
-};
+using SamplerFor = ModelSamplerT<P>;
 
 template <bool Shaded, int P, int MinBlocks = 0>
 __global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
@@ -84,7 +30,7 @@ __global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
   if (px >= f.camera.width || py >= f.camera.height) return;
-  const RGBA c = castRayWith<Shaded>(f, typename SamplerFor<P>::type{}, px, py);
+  const RGBA c = castRayWith<Shaded>(f, SamplerFor<P>{}, px, py);
   image[int64_t(py) * f.camera.width + px] = make_float4(c.r, c.g, c.b, c.a);
 }
 
@@ -95,7 +41,7 @@ __global__ void __launch_bounds__(kTileX * kTileY)
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
   if (px >= f.camera.width || py >= f.camera.height) return;
   unsigned count = 0;
-  CountingSampler<typename SamplerFor<P>::type> sampler{{}, &count};
+  SampleCounter<SamplerFor<P>> sampler{{}, &count};
   (void)castRayWith<Shaded>(f, sampler, px, py);
   atomicAdd(total, (unsigned long long)count);
 }
@@ -108,7 +54,7 @@ __global__ void __launch_bounds__(kTileX * kTileY)
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
   if (px >= f.camera.width || py >= f.camera.height) return;
-  const typename SamplerFor<P>::type sampler{};
+  const SamplerFor<P> sampler{};
   float d[3];
   rayDirection(f.camera, px, py, d);
   float tEnter, tExit, sum = 0.f;

@@ -26,8 +26,7 @@ struct TextureDsSampler {
   __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
                                          float* gradient) const {
     float x[3];
-    toVoxel(f, p, x);
-    const int32_t slot = lookupSlot(f, x);
+    const int32_t slot = locateSample(f, p, x);
     if (slot < 0) return false;
     const FrameSlot& s = f.slots[slot];
     float t[3], perVoxel[3];
@@ -40,29 +39,15 @@ struct TextureDsSampler {
     const cudaTextureObject_t tex = textures[slot];
     value = tex3D<float>(tex, t[0], t[1], t[2]);
     if (WithGradient) {
-      const float gx = 0.5f * (tex3D<float>(tex, t[0] + 1.f, t[1], t[2]) -
-                               tex3D<float>(tex, t[0] - 1.f, t[1], t[2])) * perVoxel[0];
-      const float gy = 0.5f * (tex3D<float>(tex, t[0], t[1] + 1.f, t[2]) -
-                               tex3D<float>(tex, t[0], t[1] - 1.f, t[2])) * perVoxel[1];
-      const float gz = 0.5f * (tex3D<float>(tex, t[0], t[1], t[2] + 1.f) -
-                               tex3D<float>(tex, t[0], t[1], t[2] - 1.f)) * perVoxel[2];
-      gradient[0] = gx * f.voxelPerUnit[0];
-      gradient[1] = gy * f.voxelPerUnit[1];
-      gradient[2] = gz * f.voxelPerUnit[2];
+      const float gv[3] = {0.5f * (tex3D<float>(tex, t[0] + 1.f, t[1], t[2]) -
+                                   tex3D<float>(tex, t[0] - 1.f, t[1], t[2])) * perVoxel[0],
+                           0.5f * (tex3D<float>(tex, t[0], t[1] + 1.f, t[2]) -
+                                   tex3D<float>(tex, t[0], t[1] - 1.f, t[2])) * perVoxel[1],
+                           0.5f * (tex3D<float>(tex, t[0], t[1], t[2] + 1.f) -
+                                   tex3D<float>(tex, t[0], t[1], t[2] - 1.f)) * perVoxel[2]};
+      voxelToNormalisedGradient(f, gv, gradient);
     }
     return true;
-  }
-};
-
-struct CountingTextureSampler {
-  TextureDsSampler inner;
-  unsigned* count;
-  template <bool WithGradient>
-  __device__ __forceinline__ bool sample(const FrameView& f, const float* p, float& value,
-                                         float* gradient) const {
-    const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
-    if (ok && !WithGradient) ++*count;
-    return ok;
   }
 };
 
@@ -75,7 +60,7 @@ __global__ void __launch_bounds__(kTileX * kTileY)
   if (px >= f.camera.width || py >= f.camera.height) return;
   if (total) {
     unsigned count = 0;
-    (void)castRayWith<Shaded>(f, CountingTextureSampler{{textures}, &count}, px, py);
+    (void)castRayWith<Shaded>(f, SampleCounter<TextureDsSampler>{{textures}, &count}, px, py);
     atomicAdd(total, (unsigned long long)count);
     return;
   }

@@ -49,8 +49,12 @@ TEST(Cache, BudgetsAreNeverExceeded) {
     for (int i = 0; i < 400; ++i) {
       if (i % 3 == 0) cache.prefetch(pick(rng));
       else cache.get(pick(rng));
-      if (b.bytes) ASSERT_LE(cache.residentBytes(), b.bytes);
-      if (b.blocks) ASSERT_LE(cache.residentBlocks(), b.blocks);
+      if (b.bytes) {
+        ASSERT_LE(cache.residentBytes(), b.bytes);
+      }
+      if (b.blocks) {
+        ASSERT_LE(cache.residentBlocks(), b.blocks);
+      }
     }
   }
 }

@@ -111,8 +111,8 @@ AFAM_HD int degree2KnotHalfUnits(const Knots& k, int i) {
 ///  * p = 2: every span, the clamped end spans included: with U = 2 u / h and the knots in units
 ///    of h/2 (integers K), N[0] = (K[s+1] - U)^2 / ((K[s+1] - K[s-1]) (K[s+1] - K[s])),
 ///    N[2] = (U - K[s])^2 / ((K[s+2] - K[s]) (K[s+1] - K[s])), N[1] = 1 - N[0] - N[2] (clamped at 0)
-///    (two exact reciprocals of small integers instead of the recurrence's divisions, and no
-///    branch between interior and end spans, which matters on the GPU);
+///    (interior spans: both products are 8; the two spans at each clamped end: two reciprocals of
+///    small integers instead of the recurrence's loops and divisions);
 ///  * p = 3: spans whose 2p surrounding knots are all interior (the cardinal cubic).
 /// Returns false (and writes nothing) elsewhere; those take the Cox-de Boor recurrence.
 /// Agrees with it to rounding (tested).
@@ -122,12 +122,22 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const Real scale = Real(k.ncp - 1);  // 1 / h
   if (p == 2) {
     if (k.ncp < 3) return false;
-    const int k0 = degree2KnotHalfUnits(k, s - 1), k1 = degree2KnotHalfUnits(k, s);
-    const int k2 = degree2KnotHalfUnits(k, s + 1), k3 = degree2KnotHalfUnits(k, s + 2);
+    int k1, k2;
+    Real i0, i2;
+    if (s >= 4 && s + 2 <= k.ncp - 1) {
+      // Interior span: K[s-1..s+2] = 2s-5, 2s-3, 2s-1, 2s+1; both products are 8.
+      k1 = 2 * s - 3;
+      k2 = 2 * s - 1;
+      i0 = i2 = Real(0.125);
+    } else {
+      const int k0 = degree2KnotHalfUnits(k, s - 1), k3 = degree2KnotHalfUnits(k, s + 2);
+      k1 = degree2KnotHalfUnits(k, s);
+      k2 = degree2KnotHalfUnits(k, s + 1);
+      i0 = Real(1) / Real((k2 - k0) * (k2 - k1));
+      i2 = Real(1) / Real((k3 - k1) * (k2 - k1));
+    }
     const Real U = Real(2) * scale * u;
     const Real a = Real(k2) - U, b = U - Real(k1);
-    const Real i0 = Real(1) / Real((k2 - k0) * (k2 - k1));
-    const Real i2 = Real(1) / Real((k3 - k1) * (k2 - k1));
     N[0] = a * a * i0;
     N[2] = b * b * i2;
     const Real middle = Real(1) - N[0] - N[2];

@@ -318,30 +318,67 @@ AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* pool, const float* 
   return value;
 }
 
+/// Voxel coordinate x of a normalised-frame point p and the slot covering it (-1: culled / empty):
+/// the first step of every model sampler.
+AFAM_HD int32_t locateSample(const FrameView& f, const float* p, float* x) {
+  toVoxel(f, p, x);
+  return lookupSlot(f, x);
+}
+
+/// A gradient in voxel units (d/dx) to the normalised frame.
+AFAM_HD void voxelToNormalisedGradient(const FrameView& f, const float* gVoxel, float* gradient) {
+  gradient[0] = gVoxel[0] * f.voxelPerUnit[0];
+  gradient[1] = gVoxel[1] * f.voxelPerUnit[1];
+  gradient[2] = gVoxel[2] * f.voxelPerUnit[2];
+}
+
 /// The default sampler: the frame's resident micro-models (spline or raw), found in O(1).
 /// A sampler provides `template <bool G> bool sample(const FrameView&, const float* p, float& value,
 /// float* gradient) const` with p and gradient in the NORMALISED frame; it returns false where
 /// nothing is to be sampled (culled cell). castRayWith<> accepts any such sampler (ground_truth.hpp
 /// plugs the analytic Marschner-Lobb function in here).
-struct ModelSampler {
+/// FixedDegree > 0 promises that every spline slot of the frame has that degree on all axes: the
+/// slot's knots are copied with the degree as a compile-time constant, so the compiler unrolls the
+/// basis and tensor loops of evaluateModel and keeps their arrays in registers (the CUDA kernels
+/// specialise this way; the values are those of the generic path, same functions, same operations).
+template <int FixedDegree = -1>
+struct ModelSamplerT {
   template <bool WithGradient>
   AFAM_HD bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
     float x[3];
-    toVoxel(f, p, x);
-    const int32_t slot = lookupSlot(f, x);
+    const int32_t slot = locateSample(f, p, x);
     if (slot < 0) return false;
-    const FrameSlot& s = f.slots[slot];
+    const FrameSlot& stored = f.slots[slot];
     float gv[3] = {0.f, 0.f, 0.f};
-    if (s.kind == kSlotRaw)
-      value = sampleRawSlot<WithGradient>(s, f.pool, x, gv);
-    else
+    if (stored.kind == kSlotRaw) {
+      value = sampleRawSlot<WithGradient>(stored, f.pool, x, gv);
+    } else if (FixedDegree > 0) {
+      FrameSlot s = stored;
+      s.knots[0].degree = FixedDegree;
+      s.knots[1].degree = FixedDegree;
+      s.knots[2].degree = FixedDegree;
       value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
-    if (WithGradient) {
-      gradient[0] = gv[0] * f.voxelPerUnit[0];
-      gradient[1] = gv[1] * f.voxelPerUnit[1];
-      gradient[2] = gv[2] * f.voxelPerUnit[2];
+    } else {
+      value = sampleSplineSlot<WithGradient>(stored, f.pool, x, gv);
     }
+    if (WithGradient) voxelToNormalisedGradient(f, gv, gradient);
     return true;
+  }
+};
+using ModelSampler = ModelSamplerT<>;
+
+/// Wraps a sampler and counts the ray samples that hit a model (benchmarks: samples per second).
+/// castRayWith evaluates each sample's value, then value + gradient again for visible samples when
+/// shaded: only the value evaluations are counted.
+template <typename Inner>
+struct SampleCounter {
+  Inner inner;
+  unsigned* count;
+  template <bool WithGradient>
+  AFAM_HD bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
+    const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
+    if (ok && !WithGradient) ++*count;
+    return ok;
   }
 };
 
@@ -384,7 +421,22 @@ AFAM_HD void shadePhong(const FrameView& f, const float* d, const float* g, RGBA
   const float inv = 1.f / sqrtf(len2);
   float ndl = -(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) * inv;  // n.L with L = -d
   ndl = ndl < 0.f ? -ndl : ndl;                                  // two-sided
-  const float spec = f.specular * powf(ndl, f.specularPower);
+  // Integral exponents (the usual case, 20 by default) by binary powering: a handful of
+  // multiplications instead of powf, the same operations on the host and the device.
+  const float e = f.specularPower;
+  const int ie = int(e);
+  float sp;
+  if (float(ie) == e && ie >= 0 && ie <= 1024) {
+    sp = 1.f;
+    float base = ndl;
+    for (int n = ie; n > 0; n >>= 1) {
+      if (n & 1) sp *= base;
+      base *= base;
+    }
+  } else {
+    sp = powf(ndl, e);
+  }
+  const float spec = f.specular * sp;
   const float k = f.ambient + f.diffuse * ndl;
   c.r = c.r * k + spec * f.specularColor[0];
   c.g = c.g * k + spec * f.specularColor[1];

@@ -124,11 +124,19 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
     if (k.ncp < 3) return false;
     int k1, k2;
     Real i0, i2;
-    if (s >= 4 && s + 2 <= k.ncp - 1) {
-      // Interior span: K[s-1..s+2] = 2s-5, 2s-3, 2s-1, 2s+1; both products are 8.
-      k1 = 2 * s - 3;
-      k2 = 2 * s - 1;
-      i0 = i2 = Real(0.125);
+    if (k.ncp >= 6) {
+      // Selects only, no branch: interior spans (both knot products 8) and the two spans at each
+      // clamped end (products 9 and 15, then 10 and 8, mirrored at the upper end) take the same
+      // instructions, so GPU lanes on either side of a block's end spans do not diverge.
+      const int fromLow = s - 2, fromHigh = k.ncp - 1 - s;
+      const bool low = fromLow <= fromHigh;
+      const int e = low ? fromLow : fromHigh;
+      const Real inner = e == 0 ? Real(1) / Real(9) : Real(1) / Real(10);
+      const Real outer = e == 0 ? Real(1) / Real(15) : Real(0.125);
+      i0 = e >= 2 ? Real(0.125) : (low ? inner : outer);
+      i2 = e >= 2 ? Real(0.125) : (low ? outer : inner);
+      k1 = s <= 2 ? 0 : 2 * s - 3;
+      k2 = s + 1 >= k.ncp ? 2 * (k.ncp - 1) : 2 * s - 1;
     } else {
       const int k0 = degree2KnotHalfUnits(k, s - 1), k3 = degree2KnotHalfUnits(k, s + 2);
       k1 = degree2KnotHalfUnits(k, s);

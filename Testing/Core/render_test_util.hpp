@@ -21,10 +21,10 @@ inline std::string tempPath(const std::string& stem) {
 /// process so several tests share one encoding.
 inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode mode, int levels = 3,
                                                       int blocks = 4, double bound = 1e-3,
-                                                      int fixedNcp = 0) {
+                                                      int fixedNcp = 0, int degree = 2) {
   const std::string path = tempPath(std::to_string(n) + "_" + afam::modeName(mode) + "_" +
                                     std::to_string(levels) + "_" + std::to_string(blocks) + "_" +
-                                    std::to_string(fixedNcp));
+                                    std::to_string(fixedNcp) + "_p" + std::to_string(degree));
   if (::access(path.c_str(), R_OK) != 0) {
     std::vector<float> data(size_t(n) * n * n);
     afam::MarschnerLobb ml;
@@ -33,7 +33,7 @@ inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode 
     afam::EncoderOptions o;
     o.levels = levels;
     o.blocksPerAxis = blocks;
-    o.degree = 2;
+    o.degree = degree;
     o.errorBound = bound;
     o.mode = mode;
     o.fixedNcp = fixedNcp;

@@ -146,6 +146,51 @@ TEST(Renderer, ShadingOffComputesNoGradientAndDiffersFromShaded) {
   EXPECT_LT(psnrOf(a, b), 40.0);
 }
 
+TEST(Renderer, GradientWithValueGivesTheSameImageWithFewerEvaluations) {
+  // Degree 2 (closed-form basis) and degree 4 (Cox-de Boor): one value+gradient evaluation per
+  // sample must give the image of "value first, gradient again where visible", bit for bit.
+  for (int degree : {2, 4}) {
+    auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3, 0, degree);
+    Renderer r(file, testOptions());
+    PreparedFrame fr;
+    FrameStats stats;
+    r.prepare(testCamera(40), fr, stats);
+    ASSERT_GT(fr.view.slotCount, 0);
+    ImageRGBA together, separate;
+    fr.view.gradientWithValue = 1;
+    renderCpu(fr.view, together, 2);
+    fr.view.gradientWithValue = 0;
+    renderCpu(fr.view, separate, 2);
+    ASSERT_EQ(together.rgba.size(), separate.rgba.size());
+    size_t differ = 0;
+    float alpha = 0.f;
+    for (size_t i = 0; i < together.rgba.size(); ++i) {
+      differ += together.rgba[i] != separate.rgba[i];
+      alpha += together.rgba[i];
+    }
+    EXPECT_EQ(differ, 0u) << "degree " << degree;
+    EXPECT_GT(alpha, 1.f) << "degree " << degree;  // something was drawn
+    // Count the evaluations: one per sample with gradientWithValue, more without.
+    unsigned together1 = 0, separate1 = 0;
+    fr.view.gradientWithValue = 1;
+    for (int y = 0; y < 40; y += 3)
+      for (int x = 0; x < 40; x += 3) {
+        unsigned c = 0;
+        castRayWith<true>(fr.view, SampleCounter<ModelSampler>{{}, &c}, x, y);
+        together1 += c;
+      }
+    fr.view.gradientWithValue = 0;
+    for (int y = 0; y < 40; y += 3)
+      for (int x = 0; x < 40; x += 3) {
+        unsigned c = 0;
+        castRayWith<true>(fr.view, SampleCounter<ModelSampler>{{}, &c}, x, y);
+        separate1 += c;
+      }
+    EXPECT_EQ(together1, separate1) << "the counter counts ray samples either way";
+    EXPECT_GT(together1, 100u);
+  }
+}
+
 TEST(Renderer, CameraInsideTheVolumeSeesSomething) {
   auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
   Renderer r(file, testOptions());

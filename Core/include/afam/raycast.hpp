@@ -153,6 +153,10 @@ struct FrameView {
   float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
   float specularColor[3] = {1.f, 1.f, 1.f};
   int32_t shading = 1;  ///< informative: the caster picks castRay<true> or castRay<false> from it
+  /// Shaded rays: 1 evaluates value and gradient together at every sample (one model evaluation
+  /// per sample; best when most samples are visible), 0 evaluates the value first and the gradient
+  /// again only where the transfer function gives opacity (best for sparse transfer functions).
+  int32_t gradientWithValue = 1;
 
   // Opaque geometry (optional): per pixel, the largest ray distance t from the eye (normalised
   // units, camera.width * camera.height floats, row 0 = top) at which samples are still taken;
@@ -368,8 +372,9 @@ struct ModelSamplerT {
 using ModelSampler = ModelSamplerT<>;
 
 /// Wraps a sampler and counts the ray samples that hit a model (benchmarks: samples per second).
-/// castRayWith evaluates each sample's value, then value + gradient again for visible samples when
-/// shaded: only the value evaluations are counted.
+/// castRayWith evaluates each sample once (value, or value + gradient with gradientWithValue), and
+/// with gradientWithValue = 0 value + gradient again for visible samples when shaded: only the
+/// first evaluation of each sample is counted.
 template <typename Inner>
 struct SampleCounter {
   Inner inner;
@@ -377,7 +382,7 @@ struct SampleCounter {
   template <bool WithGradient>
   AFAM_HD bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
     const bool ok = inner.template sample<WithGradient>(f, p, value, gradient);
-    if (ok && !WithGradient) ++*count;
+    if (ok && (!WithGradient || f.gradientWithValue != 0)) ++*count;
     return ok;
   }
 };
@@ -478,13 +483,19 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
                         f.camera.eye[2] + t * d[2]};
     float value = 0.f;
     float g[3] = {0.f, 0.f, 0.f};
-    // Value first; the gradient only for samples the transfer function makes visible.
-    if (!sampler.template sample<false>(f, p, value, g)) continue;
+    // Shaded and gradientWithValue: one evaluation of value and gradient per sample. Otherwise the
+    // value first, and the gradient only for samples the transfer function makes visible.
+    const bool together = Shaded && f.gradientWithValue != 0;
+    if (together) {
+      if (!sampler.template sample<true>(f, p, value, g)) continue;
+    } else if (!sampler.template sample<false>(f, p, value, g)) {
+      continue;
+    }
     RGBA c = classify(f, value);
     if (c.a <= 0.f) continue;
     if (ratio != 1.f) c.a = correctOpacity(c.a, ratio);
     if (Shaded) {
-      sampler.template sample<true>(f, p, value, g);
+      if (!together) sampler.template sample<true>(f, p, value, g);
       shadePhong(f, d, g, c);
     }
     compositeFrontToBack(acc, c);

@@ -295,6 +295,7 @@ void buildFrame(const EncodedVolume& e, const std::vector<BlockId>& blocks, cons
   v.tfReferenceDistance = options.sampleDistance;
   v.sampleDistance = options.sampleDistance;
   v.shading = options.shaded ? 1 : 0;
+  v.gradientWithValue = e.raw ? 0 : 1;  // as Core's Renderer chooses per method
 }
 
 ImageDiff compareImages(const std::vector<float>& cpu, const std::vector<float>& gpu) {

@@ -24,7 +24,8 @@ std::unique_ptr<Predictor> makePredictor(const std::string& name) {
   if (name == "linear") return std::make_unique<LinearPredictor>();
   if (name == "appa" || name == "forecache" || name == "lstm")
     throw InvalidArgument("prefetch: predictor '" + name +
-                          "' is not available yet (the prefetching issue adds it); use none or linear");
+                          "' needs the encoded file and the view settings: build it with "
+                          "makePrefetchPredictor (the Renderer does)");
   throw InvalidArgument("prefetch: unknown predictor '" + name +
                         "' (expected none, linear, appa, forecache or lstm)");
 }

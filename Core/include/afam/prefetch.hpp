@@ -48,7 +48,9 @@ class LinearPredictor : public Predictor {
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
 };
 
-/// none | linear. appa, forecache and lstm throw InvalidArgument("... not available yet ...").
+/// none | linear (camera-only predictors). appa, forecache and lstm need the file and the view
+/// settings: makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds them, and this
+/// throws InvalidArgument saying so.
 std::unique_ptr<Predictor> makePredictor(const std::string& name);
 
 struct PrefetchStats {

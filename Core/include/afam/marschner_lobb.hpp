@@ -50,15 +50,24 @@ struct MarschnerLobb {
   float fM = 6.f;
   float lo = -1.f, hi = 1.f;  ///< domain per axis, mapped onto [-1, 1]
 
+  /// The function's own coordinates (X, Y, Z) in [-1, 1] of domain point (x, y, z), the scale s
+  /// (d X / d x) and the radius r = sqrt(X^2 + Y^2), which it returns.
+  template <typename Real>
+  AFAM_HD Real unitCoordinates(Real x, Real y, Real z, Real& X, Real& Y, Real& Z, Real& s) const {
+    s = Real(2) / (Real(hi) - Real(lo));
+    X = (x - Real(lo)) * s - Real(1);
+    Y = (y - Real(lo)) * s - Real(1);
+    Z = (z - Real(lo)) * s - Real(1);
+    return ml_detail::sqrtR(X * X + Y * Y);
+  }
+
   /// Value at domain coordinates; Real = double for reference data, float in kernels.
   template <typename Real>
   AFAM_HD Real valueT(Real x, Real y, Real z) const {
     using namespace ml_detail;
     const Real pi = Real(3.14159265358979323846);
-    const Real s = Real(2) / (Real(hi) - Real(lo));
-    const Real X = (x - Real(lo)) * s - Real(1), Y = (y - Real(lo)) * s - Real(1),
-               Z = (z - Real(lo)) * s - Real(1);
-    const Real r = sqrtR(X * X + Y * Y);
+    Real X, Y, Z, s;
+    const Real r = unitCoordinates(x, y, z, X, Y, Z, s);
     const Real a = Real(alpha);
     const Real rho = cosR(Real(2) * pi * Real(fM) * cosR(pi * r / Real(2)));
     return (Real(1) - sinR(pi * Z / Real(2)) + a * (Real(1) + rho)) / (Real(2) * (Real(1) + a));
@@ -69,10 +78,8 @@ struct MarschnerLobb {
   AFAM_HD void gradientT(Real x, Real y, Real z, Real* g) const {
     using namespace ml_detail;
     const Real pi = Real(3.14159265358979323846);
-    const Real s = Real(2) / (Real(hi) - Real(lo));
-    const Real X = (x - Real(lo)) * s - Real(1), Y = (y - Real(lo)) * s - Real(1),
-               Z = (z - Real(lo)) * s - Real(1);
-    const Real r = sqrtR(X * X + Y * Y);
+    Real X, Y, Z, s;
+    const Real r = unitCoordinates(x, y, z, X, Y, Z, s);
     const Real a = Real(alpha);
     const Real norm = Real(1) / (Real(2) * (Real(1) + a));
     // d rho / dr = pi^2 fM sin(2 pi fM cos(pi r/2)) sin(pi r/2); divided by r for d/dX = (.) X/r.

@@ -13,6 +13,7 @@
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkMatrix3x3.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkObjectFactory.h"
 
@@ -83,9 +84,22 @@ int vtkAFAMEncoder::RequestData(
     values = vtkSmartPointer<vtkFloatArray>::New();
     values->DeepCopy(array);
   }
+  // The file's origin is the world position of the first sample that arrived: the image's origin
+  // is that of index (0, 0, 0), and the extent (the whole extent's or a sub-extent's) may start
+  // elsewhere, e.g. at -20 for ParaView's Wavelet.
+  int extent[6];
   double origin[3], spacing[3];
+  input->GetExtent(extent);
   input->GetOrigin(origin);
   input->GetSpacing(spacing);
+  for (int a = 0; a < 3; ++a)
+  {
+    origin[a] += static_cast<double>(extent[2 * a]) * spacing[a];
+  }
+  if (input->GetDirectionMatrix() && !input->GetDirectionMatrix()->IsIdentity())
+  {
+    vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
+  }
   afam::ArraySource source(values->GetPointer(0), afam::Index3{ dims[0], dims[1], dims[2] },
     array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
     { spacing[0], spacing[1], spacing[2] });

@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """pvbatch: load the plugin; a wrong file gives an error, not a crash; encode a Wavelet with the
-Adaptive-FAM Encoder, save it with the writer, reopen it with OpenDataFile, render it with the
-"Adaptive-FAM Volume" representation, compare with the baseline and read the frame statistics.
+Adaptive-FAM Encoder, save it with the writer, reopen it with OpenDataFile; the encoder's and the
+reader's bounds are the Wavelet's [-20, 20]^3 (also for a sub-extent input); render it with the
+"Adaptive-FAM Volume" representation under a fixed camera, compare with the baseline, read the frame
+statistics, and check it is drawn where ParaView's own Volume representation draws the Wavelet.
 Leaves wavelet.afam in the shared test folder for the MPI and GUI tests."""
 import os
 import sys
@@ -9,8 +11,8 @@ import sys
 sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))  # the GUI defines no __file__
 import afam_test_util as u  # noqa: E402
 
-from paraview.simple import (CreateView, OpenDataFile, Render, SaveData, SaveScreenshot,  # noqa: E402
-                             Show, Wavelet)
+from paraview.simple import (ColorBy, CreateView, ExtractSubset, Hide, OpenDataFile, Render,  # noqa: E402
+                             SaveData, SaveScreenshot, Show, Wavelet)
 from paraview import servermanager  # noqa: E402
 
 u.load_plugin(globals())
@@ -52,6 +54,27 @@ model.UpdatePipeline()
 if model.GetDataInformation().GetNumberOfDataSets() != expected:
     u.fail("reopened file has %d leaves" % model.GetDataInformation().GetNumberOfDataSets())
 
+# The models sit where the Wavelet is: the file's origin is the world position of the first sample
+# (origin + extent minimum x spacing), so bounds survive encoder -> writer -> reader.
+wavelet_bounds = wavelet.GetDataInformation().GetBounds()
+for name, proxy in (("encoder", encoder), ("reader", model)):
+    b = proxy.GetDataInformation().GetBounds()
+    print("%s bounds %s, Wavelet bounds %s" % (name, b, wavelet_bounds))
+    if max(abs(x - y) for x, y in zip(b, wavelet_bounds)) > 1e-9:
+        u.fail("%s bounds %s differ from the Wavelet's %s" % (name, b, wavelet_bounds))
+if max(abs(x - y) for x, y in zip(wavelet_bounds, [-20, 20, -20, 20, -20, 20])) > 1e-9:
+    u.fail("Wavelet bounds %s, expected [-20, 20]^3" % (wavelet_bounds,))
+# A sub-extent (what one piece of a split Wavelet delivers) keeps its own place too.
+sub = Wavelet(WholeExtent=[-20, 20, -20, 20, -20, 20])
+sub_voi = ExtractSubset(Input=sub, VOI=[-10, 15, -20, 0, 5, 20])
+sub_encoder = AdaptiveFAMEncoder(Input=sub_voi, Levels=1, BlocksPerAxis=1, ErrorBound=0.05)  # noqa: F821
+sub_encoder.Scalars = ["POINTS", "RTData"]
+sub_encoder.UpdatePipeline()
+sub_bounds = sub_encoder.GetDataInformation().GetBounds()
+print("sub-extent encoder bounds %s" % (sub_bounds,))
+if max(abs(x - y) for x, y in zip(sub_bounds, [-10, 15, -20, 0, 5, 20])) > 1e-9:
+    u.fail("sub-extent encoder bounds %s, expected [-10, 15, -20, 0, 5, 20]" % (sub_bounds,))
+
 # 3. Render with the representation and compare.
 view = CreateView("RenderView")
 u.setup_view(view)
@@ -76,3 +99,19 @@ print("statistics: frames=%s total=%.4fs raycast=%.4fs caching=%.4fs visible=%s 
 if not frames or frames < 1 or not visible or visible < 1 or not total or total <= 0:
     u.fail("the mapper did not render (statistics above)")
 u.compare_with_baseline(png, "TestAFAMPipeline.png")
+
+# 4. Same place as ParaView's own Volume representation of the Wavelet, same view and colours: the
+# non-background pixels' box and centroid agree within a few pixels.
+Hide(model, view)
+reference = Show(wavelet, view)
+reference.Representation = "Volume"
+ColorBy(reference, ("POINTS", "RTData"))  # the lookup table and opacity set above
+reference.ScalarOpacityUnitDistance = 2.0
+Render(view)
+png_ref = os.path.join(out, "TestAFAMPipeline_paraview_volume.png")
+SaveScreenshot(png_ref, view, ImageResolution=[301, 300])
+afam_box = u.foreground_box(png)
+paraview_box = u.foreground_box(png_ref)
+print("foreground (x0, y0, x1, y1, cx, cy): Adaptive-FAM %s, ParaView Volume %s" % (afam_box, paraview_box))
+if max(abs(a - b) for a, b in zip(afam_box, paraview_box)) > 6:
+    u.fail("the volume is not where ParaView's Volume representation draws the Wavelet")

@@ -17,6 +17,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 
 COLORS = {"DS": "tab:gray", "FAM": "tab:blue", "Adaptive-FAM": "tab:red", "inlevel": "tab:purple",
           "adaptive": "tab:red", "fixed": "tab:blue", "zfp": "tab:green", "fpzip": "tab:orange"}
@@ -221,14 +222,57 @@ def latency(out):
     os.path.exists(path[:-4] + ".csv") or os.symlink("latency_summary.csv", path[:-4] + ".csv")
 
 
+def median(xs):
+    xs = sorted(x for x in xs if math.isfinite(x))
+    if not xs:
+        return float("nan")
+    m = len(xs) // 2
+    return xs[m] if len(xs) % 2 else 0.5 * (xs[m - 1] + xs[m])
+
+
+def pareto_replays(out):
+    """Pooled figures of the interleaved Pareto replays (scripts/evaluation/pareto_replays.sh):
+    per method, medians over every point of view of every round and both trajectories, the range
+    of the per-round medians, and the paired per-view difference against Adaptive-FAM (same
+    trajectory, same round, same point of view: the same blocks are visible)."""
+    path = os.path.join(out, "latency", "pareto_replays.csv")
+    if not os.path.exists(path):
+        return None
+    runs = read(path)
+    per = {}  # method -> list of (round, trajectory, pov, latency, caching, render)
+    for r in runs:
+        for p in read(r["csv"]):
+            per.setdefault(r["method"], []).append((r["round"], r["trajectory"], p["pov"], num(p["latency_ms"]),
+                                                   num(p["caching_ms"]), num(p["render_ms"])))
+    res = {}
+    afam = {(a, b, c): l for a, b, c, l, _, _ in per.get("Adaptive-FAM", [])}
+    for meth, rows in per.items():
+        rounds = sorted({x[0] for x in rows})
+        round_meds = [median([x[3] for x in rows if x[0] == k]) for k in rounds]
+        d = [x[3] - afam[x[:3]] for x in rows if x[:3] in afam] if meth != "Adaptive-FAM" else []
+        res[meth] = dict(latency=median([x[3] for x in rows]), caching=median([x[4] for x in rows]),
+                         render=median([x[5] for x in rows]), rounds=len(rounds), views=len(rows),
+                         round_min=min(round_meds), round_max=max(round_meds),
+                         paired=median(d) if d else float("nan"),
+                         frac_faster=(sum(1 for v in d if v < 0) / len(d)) if d else float("nan"))
+    return res
+
+
 def pareto(out):
-    """Error (image MSE at the cross-level view, middle sample distance) against latency (median,
-    user_1 and user_2, no prefetching) for every method measured on ML."""
+    """Error (image MSE at the cross-level view, middle sample distance) against latency for
+    every method measured on ML. Latency: the interleaved Pareto replays when present (pooled
+    medians over every round, both trajectories, no prefetching), otherwise the mean of the
+    user_1 and user_2 medians of the single replays without prefetching."""
     q = read(os.path.join(out, "compressors", "compressors_quality.csv"))
     q0 = read(os.path.join(out, "quality", "quality.csv"))
     summ = read(os.path.join(out, "latency", "latency_summary.csv"))
     lat, cach = {}, {}
+    pr = pareto_replays(out)
     for meth in ("DS", "FAM", "Adaptive-FAM"):
+        if pr is not None and meth in pr:
+            lat[meth] = pr[meth]["latency"]
+            cach[meth] = pr[meth]["caching"]
+            continue
         rs = [num(r["median_latency_ms"]) for r in summ if r["method"] == meth and r["prefetch"] == "none"]
         cs = [num(r["median_caching_ms"]) for r in summ if r["method"] == meth and r["prefetch"] == "none"]
         if rs:
@@ -255,28 +299,51 @@ def pareto(out):
         dominated_by = [o for o, l2, e2 in pts if o != name and l2 < l and e2 < e]
         c = cach[name]
         dom_c = [o for o, _, e2 in pts if o != name and cach[o] < c and e2 < e]
+        x = (pr or {}).get(name)
         rows.append(dict(method=name, median_latency_ms=l, image_mse=e, pareto=int(not dominated_by),
                          dominated_by=";".join(dominated_by), median_caching_ms=c,
-                         pareto_caching=int(not dom_c), caching_dominated_by=";".join(dom_c)))
+                         pareto_caching=int(not dom_c), caching_dominated_by=";".join(dom_c),
+                         median_render_ms=x["render"] if x else "", rounds=x["rounds"] if x else "",
+                         views=x["views"] if x else "",
+                         latency_round_min_ms=x["round_min"] if x else "",
+                         latency_round_max_ms=x["round_max"] if x else "",
+                         paired_minus_afam_ms=x["paired"] if x and name != "Adaptive-FAM" else "",
+                         frac_views_faster_than_afam=x["frac_faster"] if x and name != "Adaptive-FAM" else ""))
     path = os.path.join(out, "quality", "pareto_error_vs_latency.csv")
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["method", "median_latency_ms", "image_mse", "pareto", "dominated_by",
-                                          "median_caching_ms", "pareto_caching", "caching_dominated_by"])
+                                          "median_caching_ms", "pareto_caching", "caching_dominated_by",
+                                          "median_render_ms", "rounds", "views", "latency_round_min_ms",
+                                          "latency_round_max_ms", "paired_minus_afam_ms",
+                                          "frac_views_faster_than_afam"])
         w.writeheader()
         w.writerows(rows)
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6))
     for ax, key, pk, xl in ((axes[0], "median_latency_ms", "pareto", "median input latency (ms)"),
                             (axes[1], "median_caching_ms", "pareto_caching", "median caching time (ms)")):
         for r in rows:
-            ax.plot(r[key], r["image_mse"], "o", color=COLORS[r["method"]], ms=8,
-                    label="%s%s" % (r["method"], "" if r[pk] else " (dominated)"))
+            lab = "%s%s" % (r["method"], "" if r[pk] else " (dominated)")
+            if key == "median_latency_ms" and r["latency_round_min_ms"] != "":
+                ax.errorbar(r[key], r["image_mse"], xerr=[[r[key] - r["latency_round_min_ms"]],
+                                                          [r["latency_round_max_ms"] - r[key]]],
+                            fmt="o", color=COLORS[r["method"]], ms=8, capsize=4, label=lab)
+            else:
+                ax.plot(r[key], r["image_mse"], "o", color=COLORS[r["method"]], ms=8, label=lab)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel(xl + ", mean of user_1, user_2")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
+        ticks = []
+        for t in sorted(round(r[key], 1) for r in rows):
+            if not ticks or t > 1.03 * ticks[-1]:
+                ticks.append(t)  # methods closer than 3 % share a tick
+        ax.set_xticks(ticks)
+        ax.set_xlabel(xl + ("\npooled over %s rounds, user_1 + user_2" % rows[0]["rounds"]
+                            if pr else "\nmean of user_1, user_2"), fontsize=8)
         ax.set_ylabel("image MSE at the cross-level view")
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3)
-    save(fig, path[:-4] + ".png", out, [" replay ", " quality "])
+    save(fig, path[:-4] + ".png", out, [" replay ", " quality ", "pareto_replays"])
     return rows, afam_label
 
 
@@ -289,6 +356,14 @@ def summary(out, size, wall):
         lines.append("Pareto (error vs latency, ML, no prefetching; Adaptive-FAM = %s): Adaptive-FAM is %s%s" % (
             afam_label, "ON the Pareto front" if r["pareto"] else "NOT on the Pareto front",
             "" if r["pareto"] else " (dominated by %s)" % r["dominated_by"]))
+        for o in rows:
+            if o["method"] != "Adaptive-FAM" and o["paired_minus_afam_ms"] != "":
+                lines.append("Paired per view, %s minus Adaptive-FAM latency: median %+.3f ms; %s faster on %.0f%% of "
+                             "%s views (%s rounds; per-round medians %s %.2f-%.2f ms, Adaptive-FAM %.2f-%.2f ms)" % (
+                                 o["method"], o["paired_minus_afam_ms"], o["method"],
+                                 100 * o["frac_views_faster_than_afam"], o["views"], o["rounds"], o["method"],
+                                 o["latency_round_min_ms"], o["latency_round_max_ms"],
+                                 r["latency_round_min_ms"], r["latency_round_max_ms"]))
         lines.append("Pareto (error vs caching time, the representation-dependent term): Adaptive-FAM is %s" % (
             "ON the front" if r["pareto_caching"] else "NOT on the front (dominated by %s)" % r["caching_dominated_by"]))
     lines.append("")
@@ -327,7 +402,7 @@ def summary(out, size, wall):
             continue
     with open(os.path.join(out, "summary.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
-    print("\n".join(lines[:12]))
+    print("\n".join(lines[:14]))
     if bad:
         print("\n".join(bad), file=sys.stderr)
         sys.exit(1)
@@ -339,7 +414,7 @@ def check(out):
     expected = ["encoding/encoding.csv", "quality/quality.csv", "compressors/compressors_codec.csv",
                 "compressors/compressors_quality.csv", "compressors/compressors_vs_ratio.csv",
                 "latency/latency_summary.csv", "stability/stability.csv", "stability/seams.csv",
-                "quality/pareto_error_vs_latency.csv"]
+                "quality/pareto_error_vs_latency.csv", "latency/pareto_replays.csv"]
     bad = []
     for name in expected:
         path = os.path.join(out, name)

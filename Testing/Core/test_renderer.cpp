@@ -171,21 +171,15 @@ TEST(Renderer, GradientWithValueGivesTheSameImageWithFewerEvaluations) {
     EXPECT_EQ(differ, 0u) << "degree " << degree;
     EXPECT_GT(alpha, 1.f) << "degree " << degree;  // something was drawn
     // Count the evaluations: one per sample with gradientWithValue, more without.
-    unsigned together1 = 0, separate1 = 0;
-    fr.view.gradientWithValue = 1;
-    for (int y = 0; y < 40; y += 3)
-      for (int x = 0; x < 40; x += 3) {
-        unsigned c = 0;
-        castRayWith<true>(fr.view, SampleCounter<ModelSampler>{{}, &c}, x, y);
-        together1 += c;
-      }
-    fr.view.gradientWithValue = 0;
-    for (int y = 0; y < 40; y += 3)
-      for (int x = 0; x < 40; x += 3) {
-        unsigned c = 0;
-        castRayWith<true>(fr.view, SampleCounter<ModelSampler>{{}, &c}, x, y);
-        separate1 += c;
-      }
+    auto countSamples = [&](int32_t gradientWithValue) {
+      fr.view.gradientWithValue = gradientWithValue;
+      unsigned total = 0;
+      for (int y = 0; y < 40; y += 3)
+        for (int x = 0; x < 40; x += 3)
+          castRayWith<true>(fr.view, SampleCounter<ModelSampler>{{}, &total}, x, y);
+      return total;
+    };
+    const unsigned together1 = countSamples(1), separate1 = countSamples(0);
     EXPECT_EQ(together1, separate1) << "the counter counts ray samples either way";
     EXPECT_GT(together1, 100u);
   }

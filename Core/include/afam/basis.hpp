@@ -111,8 +111,8 @@ AFAM_HD int degree2KnotHalfUnits(const Knots& k, int i) {
 ///  * p = 2: every span, the clamped end spans included: with U = 2 u / h and the knots in units
 ///    of h/2 (integers K), N[0] = (K[s+1] - U)^2 / ((K[s+1] - K[s-1]) (K[s+1] - K[s])),
 ///    N[2] = (U - K[s])^2 / ((K[s+2] - K[s]) (K[s+1] - K[s])), N[1] = 1 - N[0] - N[2] (clamped at 0)
-///    (interior spans: both products are 8; the two spans at each clamped end: two reciprocals of
-///    small integers instead of the recurrence's loops and divisions);
+///    (interior spans: both products are 8; the two spans at each clamped end: 9 and 15, 10 and 8,
+///    chosen by selects; only ncp < 6, where the ends meet, divides);
 ///  * p = 3: spans whose 2p surrounding knots are all interior (the cardinal cubic).
 /// Returns false (and writes nothing) elsewhere; those take the Cox-de Boor recurrence.
 /// Agrees with it to rounding (tested).
@@ -122,7 +122,7 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const Real scale = Real(k.ncp - 1);  // 1 / h
   if (p == 2) {
     if (k.ncp < 3) return false;
-    int k1, k2;
+    const int k1 = degree2KnotHalfUnits(k, s), k2 = degree2KnotHalfUnits(k, s + 1);
     Real i0, i2;
     if (k.ncp >= 6) {
       // Selects only, no branch: interior spans (both knot products 8) and the two spans at each
@@ -135,12 +135,8 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
       const Real outer = e == 0 ? Real(1) / Real(15) : Real(0.125);
       i0 = e >= 2 ? Real(0.125) : (low ? inner : outer);
       i2 = e >= 2 ? Real(0.125) : (low ? outer : inner);
-      k1 = s <= 2 ? 0 : 2 * s - 3;
-      k2 = s + 1 >= k.ncp ? 2 * (k.ncp - 1) : 2 * s - 1;
-    } else {
+    } else {  // ncp 3..5: the ends meet, compute the products
       const int k0 = degree2KnotHalfUnits(k, s - 1), k3 = degree2KnotHalfUnits(k, s + 2);
-      k1 = degree2KnotHalfUnits(k, s);
-      k2 = degree2KnotHalfUnits(k, s + 1);
       i0 = Real(1) / Real((k2 - k0) * (k2 - k1));
       i2 = Real(1) / Real((k3 - k1) * (k2 - k1));
     }

@@ -122,7 +122,7 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
   const Real scale = Real(k.ncp - 1);  // 1 / h
   if (p == 2) {
     if (k.ncp < 3) return false;
-    const int k1 = degree2KnotHalfUnits(k, s), k2 = degree2KnotHalfUnits(k, s + 1);
+    int k1, k2;
     Real i0, i2;
     if (k.ncp >= 6) {
       // Selects only, no branch: interior spans (both knot products 8) and the two spans at each
@@ -135,8 +135,14 @@ AFAM_HD bool closedFormBasis(const Knots& k, int s, Real u, Real* N, Real* dN) {
       const Real outer = e == 0 ? Real(1) / Real(15) : Real(0.125);
       i0 = e >= 2 ? Real(0.125) : (low ? inner : outer);
       i2 = e >= 2 ? Real(0.125) : (low ? outer : inner);
-    } else {  // ncp 3..5: the ends meet, compute the products
+      // degree2KnotHalfUnits(s) and (s + 1) without the clamps that cannot apply (s <= ncp - 1):
+      // calling it instead cost 5 % on the H200 (view 200: 3.90 -> 4.10 ms).
+      k1 = s <= 2 ? 0 : 2 * s - 3;
+      k2 = s + 1 >= k.ncp ? 2 * (k.ncp - 1) : 2 * s - 1;
+    } else {
       const int k0 = degree2KnotHalfUnits(k, s - 1), k3 = degree2KnotHalfUnits(k, s + 2);
+      k1 = degree2KnotHalfUnits(k, s);
+      k2 = degree2KnotHalfUnits(k, s + 1);
       i0 = Real(1) / Real((k2 - k0) * (k2 - k1));
       i2 = Real(1) / Real((k3 - k1) * (k2 - k1));
     }

@@ -11,6 +11,11 @@
 #   --smoke  tiny sizes for CI (< 3 minutes on 2 cores)
 #   --small  the CPU report (default; < 30 minutes on a 2-core machine)
 #   --full   the paper-scale sizes (GPU machine / big hosts)
+# Environment: AFAM_DEVICE=cpu|gpu (ray caster of the replays and the quality renders; gpu builds
+# with CUDA), AFAM_JOBS (threads, default 2), AFAM_PYTHON (default /usr/bin/python3), AFAM_ML_N
+# (Marschner-Lobb size, overrides the size's default), AFAM_DATA (default ../shared/data),
+# AFAM_STORAGE_MBPS (emulated storage, default 100), AFAM_PARETO_REPS. On the GPU machine,
+# scripts/gpu_evaluate.sh runs the --full report this way.
 set -euo pipefail
 
 SIZE=small
@@ -28,12 +33,16 @@ OUT=$(mkdir -p "$1" && cd "$1" && pwd)
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 DATA=${AFAM_DATA:-$ROOT/../shared/data}
 BUILD=${AFAM_BUILD:-$ROOT/build-eval}
-PY=/usr/bin/python3
+PY=${AFAM_PYTHON:-/usr/bin/python3}
+DEVICE=${AFAM_DEVICE:-cpu}
 JOBS=${AFAM_JOBS:-2}
 
 if [[ ! -x $BUILD/Apps/afam || ! -x $BUILD/Apps/evaluation/afam_eval ]]; then
-  cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DAFAM_ENABLE_PARAVIEW=OFF -DAFAM_ENABLE_CUDA=OFF >/dev/null
-  cmake --build "$BUILD" -j"$JOBS" --target afam afam_eval >/dev/null
+  CUDA=OFF; [[ $DEVICE == gpu ]] && CUDA=ON
+  mkdir -p "$BUILD"
+  { cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DAFAM_ENABLE_PARAVIEW=OFF -DAFAM_ENABLE_CUDA=$CUDA &&
+    cmake --build "$BUILD" -j"$JOBS" --target afam afam_eval; } > "$BUILD/evaluate_build.log" 2>&1 ||
+    { tail -30 "$BUILD/evaluate_build.log" >&2; echo "evaluate.sh: build failed ($BUILD/evaluate_build.log)" >&2; exit 1; }
 fi
 AFAM=$BUILD/Apps/afam
 EVAL=$BUILD/Apps/evaluation/afam_eval
@@ -57,6 +66,7 @@ case $SIZE in
     SDS="0.01,0.005,0.0025,0.00125"; ZFP_RATES="0.25 0.5 1 2 4 8"; FPZIP_PRECS="4 6 8 12 16 20"
     QUALITY_BOUNDS="1e-3 1e-4"; REPLAY_IMG=512; REPLAY_SD=0.005; PARETO_REPS=3 ;;
 esac
+ML_N=${AFAM_ML_N:-$ML_N}
 LEVELS=4
 PARETO_REPS=${AFAM_PARETO_REPS:-$PARETO_REPS}
 # Replays run in the paper's regime: 200-model cache, OS page cache dropped before each point of
@@ -70,7 +80,8 @@ LOG=$OUT/commands.log
 {
   echo "# scripts/evaluate.sh --$SIZE $OUT"
   echo "# date: $(date -u +%FT%TZ)  host: $(uname -n)  git: $(cd "$ROOT" && git rev-parse --short HEAD 2>/dev/null || echo ?)"
-  echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')  cores: $(nproc)"
+  echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')  cores: $(nproc)  threads used: $JOBS"
+  echo "# device: $DEVICE$( [[ $DEVICE == gpu ]] && echo " ($(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1))")  ml: ${ML_N}^3"
 } >> "$LOG"
 
 # run CMD...: logs the command, runs it, logs its wall time; stdout goes to the caller.
@@ -129,7 +140,7 @@ QFILES=("DS=$W/ml_ds.afam" "FAM=$W/ml_fixed_n.afam")
 for b in $QUALITY_BOUNDS; do QFILES+=("Adaptive-FAM_$b=$W/ml_adaptive_$b.afam"); done
 QFILES+=("inlevel_${QUALITY_BOUNDS##* }=$W/ml_inlevel_${QUALITY_BOUNDS##* }.afam")
 mkdir -p "$OUT/images/quality"
-run "$EVAL" quality --trajectory "$TRAJ1" --view auto --size "$IMG" --sd "$SDS" --threads "$JOBS" \
+run "$EVAL" quality --trajectory "$TRAJ1" --view auto --size "$IMG" --sd "$SDS" --threads "$JOBS" --device "$DEVICE" \
   --csv "$OUT/quality/quality.csv" --images "$OUT/images/quality" "${QFILES[@]}" > "$W/quality.log"
 VIEW=$(awk -F, 'NR==2{print $4}' "$OUT/quality/quality.csv")
 run $PY "$ROOT/scripts/evaluation/report.py" quality "$OUT"
@@ -154,7 +165,7 @@ done
 AFILES=()
 for b in $BOUNDS; do AFILES+=("Adaptive-FAM_$b=$W/ml_adaptive_$b.afam"); done
 SD_MID=$(echo "$SDS" | cut -d, -f2)
-run "$EVAL" quality --trajectory "$TRAJ1" --view "$VIEW" --size "$IMG" --sd "$SD_MID" --threads "$JOBS" \
+run "$EVAL" quality --trajectory "$TRAJ1" --view "$VIEW" --size "$IMG" --sd "$SD_MID" --threads "$JOBS" --device "$DEVICE" \
   --csv "$OUT/compressors/compressors_quality.csv" --images "$OUT/images/quality" \
   "DS=$W/ml_ds.afam" "${AFILES[@]}" "${CFILES[@]}" > "$W/compressors.log"
 run $PY "$ROOT/scripts/evaluation/report.py" compressors "$OUT"
@@ -175,7 +186,7 @@ for traj in user_1 user_2; do
       csv=$OUT/latency/replay_${traj}_${meth}_${pf}.csv
       o=$(set -o pipefail; run "$AFAM" replay "$f" --trajectory "$DATA/trajectories/$traj.dat" --frames "$FRAMES" \
             --size "$REPLAY_IMG,$REPLAY_IMG" --sample-distance "$REPLAY_SD" --cache-blocks 200 \
-            --cold --storage-mbps "$STORAGE_MBPS" --prefetch "$pf" --threads "$JOBS" --quiet --csv "$csv" 2>&1 | tail -1) || {
+            --cold --storage-mbps "$STORAGE_MBPS" --prefetch "$pf" --threads "$JOBS" --device "$DEVICE" --quiet --csv "$csv" 2>&1 | tail -1) || {
         echo "# replay $traj $meth $pf failed: $o" >> "$LOG"; continue; }
       echo "$traj,$meth,$f,$pf,$(echo "$o" | kv median_latency_ms),$(echo "$o" | kv median_caching_ms),$(echo "$o" | kv median_render_ms),$(echo "$o" | kv miss_rate),$csv" >> "$LAT_CSV"
     done

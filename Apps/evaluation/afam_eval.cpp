@@ -2,10 +2,13 @@
 // afam_eval: the measurement programs behind scripts/evaluate.sh (issue 8) that the `afam`
 // command line does not cover. Every sub-command writes one CSV.
 //
-//   afam_eval quality  --trajectory T --view I|auto --size N --sd a,b,.. --csv OUT LABEL=FILE...
+//   afam_eval quality  --trajectory T --view I|auto --size N --sd a,b,.. --csv OUT
+//                      [--device cpu|gpu] LABEL=FILE...
 //       image MSE/PSNR/SSIM against the analytic Marschner-Lobb ray cast, and frame time, per
 //       file and sample distance, at one view (auto: the first view whose visible cut holds
-//       blocks of every level: the paper's cross-level view).
+//       blocks of every level: the paper's cross-level view). --device gpu times the CUDA ray
+//       caster (the ground truth stays the CPU's analytic cast); the CSV's last column says which
+//       device rendered each row.
 //   afam_eval compress --codec zfp|fpzip --param X DS.afam OUT.afam
 //       ZFP (fixed rate, bits/value) or fpzip (precision bits) over the DS file's micro-blocks
 //       without their ghost layer; decompressed on load into a DS file (ghost layer re-made by
@@ -38,6 +41,7 @@
 #include "afam/marschner_lobb.hpp"
 #include "afam/png_io.hpp"
 #include "afam/renderer.hpp"
+#include "gpu_device.hpp"
 
 #ifdef AFAM_EVAL_HAVE_ZFP
 #include <zfp.h>
@@ -107,6 +111,7 @@ int runQuality(const Opts& o) {
   const int size = std::atoi(o.str("size", "128").c_str());
   const int threads = std::atoi(o.str("threads", "0").c_str());
   const int repeats = std::max(1, std::atoi(o.str("repeats", "2").c_str()));
+  const std::string device = o.str("device", "cpu");
   std::vector<double> sds;
   for (const auto& s : split(o.str("sd", "0.005"), ',')) sds.push_back(std::atof(s.c_str()));
   if (o.pos.empty()) throw std::runtime_error("quality: no LABEL=FILE given");
@@ -132,7 +137,7 @@ int runQuality(const Opts& o) {
   if (!csv) throw std::runtime_error("cannot write " + o.str("csv"));
   std::fprintf(csv,
                "label,file,mode,view,levels_visible,sample_distance,blocks,payload_bytes,file_payload_bytes,raw_block_bytes,ratio,"
-               "caching_ms,render_ms,mse,psnr,ssim\n");
+               "caching_ms,render_ms,mse,psnr,ssim,device\n");
   const std::string imgDir = o.str("images");
   for (double sd : sds) {
     RenderOptions ro;
@@ -158,6 +163,7 @@ int runQuality(const Opts& o) {
         rawBlocks += uint64_t(e.samples[0]) * uint64_t(e.samples[1]) * uint64_t(e.samples[2]) * 4u;
       }
       Renderer r(file, ro);
+      const cli::DeviceChoice dev = cli::useDevice(r, device, 4096);
       FrameStats st;
       ImageRGBA img = r.renderFrame(cam, st);  // cold: loads the models
       const double caching = st.cachingMs;
@@ -171,11 +177,11 @@ int runQuality(const Opts& o) {
       if (!imgDir.empty()) writePng(imgDir + "/" + lf.first + "_sd" + std::to_string(sd) + ".png", rgb);
       const ImageErrors e = compare(rgb, gtRgb);
       const int lv = levelsVisible(r.select(cam), file->header().levels);
-      std::fprintf(csv, "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%llu,%.4f,%.4f,%.4f,%.8g,%.6f,%.6f\n", lf.first.c_str(),
+      std::fprintf(csv, "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%llu,%.4f,%.4f,%.4f,%.8g,%.6f,%.6f,%s\n", lf.first.c_str(),
                    lf.second.c_str(), modeName(file->header().mode), view, lv, sd, (long long)st.slots,
                    (unsigned long long)st.poolBytes, (unsigned long long)filePayload,
                    (unsigned long long)rawBlocks, double(rawBlocks) / double(std::max<uint64_t>(filePayload, 1)), caching, best, e.mse,
-                   e.psnr, e.ssim);
+                   e.psnr, e.ssim, dev.used.c_str());
       std::fflush(csv);
       std::printf("%s sd=%g view=%d levels=%d render_ms=%.2f psnr=%.3f ssim=%.4f\n", lf.first.c_str(), sd,
                   view, lv, best, e.psnr, e.ssim);

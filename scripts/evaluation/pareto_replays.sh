@@ -7,7 +7,7 @@
 #   scripts/evaluation/pareto_replays.sh AFAM OUTCSV_DIR TRAJ_DIR FRAMES IMG SD MBPS THREADS REPS \
 #       DS=ds.afam FAM=fam.afam Adaptive-FAM=adaptive.afam
 # Writes OUTCSV_DIR/pareto_replays.csv (one row per replay) and OUTCSV_DIR/pareto/*.csv (one row
-# per point of view); report.py pools the points of view of every round (medians, paired
+# per point of view); AFAM_DEVICE=gpu replays on the CUDA ray caster. report.py pools the points of view of every round (medians, paired
 # per-view differences).
 set -euo pipefail
 AFAM=$1 DIR=$2 TRAJ=$3 FRAMES=$4 IMG=$5 SD=$6 MBPS=$7 THREADS=$8 REPS=$9
@@ -27,7 +27,7 @@ for ((r = 1; r <= REPS; r++)); do
       csv=$DIR/pareto/replay_${traj}_${meth}_r$r.csv
       o=$("$AFAM" replay "$f" --trajectory "$TRAJ/$traj.dat" --frames "$FRAMES" --size "$IMG,$IMG" \
             --sample-distance "$SD" --cache-blocks 200 --cold --storage-mbps "$MBPS" --prefetch none \
-            --threads "$THREADS" --quiet --csv "$csv" 2>&1 | tail -1)
+            --threads "$THREADS" --device "${AFAM_DEVICE:-cpu}" --quiet --csv "$csv" 2>&1 | tail -1)
       echo "$r,$s,$traj,$meth,$f,$(echo "$o" | kv median_latency_ms),$(echo "$o" | kv median_caching_ms),$(echo "$o" | kv median_render_ms),$(echo "$o" | kv miss_rate),$csv" >> "$SUM"
     done
   done

@@ -91,7 +91,7 @@ run() {
   t0=$(date +%s.%N)
   "$@" || rc=$?
   t1=$(date +%s.%N)
-  echo "#   wall_s=$(echo "$t1 - $t0" | bc) rc=$rc" >> "$LOG"
+  echo "#   wall_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.3f", b - a}') rc=$rc" >> "$LOG"
   return $rc
 }
 stamp() { echo "[$(date +%T)] $*" >&2; }
@@ -115,7 +115,8 @@ encode_one() {  # VOLUME_LABEL RAW MODE BOUND REL NCP OUTFILE [extra args]
   e=$(run "$AFAM" "${args[@]}" 2>/dev/null)
   v=$(run "$AFAM" verify "$out" --against "$raw" "$@" 2>/dev/null)
   local range
-  range=$(echo "$e" | grep -o 'value_range=\[[^]]*\]' | sed 's/value_range=\[\(.*\), \(.*\)\]/\2-(\1)/' | bc -l 2>/dev/null || echo nan)
+  range=$(echo "$e" | grep -o 'value_range=\[[^]]*\]' | sed 's/value_range=\[\(.*\), \(.*\)\]/\1 \2/' |
+          awk 'NF == 2 {printf "%.9g", $2 - $1; next} {printf "nan"}')
   echo "$label,$mode,$bound,$rel,$ncp,$(echo "$e" | kv seconds),$(echo "$e" | kv fits),$(echo "$e" | kv bytes_in),$(echo "$e" | kv bytes_out),$(echo "$e" | kv ratio_float32),$(echo "$v" | kv rmse),$(echo "$v" | kv max_error),$range" >> "$ENC_CSV"
 }
 for b in $BOUNDS; do

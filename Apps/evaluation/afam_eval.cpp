@@ -432,12 +432,13 @@ int runStability(const Opts& o) {
   if (!chi.empty()) {
     std::ifstream in(chi, std::ios::binary);
     std::vector<float> d(size_t(50) * 50 * 50);
+    if (!in) throw std::runtime_error("stability: cannot open --chi file " + chi);
     in.read(reinterpret_cast<char*>(d.data()), std::streamsize(d.size() * 4));
-    if (in) {
-      cases.push_back({"chi_field_ncp25", {50, 50, 50}, 25, 2, d});
-      cases.push_back({"chi_field_ncp_eq_n", {50, 50, 50}, 50, 2, d});
-      cases.push_back({"chi_field_ncp_eq_n_p3", {50, 50, 50}, 50, 3, d});
-    }
+    if (!in)
+      throw std::runtime_error("stability: --chi file " + chi + " holds fewer than 50^3 float32 values");
+    cases.push_back({"chi_field_ncp25", {50, 50, 50}, 25, 2, d});
+    cases.push_back({"chi_field_ncp_eq_n", {50, 50, 50}, 50, 2, d});
+    cases.push_back({"chi_field_ncp_eq_n_p3", {50, 50, 50}, 50, 3, d});
   }
   for (const auto& c : cases) stabilityRow(csv, fitter, c);
   std::fclose(csv);

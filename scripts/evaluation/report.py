@@ -350,6 +350,11 @@ def pareto(out):
 def summary(out, size, wall):
     rows, afam_label = pareto(out)
     lines = ["# Evaluation summary (%s, wall %s s)" % (size, wall), ""]
+    log = os.path.join(out, "commands.log")
+    if os.path.exists(log):  # the run's header: command, date, host, git, CPU, device, sizes
+        with open(log) as f:
+            head = [l.rstrip("\n") for l in f if l.startswith("# ") and not l.startswith("#   ")]
+        lines += ["    " + l[2:] for l in head[:5]] + [""]
     af = [r for r in rows if r["method"] == "Adaptive-FAM"]
     if af:
         r = af[0]

@@ -49,6 +49,12 @@ def commands(out, words):
 
 
 def save(fig, png, out, words):
+    # Log axes: plain numbers at the decades only (minor labels like 3x10^0 overlap).
+    for ax in fig.axes:
+        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
+            if scale == "log":
+                axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+                axis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%g"))
     fig.tight_layout()
     fig.savefig(png, dpi=80)
     plt.close(fig)
@@ -57,7 +63,7 @@ def save(fig, png, out, words):
         f.write("# commands that produced %s and its CSV (see commands.log for all)\n" % os.path.basename(png))
         for line in commands(out, words):
             f.write(line + "\n")
-        f.write(" ".join(["/usr/bin/python3"] + sys.argv) + "\n")
+        f.write(" ".join([os.path.basename(sys.executable)] + sys.argv) + "\n")
 
 
 def encoding(out):

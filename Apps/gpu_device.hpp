@@ -49,6 +49,7 @@ inline DeviceChoice useDevice(Renderer& renderer, const std::string& device, lon
   choice.description = gpu.description;
   choice.state = gpu.gpu;
 #else
+  (void)renderer;
   std::fprintf(stderr, "afam: --device gpu: this build has no CUDA support; rendering on the CPU\n");
 #endif
   return choice;

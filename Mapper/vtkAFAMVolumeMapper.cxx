@@ -22,6 +22,7 @@
 #include "vtk_glew.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -99,8 +100,8 @@ bool vtkAFAMVolumeMapper::HasCudaRenderer()
   return vtkAFAMCoreRenderer::HasCuda();
 }
 
-bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double center[3],
-  const double half[3], const double eyeN[3], int width, int height, std::vector<float>& limits)
+bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double toFrame[12],
+  const afam::Camera& camera, int width, int height, std::vector<float>& limits)
 {
   int w = 0, h = 0, x0 = 0, y0 = 0;
   ren->GetTiledSizeAndOrigin(&w, &h, &x0, &y0);
@@ -116,12 +117,19 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double center[
     return false;
   }
   // Window depth -> world point: inverse of the camera's composite projection (NDC z in [-1, 1]),
-  // which linearises the perspective depth exactly; -> normalised frame -> distance from the eye.
+  // which linearises the perspective depth exactly; -> normalised frame -> ray parameter t:
+  // perspective, the distance from the eye; parallel, (p - eye).n / (d.n) with n the image
+  // plane's normal and d the unit view direction (every ray starts on the eye plane).
   vtkNew<vtkMatrix4x4> inverse;
   vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
                          ren->GetTiledAspectRatio(), -1, 1),
     inverse);
   const double* m = inverse->GetData();
+  const afam::Vec3& e = camera.eye;
+  const afam::Vec3 &r = camera.right, &u = camera.up, &f = camera.forward;
+  afam::Vec3 n{ r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2], r[0] * u[1] - r[1] * u[0] };
+  const double fLength = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+  const double dn = (f[0] * n[0] + f[1] * n[1] + f[2] * n[2]) / fLength;
   limits.assign(depth.size(), std::numeric_limits<float>::infinity());
   bool any = false;
   for (int y = 0; y < height; ++y) // y = 0: bottom row (OpenGL)
@@ -145,13 +153,16 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double center[
       {
         continue;
       }
-      double t2 = 0;
+      const double w[3] = { p[0] / p[3], p[1] / p[3], p[2] / p[3] };
+      double q[3]; // normalised frame, relative to the eye
       for (int a = 0; a < 3; ++a)
       {
-        const double d = (p[a] / p[3] - center[a]) / half[a] - eyeN[a];
-        t2 += d * d;
+        q[a] = toFrame[4 * a] * w[0] + toFrame[4 * a + 1] * w[1] + toFrame[4 * a + 2] * w[2] +
+          toFrame[4 * a + 3] - e[a];
       }
-      row[x] = static_cast<float>(std::sqrt(t2));
+      row[x] = static_cast<float>(camera.parallel
+          ? (q[0] * n[0] + q[1] * n[1] + q[2] * n[2]) / dn
+          : std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]));
       any = true;
     }
   }
@@ -204,11 +215,6 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     vtkErrorMacro(<< "needs an OpenGL render window, an active camera and a volume property");
     return;
   }
-  if (cam->GetParallelProjection())
-  {
-    vtkErrorMacro(<< "parallel projection is not supported by the Adaptive-FAM renderer");
-    return;
-  }
   const int* size = ren->GetSize();
   const int width = size[0], height = size[1];
   if (width < 1 || height < 1)
@@ -216,7 +222,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
 
-  // World -> normalised frame: the volume's box maps to [-1, 1]^3, each axis on its own (paper).
+  // World -> normalised frame: the inverse of the vtkVolume's matrix takes the world to the data,
+  // then the data box maps to [-1, 1]^3, each axis on its own (paper).
   double* b = this->GetBounds();
   double center[3], half[3];
   for (int a = 0; a < 3; ++a)
@@ -228,32 +235,49 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       half[a] = 1;
     }
   }
-  const double meanHalf = (half[0] + half[1] + half[2]) / 3.0;
-  double pos[3], focal[3], up[3];
+  vtkNew<vtkMatrix4x4> toData;
+  vtkMatrix4x4::Invert(vol->GetMatrix(), toData);
+  double toFrame[12];
+  std::array<double, 9> linear;
+  afam::Vec3 offset;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      toFrame[4 * r + c] = (toData->GetElement(r, c) - (c == 3 ? center[r] : 0.0)) / half[r];
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      linear[static_cast<size_t>(3 * r + c)] = toFrame[4 * r + c];
+    }
+    offset[static_cast<size_t>(r)] = toFrame[4 * r + 3];
+  }
+  double pos[3], focal[3], up[3], clip[2];
   cam->GetPosition(pos);
   cam->GetFocalPoint(focal);
   cam->GetViewUp(up);
-  afam::Vec3 eyeN, focalN, upN;
-  for (int a = 0; a < 3; ++a)
-  {
-    eyeN[a] = (pos[a] - center[a]) / half[a];
-    focalN[a] = (focal[a] - center[a]) / half[a];
-    upN[a] = up[a] / half[a];
-  }
+  cam->GetClippingRange(clip);
 
   vtkAFAMFrameRequest request;
   try
   {
-    request.Camera = afam::Camera::lookAt(eyeN, focalN, upN, cam->GetViewAngle(), width, height);
+    const afam::Vec3 eyeW{ pos[0], pos[1], pos[2] }, focalW{ focal[0], focal[1], focal[2] },
+      upW{ up[0], up[1], up[2] };
+    afam::Camera world = cam->GetParallelProjection()
+      ? afam::Camera::parallelLookAt(eyeW, focalW, upW, cam->GetParallelScale(), width, height)
+      : afam::Camera::lookAt(eyeW, focalW, upW, cam->GetViewAngle(), width, height);
+    world.nearDistance = std::max(0.0, clip[0]);
+    request.Camera = world.mapped(linear, offset);
+    request.Camera.nearDistance = std::max(1e-4, request.Camera.nearDistance);
   }
   catch (const std::exception& e)
   {
     vtkErrorMacro(<< e.what());
     return;
   }
-  double clip[2];
-  cam->GetClippingRange(clip);
-  request.Camera.nearDistance = std::max(1e-4, clip[0] / meanHalf);
+  // World lengths -> normalised-frame lengths (Camera::mapped's lengthUnit; the step metric keeps
+  // steps and opacities right in every direction when the map stretches axes differently).
+  const double lengthUnit = request.Camera.lengthUnit;
 
   // Transfer functions and shading from the volume property (component 0).
   if (vtkColorTransferFunction* ctf = property->GetRGBTransferFunction(0))
@@ -275,10 +299,10 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     }
   }
   const double unitDistance = property->GetScalarOpacityUnitDistance(0);
-  request.Transfer.referenceDistance = std::max(1e-6, unitDistance / meanHalf);
+  request.Transfer.referenceDistance = std::max(1e-6, unitDistance / lengthUnit);
   request.Shading = property->GetShade(0) != 0;
   const double sampleWorld = this->SampleDistance > 0 ? this->SampleDistance : 0.5 * unitDistance;
-  request.SampleDistance = sampleWorld / meanHalf;
+  request.SampleDistance = sampleWorld / lengthUnit;
   request.LodPolicy = this->LodPolicy;
   request.CacheBudgetMB = this->CacheBudgetMB;
   request.Prefetcher = this->Prefetcher;
@@ -290,8 +314,7 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   this->LastDepthLimitedPixels = 0;
   if (this->DepthCompositing)
   {
-    const double eye[3] = { eyeN[0], eyeN[1], eyeN[2] };
-    if (this->ReadDepthLimits(ren, center, half, eye, width, height, limits))
+    if (this->ReadDepthLimits(ren, toFrame, request.Camera, width, height, limits))
     {
       request.MaxDistance = limits.data();
       this->LastDepthLimitedPixels = static_cast<vtkTypeInt64>(std::count_if(limits.begin(),

@@ -11,6 +11,13 @@
  * transfer functions, shading and sample distance to Core's types, asks Core for an RGBA image of
  * the viewport size and blends it (premultiplied alpha) over what the render window holds.
  *
+ * Placement: the camera (perspective or parallel projection) is mapped from the world through
+ * the inverse of the vtkVolume's matrix (position, orientation, scale, origin, user matrix) into
+ * the data, then each axis of the data box onto [-1, 1] (the paper's normalised frame). Every
+ * pixel's ray lands on the world ray it stands for, also for non-cubic volumes and non-uniform
+ * scales; steps are SampleDistance long in the world in every direction, and opacity follows
+ * the property's ScalarOpacityUnitDistance in world units.
+ *
  * Depth compositing: before casting, the mapper reads the viewport's z-buffer (the opaque geometry
  * VTK has drawn), converts every pixel's window depth back to the distance along that pixel's ray
  * (inverse of the camera's composite projection: perspective depth linearised) and hands Core a
@@ -31,6 +38,10 @@
 #include <vector> // for std::vector
 
 class vtkAFAMCoreRenderer;
+namespace afam
+{
+struct Camera;
+}
 
 class VTKAFAM_EXPORT vtkAFAMVolumeMapper : public vtkVolumeMapper
 {
@@ -137,8 +148,10 @@ protected:
   bool EnsureOpen();
   /// Per-pixel ray length limits (normalised frame, row 0 = top) from the viewport's z-buffer;
   /// false when no pixel holds opaque geometry (or the z-buffer cannot be read).
-  bool ReadDepthLimits(vtkRenderer* ren, const double center[3], const double half[3],
-    const double eyeN[3], int width, int height, std::vector<float>& limits);
+  /// toFrame: world -> normalised frame (row-major 3x4, linear part then offset column);
+  /// camera: the mapped camera the rays come from.
+  bool ReadDepthLimits(vtkRenderer* ren, const double toFrame[12], const afam::Camera& camera,
+    int width, int height, std::vector<float>& limits);
 
   char* FileName = nullptr;
   int LodPolicy = 0;

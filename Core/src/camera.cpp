@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -62,6 +63,56 @@ Camera Camera::lookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp, do
   return c;
 }
 
+Camera Camera::parallelLookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp,
+                              double parallelScale, int width, int height) {
+  if (!(parallelScale > 0) || !std::isfinite(parallelScale))
+    throw InvalidArgument("camera: parallel scale must be positive and finite");
+  Camera c = lookAt(eye, focal, viewUp, 30.0, width, height);
+  c.parallel = true;
+  c.tanHalfY = parallelScale;
+  c.tanHalfX = parallelScale * double(width) / double(height);
+  return c;
+}
+
+Camera Camera::mapped(const std::array<double, 9>& m, const Vec3& offset) const {
+  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                     m[2] * (m[3] * m[7] - m[4] * m[6]);
+  bool finite = std::isfinite(det);
+  for (double x : offset) finite = finite && std::isfinite(x);
+  if (!finite || !(std::abs(det) > 1e-300))
+    throw InvalidArgument("camera: the map into the normalised frame is singular or not finite");
+  auto apply = [&](const Vec3& v) {
+    return Vec3{m[0] * v[0] + m[1] * v[1] + m[2] * v[2], m[3] * v[0] + m[4] * v[1] + m[5] * v[2],
+                m[6] * v[0] + m[7] * v[1] + m[8] * v[2]};
+  };
+  Camera c = *this;
+  c.eye = apply(eye);
+  for (int a = 0; a < 3; ++a) c.eye[a] += offset[a];
+  c.right = apply(right);
+  c.up = apply(up);
+  c.forward = apply(forward);
+  const double forwardLength = std::sqrt(dot(forward, forward));
+  c.nearDistance = nearDistance * std::sqrt(dot(c.forward, c.forward)) / forwardLength;
+  // Inverse (normalised -> world) by cofactors, scaled to unit volume scale.
+  std::array<double, 9> inv{(m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
+                            (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det,
+                            (m[0] * m[8] - m[2] * m[6]) / det, (m[2] * m[3] - m[0] * m[5]) / det,
+                            (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
+                            (m[0] * m[4] - m[1] * m[3]) / det};
+  c.lengthUnit = std::cbrt(1.0 / std::abs(det));
+  for (double& x : inv) x /= c.lengthUnit;
+  // A similarity (scaled rotation) leaves lengths alone: inv^T inv = I.
+  double offIdentity = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double g = inv[i] * inv[j] + inv[3 + i] * inv[3 + j] + inv[6 + i] * inv[6 + j];
+      offIdentity = std::max(offIdentity, std::abs(g - (i == j ? 1.0 : 0.0)));
+    }
+  c.hasStepMetric = offIdentity > 1e-9;
+  c.stepMetric = c.hasStepMetric ? inv : std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  return c;
+}
+
 void Camera::orthonormalize() {
   if (!normalize(forward)) forward = {0, 0, -1};
   right = cross(forward, up);
@@ -86,6 +137,9 @@ RayCamera Camera::toRayCamera() const {
   r.nearDistance = float(nearDistance);
   r.width = width;
   r.height = height;
+  r.parallel = parallel ? 1 : 0;
+  r.hasStepMetric = hasStepMetric ? 1 : 0;
+  for (int i = 0; i < 9; ++i) r.stepMetric[i] = float(stepMetric[size_t(i)]);
   return r;
 }
 

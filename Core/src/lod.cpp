@@ -43,12 +43,19 @@ int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Cam
     d2 += q * q;
   }
   const double d = std::sqrt(d2);
-  if (d <= 0) return level + 1;  // eye inside: refine
+  if (d <= 0 && !c.parallel) return level + 1;  // eye inside: refine
   double voxel = 0;
   for (int a = 0; a < 3; ++a)
     if (p.dims()[a] > 1) voxel = std::max(voxel, 2.0 / double(p.dims()[a] - 1));
   const double spacing = voxel * double(p.stride(level));
-  const double pixels = spacing / (d * c.tanHalfY) * (0.5 * c.height);
+  // Half the view's height at the block: parallel, tanHalfY |up|; perspective, at distance d
+  // along a ray, d tanHalfY |up| / |forward| (both |.| = 1 unless the camera was mapped()).
+  const double upLength = std::sqrt(c.up[0] * c.up[0] + c.up[1] * c.up[1] + c.up[2] * c.up[2]);
+  const double forwardLength =
+      std::sqrt(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] + c.forward[2] * c.forward[2]);
+  const double halfHeight =
+      c.parallel ? c.tanHalfY * upLength : d * c.tanHalfY * upLength / forwardLength;
+  const double pixels = spacing / halfHeight * (0.5 * c.height);
   return pixels > options_.pixelBudget ? level + 1 : level;
 }
 
@@ -72,26 +79,61 @@ std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera)
   return out;
 }
 
+namespace {
+using V3 = std::array<double, 3>;
+V3 crossOf(const V3& a, const V3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double dotOf(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 combine(const V3& a, double s, const V3& b) { return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]}; }
+/// n, flipped if needed so that n.inside > 0.
+V3 toward(V3 n, const V3& inside) {
+  if (dotOf(n, inside) < 0)
+    for (double& x : n) x = -x;
+  return n;
+}
+}  // namespace
+
 bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const double hi[3]) {
-  // Planes through the eye with inward normals: n.(x - eye) >= 0 inside.
-  //   left/right: forward * tanHalfX +- right; bottom/top: forward * tanHalfY +- up; near: forward.
-  double planes[5][3];
-  for (int a = 0; a < 3; ++a) {
-    planes[0][a] = c.forward[a] * c.tanHalfX + c.right[a];
-    planes[1][a] = c.forward[a] * c.tanHalfX - c.right[a];
-    planes[2][a] = c.forward[a] * c.tanHalfY + c.up[a];
-    planes[3][a] = c.forward[a] * c.tanHalfY - c.up[a];
-    planes[4][a] = c.forward[a];
+  // Five planes with inward normals n through points q: n.(x - q) >= 0 inside. Each side plane is
+  // spanned by an edge direction of the frustum and a frame vector, so the normals come from cross
+  // products and hold for a mapped (non-orthonormal) frame too. For an orthonormal perspective
+  // frame they are forward * tanHalf +- right / up; near: forward.
+  const V3 f = c.forward, r = c.right, u = c.up, e = c.eye;
+  V3 n[5], q[5];
+  if (!c.parallel) {
+    n[0] = toward(crossOf(u, combine(f, -c.tanHalfX, r)), f);  // left: edge f - tx r, spans u
+    n[1] = toward(crossOf(u, combine(f, c.tanHalfX, r)), f);   // right
+    n[2] = toward(crossOf(r, combine(f, -c.tanHalfY, u)), f);  // bottom
+    n[3] = toward(crossOf(r, combine(f, c.tanHalfY, u)), f);   // top
+    for (int k = 0; k < 4; ++k) q[k] = e;
+  } else {
+    const V3 nx = crossOf(u, f), ny = crossOf(r, f);  // normals of the side planes' pairs
+    n[0] = toward(nx, r);
+    q[0] = combine(e, -c.tanHalfX, r);
+    n[1] = toward(nx, combine(V3{0, 0, 0}, -1, r));
+    q[1] = combine(e, c.tanHalfX, r);
+    n[2] = toward(ny, u);
+    q[2] = combine(e, -c.tanHalfY, u);
+    n[3] = toward(ny, combine(V3{0, 0, 0}, -1, u));
+    q[3] = combine(e, c.tanHalfY, u);
   }
+  // Near plane: parallel to the image plane (spanned by right and up), nearDistance along the
+  // unit view direction from the eye.
+  V3 nn = toward(crossOf(r, u), f);
+  const double nnLength = std::sqrt(dotOf(nn, nn));
+  for (double& x : nn) x /= nnLength;
+  const double fLength = std::sqrt(dotOf(f, f));
+  n[4] = nn;
+  q[4] = combine(e, c.nearDistance / fLength, f);
   for (int k = 0; k < 5; ++k) {
     // The box corner farthest along the normal (p-vertex); if even it is outside, the box is.
     double s = 0;
     for (int a = 0; a < 3; ++a) {
-      const double v = planes[k][a] >= 0 ? hi[a] : lo[a];
-      s += planes[k][a] * (v - c.eye[a]);
+      const double v = n[k][a] >= 0 ? hi[a] : lo[a];
+      s += n[k][a] * (v - q[k][a]);
     }
-    const double eps = 1e-9;
-    if (k == 4 ? s < c.nearDistance - eps : s < -eps) return true;
+    if (s < -1e-9) return true;
   }
   return false;
 }

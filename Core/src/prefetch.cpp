@@ -14,8 +14,11 @@ bool LinearPredictor::predict(const std::vector<Camera>& h, Camera& next) const 
     next.eye[i] = 2 * b.eye[i] - a.eye[i];
     next.forward[i] = 2 * b.forward[i] - a.forward[i];
     next.up[i] = 2 * b.up[i] - a.up[i];
+    next.right[i] = 2 * b.right[i] - a.right[i];
   }
-  next.orthonormalize();
+  // An orthonormal frame stays one; a mapped frame (Camera::mapped: lengths and angles carry the
+  // world-to-normalised map, and a parallel view's size) keeps its extrapolated vectors.
+  if (!next.hasStepMetric && !next.parallel && b.lengthUnit == 1) next.orthonormalize();
   return true;
 }
 

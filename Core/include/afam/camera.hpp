@@ -27,15 +27,27 @@ struct Pose {
   double distance = 1.5, thetaDeg = 0, phiDeg = 0;
 };
 
-/// Pinhole camera with an explicit orthonormal frame in the normalised frame.
+/// Pinhole (or orthographic) camera with an explicit frame in the normalised frame: orthonormal
+/// for the trajectory and look-at cameras; after mapped(), the images of the world's unit vectors.
 struct Camera {
   Vec3 eye{0, 0, 5};
   Vec3 right{1, 0, 0};
   Vec3 up{0, 1, 0};
   Vec3 forward{0, 0, -1};
+  /// Perspective: tan of half the view angles. Parallel: half the view's width / height in units
+  /// of |right| / |up|.
   double tanHalfX = 0.125, tanHalfY = 0.125;
   double nearDistance = 0.01;  ///< rays start no closer to the eye (near plane inside the volume)
   int width = 256, height = 256;
+  bool parallel = false;  ///< orthographic projection (rays along forward)
+  /// Set by mapped() when the map is not a similarity: a ray's step is sampleDistance divided by
+  /// |stepMetric d| (row-major), the world length of unit normalised direction d in units of
+  /// lengthUnit, so that steps are equally long in the world in every direction.
+  bool hasStepMetric = false;
+  std::array<double, 9> stepMetric{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  /// World length of one normalised-frame unit (the cube root of the map's volume scale) after
+  /// mapped(); 1 otherwise. Sample and opacity distances given in the world divide by it.
+  double lengthUnit = 1;
 
   /// The authors' camera for a recorded pose (tanHalf = 1/8 on both axes, any image size).
   static Camera fromPose(const Pose& pose, int width, int height);
@@ -43,6 +55,18 @@ struct Camera {
   /// the aspect ratio. Throws InvalidArgument when eye == focal or up is parallel to the view.
   static Camera lookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp, double viewAngleDeg,
                        int width, int height);
+  /// Orthographic look-at camera; parallelScale is half the view's height (VTK's
+  /// ParallelScale), the width follows the aspect ratio. Throws as lookAt, and for
+  /// parallelScale <= 0.
+  static Camera parallelLookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp,
+                               double parallelScale, int width, int height);
+  /// This camera (given in the world) seen in the frame x' = linear x + offset (row-major 3x3,
+  /// invertible): every pixel's ray maps onto the same points. The eye is mapped, the frame
+  /// vectors are multiplied by `linear` (no longer unit or orthogonal unless it is a similarity),
+  /// nearDistance becomes the mapped length along the view direction; stepMetric, hasStepMetric
+  /// and lengthUnit describe the map (see above). Throws InvalidArgument for a singular or
+  /// non-finite map.
+  Camera mapped(const std::array<double, 9>& linear, const Vec3& offset) const;
   /// The trivially copyable form castRay uses.
   RayCamera toRayCamera() const;
   /// Re-orthonormalises right/up against forward (after extrapolation, for example).

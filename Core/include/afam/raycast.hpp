@@ -108,15 +108,26 @@ struct FrameSlot {
 };
 
 /// Camera of one frame in the normalised frame. Trivially copyable.
+/// right/up/forward are unit and orthonormal for the trajectory cameras; a camera mapped from
+/// the world into the normalised frame (Camera::mapped: a non-cubic volume, a transformed
+/// vtkVolume) keeps the images of the world's unit vectors, which need not be either.
 struct RayCamera {
   float eye[3] = {0.f, 0.f, 5.f};
-  float right[3] = {1.f, 0.f, 0.f};     ///< unit
-  float up[3] = {0.f, 1.f, 0.f};        ///< unit
-  float forward[3] = {0.f, 0.f, -1.f};  ///< unit, viewing direction
-  float tanHalfX = 0.125f;  ///< tan of half the horizontal view angle (authors: 1/8)
-  float tanHalfY = 0.125f;  ///< tan of half the vertical view angle
-  float nearDistance = 1e-3f;  ///< rays start no closer than this to the eye
+  float right[3] = {1.f, 0.f, 0.f};
+  float up[3] = {0.f, 1.f, 0.f};
+  float forward[3] = {0.f, 0.f, -1.f};  ///< viewing direction
+  /// Perspective: tan of half the horizontal / vertical view angle (authors: 1/8). Parallel:
+  /// half the view's width / height in units of |right| / |up|.
+  float tanHalfX = 0.125f;
+  float tanHalfY = 0.125f;
+  float nearDistance = 1e-3f;  ///< rays start no closer than this to the eye (parallel: eye plane)
   int width = 1, height = 1;
+  int32_t parallel = 0;  ///< 1: orthographic, every ray along forward from its own origin
+  /// 1: a ray's step is sampleDistance / |stepMetric d| (row-major 3x3), so that every step
+  /// covers the same length in the world however the frame stretches it; 0: steps of
+  /// sampleDistance (the normalised frame is the world up to a similarity).
+  int32_t hasStepMetric = 0;
+  float stepMetric[9] = {1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f};
 };
 
 /// Everything a ray needs for one frame. Trivially copyable; all pointers are non-owning and
@@ -158,7 +169,8 @@ struct FrameView {
   /// again only where the transfer function gives opacity (best for sparse transfer functions).
   int32_t gradientWithValue = 1;
 
-  // Opaque geometry (optional): per pixel, the largest ray distance t from the eye (normalised
+  // Opaque geometry (optional): per pixel, the largest ray distance t from the ray's origin (the
+  // eye; parallel projection: the pixel's point on the eye plane; normalised
   // units, camera.width * camera.height floats, row 0 = top) at which samples are still taken;
   // a ray stops where an opaque surface is. nullptr (default): no limit, no cost.
   const float* maxDistance = nullptr;
@@ -191,6 +203,36 @@ AFAM_HD void rayDirection(const RayCamera& c, int px, int py, float* d) {
   d[0] = x * inv;
   d[1] = y * inv;
   d[2] = z * inv;
+}
+
+/// Ray of pixel (px, py), py = 0 the top row: origin o and unit direction d. Perspective: o is
+/// the eye, d as rayDirection. Parallel: d = forward / |forward|, o on the eye plane.
+AFAM_HD void pixelRay(const RayCamera& c, int px, int py, float* o, float* d) {
+  if (!c.parallel) {
+    o[0] = c.eye[0];
+    o[1] = c.eye[1];
+    o[2] = c.eye[2];
+    rayDirection(c, px, py, d);
+    return;
+  }
+  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX;
+  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY;
+  for (int a = 0; a < 3; ++a) o[a] = c.eye[a] + su * c.right[a] + sv * c.up[a];
+  const float inv = 1.f / sqrtf(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] +
+                                c.forward[2] * c.forward[2]);
+  d[0] = c.forward[0] * inv;
+  d[1] = c.forward[1] * inv;
+  d[2] = c.forward[2] * inv;
+}
+
+/// Step along unit direction d that covers sampleDistance of world length (RayCamera::stepMetric).
+AFAM_HD float rayStep(const RayCamera& c, const float* d, float sampleDistance) {
+  if (!c.hasStepMetric) return sampleDistance;
+  const float* m = c.stepMetric;
+  const float x = m[0] * d[0] + m[1] * d[1] + m[2] * d[2];
+  const float y = m[3] * d[0] + m[4] * d[1] + m[5] * d[2];
+  const float z = m[6] * d[0] + m[7] * d[1] + m[8] * d[2];
+  return sampleDistance / sqrtf(x * x + y * y + z * z);
 }
 
 /// Slab test of the ray o + t d against [lo, hi]; returns false when it misses.
@@ -465,22 +507,23 @@ AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
 template <bool Shaded, typename Sampler>
 AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int py) {
   RGBA acc;
-  float d[3];
-  rayDirection(f.camera, px, py, d);
+  float o[3], d[3];
+  pixelRay(f.camera, px, py, o, d);
   float tEnter, tExit;
-  if (!intersectBox(f.camera.eye, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
+  if (!intersectBox(o, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
   if (f.maxDistance) tExit = rc::minf(tExit, f.maxDistance[int64_t(py) * f.camera.width + px]);
   const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
   if (tExit < tStart || !(f.sampleDistance > 0.f)) return acc;
-  const float dt = f.sampleDistance;
-  const float ratio = dt / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : dt);
+  // The opacity correction refers to sampleDistance: rayStep keeps the world length of a step.
+  const float dt = rayStep(f.camera, d, f.sampleDistance);
+  const float ratio =
+      f.sampleDistance / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : f.sampleDistance);
   // Samples on the global lattice t = k dt.
   int64_t k = int64_t(ceilf(tStart / dt));
   const int64_t kEnd = int64_t(floorf(tExit / dt));
   for (; k <= kEnd; ++k) {
     const float t = float(k) * dt;
-    const float p[3] = {f.camera.eye[0] + t * d[0], f.camera.eye[1] + t * d[1],
-                        f.camera.eye[2] + t * d[2]};
+    const float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
     float value = 0.f;
     float g[3] = {0.f, 0.f, 0.f};
     // Shaded and gradientWithValue: one evaluation of value and gradient per sample. Otherwise the

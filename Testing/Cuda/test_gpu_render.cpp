@@ -44,6 +44,25 @@ const EncodedVolume* encoded(const std::string& name, int degree) {
   return slot.get();
 }
 
+/// One frame of `e` seen by `camera`, cast by the CPU reference and by `gpu` (exact kernels).
+struct BothImages {
+  Frame frame;
+  ImageRGBA cpu;
+  std::vector<float> gpu;
+  ImageDiff diff;
+};
+void renderOnBoth(GpuRenderer& gpu, const EncodedVolume& e, const Camera& camera, bool shaded,
+                  BothImages& out) {
+  FrameOptions options;
+  options.shaded = shaded;
+  options.sampleDistance = 0.005f;
+  buildFrame(e, distanceBands(e.partition, camera), camera, options, out.frame);
+  renderCpu(out.frame.view, out.cpu, 0);
+  out.gpu.assign(out.cpu.rgba.size(), 0.f);
+  gpu.render(out.frame.view, out.frame.keys.data(), out.gpu.data());
+  out.diff = compareImages(out.cpu.rgba, out.gpu);
+}
+
 using Case = std::tuple<std::string, int, bool>;
 
 class GpuMatchesCpu : public ::testing::TestWithParam<Case> {};
@@ -59,16 +78,12 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
   const Pose poses[2] = {{2.6, 55.0, 30.0}, {1.25, 70.0, 200.0}};
   for (const Pose& pose : poses) {
     const Camera camera = Camera::fromPose(pose, 301, 256);  // awkward width on purpose
-    Frame frame;
-    FrameOptions options;
-    options.shaded = shaded;
-    options.sampleDistance = 0.005f;
-    buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
-    ImageRGBA cpu;
-    renderCpu(frame.view, cpu, 0);
-    std::vector<float> image(cpu.rgba.size());
-    gpu.render(frame.view, frame.keys.data(), image.data());
-    const ImageDiff d = compareImages(cpu.rgba, image);
+    BothImages both;
+    renderOnBoth(gpu, *e, camera, shaded, both);
+    const Frame& frame = both.frame;
+    const ImageRGBA& cpu = both.cpu;
+    const std::vector<float>& image = both.gpu;
+    const ImageDiff& d = both.diff;
     std::printf("[gpu-vs-cpu] %-14s p=%d %-8s pose(%.2f,%.0f,%.0f) slots=%d: max |diff| %d/255, "
                 "%lld of %lld pixels differ, max float diff %.2e, unwritten %lld  (%s)\n",
                 name.c_str(), degree, shaded ? "shaded" : "unshaded", pose.distance,
@@ -127,16 +142,11 @@ TEST(GpuRenderer, MappedAndParallelCamerasMatchCpu) {
     const Camera camera = world.mapped(linear, offset);
     ASSERT_TRUE(camera.hasStepMetric);
     for (bool shaded : {false, true}) {
-      Frame frame;
-      FrameOptions options;
-      options.shaded = shaded;
-      options.sampleDistance = 0.005f;
-      buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
-      ImageRGBA cpu;
-      renderCpu(frame.view, cpu, 0);
-      std::vector<float> image(cpu.rgba.size());
-      gpu.render(frame.view, frame.keys.data(), image.data());
-      const ImageDiff d = compareImages(cpu.rgba, image);
+      BothImages both;
+      renderOnBoth(gpu, *e, camera, shaded, both);
+      const Frame& frame = both.frame;
+      const ImageRGBA& cpu = both.cpu;
+      const ImageDiff& d = both.diff;
       std::printf("[gpu-vs-cpu] mapped %-11s p=2 %-8s slots=%d: max |diff| %d/255, %lld of %lld "
                   "pixels differ, unwritten %lld\n",
                   parallel ? "parallel" : "perspective", shaded ? "shaded" : "unshaded",

@@ -15,7 +15,7 @@ sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
 import afam_test_util as u  # noqa: E402
 
 import numpy as np  # noqa: E402
-from paraview.simple import Contour, OutputPort, SaveData, Slice, Wavelet  # noqa: E402
+from paraview.simple import Contour, OutputPort, Slice  # noqa: E402
 from paraview import servermanager  # noqa: E402
 from vtkmodules.numpy_interface import dataset_adapter as dsa  # noqa: E402
 from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline  # noqa: E402
@@ -24,13 +24,8 @@ from vtkmodules.vtkFiltersCore import vtkPassThrough  # noqa: E402
 u.load_plugin(globals())
 out = u.out_dir()
 
-wavelet = Wavelet(WholeExtent=[-20, 20, -20, 20, -20, 20])
-encoder = AdaptiveFAMEncoder(Input=wavelet, Levels=2, BlocksPerAxis=4, ErrorBound=0.005)  # noqa: F821
-encoder.Scalars = ["POINTS", "RTData"]
 path = os.path.join(out, "wavelet_l2.afam")
-if os.path.exists(path):
-    os.remove(path)
-SaveData(path, proxy=encoder)
+wavelet, _ = u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 2, 4, 0.005, path)
 reader = AdaptiveFAMReader(FileName=path)  # noqa: F821
 
 

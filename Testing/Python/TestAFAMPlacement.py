@@ -11,19 +11,13 @@ import sys
 sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
 import afam_test_util as u  # noqa: E402
 
-from paraview.simple import (ColorBy, CreateView, OpenDataFile, Render, SaveData,  # noqa: E402
-                             SaveScreenshot, Show, Wavelet)
+from paraview.simple import ColorBy, CreateView, OpenDataFile, Render, SaveScreenshot, Show  # noqa: E402
 
 u.load_plugin(globals())
 out = u.out_dir()
 
-wavelet = Wavelet(WholeExtent=[-30, 30, -8, 8, -15, 15])
-encoder = AdaptiveFAMEncoder(Input=wavelet, Levels=2, BlocksPerAxis=2, ErrorBound=0.005)  # noqa: F821
-encoder.Scalars = ["POINTS", "RTData"]
 path = os.path.join(out, "wavelet_61x17x31.afam")
-if os.path.exists(path):
-    os.remove(path)
-SaveData(path, proxy=encoder)
+wavelet, _ = u.encode_wavelet(globals(), [-30, 30, -8, 8, -15, 15], 2, 2, 0.005, path)
 model = OpenDataFile(path)
 model.UpdatePipeline()
 b = model.GetDataInformation().GetBounds()

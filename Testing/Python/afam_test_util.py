@@ -39,6 +39,20 @@ def load_plugin(ns):
     LoadPlugin(plugin, remote=False, ns=ns)
 
 
+def encode_wavelet(ns, extent, levels, blocks, bound, path):
+    """A Wavelet over `extent`, encoded by the plugin's AdaptiveFAMEncoder (taken from `ns`, the
+    namespace load_plugin filled) and saved to `path` (an old file is removed first). Returns
+    (wavelet, encoder)."""
+    from paraview.simple import SaveData, Wavelet
+    wavelet = Wavelet(WholeExtent=list(extent))
+    encoder = ns["AdaptiveFAMEncoder"](Input=wavelet, Levels=levels, BlocksPerAxis=blocks, ErrorBound=bound)
+    encoder.Scalars = ["POINTS", "RTData"]
+    if os.path.exists(path):
+        os.remove(path)
+    SaveData(path, proxy=encoder)
+    return wavelet, encoder
+
+
 def setup_view(view, size=(301, 300)):
     """The fixed view every image test uses (Wavelet extent [-20, 20]^3, centred on the origin).
     paraview.simple's first Render would reset the camera to the data's bounds, which hides where

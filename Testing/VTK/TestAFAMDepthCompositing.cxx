@@ -11,6 +11,11 @@
 // (ML's values are low for z > 0, which this transfer function leaves nearly transparent: the
 // front half is much dimmer than the back half.)
 // The same in-front case with DepthCompositing off must show the volume, so the test can tell.
+// The depth of a pixel becomes a ray length differently under parallel projection (rays start on
+// the eye plane) and through the vtkVolume's matrix, so both are checked too: parallel, the plane
+// in front hides everything, behind hides nothing, through the middle hides the back half; the
+// volume moved to z in [-2, 0] (SetPosition) behind a plane at z = 0.5 is hidden, and a plane at
+// its middle (z = -1) hides its back half.
 // Usage: TestAFAMDepthCompositing -V <baseline.png> -T <output folder>
 #include "AFAMTestScene.h"
 #include "vtkAFAMVolumeMapper.h"
@@ -99,6 +104,17 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   const Shot frontIgnored = Take(window, renderer, plane, mapper, 1.5);
   mapper->DepthCompositingOn();
   const Shot quarter = Take(window, renderer, plane, mapper, -0.5);
+  camera->ParallelProjectionOn();
+  camera->SetParallelScale(1.4);
+  const Shot parallelFront = Take(window, renderer, plane, mapper, 1.5);
+  const Shot parallelBack = Take(window, renderer, plane, mapper, -1.5);
+  const Shot parallelMiddle = Take(window, renderer, plane, mapper, 0.0);
+  camera->ParallelProjectionOff();
+  volume->SetPosition(0, 0, -1);
+  const Shot movedFront = Take(window, renderer, plane, mapper, 0.5);
+  const Shot movedBack = Take(window, renderer, plane, mapper, -2.5);
+  const Shot movedMiddle = Take(window, renderer, plane, mapper, -1.0);
+  volume->SetPosition(0, 0, 0);
   const Shot middle = Take(window, renderer, plane, mapper, 0.0);
 
   const vtkTypeInt64 pixels = static_cast<vtkTypeInt64>(width) * height;
@@ -126,6 +142,19 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
     "plane through the middle: only the front part of the volume shows");
   check(quarter.sum > 1.5 * middle.sum && quarter.sum < 0.9 * back.sum,
     "plane at z = -0.5: more of the volume than at z = 0, less than all of it");
+  std::cout << "parallel projection: in front " << parallelFront.sum << " (max " << parallelFront.max
+            << "), behind " << parallelBack.sum << ", middle " << parallelMiddle.sum
+            << "; moved to z in [-2, 0]: in front " << movedFront.sum << " (max " << movedFront.max
+            << "), behind " << movedBack.sum << ", middle " << movedMiddle.sum << "\n";
+  check(parallelFront.limited == pixels && parallelFront.max <= 1,
+    "parallel projection, plane in front: the volume is hidden");
+  check(parallelBack.sum > 1e5, "parallel projection, plane behind: the volume shows");
+  check(parallelMiddle.sum > 0.01 * parallelBack.sum && parallelMiddle.sum < 0.5 * parallelBack.sum,
+    "parallel projection, plane through the middle: only the front part shows");
+  check(movedFront.max <= 1, "moved volume, plane in front: hidden");
+  check(movedBack.sum > 1e5, "moved volume, plane behind: it shows");
+  check(movedMiddle.sum > 0.01 * movedBack.sum && movedMiddle.sum < 0.5 * movedBack.sum,
+    "moved volume, plane through its middle: only its front part shows");
 
   const int result = vtkRegressionTestImageThreshold(window, 15);
   if (result == vtkRegressionTester::DO_INTERACTOR)

@@ -21,7 +21,13 @@
 #include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkVolumeProperty.h"
+#include "vtkPNGReader.h"
+#include "vtkPNGWriter.h"
 #include "vtkWindowToImageFilter.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <string>
 
 #include <iostream>
 #include <vector>
@@ -112,6 +118,84 @@ inline std::vector<unsigned char> ReadPixels(vtkRenderWindow* window)
   const unsigned char* p = scalars ? scalars->GetPointer(0) : nullptr;
   return p ? std::vector<unsigned char>(p, p + scalars->GetNumberOfValues())
            : std::vector<unsigned char>();
+}
+/// vtkTesting's comparison (threshold, neighbourhood averaging) passes smooth volume images drawn
+/// a few pixels off or stretched. This one is strict: the fraction of pixels whose largest channel
+/// differs from the baseline (the -V argument) by more than `channelTolerance` must stay under
+/// `maxFraction`. Prints the figures; false (and why) on a mismatch or an unreadable baseline.
+inline bool PixelsMatchBaseline(vtkRenderWindow* window, int argc, char* argv[],
+  int channelTolerance = 24, double maxFraction = 0.005)
+{
+  std::string baseline, outDir;
+  for (int i = 0; i + 1 < argc; ++i)
+  {
+    if (std::string(argv[i]) == "-V")
+    {
+      baseline = argv[i + 1];
+    }
+    if (std::string(argv[i]) == "-T")
+    {
+      outDir = argv[i + 1];
+    }
+  }
+  vtkNew<vtkPNGReader> reader;
+  if (baseline.empty() || !reader->CanReadFile(baseline.c_str()))
+  {
+    std::cerr << "strict comparison: cannot read the baseline '" << baseline << "'\n";
+    return false;
+  }
+  reader->SetFileName(baseline.c_str());
+  reader->Update();
+  vtkImageData* b = reader->GetOutput();
+  auto* bs = vtkUnsignedCharArray::SafeDownCast(b->GetPointData()->GetScalars());
+  const int* size = window->GetSize();
+  const std::vector<unsigned char> rgb = ReadPixels(window);
+  const size_t pixels = static_cast<size_t>(size[0]) * static_cast<size_t>(size[1]);
+  if (!bs || bs->GetNumberOfComponents() < 3 || b->GetDimensions()[0] != size[0] ||
+    b->GetDimensions()[1] != size[1] || rgb.size() != pixels * 3)
+  {
+    std::cerr << "strict comparison: baseline " << baseline
+              << " is not an RGB image of the window's size\n";
+    return false;
+  }
+  const int nc = bs->GetNumberOfComponents();
+  const unsigned char* want = bs->GetPointer(0);
+  size_t differing = 0;
+  int worst = 0;
+  for (size_t i = 0; i < pixels; ++i)
+  {
+    int d = 0;
+    for (int c = 0; c < 3; ++c)
+    {
+      d = std::max(d, std::abs(int(rgb[3 * i + c]) - int(want[nc * i + c])));
+    }
+    worst = std::max(worst, d);
+    differing += d > channelTolerance ? 1 : 0;
+  }
+  const double fraction = double(differing) / double(pixels);
+  std::cout << "strict comparison: " << differing << " of " << pixels << " pixels ("
+            << 100.0 * fraction << " %) differ by more than " << channelTolerance
+            << "/255 (bar " << 100.0 * maxFraction << " %); largest difference " << worst
+            << "/255\n";
+  if (fraction > maxFraction)
+  {
+    std::cerr << "strict comparison: the image differs from " << baseline << "\n";
+    if (!outDir.empty())
+    {
+      vtkNew<vtkWindowToImageFilter> grab;
+      grab->SetInput(window);
+      grab->ReadFrontBufferOff();
+      grab->ShouldRerenderOff();
+      vtkNew<vtkPNGWriter> writer;
+      writer->SetInputConnection(grab->GetOutputPort());
+      const std::string name = baseline.substr(baseline.find_last_of('/') + 1);
+      writer->SetFileName((outDir + "/strict_" + name).c_str());
+      writer->Write();
+      std::cerr << "strict comparison: image written to " << outDir << "/strict_" << name << "\n";
+    }
+    return false;
+  }
+  return true;
 }
 }
 

@@ -161,7 +161,9 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   {
     interactor->Start();
   }
-  return (failures == 0 && result == vtkRegressionTester::PASSED) ? EXIT_SUCCESS : EXIT_FAILURE;
+  const bool placed = afam_vtk_test::PixelsMatchBaseline(window, argc, argv);
+  return (failures == 0 && placed && result == vtkRegressionTester::PASSED) ? EXIT_SUCCESS
+                                                                          : EXIT_FAILURE;
 }
 
 int main(int argc, char* argv[])

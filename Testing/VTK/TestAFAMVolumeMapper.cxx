@@ -152,7 +152,8 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   {
     interactor->Start();
   }
-  return result == vtkRegressionTester::PASSED ? EXIT_SUCCESS : EXIT_FAILURE;
+  const bool placed = afam_vtk_test::PixelsMatchBaseline(window, argc, argv);
+  return result == vtkRegressionTester::PASSED && placed ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 
 int main(int argc, char* argv[])

@@ -106,22 +106,42 @@ def compare_with_baseline(png, name, threshold=15.0, placement_tolerance=3):
     got, want = foreground_box(png), foreground_box(baseline)
     if max(abs(a - b) for a, b in zip(got, want)) > placement_tolerance:
         fail("image %s: foreground box/centroid %s, baseline %s %s" % (png, got, name, want))
+    # Strict: under 0.5% of the pixels may differ by more than 24/255 in some channel.
+    fraction, worst = differing_fraction(png, baseline, 24)
+    print("strict comparison: %.3f %% of pixels differ by more than 24/255 (bar 0.5 %%), largest %d/255"
+          % (100 * fraction, worst))
+    if fraction > 0.005:
+        fail("image %s differs from baseline %s in %.2f %% of its pixels" % (png, name, 100 * fraction))
     print("image matches baseline %s" % name)
+
+
+def read_rgb(png):
+    """(rows, columns, 3) integer array of a PNG, bottom row first."""
+    from vtkmodules.vtkIOImage import vtkPNGReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    r = vtkPNGReader()
+    r.SetFileName(png)
+    r.Update()
+    w, h, _ = r.GetOutput().GetDimensions()
+    return vtk_to_numpy(r.GetOutput().GetPointData().GetScalars())[:, :3].astype(int).reshape(h, w, 3)
+
+
+def differing_fraction(png, baseline, tolerance):
+    """Fraction of pixels whose largest channel difference exceeds tolerance, and the largest."""
+    a, b = read_rgb(png), read_rgb(baseline)
+    if a.shape != b.shape:
+        fail("image %s is %s, baseline %s is %s" % (png, a.shape, baseline, b.shape))
+    d = abs(a - b).max(axis=2)
+    return float((d > tolerance).mean()), int(d.max())
 
 
 def foreground_mask(png, background=(0.1, 0.1, 0.15), tolerance=8):
     """Boolean (rows, columns) array, bottom row first: pixels that differ from the background
     colour by more than tolerance/255 in some channel."""
-    from vtkmodules.vtkIOImage import vtkPNGReader
-    from vtkmodules.util.numpy_support import vtk_to_numpy
     import numpy as np
-    r = vtkPNGReader()
-    r.SetFileName(png)
-    r.Update()
-    w, h, _ = r.GetOutput().GetDimensions()
-    pixels = vtk_to_numpy(r.GetOutput().GetPointData().GetScalars())[:, :3].astype(float)
+    pixels = read_rgb(png).astype(float)
     bg = np.array([255.0 * c for c in background])
-    return (np.abs(pixels - bg).max(axis=1) > tolerance).reshape(h, w)
+    return np.abs(pixels - bg).max(axis=2) > tolerance
 
 
 def foreground_box(png, background=(0.1, 0.1, 0.15), tolerance=8):

@@ -235,8 +235,16 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       half[a] = 1;
     }
   }
+  vtkMatrix4x4* toWorld = vol->GetMatrix();
+  const double det = toWorld->Determinant();
+  if (!(std::abs(det) > 1e-300) || !std::isfinite(det))
+  {
+    vtkErrorMacro(<< "the volume's transform is singular (a zero Scale?) or not finite; "
+                     "nothing is drawn");
+    return;
+  }
   vtkNew<vtkMatrix4x4> toData;
-  vtkMatrix4x4::Invert(vol->GetMatrix(), toData);
+  vtkMatrix4x4::Invert(toWorld, toData);
   double toFrame[12];
   std::array<double, 9> linear;
   afam::Vec3 offset;

@@ -71,3 +71,24 @@ for name, transform, parallel in cases:
         u.fail("%s: the volume covers only %d x %d pixels; the check needs a real footprint" %
                (name, width, height))
 print("placement OK: largest box/centroid difference %.1f px over %d cases" % (worst, len(cases)))
+
+# A singular transform (zero scale): an error naming it, nothing drawn, no crash.
+from paraview import servermanager  # noqa: E402
+from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow  # noqa: E402
+messages = vtkStringOutputWindow()
+previous = vtkOutputWindow.GetInstance()
+vtkOutputWindow.SetInstance(messages)
+reference.Visibility = 0
+afam.Visibility = 1
+afam.Position, afam.Orientation, afam.Scale = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 1.0]
+view.CameraParallelProjection = 0
+Render(view)
+png = os.path.join(out, "placement_singular.png")
+SaveScreenshot(png, view, ImageResolution=[301, 300])
+vtkOutputWindow.SetInstance(previous)
+text = messages.GetOutput()
+print("zero scale: %d foreground pixels; messages: %s" % (u.non_blank(png), text.strip().splitlines()[-1:]))
+if "singular" not in text:
+    u.fail("a zero Scale gave no error naming the singular transform")
+if u.non_blank(png) > 0:
+    u.fail("a zero Scale still drew something")

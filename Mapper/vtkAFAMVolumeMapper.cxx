@@ -9,6 +9,7 @@
 #include "vtkColorTransferFunction.h"
 #include "vtkInformation.h"
 #include "vtkLogger.h"
+#include "vtkMath.h"
 #include "vtkMatrix4x4.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkNew.h"
@@ -215,8 +216,17 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     vtkErrorMacro(<< "needs an OpenGL render window, an active camera and a volume property");
     return;
   }
-  const int* size = ren->GetSize();
-  const int width = size[0], height = size[1];
+  if (cam->GetUseOffAxisProjection())
+  {
+    vtkErrorMacro(<< "off-axis (head-tracked) projection is not supported by the Adaptive-FAM "
+                     "renderer; nothing is drawn");
+    return;
+  }
+  // The image is the renderer's part of the current tile: with a magnified screenshot VTK renders
+  // tiles of the window's size, narrowing the view angle (or parallel scale) and moving the
+  // camera's WindowCenter per tile.
+  int width = 0, height = 0, tileX = 0, tileY = 0;
+  ren->GetTiledSizeAndOrigin(&width, &height, &tileX, &tileY);
   if (width < 1 || height < 1)
   {
     return;
@@ -274,6 +284,21 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     afam::Camera world = cam->GetParallelProjection()
       ? afam::Camera::parallelLookAt(eyeW, focalW, upW, cam->GetParallelScale(), width, height)
       : afam::Camera::lookAt(eyeW, focalW, upW, cam->GetViewAngle(), width, height);
+    // VTK's frustum: half extents from the tiled aspect ratio, the angle (or scale) vertical
+    // unless UseHorizontalViewAngle, shifted by WindowCenter in units of the half extents.
+    const double aspect = ren->GetTiledAspectRatio();
+    if (cam->GetUseHorizontalViewAngle() && !cam->GetParallelProjection())
+    {
+      world.tanHalfX = std::tan(0.5 * vtkMath::RadiansFromDegrees(cam->GetViewAngle()));
+      world.tanHalfY = world.tanHalfX / aspect;
+    }
+    else
+    {
+      world.tanHalfX = world.tanHalfY * aspect;
+    }
+    const double* center = cam->GetWindowCenter();
+    world.centerX = center[0] * world.tanHalfX;
+    world.centerY = center[1] * world.tanHalfY;
     world.nearDistance = std::max(0.0, clip[0]);
     request.Camera = world.mapped(linear, offset);
     request.Camera.nearDistance = std::max(1e-4, request.Camera.nearDistance);

@@ -134,6 +134,8 @@ RayCamera Camera::toRayCamera() const {
   }
   r.tanHalfX = float(tanHalfX);
   r.tanHalfY = float(tanHalfY);
+  r.centerX = float(centerX);
+  r.centerY = float(centerY);
   r.nearDistance = float(nearDistance);
   r.width = width;
   r.height = height;

@@ -102,21 +102,22 @@ bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const doub
   const V3 f = c.forward, r = c.right, u = c.up, e = c.eye;
   V3 n[5], q[5];
   if (!c.parallel) {
-    n[0] = toward(crossOf(u, combine(f, -c.tanHalfX, r)), f);  // left: edge f - tx r, spans u
-    n[1] = toward(crossOf(u, combine(f, c.tanHalfX, r)), f);   // right
-    n[2] = toward(crossOf(r, combine(f, -c.tanHalfY, u)), f);  // bottom
-    n[3] = toward(crossOf(r, combine(f, c.tanHalfY, u)), f);   // top
+    // left: edge f + (cx - tx) r, spans u; right: f + (cx + tx) r; bottom/top likewise with u.
+    n[0] = toward(crossOf(u, combine(f, c.centerX - c.tanHalfX, r)), combine(f, c.centerX, r));
+    n[1] = toward(crossOf(u, combine(f, c.centerX + c.tanHalfX, r)), combine(f, c.centerX, r));
+    n[2] = toward(crossOf(r, combine(f, c.centerY - c.tanHalfY, u)), combine(f, c.centerY, u));
+    n[3] = toward(crossOf(r, combine(f, c.centerY + c.tanHalfY, u)), combine(f, c.centerY, u));
     for (int k = 0; k < 4; ++k) q[k] = e;
   } else {
     const V3 nx = crossOf(u, f), ny = crossOf(r, f);  // normals of the side planes' pairs
     n[0] = toward(nx, r);
-    q[0] = combine(e, -c.tanHalfX, r);
+    q[0] = combine(e, c.centerX - c.tanHalfX, r);
     n[1] = toward(nx, combine(V3{0, 0, 0}, -1, r));
-    q[1] = combine(e, c.tanHalfX, r);
+    q[1] = combine(e, c.centerX + c.tanHalfX, r);
     n[2] = toward(ny, u);
-    q[2] = combine(e, -c.tanHalfY, u);
+    q[2] = combine(e, c.centerY - c.tanHalfY, u);
     n[3] = toward(ny, combine(V3{0, 0, 0}, -1, u));
-    q[3] = combine(e, c.tanHalfY, u);
+    q[3] = combine(e, c.centerY + c.tanHalfY, u);
   }
   // Near plane: parallel to the image plane (spanned by right and up), nearDistance along the
   // unit view direction from the eye.

@@ -198,6 +198,77 @@ TEST(MappedCamera, RenderingThroughTheMapEqualsRenderingInTheWorld) {
   }
 }
 
+// A magnified screenshot: VTK renders n x n tiles of the window's size, each with the view angle
+// (or parallel scale) divided by n and WindowCenter moved to the tile (Camera::centerX/Y). The
+// tiles must reassemble the image rendered at n times the size in one go.
+TEST(MappedCamera, OffCentreTilesReassembleTheFullImage) {
+  const int n = 3, tw = 20, th = 16;
+  const std::vector<float> tf = {0.2f, 0.1f, 0.0f, 0.00f, 0.9f, 0.3f, 0.1f, 0.05f,
+                                 0.1f, 0.8f, 0.3f, 0.15f, 1.0f, 1.0f, 0.9f, 0.30f};
+  auto view = [&](const Camera& c) {
+    FrameView f;
+    f.camera = c.toRayCamera();
+    f.tf = tf.data();
+    f.tfSize = 4;
+    f.sampleDistance = 0.004f;
+    f.tfReferenceDistance = 0.008f;
+    f.shading = 0;
+    return f;
+  };
+  for (bool parallel : {false, true}) {
+    const Camera full = worldCamera(parallel, {2.5, 1.5, 3.5}, {0.1, 0, 0}, n * tw, n * th);
+    ImageRGBA whole;
+    renderCpuWith(view(full), MarschnerLobbSampler{}, whole, 1);
+    double worst = 0, covered = 0;
+    for (int j = 0; j < n; ++j)      // tile row, 0 = top
+      for (int i = 0; i < n; ++i) {  // tile column, 0 = left
+        Camera tile = full;
+        tile.width = tw;
+        tile.height = th;
+        tile.tanHalfX = full.tanHalfX / n;
+        tile.tanHalfY = full.tanHalfY / n;
+        tile.centerX = (-1.0 + (2.0 * i + 1) / n) * full.tanHalfX;
+        tile.centerY = (1.0 - (2.0 * j + 1) / n) * full.tanHalfY;
+        ImageRGBA part;
+        renderCpuWith(view(tile), MarschnerLobbSampler{}, part, 1);
+        for (int y = 0; y < th; ++y)
+          for (int x = 0; x < tw; ++x)
+            for (int k = 0; k < 4; ++k) {
+              const float a = part.rgba[(size_t(y) * tw + x) * 4 + k];
+              const float b = whole.rgba[(size_t(j * th + y) * (n * tw) + (i * tw + x)) * 4 + k];
+              worst = std::max(worst, double(std::abs(a - b)));
+              if (k == 3) covered += b > 0.01f;
+            }
+        // Culling through the tile's frustum keeps every block the tile's rays reach: checked
+        // against the whole image's rays that fall in this tile.
+        const Partition p({33, 33, 33}, 2, 4);
+        const RayCamera wr = full.toRayCamera();
+        for (int y = 0; y < th; y += 5)
+          for (int x = 0; x < tw; x += 5) {
+            float o[3], d[3];
+            pixelRay(wr, i * tw + x, j * th + y, o, d);
+            for (double t = 0.05; t < 8; t += 0.1) {
+              const double q[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+              if (std::abs(q[0]) > 1 || std::abs(q[1]) > 1 || std::abs(q[2]) > 1) continue;
+              for (int bz = 0; bz < 4; ++bz)
+                for (int by = 0; by < 4; ++by)
+                  for (int bx = 0; bx < 4; ++bx) {
+                    double lo[3], hi[3];
+                    blockBox(p, 1, {bx, by, bz}, lo, hi);
+                    if (q[0] >= lo[0] && q[0] <= hi[0] && q[1] >= lo[1] && q[1] <= hi[1] &&
+                        q[2] >= lo[2] && q[2] <= hi[2]) {
+                      ASSERT_FALSE(LodSelector::outsideFrustum(tile, lo, hi));
+                    }
+                  }
+            }
+          }
+      }
+    std::printf("[tiles] %s: worst |tile - whole| %.2e\n", parallel ? "parallel" : "perspective", worst);
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_GT(covered, 0.2 * n * tw * n * th);
+  }
+}
+
 TEST(MappedCamera, FrustumCullingStaysConservative) {
   const Partition p({65, 65, 65}, 3, 8);
   const LodSelector sel;
@@ -213,6 +284,10 @@ TEST(MappedCamera, FrustumCullingStaysConservative) {
     const Vec3 eye{2 * (u01(rng) - 0.5), 2 * (u01(rng) - 0.5), 0.5 + 1.5 * u01(rng)};
     Camera world = worldCamera(parallel, eye, {2 * (u01(rng) - 0.5), 0.3, -1}, 24, 16);
     if (parallel) world.tanHalfY = 0.2 + 0.3 * u01(rng), world.tanHalfX = 1.5 * world.tanHalfY;
+    if (i % 4 >= 2) {  // off-centre frustums too (screenshot tiles)
+      world.centerX = 2 * (u01(rng) - 0.5) * world.tanHalfX;
+      world.centerY = 2 * (u01(rng) - 0.5) * world.tanHalfY;
+    }
     const Camera c = world.mapped(m.linear, m.offset);
     const RayCamera r = c.toRayCamera();
     const auto cut = sel.cut(p, c);

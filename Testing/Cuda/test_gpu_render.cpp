@@ -124,7 +124,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 // Cameras as the VTK mapper builds them: given in the world, mapped into the normalised frame of
 // a non-cubic, rotated volume (non-orthonormal frame, per-ray step metric), perspective and
-// parallel. Same FrameView on both sides: GPU == CPU.
+// parallel, off-centre (WindowCenter). Same FrameView on both sides: GPU == CPU.
 TEST(GpuRenderer, MappedAndParallelCamerasMatchCpu) {
   AFAM_SKIP_WITHOUT_GPU();
   const EncodedVolume* e = encoded("marschner_lobb", 2);
@@ -137,8 +137,10 @@ TEST(GpuRenderer, MappedAndParallelCamerasMatchCpu) {
   gpu.setPoisonOutput(true);
   for (bool parallel : {false, true}) {
     const Vec3 eye{5, 3.5, 4}, focal{0.5, 0, 0}, up{0, 0, 1};
-    const Camera world = parallel ? Camera::parallelLookAt(eye, focal, up, 1.6, 240, 200)
-                                  : Camera::lookAt(eye, focal, up, 30.0, 240, 200);
+    Camera world = parallel ? Camera::parallelLookAt(eye, focal, up, 1.6, 240, 200)
+                            : Camera::lookAt(eye, focal, up, 30.0, 240, 200);
+    world.centerX = 0.3 * world.tanHalfX;  // off-centre, as a screenshot tile
+    world.centerY = -0.2 * world.tanHalfY;
     const Camera camera = world.mapped(linear, offset);
     ASSERT_TRUE(camera.hasStepMetric);
     for (bool shaded : {false, true}) {

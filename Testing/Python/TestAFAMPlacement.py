@@ -72,6 +72,27 @@ for name, transform, parallel in cases:
                (name, width, height))
 print("placement OK: largest box/centroid difference %.1f px over %d cases" % (worst, len(cases)))
 
+# A screenshot three times the view's size: VTK renders it as 3 x 3 tiles of the view's size
+# (narrower view angle, WindowCenter moved per tile). It must be the same picture, three times
+# larger: its foreground box and centroid, divided by 3, within 2 px of the view-size image.
+for display in (afam, reference):
+    display.Position, display.Orientation, display.Scale = [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0]
+view.CameraParallelProjection = 0
+reference.Visibility = 0
+afam.Visibility = 1
+Render(view)
+small = os.path.join(out, "placement_screenshot_1x.png")
+large = os.path.join(out, "placement_screenshot_3x.png")
+SaveScreenshot(small, view, ImageResolution=[301, 300])
+SaveScreenshot(large, view, ImageResolution=[903, 900])
+b1, b3 = u.foreground_box(small), u.foreground_box(large)
+scaled = tuple(round(v / 3.0, 1) for v in b3)
+diff = max(abs(a - c) for a, c in zip(b1, scaled))
+print("3x screenshot: foreground %s, divided by 3 %s, view-size image %s, largest difference %.1f px"
+      % (b3, scaled, b1, diff))
+if diff > 2:
+    u.fail("the 3x screenshot is not the view-size picture enlarged (tiles rendered wrongly)")
+
 # A singular transform (zero scale): an error naming it, nothing drawn, no crash.
 from paraview import servermanager  # noqa: E402
 from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow  # noqa: E402

@@ -37,6 +37,9 @@ struct Camera {
   /// Perspective: tan of half the view angles. Parallel: half the view's width / height in units
   /// of |right| / |up|.
   double tanHalfX = 0.125, tanHalfY = 0.125;
+  /// Off-centre frustum: the image spans [center - tanHalf, center + tanHalf] in the same units
+  /// (VTK's WindowCenter times tanHalf; the tiles of a magnified screenshot). 0: centred.
+  double centerX = 0, centerY = 0;
   double nearDistance = 0.01;  ///< rays start no closer to the eye (near plane inside the volume)
   int width = 256, height = 256;
   bool parallel = false;  ///< orthographic projection (rays along forward)

@@ -49,8 +49,10 @@
 // Camera and pixels
 // ---------------------------------------------------------------------------------------------
 //  Pixel (px, py), py = 0 the TOP row, has the camera-space direction
-//      d = normalize(su * tanHalfX * right + sv * tanHalfY * up + forward),
-//      su = 2 (px + 0.5) / width - 1,  sv = 1 - 2 (py + 0.5) / height.
+//      d = normalize((su * tanHalfX + centerX) * right + (sv * tanHalfY + centerY) * up + forward),
+//      su = 2 (px + 0.5) / width - 1,  sv = 1 - 2 (py + 0.5) / height  (centre 0 but for VTK's
+//      WindowCenter / screenshot tiles). Parallel projection: d = forward, the ray starts at
+//      eye + (su tanHalfX + centerX) right + (sv tanHalfY + centerY) up.
 //  The authors' camera (data README) is tanHalfX = tanHalfY = 1/8: direction normalize(u, v, -8).
 //  Rays start at max(box entry, nearDistance): a camera inside the volume starts at its near plane.
 //  They end at min(box exit, maxDistance[pixel]) when the frame carries the per-pixel distances of
@@ -120,6 +122,9 @@ struct RayCamera {
   /// half the view's width / height in units of |right| / |up|.
   float tanHalfX = 0.125f;
   float tanHalfY = 0.125f;
+  /// Off-centre frustum (VTK's WindowCenter, tiles of a magnified screenshot): the image spans
+  /// su in [centerX - tanHalfX, centerX + tanHalfX], sv likewise. 0: centred.
+  float centerX = 0.f, centerY = 0.f;
   float nearDistance = 1e-3f;  ///< rays start no closer than this to the eye (parallel: eye plane)
   int width = 1, height = 1;
   int32_t parallel = 0;  ///< 1: orthographic, every ray along forward from its own origin
@@ -194,8 +199,8 @@ AFAM_HD float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] *
 
 /// Unit ray direction of pixel (px, py), py = 0 the top row (see the header comment).
 AFAM_HD void rayDirection(const RayCamera& c, int px, int py, float* d) {
-  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX;
-  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY;
+  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX + c.centerX;
+  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY + c.centerY;
   float x = su * c.right[0] + sv * c.up[0] + c.forward[0];
   float y = su * c.right[1] + sv * c.up[1] + c.forward[1];
   float z = su * c.right[2] + sv * c.up[2] + c.forward[2];
@@ -215,8 +220,8 @@ AFAM_HD void pixelRay(const RayCamera& c, int px, int py, float* o, float* d) {
     rayDirection(c, px, py, d);
     return;
   }
-  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX;
-  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY;
+  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX + c.centerX;
+  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY + c.centerY;
   for (int a = 0; a < 3; ++a) o[a] = c.eye[a] + su * c.right[a] + sv * c.up[a];
   const float inv = 1.f / sqrtf(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] +
                                 c.forward[2] * c.forward[2]);

@@ -126,25 +126,37 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double toFrame
                          ren->GetTiledAspectRatio(), -1, 1),
     inverse);
   const double* m = inverse->GetData();
+  const int cw = camera.width, ch = camera.height; // the cast image, at most the tile's size
   const afam::Vec3& e = camera.eye;
   const afam::Vec3 &r = camera.right, &u = camera.up, &f = camera.forward;
   afam::Vec3 n{ r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2], r[0] * u[1] - r[1] * u[0] };
   const double fLength = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
   const double dn = (f[0] * n[0] + f[1] * n[1] + f[2] * n[2]) / fLength;
-  limits.assign(depth.size(), std::numeric_limits<float>::infinity());
+  limits.assign(static_cast<size_t>(cw) * static_cast<size_t>(ch),
+    std::numeric_limits<float>::infinity());
   bool any = false;
-  for (int y = 0; y < height; ++y) // y = 0: bottom row (OpenGL)
+  for (int y = 0; y < ch; ++y) // y = 0: bottom row (OpenGL)
   {
-    const double ny = 2.0 * (y + 0.5) / height - 1.0;
-    float* row = &limits[static_cast<size_t>(height - 1 - y) * width]; // Core: row 0 = top
-    for (int x = 0; x < width; ++x)
+    const double ny = 2.0 * (y + 0.5) / ch - 1.0;
+    float* row = &limits[static_cast<size_t>(ch - 1 - y) * cw]; // Core: row 0 = top
+    const int y0t = y * height / ch, y1t = std::max(y0t + 1, (y + 1) * height / ch);
+    for (int x = 0; x < cw; ++x)
     {
-      const float z = depth[static_cast<size_t>(y) * width + x];
+      // The nearest opaque surface among the tile pixels this pixel covers.
+      const int x0t = x * width / cw, x1t = std::max(x0t + 1, (x + 1) * width / cw);
+      float z = 1.0f;
+      for (int yt = y0t; yt < y1t; ++yt)
+      {
+        for (int xt = x0t; xt < x1t; ++xt)
+        {
+          z = std::min(z, depth[static_cast<size_t>(yt) * width + xt]);
+        }
+      }
       if (!(z < 1.0f))
       {
         continue; // the far plane: nothing opaque here
       }
-      const double ndc[4] = { 2.0 * (x + 0.5) / width - 1.0, ny, 2.0 * z - 1.0, 1.0 };
+      const double ndc[4] = { 2.0 * (x + 0.5) / cw - 1.0, ny, 2.0 * z - 1.0, 1.0 };
       double p[4];
       for (int r = 0; r < 4; ++r)
       {
@@ -231,6 +243,18 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     return;
   }
+  // Interactive frames: a smaller image that fits the allotted time (see AutoAdjustImageScale).
+  double scale = 1.0;
+  const double rate = renWin->GetDesiredUpdateRate();
+  if (this->AutoAdjustImageScale && rate > 1.0 && this->SecondsPerPixel > 0)
+  {
+    const double allotted = vol->GetAllocatedRenderTime();
+    const double budget = allotted > 0 ? std::min(allotted, 1.0 / rate) : 1.0 / rate;
+    scale = std::sqrt(budget / (this->SecondsPerPixel * width * height));
+    scale = std::max(this->MinimumImageScale, std::min(1.0, scale));
+  }
+  const int castWidth = std::max(1, static_cast<int>(std::lround(width * scale)));
+  const int castHeight = std::max(1, static_cast<int>(std::lround(height * scale)));
 
   // World -> normalised frame: the inverse of the vtkVolume's matrix takes the world to the data,
   // then the data box maps to [-1, 1]^3, each axis on its own (paper).
@@ -282,8 +306,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     const afam::Vec3 eyeW{ pos[0], pos[1], pos[2] }, focalW{ focal[0], focal[1], focal[2] },
       upW{ up[0], up[1], up[2] };
     afam::Camera world = cam->GetParallelProjection()
-      ? afam::Camera::parallelLookAt(eyeW, focalW, upW, cam->GetParallelScale(), width, height)
-      : afam::Camera::lookAt(eyeW, focalW, upW, cam->GetViewAngle(), width, height);
+      ? afam::Camera::parallelLookAt(eyeW, focalW, upW, cam->GetParallelScale(), castWidth, castHeight)
+      : afam::Camera::lookAt(eyeW, focalW, upW, cam->GetViewAngle(), castWidth, castHeight);
     // VTK's frustum: half extents from the tiled aspect ratio, the angle (or scale) vertical
     // unless UseHorizontalViewAngle, shifted by WindowCenter in units of the half extents.
     const double aspect = ren->GetTiledAspectRatio();
@@ -366,19 +390,20 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     vtkErrorMacro(<< e.what());
     return;
   }
-  if (image.width != width || image.height != height)
+  if (image.width != castWidth || image.height != castHeight)
   {
     vtkErrorMacro(<< "Core returned a " << image.width << "x" << image.height << " image for a "
-                  << width << "x" << height << " viewport");
+                  << castWidth << "x" << castHeight << " request");
     return;
   }
 
   // Core's row 0 is the top; OpenGL's is the bottom.
   std::vector<float> flipped(image.rgba.size());
-  const size_t row = static_cast<size_t>(width) * 4;
-  for (int y = 0; y < height; ++y)
+  const size_t row = static_cast<size_t>(castWidth) * 4;
+  for (int y = 0; y < castHeight; ++y)
   {
-    std::copy_n(&image.rgba[static_cast<size_t>(height - 1 - y) * row], row, &flipped[y * row]);
+    std::copy_n(
+      &image.rgba[static_cast<size_t>(castHeight - 1 - y) * row], row, &flipped[y * row]);
   }
 
   // Blend the premultiplied image over the viewport's content.
@@ -391,7 +416,16 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
   state->vtkglDisable(GL_DEPTH_TEST);
   state->vtkglDepthMask(GL_FALSE);
-  renWin->DrawPixels(width, height, 4, VTK_FLOAT, flipped.data());
+  renWin->DrawPixels(castWidth, castHeight, 4, VTK_FLOAT, flipped.data()); // scaled to the viewport
+
+  // Time per cast pixel, for the next interactive frame's scale: the latest still frame sets it,
+  // interactive frames blend in (they are smaller, so fixed costs weigh more there).
+  const double frameSeconds = stats.RenderSeconds + stats.CachingSeconds;
+  const double perPixel = frameSeconds / (static_cast<double>(castWidth) * castHeight);
+  this->SecondsPerPixel = (this->SecondsPerPixel > 0 && scale < 1.0)
+    ? 0.5 * (this->SecondsPerPixel + perPixel)
+    : perPixel;
+  this->LastImageScale = static_cast<double>(castWidth) / width;
 
   this->LastCachingTime = stats.CachingSeconds;
   this->LastRenderTime = stats.RenderSeconds;
@@ -436,6 +470,9 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DepthCompositing: " << this->DepthCompositing << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "AutoAdjustImageScale: " << this->AutoAdjustImageScale << "\n";
+  os << indent << "MinimumImageScale: " << this->MinimumImageScale << "\n";
+  os << indent << "LastImageScale: " << this->LastImageScale << "\n";
   os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
   os << indent << "LastRenderTime: " << this->LastRenderTime << "\n";
   os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";

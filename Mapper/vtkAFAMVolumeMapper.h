@@ -109,6 +109,19 @@ public:
   ///@}
 
   ///@{
+  /// Interactive frames (the render window's DesiredUpdateRate above 1, as while the mouse
+  /// drags) are cast at a reduced image size so that they fit the time VTK allots the volume,
+  /// estimated from the previous frames' time per pixel, and drawn scaled up; still frames are
+  /// always full size. Default on. The scale (of width and height) never goes below
+  /// MinimumImageScale (default 0.25, range [0.05, 1]).
+  vtkSetMacro(AutoAdjustImageScale, bool);
+  vtkGetMacro(AutoAdjustImageScale, bool);
+  vtkBooleanMacro(AutoAdjustImageScale, bool);
+  vtkSetClampMacro(MinimumImageScale, double, 0.05, 1.0);
+  vtkGetMacro(MinimumImageScale, double);
+  ///@}
+
+  ///@{
   /// CPU threads for the CPU ray caster, 0 = all cores (default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -127,6 +140,8 @@ public:
   vtkGetMacro(LastUsedGpu, bool);
   /// Pixels of the last frame whose rays were cut short by opaque geometry.
   vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
+  /// Image scale of the last frame (1 = full size; below 1 for interactive frames).
+  vtkGetMacro(LastImageScale, double);
   vtkGetMacro(NumberOfFrames, vtkTypeInt64);
   /// Why the GPU was not used (empty when it was, or when the CPU was asked for).
   const char* GetLastDeviceMessage() { return this->LastDeviceMessage.c_str(); }
@@ -150,6 +165,8 @@ protected:
   /// false when no pixel holds opaque geometry (or the z-buffer cannot be read).
   /// toFrame: world -> normalised frame (row-major 3x4, linear part then offset column);
   /// camera: the mapped camera the rays come from.
+  /// The image may be smaller than the tile (width x height): camera.width x camera.height
+  /// pixels, each limited by the nearest opaque depth among the tile pixels it covers.
   bool ReadDepthLimits(vtkRenderer* ren, const double toFrame[12], const afam::Camera& camera,
     int width, int height, std::vector<float>& limits);
 
@@ -162,6 +179,10 @@ protected:
   bool WarnedDevice = false;
   double SampleDistance = 0;
   int NumberOfThreads = 0;
+  bool AutoAdjustImageScale = true;
+  double MinimumImageScale = 0.25;
+  double LastImageScale = 1;
+  double SecondsPerPixel = 0; ///< running estimate of a frame's time per cast pixel
 
   double LastCachingTime = 0, LastRenderTime = 0, LastTotalTime = 0;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;

@@ -167,6 +167,9 @@ void vtkAFAMVolumeRepresentation::SetRenderDevice(int v) { this->Mapper->SetRend
 void vtkAFAMVolumeRepresentation::SetDepthCompositing(bool v) { this->Mapper->SetDepthCompositing(v); }
 void vtkAFAMVolumeRepresentation::SetSampleDistance(double v) { this->Mapper->SetSampleDistance(v); }
 void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v) { this->Mapper->SetNumberOfThreads(v); }
+void vtkAFAMVolumeRepresentation::SetAutoAdjustImageScale(bool v) { this->Mapper->SetAutoAdjustImageScale(v); }
+void vtkAFAMVolumeRepresentation::SetMinimumImageScale(double v) { this->Mapper->SetMinimumImageScale(v); }
+double vtkAFAMVolumeRepresentation::GetLastImageScale() { return this->Mapper->GetLastImageScale(); }
 double vtkAFAMVolumeRepresentation::GetLastCachingTime() { return this->Mapper->GetLastCachingTime(); }
 double vtkAFAMVolumeRepresentation::GetLastRenderTime() { return this->Mapper->GetLastRenderTime(); }
 double vtkAFAMVolumeRepresentation::GetLastTotalTime() { return this->Mapper->GetLastTotalTime(); }

@@ -59,6 +59,8 @@ public:
   void SetDepthCompositing(bool);
   void SetSampleDistance(double);
   void SetNumberOfThreads(int);
+  void SetAutoAdjustImageScale(bool);
+  void SetMinimumImageScale(double);
   ///@}
 
   ///@{
@@ -73,6 +75,7 @@ public:
   vtkTypeInt64 GetNumberOfFrames();
   int GetLastUsedGpu();
   vtkTypeInt64 GetLastDepthLimitedPixels();
+  double GetLastImageScale();
   const char* GetLastDeviceMessage();
   ///@}
 

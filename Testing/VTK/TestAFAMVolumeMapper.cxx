@@ -9,6 +9,10 @@
 //   GPU or driver) exactly one warning must say so across two frames and the frames must be cast
 //   on the CPU; where it is usable the frames must be cast on the GPU without a warning. Either
 //   way the image must match the same baseline.
+// Interactive frames (DesiredUpdateRate 1000, a 1 ms budget) must be cast at the minimum image
+// scale, faster, and show the same picture (mean difference under 8/255 per channel against
+// the still frame); the next still frame is full size again (and is the one compared with the
+// baseline).
 #include "AFAMTestScene.h"
 #include "vtkAFAMVolumeMapper.h"
 
@@ -25,6 +29,8 @@
 #include "vtkSphereSource.h"
 #include "vtkVolume.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -144,6 +150,39 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   if (!vtkAFAMVolumeMapper::HasCudaRenderer() && mapper->GetLastUsedGpu())
   {
     std::cerr << "a build without CUDA claims to have rendered on the GPU\n";
+    return EXIT_FAILURE;
+  }
+
+  // Interactive frames, then a still frame again.
+  const std::vector<unsigned char> still = afam_vtk_test::ReadPixels(window);
+  const double stillSeconds = mapper->GetLastRenderTime() + mapper->GetLastCachingTime();
+  window->SetDesiredUpdateRate(1000);
+  window->Render();
+  window->Render();
+  const double interactiveScale = mapper->GetLastImageScale();
+  const double interactiveSeconds = mapper->GetLastRenderTime() + mapper->GetLastCachingTime();
+  const std::vector<unsigned char> moving = afam_vtk_test::ReadPixels(window);
+  double meanDiff = 0;
+  for (size_t i = 0; i < still.size() && i < moving.size(); ++i)
+  {
+    meanDiff += std::abs(int(still[i]) - int(moving[i]));
+  }
+  meanDiff /= std::max<size_t>(1, still.size());
+  window->SetDesiredUpdateRate(0.0001);
+  window->Render();
+  std::cout << "interactive frames: image scale " << interactiveScale << ", cast in "
+            << interactiveSeconds << " s against " << stillSeconds
+            << " s still; mean |interactive - still| " << meanDiff
+            << "/255 per channel; next still frame at scale " << mapper->GetLastImageScale()
+            << "\n";
+  // (The time check is for the CPU caster, whose time scales with pixels; a GPU frame this small
+  // is dominated by fixed costs.)
+  const bool slower = !mapper->GetLastUsedGpu() && interactiveSeconds >= 0.6 * stillSeconds;
+  if (std::abs(interactiveScale - 75.0 / 301.0) > 1e-9 || slower ||
+    moving.size() != still.size() || meanDiff > 8.0 || mapper->GetLastImageScale() != 1.0)
+  {
+    std::cerr << "interactive image scaling: expected scale 75/301 (the minimum 0.25), a faster "
+                 "frame, the same picture, and full size again when still\n";
     return EXIT_FAILURE;
   }
 

@@ -98,6 +98,12 @@ print("statistics: frames=%s total=%.4fs raycast=%.4fs caching=%.4fs visible=%s 
     display.GetPropertyValue("AFAMLastCacheMisses")))
 if not frames or frames < 1 or not visible or visible < 1 or not total or total <= 0:
     u.fail("the mapper did not render (statistics above)")
+# Interactive image scaling is on by default; a still render (pvbatch renders are still) is full size.
+scale = display.GetPropertyValue("AFAMLastImageScale")
+print("interactive image scaling %s (minimum %s), last image scale %s" % (
+    display.AFAMAutoAdjustImageScale, display.AFAMMinimumImageScale, scale))
+if display.AFAMAutoAdjustImageScale != 1 or abs(display.AFAMMinimumImageScale - 0.25) > 1e-12 or scale != 1.0:
+    u.fail("interactive image scaling defaults or the still frame's scale are wrong")
 u.compare_with_baseline(png, "TestAFAMPipeline.png")
 
 # 4. Same place as ParaView's own Volume representation of the Wavelet, same view and colours: the

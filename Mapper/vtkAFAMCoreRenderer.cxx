@@ -90,7 +90,7 @@ bool SameOptions(const afam::RenderOptions& a, const afam::RenderOptions& b)
   return a.threads == b.threads && a.sampleDistance == b.sampleDistance &&
     a.shading == b.shading && a.lod.policy == b.lod.policy && a.cache.bytes == b.cache.bytes &&
     a.prefetch == b.prefetch && a.hasTransferFunction == b.hasTransferFunction &&
-    sameTf(a.transferFunction, b.transferFunction);
+    a.blendMode == b.blendMode && sameTf(a.transferFunction, b.transferFunction);
 }
 }
 
@@ -144,6 +144,7 @@ void vtkAFAMCoreRenderer::Render(
   options.hasTransferFunction =
     !request.Transfer.colors.empty() && !request.Transfer.opacities.empty();
   options.transferFunction = request.Transfer;
+  options.blendMode = request.BlendMode;
 
   const bool wantGpu = request.Device != 1;
   Internals& m = *this->Impl;

@@ -26,6 +26,7 @@ struct vtkAFAMFrameRequest
   int Prefetcher = 0;               ///< 0 none, 1 linear
   int Device = 0;                   ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
   int Threads = 0;
+  int BlendMode = 0;                ///< 0 composite, 1 maximum, 2 minimum, 3 average intensity
   /// Optional per-pixel ray length limit from opaque geometry (normalised-frame distance from the
   /// eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
   const float* MaxDistance = nullptr;

@@ -365,6 +365,17 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   request.Prefetcher = this->Prefetcher;
   request.Device = this->RenderDevice;
   request.Threads = this->NumberOfThreads;
+  // Composite, maximum, minimum and average intensity (VTK's numbering); other modes are drawn
+  // composite, with one warning.
+  const int blend = this->GetBlendMode();
+  request.BlendMode = blend >= 0 && blend <= 3 ? blend : 0;
+  if (request.BlendMode != blend && !this->WarnedBlendMode)
+  {
+    this->WarnedBlendMode = true;
+    vtkWarningMacro(<< "blend mode " << blend
+                    << " is not supported by the Adaptive-FAM renderer (composite, maximum, "
+                       "minimum and average intensity are); drawing it composite");
+  }
 
   // Opaque geometry drawn so far stops the rays (see the class documentation).
   std::vector<float> limits;

@@ -23,6 +23,9 @@
  * (inverse of the camera's composite projection: perspective depth linearised) and hands Core a
  * per-pixel ray length limit, so no sample behind an opaque surface is composited.
  *
+ * Blend modes: composite, maximum, minimum and average intensity projection (vtkVolumeMapper's
+ * SetBlendMode); the others are drawn composite with one warning.
+ *
  * Render device: with RenderDevice Auto or GPU the frame is cast by the CUDA renderer when the
  * build has it (afam_cuda) and a usable GPU is present, else by the CPU ray caster; GPU explicitly
  * asked for but unusable gives one vtkWarning saying why (Auto says it once through vtkLog).
@@ -177,6 +180,7 @@ protected:
   int RenderDevice = DEVICE_AUTO;
   bool DepthCompositing = true;
   bool WarnedDevice = false;
+  bool WarnedBlendMode = false;
   double SampleDistance = 0;
   int NumberOfThreads = 0;
   bool AutoAdjustImageScale = true;

@@ -169,6 +169,7 @@ void vtkAFAMVolumeRepresentation::SetSampleDistance(double v) { this->Mapper->Se
 void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v) { this->Mapper->SetNumberOfThreads(v); }
 void vtkAFAMVolumeRepresentation::SetAutoAdjustImageScale(bool v) { this->Mapper->SetAutoAdjustImageScale(v); }
 void vtkAFAMVolumeRepresentation::SetMinimumImageScale(double v) { this->Mapper->SetMinimumImageScale(v); }
+void vtkAFAMVolumeRepresentation::SetBlendMode(int v) { this->Mapper->SetBlendMode(v); }
 double vtkAFAMVolumeRepresentation::GetLastImageScale() { return this->Mapper->GetLastImageScale(); }
 double vtkAFAMVolumeRepresentation::GetLastCachingTime() { return this->Mapper->GetLastCachingTime(); }
 double vtkAFAMVolumeRepresentation::GetLastRenderTime() { return this->Mapper->GetLastRenderTime(); }

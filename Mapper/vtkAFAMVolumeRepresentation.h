@@ -61,6 +61,7 @@ public:
   void SetNumberOfThreads(int);
   void SetAutoAdjustImageScale(bool);
   void SetMinimumImageScale(double);
+  void SetBlendMode(int);
   ///@}
 
   ///@{

@@ -32,6 +32,9 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options)
   if (!file_) throw InvalidArgument("renderer: no file");
   if (!(options_.sampleDistance > 0))
     throw InvalidArgument("renderer: sample distance must be > 0");
+  if (options_.blendMode < kBlendComposite || options_.blendMode > kBlendAverage)
+    throw InvalidArgument("renderer: blend mode must be 0 (composite), 1 (maximum), 2 (minimum) or "
+                          "3 (average), not " + std::to_string(options_.blendMode));
   cache_ = std::make_unique<LruCache>(file_, options_.cache);
   if (options_.storageMBps > 0) cache_->setBandwidthCap(options_.storageMBps * 1e6);
   if (!isPrefetchPredictorName(options_.prefetch)) predictor_ = makePredictor(options_.prefetch);
@@ -73,7 +76,8 @@ Renderer::~Renderer() {
 }
 
 Selection Renderer::select(const Camera& camera) const {
-  return lod_.select(*file_, camera, tf_, tfLo_, tfHi_);
+  static const std::vector<float> none;
+  return lod_.select(*file_, camera, options_.blendMode == kBlendComposite ? tf_ : none, tfLo_, tfHi_);
 }
 
 void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
@@ -100,7 +104,10 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.tf = tf_;
   const float ratio =
       float(double(options_.sampleDistance) / options_.transferFunction.referenceDistance);
-  for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
+  // Compositing uses opacities per sample step; the projections use the table's own opacity.
+  if (options_.blendMode == kBlendComposite)
+    for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
+  v.blendMode = options_.blendMode;
   v.tfMin = float(tfLo_);
   v.tfMax = float(tfHi_);
   v.tfReferenceDistance = options_.sampleDistance;

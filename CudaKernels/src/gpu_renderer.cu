@@ -332,7 +332,7 @@ void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float*
   if (poison_)
     AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceImage, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
-  if (dsTextures_)
+  if (dsTextures_ && view.blendMode == kBlendComposite)  // the texture kernel composites only
     kernelInfo_ = kernels_texture::launchDsTexture(
         view.shading != 0, d, m.textureHandles(view, slotKeys),
         reinterpret_cast<float*>(m.deviceImage), nullptr, m.stream, true);

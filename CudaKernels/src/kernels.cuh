@@ -34,6 +34,17 @@ __global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
   image[int64_t(py) * f.camera.width + px] = make_float4(c.r, c.g, c.b, c.a);
 }
 
+/// Maximum / minimum / average intensity projection (FrameView::blendMode 1-3).
+template <int P>
+__global__ void __launch_bounds__(kTileX * kTileY)
+    projectionKernel(const FrameView f, float4* __restrict__ image) {
+  const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
+  const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
+  if (px >= f.camera.width || py >= f.camera.height) return;
+  const RGBA c = castProjectionRayWith(f, SamplerFor<P>{}, px, py);
+  image[int64_t(py) * f.camera.width + px] = make_float4(c.r, c.g, c.b, c.a);
+}
+
 template <bool Shaded, int P>
 __global__ void __launch_bounds__(kTileX * kTileY)
     countingKernel(const FrameView f, unsigned long long* total) {
@@ -112,6 +123,17 @@ std::string launchFullT(const FrameView& d, float* image, cudaStream_t stream, b
   return describe(fullKernel<Shaded, P, MinBlocks>, name.c_str());
 }
 
+template <int P>
+std::string launchProjectionT(const FrameView& d, float* image, cudaStream_t stream, bool describeIt) {
+  const LaunchConfig c = config(d);
+  projectionKernel<P><<<c.grid, c.block, 0, stream>>>(d, reinterpret_cast<float4*>(image));
+  AFAM_CUDA_CHECK(cudaGetLastError());
+  if (!describeIt) return {};
+  const std::string name = "projection<mode=" + std::to_string(d.blendMode) +
+                           ",p=" + (P < 0 ? std::string("any") : std::to_string(P)) + ">";
+  return describe(projectionKernel<P>, name.c_str());
+}
+
 template <bool Shaded, int P>
 void launchCountT(const FrameView& d, unsigned long long* total, cudaStream_t stream) {
   const LaunchConfig c = config(d);
@@ -132,6 +154,14 @@ std::string launchBareT(const FrameView& d, float* sink, unsigned long long* tot
 
 std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cudaStream_t s,
                        bool describeIt, int minBlocks) {
+  if (d.blendMode != kBlendComposite) {  // projections: no shading, one kernel per degree
+    switch (p) {
+      case 1: return launchProjectionT<1>(d, image, s, describeIt);
+      case 2: return launchProjectionT<2>(d, image, s, describeIt);
+      case 3: return launchProjectionT<3>(d, image, s, describeIt);
+      default: return launchProjectionT<-1>(d, image, s, describeIt);
+    }
+  }
   // Occupancy variant (8 blocks of 128 threads per SM: at most 64 registers), degree 2 only.
   if (minBlocks == 8 && p == 2)
     return shaded ? launchFullT<true, 2, 8>(d, image, s, describeIt)

@@ -198,3 +198,63 @@ TEST(Raycast, MaxDistanceStopsTheRayAtOpaqueGeometry) {
   EXPECT_NEAR(b.a, 1.f - std::pow(0.99f, float(limited.calls)), 1e-5);
   EXPECT_LT(b.a, 0.7f * a.a);
 }
+
+namespace {
+/// value = z of the sample point (a linear field), for the projection tests.
+struct DepthSampler {
+  template <bool G>
+  bool sample(const FrameView&, const float* p, float& v, float* g) const {
+    v = p[2];
+    if (G) g[0] = g[1] = 0.f, g[2] = 1.f;
+    return true;
+  }
+};
+}  // namespace
+
+TEST(Raycast, ProjectionsTakeTheLargestSmallestAndMeanValueOfTheRay) {
+  // Table over [-1, 1]: colour (v + 1) / 2 in every channel, alpha 0.2 at -1 to 0.8 at 1. Eye at
+  // z = 5 looking down -z: the ray's samples run from z = 1 (t = 4) to z = -1 (t = 6).
+  const float tf[8] = {0, 0, 0, 0.2f, 1, 1, 1, 0.8f};
+  FrameView f = constantFieldView(tf, 5.f);
+  f.tfMin = -1.f;
+  f.tfMax = 1.f;
+  f.camera.tanHalfX = f.camera.tanHalfY = 1e-4f;
+  auto expect = [](const RGBA& c, float v, const char* what) {
+    const float a = 0.2f + 0.3f * (v + 1.f), col = 0.5f * (v + 1.f);
+    EXPECT_NEAR(c.a, a, 2e-3) << what;
+    EXPECT_NEAR(c.r, col * a, 2e-3) << what;  // premultiplied
+    EXPECT_NEAR(c.b, col * a, 2e-3) << what;
+  };
+  const DepthSampler s;
+  f.blendMode = kBlendMaximum;
+  expect(castProjectionRayWith(f, s, 0, 0), 1.f, "maximum");
+  f.blendMode = kBlendMinimum;
+  expect(castProjectionRayWith(f, s, 0, 0), -1.f, "minimum");
+  // Average (VTK's convention): an opaque grey, the mean of alpha(v) (v - tfMin) / (tfMax - tfMin):
+  // here the mean of (0.5 + 0.3 z) (z + 1) / 2 over z in [-1, 1] = 0.3 (0.25 + 0.1 / 3 ... see below).
+  // For samples uniform in z on [a, b]: mean of (0.5 + 0.3 z)(z + 1)/2 = (1/2)(0.5 + 0.8 m + 0.3 q),
+  // m = mean z, q = mean z^2.
+  auto expectGrey = [](const RGBA& c, float grey, const char* what) {
+    EXPECT_NEAR(c.a, 1.f, 1e-6) << what;
+    EXPECT_NEAR(c.r, grey, 2e-3) << what;
+    EXPECT_NEAR(c.g, grey, 2e-3) << what;
+  };
+  auto averageOf = [](double a, double b) {
+    const double m = 0.5 * (a + b), q = (a * a + a * b + b * b) / 3.0;
+    return float(0.5 * (0.5 + 0.8 * m + 0.3 * q));
+  };
+  f.blendMode = kBlendAverage;
+  expectGrey(castProjectionRayWith(f, s, 0, 0), averageOf(-1, 1), "average");
+  // Opaque geometry at t = 5 (z = 0): the samples behind it do not count.
+  const float limit[1] = {5.f};
+  f.maxDistance = limit;
+  f.blendMode = kBlendMinimum;
+  expect(castProjectionRayWith(f, s, 0, 0), 0.f, "minimum, cut at z = 0");
+  f.blendMode = kBlendAverage;
+  expectGrey(castProjectionRayWith(f, s, 0, 0), averageOf(0, 1), "average, cut at z = 0");
+  f.blendMode = kBlendMaximum;
+  expect(castProjectionRayWith(f, s, 0, 0), 1.f, "maximum, cut at z = 0");
+  // A ray that misses the box: nothing.
+  f.camera.forward[2] = 1.f;
+  EXPECT_EQ(castProjectionRayWith(f, s, 0, 0).a, 0.f);
+}

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "afam/cpu_raycaster.hpp"
+#include "afam/errors.hpp"
 #include "afam/ground_truth.hpp"
 #include "afam/image_metrics.hpp"
 #include "afam/png_io.hpp"
@@ -258,4 +259,37 @@ TEST(Renderer, MaxDistanceHidesTheVolumeBehindOpaqueGeometry) {
   EXPECT_GT(middleFullAlpha, 1.0);  // the volume is visible there at all
   EXPECT_GT(middleAlpha, 0.05 * middleFullAlpha);
   EXPECT_LT(middleAlpha, 0.9 * middleFullAlpha);
+}
+
+TEST(Renderer, MaximumIntensityProjectionMatchesTheAnalyticOneAndCullsNothingByOpacity) {
+  auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
+  // A table that is transparent below the middle of the range: composite frames cull blocks by
+  // it, projections must not (a transparent block can hold a ray's extreme value).
+  TransferFunction tf;
+  tf.colors = {{0.0, 0.1, 0.2, 0.9}, {1.0, 1.0, 0.8, 0.1}};
+  tf.opacities = {{0.0, 0.0}, {0.55, 0.0}, {1.0, 0.9}};
+  RenderOptions o = testOptions(true);
+  o.hasTransferFunction = true;
+  o.transferFunction = tf;
+  const Camera c = testCamera();
+  FrameStats composite, mip;
+  {
+    Renderer r(file, o);
+    (void)r.renderFrame(c, composite);
+  }
+  o.blendMode = kBlendMaximum;
+  Renderer r(file, o);
+  const ImageRGBA img = r.renderFrame(c, mip);
+  const ImageRGBA gt = groundTruth(r, c);
+  const double p = psnrOf(img, gt);
+  std::printf("mip psnr=%.2f; tf-culled blocks: composite %lld, mip %lld\n", p,
+              (long long)composite.culled.tfBlocks, (long long)mip.culled.tfBlocks);
+  EXPECT_GT(composite.culled.tfBlocks, 0);
+  EXPECT_EQ(mip.culled.tfBlocks, 0);
+  EXPECT_GT(p, 35.0);
+  double alpha = 0;
+  for (size_t i = 3; i < img.rgba.size(); i += 4) alpha += img.rgba[i];
+  EXPECT_GT(alpha, 0.2 * c.width * c.height);  // the projection covers much of the view
+  o.blendMode = 7;
+  EXPECT_THROW(Renderer(file, o), InvalidArgument);
 }

@@ -163,6 +163,41 @@ TEST(GpuRenderer, MappedAndParallelCamerasMatchCpu) {
   }
 }
 
+// Maximum, minimum and average intensity projections: GPU == CPU, degree 2 and the generic path.
+TEST(GpuRenderer, ProjectionsMatchCpu) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const EncodedVolume* e = encoded("marschner_lobb", 2);
+  const Camera camera = Camera::fromPose({2.4, 40.0, 120.0}, 200, 160);
+  GpuRenderer gpu(size_t(64) << 20);
+  gpu.setPoisonOutput(true);
+  for (int mode : {kBlendMaximum, kBlendMinimum, kBlendAverage}) {
+    for (bool specialise : {true, false}) {
+      Frame frame;
+      FrameOptions options;
+      options.shaded = false;
+      options.sampleDistance = 0.005f;
+      buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
+      frame.view.blendMode = mode;
+      ImageRGBA cpu;
+      renderCpu(frame.view, cpu, 0);
+      std::vector<float> image(cpu.rgba.size());
+      gpu.setDegreeSpecialisation(specialise);
+      gpu.render(frame.view, frame.keys.data(), image.data());
+      const ImageDiff d = compareImages(cpu.rgba, image);
+      std::printf("[gpu-vs-cpu] projection mode=%d %s: max |diff| %d/255, %lld of %lld pixels "
+                  "differ, unwritten %lld  (%s)\n",
+                  mode, specialise ? "p=2" : "p=any", d.maxAbs8, (long long)d.differing,
+                  (long long)d.pixels, (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
+      EXPECT_EQ(d.nonFinite, 0);
+      EXPECT_LE(d.maxAbs8, 2);
+      double alpha = 0;
+      for (size_t i = 3; i < cpu.rgba.size(); i += 4) alpha += cpu.rgba[i];
+      EXPECT_GT(alpha, 100.0);
+    }
+  }
+  gpu.setDegreeSpecialisation(true);
+}
+
 TEST(GpuRenderer, GenericDegreePathMatchesSpecialised) {
   AFAM_SKIP_WITHOUT_GPU();
   const EncodedVolume* e = encoded("marschner_lobb", 2);

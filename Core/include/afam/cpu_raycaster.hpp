@@ -31,8 +31,9 @@ void renderCpuWith(const FrameView& f, const Sampler& sampler, ImageRGBA& image,
       const int x0 = (t % tilesX) * kTile, y0 = (t / tilesX) * kTile;
       for (int y = y0; y < y0 + kTile && y < h; ++y)
         for (int x = x0; x < x0 + kTile && x < w; ++x) {
-          const RGBA c = f.shading ? castRayWith<true>(f, sampler, x, y)
-                                   : castRayWith<false>(f, sampler, x, y);
+          const RGBA c = f.blendMode != kBlendComposite ? castProjectionRayWith(f, sampler, x, y)
+                         : f.shading                    ? castRayWith<true>(f, sampler, x, y)
+                                                        : castRayWith<false>(f, sampler, x, y);
           float* o = &image.rgba[(size_t(y) * size_t(w) + size_t(x)) * 4];
           o[0] = c.r;
           o[1] = c.g;

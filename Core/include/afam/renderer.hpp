@@ -42,6 +42,11 @@ struct RenderOptions {
   bool hasTransferFunction = false;  ///< false: TransferFunction::preset over the file's range
   TransferFunction transferFunction;
   float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
+  /// BlendMode (raycast.hpp): composite (0) or maximum / minimum / average intensity projection
+  /// (average: VTK's opaque grey level of the opacity-weighted mean value). Projections use the
+  /// table's own opacity, not corrected for the sample distance. No projection culls blocks by the transfer function (a block the table makes
+  /// transparent can still hold a ray's largest or smallest value, and counts in the mean).
+  int blendMode = 0;
 };
 
 struct FrameStats {

@@ -178,6 +178,10 @@ TEST(GpuRenderer, ProjectionsMatchCpu) {
       options.sampleDistance = 0.005f;
       buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
       frame.view.blendMode = mode;
+      // buildFrame's table holds opacities per 0.005 step (for compositing); a projection uses
+      // one opacity per ray, so give it the per-unit opacities back (alpha' = 1 - (1 - a)^200).
+      for (size_t i = 3; i < frame.tf.size(); i += 4)
+        frame.tf[i] = 1.f - std::pow(1.f - frame.tf[i], 200.f);
       ImageRGBA cpu;
       renderCpu(frame.view, cpu, 0);
       std::vector<float> image(cpu.rgba.size());

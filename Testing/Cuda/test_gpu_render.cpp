@@ -194,9 +194,13 @@ TEST(GpuRenderer, ProjectionsMatchCpu) {
                   (long long)d.pixels, (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
       EXPECT_EQ(d.nonFinite, 0);
       EXPECT_LE(d.maxAbs8, 2);
+      // Not empty, so the comparison means something (the preset table makes the lowest values
+      // transparent, so a minimum intensity image is nearly empty by design).
       double alpha = 0;
       for (size_t i = 3; i < cpu.rgba.size(); i += 4) alpha += cpu.rgba[i];
-      EXPECT_GT(alpha, 100.0);
+      if (mode != kBlendMinimum) {
+        EXPECT_GT(alpha, 100.0);
+      }
     }
   }
   gpu.setDegreeSpecialisation(true);

@@ -66,24 +66,17 @@ __global__ void __launch_bounds__(kTileX * kTileY)
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
   if (px >= f.camera.width || py >= f.camera.height) return;
   const SamplerFor<P> sampler{};
-  float o[3], d[3];
-  pixelRay(f.camera, px, py, o, d);
-  float tEnter, tExit, sum = 0.f;
+  float sum = 0.f;
   unsigned count = 0;
-  if (intersectBox(o, d, f.boxLo, f.boxHi, tEnter, tExit)) {
-    const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
-    const float dt = rayStep(f.camera, d, f.sampleDistance);
-    if (tExit >= tStart && dt > 0.f) {
-      int64_t k = int64_t(ceilf(tStart / dt));
-      const int64_t kEnd = int64_t(floorf(tExit / dt));
-      for (; k <= kEnd; ++k) {
-        const float t = float(k) * dt;
-        const float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
-        float value = 0.f, g[3] = {0.f, 0.f, 0.f};
-        if (!sampler.template sample<true>(f, p, value, g)) continue;
-        sum += value + g[0] + g[1] + g[2];
-        ++count;
-      }
+  RaySamples r;
+  if (raySamples(f, px, py, r)) {
+    for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
+      const float t = float(k) * r.dt;
+      const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
+      float value = 0.f, g[3] = {0.f, 0.f, 0.f};
+      if (!sampler.template sample<true>(f, p, value, g)) continue;
+      sum += value + g[0] + g[1] + g[2];
+      ++count;
     }
   }
   sink[int64_t(py) * f.camera.width + px] = sum;

@@ -51,12 +51,19 @@ struct BothImages {
   std::vector<float> gpu;
   ImageDiff diff;
 };
+/// blendMode != 0: a projection; buildFrame's table holds opacities per 0.005 step (for
+/// compositing) and a projection uses one opacity per ray, so it gets the per-unit opacities back
+/// (alpha' = 1 - (1 - a)^200).
 void renderOnBoth(GpuRenderer& gpu, const EncodedVolume& e, const Camera& camera, bool shaded,
-                  BothImages& out) {
+                  BothImages& out, int blendMode = kBlendComposite) {
   FrameOptions options;
   options.shaded = shaded;
   options.sampleDistance = 0.005f;
   buildFrame(e, distanceBands(e.partition, camera), camera, options, out.frame);
+  out.frame.view.blendMode = blendMode;
+  if (blendMode != kBlendComposite)
+    for (size_t i = 3; i < out.frame.tf.size(); i += 4)
+      out.frame.tf[i] = 1.f - std::pow(1.f - out.frame.tf[i], 200.f);
   renderCpu(out.frame.view, out.cpu, 0);
   out.gpu.assign(out.cpu.rgba.size(), 0.f);
   gpu.render(out.frame.view, out.frame.keys.data(), out.gpu.data());
@@ -172,22 +179,11 @@ TEST(GpuRenderer, ProjectionsMatchCpu) {
   gpu.setPoisonOutput(true);
   for (int mode : {kBlendMaximum, kBlendMinimum, kBlendAverage}) {
     for (bool specialise : {true, false}) {
-      Frame frame;
-      FrameOptions options;
-      options.shaded = false;
-      options.sampleDistance = 0.005f;
-      buildFrame(*e, distanceBands(e->partition, camera), camera, options, frame);
-      frame.view.blendMode = mode;
-      // buildFrame's table holds opacities per 0.005 step (for compositing); a projection uses
-      // one opacity per ray, so give it the per-unit opacities back (alpha' = 1 - (1 - a)^200).
-      for (size_t i = 3; i < frame.tf.size(); i += 4)
-        frame.tf[i] = 1.f - std::pow(1.f - frame.tf[i], 200.f);
-      ImageRGBA cpu;
-      renderCpu(frame.view, cpu, 0);
-      std::vector<float> image(cpu.rgba.size());
       gpu.setDegreeSpecialisation(specialise);
-      gpu.render(frame.view, frame.keys.data(), image.data());
-      const ImageDiff d = compareImages(cpu.rgba, image);
+      BothImages both;
+      renderOnBoth(gpu, *e, camera, false, both, mode);
+      const ImageRGBA& cpu = both.cpu;
+      const ImageDiff& d = both.diff;
       std::printf("[gpu-vs-cpu] projection mode=%d %s: max |diff| %d/255, %lld of %lld pixels "
                   "differ, unwritten %lld  (%s)\n",
                   mode, specialise ? "p=2" : "p=any", d.maxAbs8, (long long)d.differing,

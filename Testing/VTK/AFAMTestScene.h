@@ -11,6 +11,9 @@
 
 #include "afam/encoder.hpp"
 
+#include "vtkCallbackCommand.h"
+#include "vtkCamera.h"
+#include "vtkCommand.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -18,8 +21,12 @@
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
 #include "vtkRenderWindow.h"
+#include "vtkRenderWindowInteractor.h"
+#include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtkVolume.h"
+#include "vtkVolumeMapper.h"
 #include "vtkVolumeProperty.h"
 #include "vtkPNGReader.h"
 #include "vtkPNGWriter.h"
@@ -103,6 +110,47 @@ inline vtkSmartPointer<vtkVolumeProperty> VolumeProperty()
   property->SetScalarOpacityUnitDistance(0.1);
   property->ShadeOff();
   return property;
+}
+
+/// Collects the warning messages `object` emits into `messages` (for as long as the returned
+/// command lives).
+inline vtkSmartPointer<vtkCallbackCommand> CollectWarnings(
+  vtkObject* object, std::vector<std::string>& messages)
+{
+  auto command = vtkSmartPointer<vtkCallbackCommand>::New();
+  command->SetCallback([](vtkObject*, unsigned long, void* clientData, void* callData) {
+    static_cast<std::vector<std::string>*>(clientData)->push_back(
+      callData ? static_cast<const char*>(callData) : "");
+  });
+  command->SetClientData(&messages);
+  object->AddObserver(vtkCommand::WarningEvent, command);
+  return command;
+}
+
+/// A vtkVolume drawn by `mapper` with `property`.
+inline vtkSmartPointer<vtkVolume> MakeVolume(vtkVolumeMapper* mapper, vtkVolumeProperty* property)
+{
+  auto volume = vtkSmartPointer<vtkVolume>::New();
+  volume->SetMapper(mapper);
+  volume->SetProperty(property);
+  return volume;
+}
+
+/// The tests' window: 301 x 300 (an awkward width), no multisampling, `renderer` in it, an
+/// interactor, and the camera at (3.2, 2.4, 4.4) looking at the origin with a 30 degree view.
+inline void SetUpWindow(vtkRenderer* renderer, vtkRenderWindow* window,
+  vtkRenderWindowInteractor* interactor)
+{
+  window->SetSize(301, 300);
+  window->SetMultiSamples(0);
+  window->AddRenderer(renderer);
+  interactor->SetRenderWindow(window);
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetPosition(3.2, 2.4, 4.4);
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetViewUp(0, 1, 0);
+  camera->SetViewAngle(30);
+  renderer->ResetCameraClippingRange();
 }
 
 /// The window's current image as RGB bytes (bottom row first).

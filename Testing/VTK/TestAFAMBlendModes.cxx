@@ -49,11 +49,6 @@ std::array<int, 4> Box(const std::vector<unsigned char>& rgb, int w, int h, cons
   }
   return b;
 }
-
-void CountWarning(vtkObject*, unsigned long, void* clientData, void*)
-{
-  ++*static_cast<int*>(clientData);
-}
 }
 
 int main(int, char*[])
@@ -66,23 +61,16 @@ int main(int, char*[])
   }
   mapper->SetRenderDevice(vtkAFAMVolumeMapper::DEVICE_CPU);
   mapper->SetSampleDistance(0.01);
-  int warnings = 0;
-  vtkNew<vtkCallbackCommand> onWarning;
-  onWarning->SetCallback(CountWarning);
-  onWarning->SetClientData(&warnings);
-  mapper->AddObserver(vtkCommand::WarningEvent, onWarning);
+  std::vector<std::string> warnings;
+  auto watch = afam_vtk_test::CollectWarnings(mapper, warnings);
   vtkSmartPointer<vtkVolumeProperty> property = afam_vtk_test::VolumeProperty();
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  vtkSmartPointer<vtkVolume> volume = afam_vtk_test::MakeVolume(mapper, property);
 
   vtkNew<vtkGPUVolumeRayCastMapper> reference;
   reference->SetInputData(image);
   reference->SetSampleDistance(0.01);
   reference->SetAutoAdjustSampleDistances(0);
-  vtkNew<vtkVolume> referenceVolume;
-  referenceVolume->SetMapper(reference);
-  referenceVolume->SetProperty(property);
+  vtkSmartPointer<vtkVolume> referenceVolume = afam_vtk_test::MakeVolume(reference, property);
 
   vtkNew<vtkRenderer> renderer;
   const double background[3] = { 0.1, 0.1, 0.15 };
@@ -90,18 +78,9 @@ int main(int, char*[])
   renderer->AddVolume(volume);
   renderer->AddVolume(referenceVolume);
   vtkNew<vtkRenderWindow> window;
-  const int w = 301, h = 300;
-  window->SetSize(w, h);
-  window->SetMultiSamples(0);
-  window->AddRenderer(renderer);
   vtkNew<vtkRenderWindowInteractor> interactor;
-  interactor->SetRenderWindow(window);
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->SetPosition(3.2, 2.4, 4.4);
-  camera->SetFocalPoint(0, 0, 0);
-  camera->SetViewUp(0, 1, 0);
-  camera->SetViewAngle(30);
-  renderer->ResetCameraClippingRange();
+  afam_vtk_test::SetUpWindow(renderer, window, interactor);
+  const int w = 301, h = 300;
   const unsigned char bg[3] = { 26, 26, 38 };
 
   int failures = 0;
@@ -154,8 +133,8 @@ int main(int, char*[])
   mapper->SetBlendMode(vtkVolumeMapper::ADDITIVE_BLEND);
   window->Render();
   window->Render();
-  std::cout << "additive: " << warnings << " warning(s)\n";
-  if (warnings != 1)
+  std::cout << "additive: " << warnings.size() << " warning(s)\n";
+  if (warnings.size() != 1)
   {
     std::cerr << "FAILED: an unsupported blend mode must warn exactly once\n";
     ++failures;

@@ -36,14 +36,6 @@
 #include <string>
 #include <vector>
 
-namespace
-{
-void CollectWarning(vtkObject*, unsigned long, void* clientData, void* callData)
-{
-  static_cast<std::vector<std::string>*>(clientData)->push_back(
-    callData ? static_cast<const char*>(callData) : "");
-}
-}
 
 int TestAFAMVolumeMapper(int argc, char* argv[])
 {
@@ -63,15 +55,9 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   }
   mapper->SetRenderDevice(gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_AUTO);
   std::vector<std::string> warnings;
-  vtkNew<vtkCallbackCommand> onWarning;
-  onWarning->SetCallback(CollectWarning);
-  onWarning->SetClientData(&warnings);
-  mapper->AddObserver(vtkCommand::WarningEvent, onWarning);
+  auto watch = afam_vtk_test::CollectWarnings(mapper, warnings);
   vtkSmartPointer<vtkVolumeProperty> property = afam_vtk_test::VolumeProperty();
-
-  vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  vtkSmartPointer<vtkVolume> volume = afam_vtk_test::MakeVolume(mapper, property);
 
   vtkNew<vtkSphereSource> sphere;
   sphere->SetCenter(-1.3, 0.0, 0.6);
@@ -98,18 +84,8 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   renderer->AddActor(sphereActor);
   renderer->AddVolume(volume);
   vtkNew<vtkRenderWindow> window;
-  window->SetSize(301, 300);
-  window->SetMultiSamples(0);
-  window->AddRenderer(renderer);
   vtkNew<vtkRenderWindowInteractor> interactor;
-  interactor->SetRenderWindow(window);
-
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->SetPosition(3.2, 2.4, 4.4);
-  camera->SetFocalPoint(0, 0, 0);
-  camera->SetViewUp(0, 1, 0);
-  camera->SetViewAngle(30);
-  renderer->ResetCameraClippingRange();
+  afam_vtk_test::SetUpWindow(renderer, window, interactor);
   window->Render();
   window->Render(); // a second frame: a fallback warning must not repeat
 

@@ -511,27 +511,40 @@ AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
 // The ray
 // ---------------------------------------------------------------------------------------------
 
+/// The samples of pixel (px, py): origin o, unit direction d, step dt and the lattice indices
+/// [kBegin, kEnd] (samples at t = k dt, a global lattice). False when the ray takes none: it
+/// misses the box, opaque geometry or the near plane cuts it off, or sampleDistance <= 0.
+struct RaySamples {
+  float o[3], d[3];
+  float dt;
+  int64_t kBegin, kEnd;
+};
+AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
+  pixelRay(f.camera, px, py, r.o, r.d);
+  float tEnter, tExit;
+  if (!intersectBox(r.o, r.d, f.boxLo, f.boxHi, tEnter, tExit)) return false;
+  if (f.maxDistance) tExit = rc::minf(tExit, f.maxDistance[int64_t(py) * f.camera.width + px]);
+  const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
+  if (tExit < tStart || !(f.sampleDistance > 0.f)) return false;
+  // The opacity correction refers to sampleDistance: rayStep keeps the world length of a step.
+  r.dt = rayStep(f.camera, r.d, f.sampleDistance);
+  r.kBegin = int64_t(ceilf(tStart / r.dt));
+  r.kEnd = int64_t(floorf(tExit / r.dt));
+  return true;
+}
+
 /// March pixel (px, py) through the volume with any sampler; returns premultiplied RGBA.
 template <bool Shaded, typename Sampler>
 AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int py) {
   RGBA acc;
-  float o[3], d[3];
-  pixelRay(f.camera, px, py, o, d);
-  float tEnter, tExit;
-  if (!intersectBox(o, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
-  if (f.maxDistance) tExit = rc::minf(tExit, f.maxDistance[int64_t(py) * f.camera.width + px]);
-  const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
-  if (tExit < tStart || !(f.sampleDistance > 0.f)) return acc;
-  // The opacity correction refers to sampleDistance: rayStep keeps the world length of a step.
-  const float dt = rayStep(f.camera, d, f.sampleDistance);
+  RaySamples r;
+  if (!raySamples(f, px, py, r)) return acc;
+  const float* d = r.d;
   const float ratio =
       f.sampleDistance / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : f.sampleDistance);
-  // Samples on the global lattice t = k dt.
-  int64_t k = int64_t(ceilf(tStart / dt));
-  const int64_t kEnd = int64_t(floorf(tExit / dt));
-  for (; k <= kEnd; ++k) {
-    const float t = float(k) * dt;
-    const float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+  for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
+    const float t = float(k) * r.dt;
+    const float p[3] = {r.o[0] + t * d[0], r.o[1] + t * d[1], r.o[2] + t * d[2]};
     float value = 0.f;
     float g[3] = {0.f, 0.f, 0.f};
     // Shaded and gradientWithValue: one evaluation of value and gradient per sample. Otherwise the
@@ -572,20 +585,13 @@ enum BlendMode : int32_t {
 template <typename Sampler>
 AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, int px, int py) {
   RGBA acc;
-  float o[3], d[3];
-  pixelRay(f.camera, px, py, o, d);
-  float tEnter, tExit;
-  if (!intersectBox(o, d, f.boxLo, f.boxHi, tEnter, tExit)) return acc;
-  if (f.maxDistance) tExit = rc::minf(tExit, f.maxDistance[int64_t(py) * f.camera.width + px]);
-  const float tStart = rc::maxf(tEnter, f.camera.nearDistance);
-  if (tExit < tStart || !(f.sampleDistance > 0.f)) return acc;
-  const float dt = rayStep(f.camera, d, f.sampleDistance);
+  RaySamples r;
+  if (!raySamples(f, px, py, r)) return acc;
   float best = 0.f, sum = 0.f;
   int64_t n = 0;
-  const int64_t kEnd = int64_t(floorf(tExit / dt));
-  for (int64_t k = int64_t(ceilf(tStart / dt)); k <= kEnd; ++k) {
-    const float t = float(k) * dt;
-    const float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+  for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
+    const float t = float(k) * r.dt;
+    const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
     float value = 0.f, g[3] = {0.f, 0.f, 0.f};
     if (!sampler.template sample<false>(f, p, value, g)) continue;
     best = n == 0 ? value : (f.blendMode == kBlendMinimum ? rc::minf(best, value) : rc::maxf(best, value));

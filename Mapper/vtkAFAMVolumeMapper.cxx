@@ -128,10 +128,8 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, const double toFrame
   const double* m = inverse->GetData();
   const int cw = camera.width, ch = camera.height; // the cast image, at most the tile's size
   const afam::Vec3& e = camera.eye;
-  const afam::Vec3 &r = camera.right, &u = camera.up, &f = camera.forward;
-  afam::Vec3 n{ r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2], r[0] * u[1] - r[1] * u[0] };
-  const double fLength = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-  const double dn = (f[0] * n[0] + f[1] * n[1] + f[2] * n[2]) / fLength;
+  const afam::Vec3 n = afam::cross(camera.right, camera.up); // the image plane's normal
+  const double dn = afam::dot(camera.forward, n) / std::sqrt(afam::dot(camera.forward, camera.forward));
   limits.assign(static_cast<size_t>(cw) * static_cast<size_t>(ch),
     std::numeric_limits<float>::infinity());
   bool any = false;

@@ -50,11 +50,9 @@ int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Cam
   const double spacing = voxel * double(p.stride(level));
   // Half the view's height at the block: parallel, tanHalfY |up|; perspective, at distance d
   // along a ray, d tanHalfY |up| / |forward| (both |.| = 1 unless the camera was mapped()).
-  const double upLength = std::sqrt(c.up[0] * c.up[0] + c.up[1] * c.up[1] + c.up[2] * c.up[2]);
-  const double forwardLength =
-      std::sqrt(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] + c.forward[2] * c.forward[2]);
-  const double halfHeight =
-      c.parallel ? c.tanHalfY * upLength : d * c.tanHalfY * upLength / forwardLength;
+  const double upLength = std::sqrt(dot(c.up, c.up));
+  const double halfHeight = c.parallel ? c.tanHalfY * upLength
+                                       : d * c.tanHalfY * upLength / std::sqrt(dot(c.forward, c.forward));
   const double pixels = spacing / halfHeight * (0.5 * c.height);
   return pixels > options_.pixelBudget ? level + 1 : level;
 }
@@ -80,15 +78,12 @@ std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera)
 }
 
 namespace {
-using V3 = std::array<double, 3>;
-V3 crossOf(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+Vec3 combine(const Vec3& a, double s, const Vec3& b) {
+  return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]};
 }
-double dotOf(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 combine(const V3& a, double s, const V3& b) { return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]}; }
 /// n, flipped if needed so that n.inside > 0.
-V3 toward(V3 n, const V3& inside) {
-  if (dotOf(n, inside) < 0)
+Vec3 toward(Vec3 n, const Vec3& inside) {
+  if (dot(n, inside) < 0)
     for (double& x : n) x = -x;
   return n;
 }
@@ -99,32 +94,32 @@ bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const doub
   // spanned by an edge direction of the frustum and a frame vector, so the normals come from cross
   // products and hold for a mapped (non-orthonormal) frame too. For an orthonormal perspective
   // frame they are forward * tanHalf +- right / up; near: forward.
-  const V3 f = c.forward, r = c.right, u = c.up, e = c.eye;
-  V3 n[5], q[5];
+  const Vec3 f = c.forward, r = c.right, u = c.up, e = c.eye;
+  Vec3 n[5], q[5];
   if (!c.parallel) {
     // left: edge f + (cx - tx) r, spans u; right: f + (cx + tx) r; bottom/top likewise with u.
-    n[0] = toward(crossOf(u, combine(f, c.centerX - c.tanHalfX, r)), combine(f, c.centerX, r));
-    n[1] = toward(crossOf(u, combine(f, c.centerX + c.tanHalfX, r)), combine(f, c.centerX, r));
-    n[2] = toward(crossOf(r, combine(f, c.centerY - c.tanHalfY, u)), combine(f, c.centerY, u));
-    n[3] = toward(crossOf(r, combine(f, c.centerY + c.tanHalfY, u)), combine(f, c.centerY, u));
+    n[0] = toward(cross(u, combine(f, c.centerX - c.tanHalfX, r)), combine(f, c.centerX, r));
+    n[1] = toward(cross(u, combine(f, c.centerX + c.tanHalfX, r)), combine(f, c.centerX, r));
+    n[2] = toward(cross(r, combine(f, c.centerY - c.tanHalfY, u)), combine(f, c.centerY, u));
+    n[3] = toward(cross(r, combine(f, c.centerY + c.tanHalfY, u)), combine(f, c.centerY, u));
     for (int k = 0; k < 4; ++k) q[k] = e;
   } else {
-    const V3 nx = crossOf(u, f), ny = crossOf(r, f);  // normals of the side planes' pairs
+    const Vec3 nx = cross(u, f), ny = cross(r, f);  // normals of the side planes' pairs
     n[0] = toward(nx, r);
     q[0] = combine(e, c.centerX - c.tanHalfX, r);
-    n[1] = toward(nx, combine(V3{0, 0, 0}, -1, r));
+    n[1] = {-n[0][0], -n[0][1], -n[0][2]};
     q[1] = combine(e, c.centerX + c.tanHalfX, r);
     n[2] = toward(ny, u);
     q[2] = combine(e, c.centerY - c.tanHalfY, u);
-    n[3] = toward(ny, combine(V3{0, 0, 0}, -1, u));
+    n[3] = {-n[2][0], -n[2][1], -n[2][2]};
     q[3] = combine(e, c.centerY + c.tanHalfY, u);
   }
   // Near plane: parallel to the image plane (spanned by right and up), nearDistance along the
   // unit view direction from the eye.
-  V3 nn = toward(crossOf(r, u), f);
-  const double nnLength = std::sqrt(dotOf(nn, nn));
+  Vec3 nn = toward(cross(r, u), f);
+  const double nnLength = std::sqrt(dot(nn, nn));
   for (double& x : nn) x /= nnLength;
-  const double fLength = std::sqrt(dotOf(f, f));
+  const double fLength = std::sqrt(dot(f, f));
   n[4] = nn;
   q[4] = combine(e, c.nearDistance / fLength, f);
   for (int k = 0; k < 5; ++k) {

@@ -9,7 +9,6 @@
 
 using namespace afam;
 
-static double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 TEST(Camera, PoseFrameFollowsTheDataReadme) {
   const Pose pose{1.3, 35.0, 120.0};

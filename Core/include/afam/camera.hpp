@@ -22,6 +22,11 @@ namespace afam {
 
 using Vec3 = std::array<double, 3>;
 
+inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
 /// One recorded point of view (the trajectory file's three numbers).
 struct Pose {
   double distance = 1.5, thetaDeg = 0, phiDeg = 0;

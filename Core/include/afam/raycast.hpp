@@ -200,10 +200,16 @@ AFAM_HD float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] *
 // Ray setup
 // ---------------------------------------------------------------------------------------------
 
+/// Image-plane coordinates of pixel (px, py)'s centre in units of right and up (see the header).
+AFAM_HD void pixelOffsets(const RayCamera& c, int px, int py, float& su, float& sv) {
+  su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX + c.centerX;
+  sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY + c.centerY;
+}
+
 /// Unit ray direction of pixel (px, py), py = 0 the top row (see the header comment).
 AFAM_HD void rayDirection(const RayCamera& c, int px, int py, float* d) {
-  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX + c.centerX;
-  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY + c.centerY;
+  float su, sv;
+  pixelOffsets(c, px, py, su, sv);
   float x = su * c.right[0] + sv * c.up[0] + c.forward[0];
   float y = su * c.right[1] + sv * c.up[1] + c.forward[1];
   float z = su * c.right[2] + sv * c.up[2] + c.forward[2];
@@ -223,8 +229,8 @@ AFAM_HD void pixelRay(const RayCamera& c, int px, int py, float* o, float* d) {
     rayDirection(c, px, py, d);
     return;
   }
-  const float su = (2.f * (float(px) + 0.5f) / float(c.width) - 1.f) * c.tanHalfX + c.centerX;
-  const float sv = (1.f - 2.f * (float(py) + 0.5f) / float(c.height)) * c.tanHalfY + c.centerY;
+  float su, sv;
+  pixelOffsets(c, px, py, su, sv);
   for (int a = 0; a < 3; ++a) o[a] = c.eye[a] + su * c.right[a] + sv * c.up[a];
   const float inv = 1.f / sqrtf(c.forward[0] * c.forward[0] + c.forward[1] * c.forward[1] +
                                 c.forward[2] * c.forward[2]);
@@ -581,7 +587,8 @@ enum BlendMode : int32_t {
 /// smallest value is classified once by the table, whose alpha is the opacity of the projection
 /// (not corrected for the sample distance). Average, as VTK's vtkGPUVolumeRayCastMapper: an
 /// opaque grey level, the mean over the ray's samples of opacity (the table's own, as for
-/// maximum and minimum) times the value mapped over [tfMin, tfMax], clamped to [0, 1]. Returns premultiplied RGBA; nothing when the ray takes no sample.
+/// maximum and minimum) times the value mapped over [tfMin, tfMax], clamped to [0, 1]. Returns
+/// premultiplied RGBA; nothing when the ray takes no sample.
 template <typename Sampler>
 AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, int px, int py) {
   RGBA acc;
@@ -594,7 +601,10 @@ AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, i
     const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
     float value = 0.f, g[3] = {0.f, 0.f, 0.f};
     if (!sampler.template sample<false>(f, p, value, g)) continue;
-    best = n == 0 ? value : (f.blendMode == kBlendMinimum ? rc::minf(best, value) : rc::maxf(best, value));
+    if (n == 0)
+      best = value;
+    else
+      best = f.blendMode == kBlendMinimum ? rc::minf(best, value) : rc::maxf(best, value);
     if (f.blendMode == kBlendAverage) sum += classify(f, value).a * (value - f.tfMin);
     ++n;
   }

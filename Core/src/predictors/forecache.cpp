@@ -19,7 +19,6 @@ Frame frameOf(const Pose& p) {
           {std::cos(t) * std::cos(f), std::cos(t) * std::sin(f), -std::sin(t)},
           {-std::sin(f), std::cos(f), 0.0}};
 }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double emaAlpha = 0.5;  // weight of the newest move in a symbol's displacement
 }  // namespace
 

@@ -48,7 +48,8 @@ struct FileHeaderV1 {
   int32_t fixedNcp;
   uint8_t mode;
   uint8_t relativeBound;
-  uint16_t reserved0;
+  uint8_t levelSampling;  // LevelSampling: 0 point (files before it existed), 1 box
+  uint8_t reserved0;
   uint32_t indexChecksum;
   uint64_t entryCount;
   uint64_t indexOffset;
@@ -78,6 +79,7 @@ static_assert(offsetof(FileHeaderV1, degree) == 128, "layout");
 static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
 static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
 static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
+static_assert(offsetof(FileHeaderV1, levelSampling) == 138, "layout");
 static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
 static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
 static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
@@ -210,6 +212,10 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
   return ~crc;
 }
 
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes) {
+  return sizeof(FileHeaderV1) + entries * sizeof(IndexEntryV1) + payloadBytes;
+}
+
 uint64_t payloadBytes(const Int3& ncp) {
   const int32_t n[3] = {ncp[0], ncp[1], ncp[2]};
   uint64_t out = 0;
@@ -311,6 +317,9 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   vh.errorBound = h.errorBound;
   vh.relativeBound = h.relativeBound != 0;
   vh.mode = static_cast<EncodingMode>(h.mode);
+  if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
+    throw bad("unknown level sampling " + std::to_string(h.levelSampling));
+  vh.sampling = static_cast<LevelSampling>(h.levelSampling);
   vh.fixedNcp = h.fixedNcp;
   vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
   f->version_ = h.version;
@@ -547,6 +556,7 @@ void AfamWriter::commit() {
   h.fixedNcp = header_.fixedNcp;
   h.mode = static_cast<uint8_t>(header_.mode);
   h.relativeBound = header_.relativeBound ? 1 : 0;
+  h.levelSampling = static_cast<uint8_t>(header_.sampling);
   h.indexChecksum = crc32(raw.data(), indexBytes);
   h.entryCount = raw.size();
   h.indexOffset = sizeof(FileHeaderV1);

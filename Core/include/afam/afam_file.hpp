@@ -46,6 +46,8 @@ struct VolumeHeader {
   bool relativeBound = false;
   EncodingMode mode = EncodingMode::Adaptive;
   int fixedNcp = 0;        ///< Fixed mode: requested NCP (0 = n)
+  /// How coarse levels were sampled (and what their error is measured against).
+  LevelSampling sampling = LevelSampling::Point;
 };
 
 struct ModelEntry {
@@ -68,6 +70,10 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0);
 
 /// Payload bytes of a model: ncp product * 4.
 uint64_t payloadBytes(const Int3& ncp);
+
+/// Bytes of a file holding `entries` models whose payloads total `payloadBytes` (header + index +
+/// payloads, before the payload area's alignment padding).
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes);
 
 /// Size in bytes the paper's layout gives the same model: 1 + ((NCP + p) * 3 + NCP^3) * 4, with
 /// per-axis NCP and degree: 1 + (sum_a (ncp_a + p_a) + prod_a ncp_a) * 4.

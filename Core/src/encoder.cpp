@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "afam/fit.hpp"
+#include "block_encoding.hpp"
 #include "worker_pool.hpp"
 
 namespace afam {
@@ -28,25 +29,6 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string blockName(int level, const Int3& b) {
-  std::ostringstream s;
-  s << "block (" << b[0] << ", " << b[1] << ", " << b[2] << ") of level " << level;
-  return s.str();
-}
-
-struct BlockTask {
-  Int3 ijk{};
-  bool search = false;
-  std::vector<float> samples;
-  ModelEntry entry;
-  std::vector<float> payload;
-  int ncpStar = 0;
-  int64_t fits = 0;
-  bool complex = false;
-  bool refit = false;          ///< skipped the search by cross-level reuse, missed the bound, searched
-  bool exact = false;          ///< stored as its samples (no NCP met the bound)
-  bool reducedDegree = false;  ///< an axis has fewer samples than the degree needs
-};
 
 }  // namespace
 
@@ -125,9 +107,6 @@ namespace {
 LevelSampling levelSampling(EncodingMode mode) {
   return mode == EncodingMode::Downsampled ? LevelSampling::Point : LevelSampling::Box;
 }
-
-/// Bounded modes promise each block's RMSE <= the bound on its own samples; Fixed does not.
-bool bounded(EncodingMode mode) { return mode == EncodingMode::Adaptive || mode == EncodingMode::InLevel; }
 
 void validateOptions(const EncoderOptions& opt) {
   if (opt.degree < 1 || opt.degree > 5) throw InvalidArgument("encode: degree " + std::to_string(opt.degree) + " outside [1, 5]");
@@ -247,109 +226,6 @@ VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, i
   return header;
 }
 
-/// DS: the samples with their ghost layer are the payload; min/max over the block's own samples.
-void storeDownsampled(const BlockExtent& e, BlockTask& t) {
-  ModelEntry& m = t.entry;
-  for (int a = 0; a < 3; ++a) {
-    m.ncp[a] = e.samples[a] + 2;
-    m.degree[a] = 1;
-  }
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  const int gx = m.ncp[0], gy = m.ncp[1];
-  for (int z = 1; z <= e.samples[2]; ++z)
-    for (int y = 1; y <= e.samples[1]; ++y)
-      for (int x = 1; x <= e.samples[0]; ++x) {
-        const float v = t.samples[(size_t(z) * size_t(gy) + size_t(y)) * size_t(gx) + size_t(x)];
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-      }
-  m.minValue = lo;
-  m.maxValue = hi;
-  t.payload = std::move(t.samples);
-}
-
-/// What the spline modes fit for one block: the searched NCP*, or the mode's fixed NCP.
-struct FitContext {
-  const EncoderOptions& opt;
-  double bound;
-  int level;
-  std::string sourceName;
-};
-
-/// The block's samples themselves as a degree-1 spline with NCP = n per axis: its implied knots
-/// put the control points on the sample parameters, so it reproduces every (float) sample exactly.
-void exactModel(const BlockExtent& e, const std::vector<float>& samples, FitResult& fr) {
-  fr.ncp = e.samples;
-  for (int a = 0; a < 3; ++a) fr.degree[a] = effectiveDegree(1, e.samples[a]);
-  fr.control = samples;
-  const auto mm = std::minmax_element(samples.begin(), samples.end());
-  fr.error = ErrorStats{0, 0, double(*mm.first), double(*mm.second)};
-}
-
-/// Fits one block: the searched NCP*, or the mode's NCP without a search. In bounded modes the
-/// error is then checked on the block's own samples: a block that skipped the search (cross-level
-/// reuse) and misses the bound is searched, and one that misses it even at NCP = n is stored exactly.
-void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t, FitResult& fr) {
-  Int3 degs{};
-  int nmax = 1;
-  for (int a = 0; a < 3; ++a) {
-    degs[a] = effectiveDegree(c.opt.degree, e.samples[a]);
-    nmax = std::max(nmax, e.samples[a]);
-  }
-  const int lo = std::min(c.opt.degree + 1, nmax);
-  auto search = [&]() {
-    t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, c.bound, c.opt.search,
-                          c.opt.fastWindow, fr, t.fits);
-    t.complex = t.ncpStar > lo;
-  };
-  if (t.search) {
-    search();
-  } else {
-    const Int3 ncp = c.opt.mode == EncodingMode::Fixed
-                         ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
-                         : clampNcp(lo, e.samples, degs);
-    fitter.fitInto(t.samples.data(), e.samples, ncp, c.opt.degree, true, fr);
-    ++t.fits;
-    t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
-  }
-  if (!bounded(c.opt.mode) || fr.error.rmse <= c.bound) return;
-  if (!t.search) {
-    t.search = true;
-    t.refit = true;
-    search();
-    if (fr.error.rmse <= c.bound) return;
-  }
-  exactModel(e, t.samples, fr);
-  t.exact = true;
-  t.complex = true;
-}
-
-void fitSpline(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
-  FitResult fr;
-  try {
-    fitBlock(c, e, fitter, t, fr);
-  } catch (const NumericError& ex) {
-    throw NumericError("encode: " + blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
-  }
-  if (bounded(c.opt.mode) && !(fr.error.rmse <= c.bound)) {
-    std::ostringstream msg;
-    msg << "encode: " << blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << fr.error.rmse
-        << " over the bound " << c.bound << " even stored exactly";
-    throw NumericError(msg.str());
-  }
-  ModelEntry& m = t.entry;
-  m.ncp = fr.ncp;
-  m.degree = fr.degree;
-  m.minValue = float(fr.error.minValue);
-  m.maxValue = float(fr.error.maxValue);
-  m.rmse = float(fr.error.rmse);
-  m.maxError = float(fr.error.maxError);
-  for (int a = 0; a < 3; ++a)
-    if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
-  t.payload = std::move(fr.control);
-  std::vector<float>().swap(t.samples);
-}
-
 void countBlock(const BlockTask& t, bool ds, LevelStats& ls) {
   const ModelEntry& m = t.entry;
   ls.searched += t.search ? 1 : 0;
@@ -359,11 +235,11 @@ void countBlock(const BlockTask& t, bool ds, LevelStats& ls) {
   ls.reducedDegree += t.reducedDegree ? 1 : 0;
   ls.fits += t.fits;
   ls.samples += int64_t(m.samples[0]) * m.samples[1] * m.samples[2];
-  const uint64_t pb = payloadBytes(m.ncp);
-  ls.payloadBytes += pb;
-  ls.paperBytes += ds ? pb : paperModelBytes(m.ncp, m.degree);
-  ls.maxRmse = std::max(ls.maxRmse, double(m.rmse));
-  ls.maxError = std::max(ls.maxError, double(m.maxError));
+  ls.payloadBytes += m.storedSize;
+  ls.paperBytes += ds ? m.storedSize : paperModelBytes(m.ncp, m.degree);
+  ++ls.kinds[size_t(m.kind)];
+  ls.maxRmse = std::max(ls.maxRmse, t.rmse);
+  ls.maxError = std::max(ls.maxError, t.maxError);
   const int k = std::max({m.ncp[0], m.ncp[1], m.ncp[2]});
   if (ls.ncpHistogram.size() <= size_t(k)) ls.ncpHistogram.resize(size_t(k) + 1, 0);
   ++ls.ncpHistogram[size_t(k)];
@@ -397,7 +273,7 @@ class LevelEncoder {
       std::vector<BlockTask> tasks = gatherRows(l, kz, levelDone);
       fitBatch(l, tasks, levelDone);
       for (BlockTask& t : tasks) {
-        sink_.add(t.entry, t.payload.data());
+        sink_.add(t.entry, t.stored.data());
         complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
         countBlock(t, ds(), ls);
         levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
@@ -461,7 +337,7 @@ class LevelEncoder {
           if (ds())
             storeDownsampled(e, t);
           else
-            fitSpline(ctx, e, fitters_[size_t(w)], t);
+            encodeBlock(ctx, e, fitters_[size_t(w)], t);
           std::lock_guard<std::mutex> lock(doneMutex);
           batchDone += double(e.samples[0]) * e.samples[1] * e.samples[2];
         },

@@ -11,6 +11,7 @@ void InMemoryModels::begin(const VolumeHeader& h) {
   const int64_t total = partition.totalBlockCount();
   entries.assign(size_t(total), ModelEntry{});
   payloads.assign(size_t(total), {});
+  stored.assign(size_t(total), {});
   levelStart.assign(size_t(h.levels) + 1, 0);
   for (int l = 0; l < h.levels; ++l) levelStart[size_t(l) + 1] = levelStart[size_t(l)] + partition.blockCount(l);
 }
@@ -23,25 +24,28 @@ int64_t InMemoryModels::entryIndex(int level, Int3 ijk) const {
   return levelStart[size_t(level)] + partition.linearIndex(level, ijk);
 }
 
-void InMemoryModels::add(const ModelEntry& entry, const float* payload) {
+void InMemoryModels::add(const ModelEntry& entry, const void* bytes) {
   const int64_t i = entryIndex(entry.level, entry.block);
   if (i < 0) throw InvalidArgument("InMemoryModels: block out of range");
   ModelEntry e = entry;
   e.size = payloadBytes(e.ncp);
-  payloads[size_t(i)].assign(payload, payload + e.size / 4);
-  e.checksum = crc32(payload, e.size);
+  const auto* b = static_cast<const uint8_t*>(bytes);
+  stored[size_t(i)].assign(b, b + e.storedSize);
+  payloads[size_t(i)].resize(e.size / 4);
+  decodeStoredPayload(e, b, payloads[size_t(i)].data(), "in-memory " + std::to_string(i));
+  e.checksum = crc32(bytes, e.storedSize);
   entries[size_t(i)] = e;
 }
 
 void InMemoryModels::write(const std::string& path) const {
   AfamWriter w(path, header);
-  for (size_t i = 0; i < entries.size(); ++i) w.add(entries[i], payloads[i].data());
+  for (size_t i = 0; i < entries.size(); ++i) w.addStored(entries[i], stored[i].data());
   w.commit();
 }
 
 void FileModelSink::begin(const VolumeHeader& h) { writer_ = std::make_unique<AfamWriter>(path_, h); }
 
-void FileModelSink::add(const ModelEntry& e, const float* payload) { writer_->add(e, payload); }
+void FileModelSink::add(const ModelEntry& e, const void* stored) { writer_->addStored(e, stored); }
 
 uint64_t FileModelSink::commit() {
   const uint64_t size = writer_->bytesWritten();

@@ -180,6 +180,7 @@ TEST(Encoder, AdaptiveIsInLevelWhereSearched) {
       opt.errorBound = 1e-2;
       opt.relativeBound = true;
       opt.mode = EncodingMode::InLevel;
+      opt.compact = false;  // the paper's float splines: the NCP decisions are what is compared
       EncodeStats si, sa;
       const InMemoryModels in = encode(v, dims, opt, &si);
       opt.mode = EncodingMode::Adaptive;

@@ -53,6 +53,9 @@ struct EncoderOptions {
   int threads = 0;             ///< 0 = hardware concurrency
   SearchMethod search = SearchMethod::Fast;
   int fastWindow = 3;          ///< Fast search: NCPs checked below the bisection result
+  /// Bounded modes: store each block in its smallest form within the bound (a constant, a coded
+  /// spline or coded samples; block_codec.hpp). false: float32 splines, the paper's payloads.
+  bool compact = true;
   /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
   /// (encodeVolume then throws afam::Cancelled; nothing is written).
   std::function<bool(double fraction)> progress;
@@ -67,7 +70,8 @@ struct LevelStats {
   int64_t reducedDegree = 0;   ///< blocks with an axis of 2..degree samples (degree lowered there)
   int64_t fits = 0;            ///< fits performed at this level
   int64_t samples = 0;         ///< micro-block samples fitted (sum of n0 n1 n2)
-  uint64_t payloadBytes = 0;   ///< sum of payload sizes
+  uint64_t payloadBytes = 0;   ///< sum of stored payload sizes
+  std::array<int64_t, 3> kinds{};  ///< blocks per BlockKind (spline, samples, constant)
   uint64_t paperBytes = 0;     ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;

@@ -16,18 +16,20 @@ class ModelSink {
  public:
   virtual ~ModelSink() = default;
   virtual void begin(const VolumeHeader& header) = 0;
-  virtual void add(const ModelEntry& entry, const float* payload) = 0;
+  /// `stored` holds entry.storedSize bytes: the payload as the file stores it.
+  virtual void add(const ModelEntry& entry, const void* stored) = 0;
 };
 
 /// Keeps every model in memory (for the VTK filter and for tests).
 class InMemoryModels : public ModelSink {
  public:
   void begin(const VolumeHeader& h) override;
-  void add(const ModelEntry& entry, const float* payload) override;
+  void add(const ModelEntry& entry, const void* stored) override;
   VolumeHeader header;
   Partition partition;
   std::vector<ModelEntry> entries;            ///< ordered like the file: level, then linear index
-  std::vector<std::vector<float>> payloads;   ///< same order
+  std::vector<std::vector<float>> payloads;   ///< same order, decoded control points
+  std::vector<std::vector<uint8_t>> stored;   ///< same order, as the file stores them
   std::vector<int64_t> levelStart;
   int64_t entryIndex(int level, Int3 ijk) const;
   /// Writes everything to an .afam file (atomic).
@@ -39,7 +41,7 @@ class FileModelSink : public ModelSink {
  public:
   explicit FileModelSink(std::string path) : path_(std::move(path)) {}
   void begin(const VolumeHeader& h) override;
-  void add(const ModelEntry& e, const float* payload) override;
+  void add(const ModelEntry& e, const void* stored) override;
   /// Commits the file; returns its size in bytes.
   uint64_t commit();
 

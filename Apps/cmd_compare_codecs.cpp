@@ -283,7 +283,7 @@ int runCompareCodecs(int argc, char** argv) {
         usage);
     return 0;
   }
-  if (args.positional().empty()) throw InvalidArgument("no raw volume given; usage: " + std::string(usage));
+  if (args.positional().empty()) throw InvalidArgument("no raw volume given (afam compare-codecs --help)");
   const std::vector<double> bounds = parseBounds(args.str("bounds", "1e-2"));
   const EncoderOptions options = encoderOptions(args);
   const std::string zfpTarget = args.str("zfp-target", "reached");

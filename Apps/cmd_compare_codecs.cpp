@@ -290,6 +290,9 @@ int runCompareCodecs(int argc, char** argv) {
   if (zfpTarget != "reached" && zfpTarget != "bound")
     throw InvalidArgument("--zfp-target must be reached or bound, not '" + zfpTarget + "'");
   if (!zfpAvailable()) throw Error("this afam was built without ZFP (install libzfp-dev and configure again)");
+  const fs::path csvFolder = fs::path(args.str("csv")).parent_path();
+  if (args.has("csv") && !csvFolder.empty() && !fs::is_directory(csvFolder))
+    throw IoError(args.str("csv") + ": its folder does not exist");
   std::vector<std::unique_ptr<RawFileSource>> sources;
   for (const std::string& path : args.positional()) sources.push_back(openNamedRaw(path));
   const TemporaryFolder folder(args.has("work") ? fs::path(args.str("work")) : fs::temp_directory_path());

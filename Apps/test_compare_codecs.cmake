@@ -104,10 +104,12 @@ foreach (case
     "--bounds: every bound must be > 0;${vol};--bounds;0"
     "--bounds: every bound must be > 0;${vol};--bounds;1e-2,-1e-3"
     "--bounds: 'x' is not a number;${vol};--bounds;x"
-    "no raw volume given")
+    "no raw volume given"
+    "nowhere/out.csv: its folder does not exist;${vol};--csv;nowhere/out.csv"
+    "--zfp-target must be reached or bound;${vol};--zfp-target;half")
   list(GET case 0 pattern)
   list(REMOVE_AT case 0)
-  run_fails("${pattern}" ${AFAM} compare-codecs ${case} --csv bad.csv --work tmp)
+  run_fails("${pattern}" ${AFAM} compare-codecs --csv bad.csv --work tmp ${case})
   if (NOT RUN_FAILS_RC EQUAL 1)
     message(FATAL_ERROR "compare-codecs ${case}: exit status ${RUN_FAILS_RC}, expected 1")
   endif ()
@@ -115,4 +117,8 @@ foreach (case
     message(FATAL_ERROR "compare-codecs ${case} left bad.csv behind")
   endif ()
 endforeach ()
+file(GLOB left "${WORK}/tmp/*")
+if (left)
+  message(FATAL_ERROR "a failed compare-codecs left its temporary folder behind: ${left}")
+endif ()
 message(STATUS "compare-codecs test passed")

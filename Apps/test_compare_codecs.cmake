@@ -105,6 +105,7 @@ foreach (case
     "--bounds: every bound must be > 0;${vol};--bounds;1e-2,-1e-3"
     "--bounds: 'x' is not a number;${vol};--bounds;x"
     "no raw volume given"
+    "levels is 0;${vol};--levels;0"
     "nowhere/out.csv: its folder does not exist;${vol};--csv;nowhere/out.csv"
     "--zfp-target must be reached or bound;${vol};--zfp-target;half")
   list(GET case 0 pattern)

@@ -27,8 +27,9 @@ int runEncode(int argc, char** argv) {
         "Dims and type default to what a name like name_64x64x93_int16.raw says.\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
-        "  --levels L        levels of detail (default 4; level 0 is the coarsest)\n"
-        "  --blocks B        blocks per axis at the finest level (default 16)\n"
+        "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks along\n"
+        "                    the longest axis; level 0 is the coarsest)\n"
+        "  --blocks B        blocks per axis at the finest level (default: about 32 samples a block)\n"
         "  --degree P        B-spline degree (default 2)\n"
         "  --mode M          adaptive (default), inlevel (search every block), fixed (NCP = n or\n"
         "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"
@@ -44,8 +45,8 @@ int runEncode(int argc, char** argv) {
   args.expectPositional(2, usage);
   auto source = openRaw(args.positional()[0], args);
   EncoderOptions opt;
-  opt.levels = int(args.integer("levels", 4));
-  opt.blocksPerAxis = int(args.integer("blocks", 16));
+  opt.levels = int(args.integer("levels", 0));
+  opt.blocksPerAxis = int(args.integer("blocks", 0));
   opt.degree = int(args.integer("degree", 2));
   opt.errorBound = args.real("error-bound", 1e-4);
   opt.relativeBound = args.has("relative");
@@ -74,7 +75,7 @@ int runEncode(int argc, char** argv) {
   std::printf("encoded %s -> %s\n", args.positional()[0].c_str(), args.positional()[1].c_str());
   std::printf("dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
               (long long)d[0], (long long)d[1], (long long)d[2], scalarTypeName(source->type()),
-              modeName(opt.mode), search.c_str(), opt.levels, opt.blocksPerAxis, opt.degree, s.bound,
+              modeName(opt.mode), search.c_str(), s.levelsUsed, s.blocksPerAxisUsed, opt.degree, s.bound,
               opt.relativeBound ? " (relative)" : "");
   std::printf("seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
               "fits=%lld blocks=%lld\n",

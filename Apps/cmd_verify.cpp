@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam verify FILE.afam [--against IN.raw] [--level K]
-#include <cmath>
 #include <cstdio>
 
 #include "afam/afam_file.hpp"
 #include "afam/encoder.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "level_error.hpp"
 #include "source_args.hpp"
 
 namespace afam::cli {
@@ -28,7 +28,6 @@ int runVerify(int argc, char** argv) {
   args.expectPositional(1, usage);
   auto f = AfamFile::open(args.positional()[0]);
   const VolumeHeader& h = f->header();
-  const Partition& part = f->partition();
   ProgressBar bar("verify", args.has("progress"));
   std::vector<float> payload;
   const size_t n = f->entries().size();
@@ -45,42 +44,10 @@ int runVerify(int argc, char** argv) {
     throw InvalidArgument(args.str("against") + ": dims differ from the .afam file's");
   const int level = int(args.integer("level", h.levels - 1));
   if (level < 0 || level >= h.levels) throw InvalidArgument("--level out of range");
-  BlockRowReader reader(*src, part);
-  const Int3 nb = part.blocksPerAxis(level);
-  std::vector<std::vector<float>> raw;
-  std::vector<float> decoded;
-  double sumSq = 0, maxErr = 0;
-  int64_t count = 0;
-  for (int kz = 0; kz < nb[2]; ++kz) {
-    reader.readRow(level, kz, false, h.sampling, raw);
-    for (int j = 0; j < nb[1]; ++j)
-      for (int i = 0; i < nb[0]; ++i) {
-        const Int3 ijk{i, j, kz};
-        const int64_t ei = f->entryIndex(level, ijk);
-        const ModelEntry& m = f->entries()[size_t(ei)];
-        payload.resize(m.size / 4);
-        f->readPayload(ei, payload.data());
-        decodeBlockSamples(m, payload.data(), h.mode, decoded);
-        const std::vector<float>& r = raw[size_t(j) * size_t(nb[0]) + size_t(i)];
-        // Count each shared boundary sample once: skip the last sample on an axis unless the block
-        // is the last one along it.
-        const int ex = m.samples[0] - (i + 1 < nb[0] ? 1 : 0), ey = m.samples[1] - (j + 1 < nb[1] ? 1 : 0),
-                  ez = m.samples[2] - (kz + 1 < nb[2] ? 1 : 0);
-        for (int z = 0; z < std::max(ez, 1); ++z)
-          for (int y = 0; y < std::max(ey, 1); ++y)
-            for (int x = 0; x < std::max(ex, 1); ++x) {
-              const size_t k = (size_t(z) * size_t(m.samples[1]) + size_t(y)) * size_t(m.samples[0]) + size_t(x);
-              const double d = double(decoded[k]) - double(r[k]);
-              sumSq += d * d;
-              maxErr = std::max(maxErr, std::fabs(d));
-              ++count;
-            }
-      }
-    bar(0.5 + 0.5 * double(kz + 1) / double(nb[2]));
-  }
+  const ErrorAccumulator e = measureLevelError(*f, *src, level, [&](double x) { bar(0.5 + 0.5 * x); });
   bar.finish();
-  const double rmse = std::sqrt(sumSq / double(std::max<int64_t>(count, 1)));
-  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)count, rmse, maxErr);
+  const double rmse = e.rmse();
+  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)e.count, rmse, e.maxError);
   if (args.has("max-rmse") && !(rmse <= args.real("max-rmse", 0)))
     throw Error("rmse " + std::to_string(rmse) + " is above --max-rmse " + args.str("max-rmse"));
   return 0;

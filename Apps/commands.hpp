@@ -19,3 +19,4 @@ int runRender(int argc, char** argv);     // Apps/cmd_render.cpp
 int runReplay(int argc, char** argv);     // Apps/cmd_replay.cpp
 int runPredict(int argc, char** argv);    // Apps/cmd_predict.cpp
 int runCompare(int argc, char** argv);    // Apps/cmd_compare.cpp
+int runCompareCodecs(int argc, char** argv);  // Apps/cmd_compare_codecs.cpp

@@ -35,6 +35,9 @@ const Command kCommands[] = {
 #ifdef AFAM_HAVE_CMD_COMPARE
     {"compare", runCompare, "psnr/ssim of one PNG against another: afam compare TEST.png REF.png"},
 #endif
+#ifdef AFAM_HAVE_CMD_COMPARE_CODECS
+    {"compare-codecs", runCompareCodecs, "Adaptive-FAM against ZFP at the same RMSE on raw volumes"},
+#endif
 #ifdef AFAM_HAVE_CMD_PREDICT
     {"predict", runPredict, "predict the next pose along a trajectory (prefetch predictors)"},
 #endif

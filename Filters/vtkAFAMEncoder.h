@@ -40,10 +40,11 @@ public:
   ///@}
 
   ///@{
-  /// Levels of detail, default 4, range [1, 8]; finest blocks per axis, default 16, [1, 256].
-  vtkSetClampMacro(Levels, int, 1, 8);
+  /// Levels of detail, [1, 16]; finest blocks per axis, [1, 4096]. 0 (the default) for each: from
+  /// the image's dimensions (blocks of about 32 samples, levels down to 2 blocks along the longest axis).
+  vtkSetClampMacro(Levels, int, 0, 16);
   vtkGetMacro(Levels, int);
-  vtkSetClampMacro(BlocksPerAxis, int, 1, 256);
+  vtkSetClampMacro(BlocksPerAxis, int, 0, 4096);
   vtkGetMacro(BlocksPerAxis, int);
   ///@}
 
@@ -88,8 +89,8 @@ protected:
 
   double ErrorBound = 1e-3;
   bool RelativeBound = true;
-  int Levels = 4;
-  int BlocksPerAxis = 16;
+  int Levels = 0;
+  int BlocksPerAxis = 0;
   int Degree = 2;
   int Mode = 0;
   int FixedNcp = 0;

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: BSD-3-Clause
 # The evaluation report of issue 8, from scratch, with one command:
 #   scripts/evaluate.sh [--smoke|--small|--full] OUTDIR
-# Writes OUTDIR/{encoding,quality,compressors,latency,stability}/*.csv, a PNG plot beside each
+# Writes OUTDIR/{encoding,quality,compressors,latency,stability,codecs}/*.csv, a PNG plot beside each
 # CSV (same stem), OUTDIR/commands.log (every command run, in order, with its wall time) and
 # OUTDIR/summary.md (the key numbers, Pareto verdict included; its latency comes from
 # interleaved rounds of replays, scripts/evaluation/pareto_replays.sh, AFAM_PARETO_REPS rounds).
@@ -73,7 +73,7 @@ PARETO_REPS=${AFAM_PARETO_REPS:-$PARETO_REPS}
 # view, storage emulated at STORAGE_MBPS (the paper read from a 5400 rpm HDD).
 STORAGE_MBPS=${AFAM_STORAGE_MBPS:-100}
 
-mkdir -p "$OUT"/{encoding,quality,compressors,latency,stability,work,images}
+mkdir -p "$OUT"/{encoding,quality,compressors,latency,stability,codecs,work,images}
 W=$OUT/work
 LOG=$OUT/commands.log
 : > "$LOG"
@@ -211,6 +211,16 @@ for vol in $VOLUMES; do
   SFILES+=("${name}_adaptive=$W/${name}_adaptive_${REL_BOUNDS##* }.afam")
 done
 run "$EVAL" seams --csv "$OUT/stability/seams.csv" "${SFILES[@]}" > "$W/seams.log"
+
+# ---- (7) Adaptive-FAM against ZFP at the same RMSE on the corpus -------------------------------
+# afam compare-codecs with the encoder's default partition; ZFP fixed-accuracy tuned to the RMSE
+# Adaptive-FAM reached.
+stamp "compression against ZFP (compare-codecs)"
+CC_VOLS=()
+for vol in $VOLUMES; do CC_VOLS+=("$DATA/volumes/$vol"); done
+run "$AFAM" compare-codecs "${CC_VOLS[@]}" --bounds 1e-2,1e-3 --threads "$JOBS" --work "$W" \
+  --csv "$OUT/codecs/compare_codecs.csv" > "$W/compare_codecs.log"
+run $PY "$ROOT/scripts/evaluation/report.py" codecs "$OUT"
 
 # ---- summary -------------------------------------------------------------------------------------
 T_END=$(date +%s)

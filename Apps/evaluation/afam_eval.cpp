@@ -42,10 +42,8 @@
 #include "afam/png_io.hpp"
 #include "afam/renderer.hpp"
 #include "gpu_device.hpp"
+#include "zfp_codec.hpp"
 
-#ifdef AFAM_EVAL_HAVE_ZFP
-#include <zfp.h>
-#endif
 #ifdef AFAM_EVAL_HAVE_FPZIP
 #include <fpzip.h>
 #endif
@@ -221,30 +219,12 @@ void withClampedGhost(const ModelEntry& m, const std::vector<float>& in, std::ve
 size_t codecRoundTrip(const std::string& codec, double param, const std::vector<float>& in, int nx, int ny,
                       int nz, std::vector<float>& out, double& decMs) {
   out.assign(in.size(), 0.f);
-#ifdef AFAM_EVAL_HAVE_ZFP
   if (codec == "zfp") {
-    std::vector<float> src(in);
-    zfp_field* field = zfp_field_3d(src.data(), zfp_type_float, size_t(nx), size_t(ny), size_t(nz));
-    zfp_stream* zs = zfp_stream_open(nullptr);
-    zfp_stream_set_rate(zs, param, zfp_type_float, 3, zfp_false);
-    std::vector<unsigned char> buf(zfp_stream_maximum_size(zs, field));
-    bitstream* bs = stream_open(buf.data(), buf.size());
-    zfp_stream_set_bit_stream(zs, bs);
-    zfp_stream_rewind(zs);
-    const size_t bytes = zfp_compress(zs, field);
-    if (!bytes) throw std::runtime_error("zfp_compress failed");
-    zfp_field* dfield = zfp_field_3d(out.data(), zfp_type_float, size_t(nx), size_t(ny), size_t(nz));
-    const auto t0 = Clock::now();
-    zfp_stream_rewind(zs);
-    if (!zfp_decompress(zs, dfield)) throw std::runtime_error("zfp_decompress failed");
-    decMs += msSince(t0);
-    zfp_field_free(dfield);
-    zfp_field_free(field);
-    zfp_stream_close(zs);
-    stream_close(bs);
-    return bytes;
+    const ZfpRoundTrip z = zfpRoundTrip(ZfpMode::FixedRate, param, in.data(), size_t(nx), size_t(ny), size_t(nz),
+                                        out.data());
+    decMs += 1000.0 * z.decompressSeconds;
+    return z.bytes;
   }
-#endif
 #ifdef AFAM_EVAL_HAVE_FPZIP
   if (codec == "fpzip") {
     std::vector<unsigned char> buf(in.size() * sizeof(float) * 2 + 1024);
@@ -564,11 +544,7 @@ int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
     std::printf("usage: afam_eval quality|compress|stability|seams [options]  (see the header of "
                 "Apps/evaluation/afam_eval.cpp)\ncodecs:%s%s\n",
-#ifdef AFAM_EVAL_HAVE_ZFP
-                " zfp",
-#else
-                "",
-#endif
+                zfpAvailable() ? " zfp" : "",
 #ifdef AFAM_EVAL_HAVE_FPZIP
                 " fpzip"
 #else

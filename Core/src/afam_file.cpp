@@ -14,6 +14,7 @@
 
 #include "afam/block_codec.hpp"
 #include "afam/errors.hpp"
+#include "afam/fit.hpp"
 
 namespace afam {
 
@@ -203,16 +204,18 @@ AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
   if (kind == BlockKind::Samples) return {effDegree(1, n), n, n};
   const int p = effDegree(headerDegree, n);
   if (kind == BlockKind::Constant) return {p, p + 1, p + 1};
+  if (kind == BlockKind::Interpolant) return {p, n, n};
   return {p, p + 1, n};
 }
 
 /// Empty when the model is valid for its block, else what is wrong.
 std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree, const BlockExtent& e) {
-  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Constant))
+  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Interpolant))
     return "unknown block kind " + std::to_string(static_cast<int>(m.kind));
   if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded))
     return "a downsampled file holds raw samples only";
   if (m.kind == BlockKind::Constant && m.coded) return "a constant block is never coded";
+  if (m.kind == BlockKind::Interpolant && !m.coded) return "an interpolant block is always coded";
   for (int a = 0; a < 3; ++a) {
     const AxisRule r = axisRule(m.kind, mode, headerDegree, e.samples[a]);
     if (m.ncp[a] < r.ncpLo || m.ncp[a] > r.ncpHi || m.degree[a] != r.degree || m.ncp[a] > 65535)
@@ -290,6 +293,7 @@ const char* blockKindName(BlockKind kind) {
     case BlockKind::Spline: return "spline";
     case BlockKind::Samples: return "samples";
     case BlockKind::Constant: return "constant";
+    case BlockKind::Interpolant: return "interpolant";
   }
   return "unknown";
 }
@@ -300,6 +304,18 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     float c;
     std::memcpy(&c, stored, 4);
     std::fill(out, out + count, c);
+  } else if (e.kind == BlockKind::Interpolant) {
+    thread_local std::vector<float> samples;
+    thread_local BlockFitter fitter;
+    thread_local FitResult fit;
+    samples.resize(count);
+    decodeValues(stored, e.storedSize, e.ncp, samples.data(), where.c_str());
+    try {
+      fitter.fitInto(samples.data(), e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
+    } catch (const Error& ex) {
+      throw FormatError(where + ": interpolant does not decode: " + ex.what());
+    }
+    std::memcpy(out, fit.control.data(), count * sizeof(float));
   } else if (e.coded) {
     decodeValues(stored, e.storedSize, e.ncp, out, where.c_str());
   } else {

@@ -15,10 +15,7 @@ namespace afam {
 
 namespace {
 
-constexpr int64_t kMaxQ = int64_t(1) << 50;
-constexpr int64_t kMaxResidual = int64_t(1) << 56;
-
-int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+constexpr double kMaxCode = 1125899906842624.0;  // 2^50: residual codes beyond are refused
 
 struct Lattice {
   Int3 n;
@@ -28,12 +25,12 @@ struct Lattice {
 /// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
 /// q[index] known when it returns.
 template <typename Fn>
-void lorenzo(const Lattice& L, std::vector<int64_t>& q, int s, Fn&& fn) {
-  auto at = [&](int x, int y, int z) -> int64_t { return x < 0 || y < 0 || z < 0 ? 0 : q[size_t(L.index(x, y, z))]; };
+void lorenzo(const Lattice& L, const std::vector<double>& q, int s, Fn&& fn) {
+  auto at = [&](int x, int y, int z) -> double { return x < 0 || y < 0 || z < 0 ? 0.0 : q[size_t(L.index(x, y, z))]; };
   for (int z = 0; z < L.n[2]; z += s)
     for (int y = 0; y < L.n[1]; y += s)
       for (int x = 0; x < L.n[0]; x += s) {
-        const int64_t p = at(x - s, y, z) + at(x, y - s, z) + at(x, y, z - s) - at(x - s, y - s, z) -
+        const double p = at(x - s, y, z) + at(x, y - s, z) + at(x, y, z - s) - at(x - s, y - s, z) -
                           at(x - s, y, z - s) - at(x, y - s, z - s) + at(x - s, y - s, z - s);
         fn(L.index(x, y, z), p);
       }
@@ -42,16 +39,16 @@ void lorenzo(const Lattice& L, std::vector<int64_t>& q, int s, Fn&& fn) {
 /// Prediction of the point at coordinate c (an odd multiple of s) along one axis of length len,
 /// from the known points at c -+ s and c -+ 3s; v(k) reads the point at coordinate k on that axis.
 template <typename V>
-int64_t interpolate(int c, int s, int len, V&& v) {
-  const int64_t b = v(c - s);
+double interpolate(int c, int s, int len, V&& v) {
+  const double b = v(c - s);
   if (c + s >= len) return b;
-  const int64_t d = v(c + s);
-  if (c - 3 * s >= 0 && c + 3 * s < len) return floorDiv(-v(c - 3 * s) + 9 * b + 9 * d - v(c + 3 * s) + 8, 16);
-  return floorDiv(b + d + 1, 2);
+  const double d = v(c + s);
+  if (c - 3 * s >= 0 && c + 3 * s < len) return (-v(c - 3 * s) + 9 * b + 9 * d - v(c + 3 * s)) / 16;
+  return (b + d) / 2;
 }
 
 template <typename Fn>
-void interpolation(const Lattice& L, std::vector<int64_t>& q, Fn&& fn) {
+void interpolation(const Lattice& L, const std::vector<double>& q, Fn&& fn) {
   const int maxn = std::max({L.n[0], L.n[1], L.n[2]});
   int S = 1;
   while (2 * S <= maxn - 1) S *= 2;
@@ -74,7 +71,7 @@ void interpolation(const Lattice& L, std::vector<int64_t>& q, Fn&& fn) {
 }
 
 template <typename Fn>
-void visit(Predictor p, const Lattice& L, std::vector<int64_t>& q, Fn&& fn) {
+void visit(Predictor p, const Lattice& L, const std::vector<double>& q, Fn&& fn) {
   if (p == Predictor::Lorenzo)
     lorenzo(L, q, 1, fn);
   else
@@ -106,27 +103,49 @@ ZSTD_DCtx* threadDCtx() {
   return ctx.get();
 }
 
+/// Predicts every value from the values already reconstructed (in the predictor's order) and
+/// quantizes the prediction residual: code = round((v - prediction) / step), reconstruction =
+/// prediction + code * step, so each reconstructed value lies within step / 2 of its value.
+/// false when a code exceeds 2^50.
+bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor, std::vector<int64_t>& codes,
+                     std::vector<float>& reconstructed) {
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  std::vector<double> r(count, 0.0);
+  codes.clear();
+  codes.reserve(count);
+  bool ok = true;
+  visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
+    const double q = std::nearbyint((double(values[i]) - pred) / step);
+    if (!(std::fabs(q) <= kMaxCode)) {
+      ok = false;
+      r[size_t(i)] = double(values[i]);
+      return;
+    }
+    codes.push_back(int64_t(q));
+    r[size_t(i)] = pred + q * step;
+  });
+  reconstructed.resize(count);
+  for (size_t i = 0; i < count; ++i) reconstructed[i] = static_cast<float>(r[i]);
+  return ok;
+}
+
 }  // namespace
+
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor, std::vector<float>& reconstructed) {
+  if (!(step > 0) || !std::isfinite(step)) return false;
+  std::vector<int64_t> codes;
+  return predictQuantize(values, n, step, predictor, codes, reconstructed);
+}
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
                   std::vector<uint8_t>& out, std::vector<float>& reconstructed) {
   out.clear();
   if (!(step > 0) || !std::isfinite(step)) return false;
-  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  std::vector<int64_t> q(count);
-  reconstructed.resize(count);
-  for (size_t i = 0; i < count; ++i) {
-    const double v = std::nearbyint(double(values[i]) / step);
-    if (!(std::fabs(v) <= kMaxQuantized)) return false;
-    q[i] = int64_t(v);
-    reconstructed[i] = static_cast<float>(double(q[i]) * step);
-  }
+  std::vector<int64_t> codes;
+  if (!predictQuantize(values, n, step, predictor, codes, reconstructed)) return false;
   std::vector<uint8_t> varints;
-  varints.reserve(count + count / 4);
-  visit(predictor, Lattice{n}, q, [&](int64_t i, int64_t pred) {
-    const int64_t r = q[size_t(i)] - pred;
-    putVarint((uint64_t(r) << 1) ^ uint64_t(r >> 63), varints);
-  });
+  varints.reserve(codes.size() + codes.size() / 4);
+  for (const int64_t c : codes) putVarint((uint64_t(c) << 1) ^ uint64_t(c >> 63), varints);
   out.resize(kCodedHeaderBytes + ZSTD_compressBound(varints.size()));
   std::memcpy(out.data(), &step, 8);
   out[8] = uint8_t(predictor);
@@ -149,9 +168,9 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
   const size_t got = ZSTD_decompressDCtx(threadDCtx(), varints.data(), varints.size(), data + kCodedHeaderBytes,
                                          bytes - kCodedHeaderBytes);
   if (ZSTD_isError(got)) throw bad(std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");
-  std::vector<int64_t> q(count, 0);
+  std::vector<double> r(count, 0.0);
   size_t pos = 0;
-  visit(Predictor(data[8]), Lattice{n}, q, [&](int64_t i, int64_t pred) {
+  visit(Predictor(data[8]), Lattice{n}, r, [&](int64_t i, double pred) {
     uint64_t u = 0;
     for (int shift = 0;; shift += 7) {
       if (pos >= got || shift > 63) throw bad("ends inside a residual");
@@ -159,15 +178,13 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
       u |= uint64_t(b & 0x7f) << shift;
       if (!(b & 0x80)) break;
     }
-    const int64_t r = int64_t(u >> 1) ^ -int64_t(u & 1);
-    if (r > kMaxResidual || r < -kMaxResidual) throw bad("holds an absurd residual");
-    const int64_t v = pred + r;
-    if (v > kMaxQ || v < -kMaxQ) throw bad("decodes a value outside the quantization lattice");
-    q[size_t(i)] = v;
+    const int64_t code = int64_t(u >> 1) ^ -int64_t(u & 1);
+    if (!(std::fabs(double(code)) <= kMaxCode)) throw bad("holds an absurd residual");
+    r[size_t(i)] = pred + double(code) * step;
   });
   if (pos != got) throw bad("has " + std::to_string(got - pos) + " bytes after its last residual");
   for (size_t i = 0; i < count; ++i) {
-    const float v = static_cast<float>(double(q[i]) * step);
+    const float v = static_cast<float>(r[i]);
     if (!std::isfinite(v)) throw bad("decodes to a value beyond float32");
     out[i] = v;
   }

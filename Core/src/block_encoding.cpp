@@ -16,10 +16,12 @@ namespace {
 // Compact mode: the spline is fitted to kFitShare of the bound, the rest of the budget (in
 // quadrature) goes to the quantization of its control points. Steps are tried from the largest
 // (the basis averages independent rounding errors, so the model moves less than the points) down.
+// The largest step whose reconstruction meets the bound is kept: a larger step is fewer bits, and a
+// block whose error budget is not spent gains nothing from it. Factors of 2 sqrt(3) x budget (the
+// step whose uniform rounding error alone would spend it), tried from the largest.
 constexpr double kFitShare = 0.9;
-constexpr double kSplineStepFactors[] = {2.5, 1.6, 1.0, 0.6};
-constexpr double kSampleStepFactors[] = {1.0, 0.8, 0.6, 0.4};
-constexpr int kZstdLevel = 6;
+constexpr double kStepFactors[] = {4.0, 3.2, 2.6, 2.1, 1.7, 1.4, 1.15, 1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
+constexpr int kZstdLevel = 15;
 
 template <typename T>
 std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
@@ -148,13 +150,14 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
   FitResult q = fr;
-  std::vector<uint8_t> bytes;
-  for (double k : kSplineStepFactors) {
-    if (!encodeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, kZstdLevel, bytes,
-                      q.control))
-      return false;
+  for (double k : kStepFactors) {
+    const double step = 2 * std::sqrt(3.0) * budget * k;
+    if (!quantizeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, q.control)) return false;
     const ErrorStats es = fitter.error(s.data(), n, q);
     if (es.rmse <= bound) {
+      std::vector<uint8_t> bytes;
+      std::vector<float> recon;
+      encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, recon);
       out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
       return true;
     }
@@ -162,20 +165,36 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   return false;
 }
 
-bool codeSamples(const std::vector<float>& s, Int3 n, double bound, Candidate& out) {
+/// The samples, predicted and coded, as an Interpolant: the step is chosen on the quantized samples,
+/// then the decoded model (the interpolating spline) is measured on the samples.
+bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
-  std::vector<uint8_t> bytes;
   std::vector<float> recon;
-  for (double k : kSampleStepFactors) {
-    if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation, kZstdLevel, bytes, recon))
-      return false;
-    const ErrorStats es = compare(recon.data(), s);
-    if (es.rmse <= bound) {
-      Int3 deg{};
-      for (int a = 0; a < 3; ++a) deg[a] = effectiveDegree(1, n[a]);
-      out = Candidate{BlockKind::Samples, n, deg, es, std::move(bytes)};
-      return true;
-    }
+  for (double k : kStepFactors) {
+    const double step = 2 * std::sqrt(3.0) * bound * k;
+    if (!quantizeValues(s.data(), n, step, Predictor::Interpolation, recon)) return false;
+    if (!(compare(recon.data(), s).rmse <= bound)) continue;
+    Candidate c;
+    c.kind = BlockKind::Interpolant;
+    c.ncp = n;
+    for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
+    encodeValues(s.data(), n, step, Predictor::Interpolation, kZstdLevel, c.bytes, recon);
+    ModelEntry probe;
+    probe.kind = c.kind;
+    probe.coded = true;
+    probe.ncp = c.ncp;
+    probe.degree = c.degree;
+    probe.size = payloadBytes(n);
+    probe.storedSize = c.bytes.size();
+    FitResult model;
+    model.ncp = n;
+    model.degree = c.degree;
+    model.control.resize(s.size());
+    decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
+    c.error = fitter.error(s.data(), n, model);
+    if (!(c.error.rmse <= bound)) return false;  // float rounding of the interpolant: leave it to the others
+    out = std::move(c);
+    return true;
   }
   return false;
 }
@@ -206,7 +225,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
                           codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
   // Samples pay when the spline is missing or spends more than a bit per sample.
-  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) && codeSamples(t.samples, e.samples, c.bound, other) &&
+  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) && codeSamples(t.samples, e.samples, c.opt.degree, c.bound, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;

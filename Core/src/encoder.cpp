@@ -372,7 +372,13 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   const double cpu0 = processCpuSeconds();
   validateOptions(opt);
   const Index3 dims = source.dims();
-  const Partition part(dims, opt.levels, opt.blocksPerAxis);  // validates levels, blocks, dims
+  if (opt.levels < 0 || opt.blocksPerAxis < 0)
+    throw InvalidArgument("encode: levels and blocks per axis must be >= 1 (or 0 for the default)");
+  const PartitionShape shape = defaultPartition(dims);
+  EncoderOptions resolved = opt;
+  if (resolved.levels == 0) resolved.levels = shape.levels;
+  if (resolved.blocksPerAxis == 0) resolved.blocksPerAxis = shape.blocksPerAxis;
+  const Partition part(dims, resolved.levels, resolved.blocksPerAxis);  // validates levels, blocks, dims
   const int threads = std::max(1, opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency()));
 
   EncodeStats stats;
@@ -384,7 +390,9 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   scanValueRange(source, part, progress, stats.valueMin, stats.valueMax);
   progress.finishRange();
   stats.bound = opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
-  sink.begin(makeHeader(source, opt, part.levels(), stats.valueMin, stats.valueMax));
+  sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  stats.levelsUsed = resolved.levels;
+  stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 
   const auto tFit0 = Clock::now();
   LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/partition.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -113,6 +114,15 @@ std::vector<Int3> Partition::children(int level, Int3 ijk) const {
 Int3 Partition::parent(int level, Int3 ijk) const {
   (void)level;
   return {ijk[0] / 2, ijk[1] / 2, ijk[2] / 2};
+}
+
+PartitionShape defaultPartition(const Index3& dims, int blockEdge) {
+  if (blockEdge < 2) throw InvalidArgument("block edge " + std::to_string(blockEdge) + " must be >= 2 samples");
+  const int64_t n = std::max({dims[0], dims[1], dims[2]});
+  PartitionShape s;
+  s.blocksPerAxis = int(std::max<int64_t>(1, std::min<int64_t>(65535, std::llround(double(n - 1) / blockEdge))));
+  while (s.levels < 16 && (s.blocksPerAxis >> s.levels) >= 2) ++s.levels;
+  return s;
 }
 
 }  // namespace afam

@@ -397,8 +397,11 @@ TEST(Encoder, NonFiniteInputNamesTheBlock) {
   v[size_t((20 * 33 + 5) * 33 + 30)] = std::nanf("");
   ArraySource src(v.data(), {33, 33, 33}, "bad");
   InMemoryModels m;
+  EncoderOptions opt;
+  opt.levels = 4;
+  opt.blocksPerAxis = 16;
   try {
-    encodeVolume(src, EncoderOptions{}, m);
+    encodeVolume(src, opt, m);
     FAIL();
   } catch (const NumericError& e) {
     const std::string w = e.what();
@@ -416,7 +419,10 @@ TEST(Encoder, InvalidOptions) {
   opt.degree = 0;
   EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
   opt = EncoderOptions{};
-  opt.levels = 0;
+  opt.levels = -1;
+  EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
+  opt = EncoderOptions{};
+  opt.levels = 17;
   EXPECT_THROW(encodeVolume(src, opt, m), InvalidArgument);
   opt = EncoderOptions{};
   opt.errorBound = -1;

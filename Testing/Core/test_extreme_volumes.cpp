@@ -91,7 +91,9 @@ struct Case {
 }  // namespace
 
 TEST(ExtremeVolumes, EveryLevelMeetsItsBound) {
-  const Case cases[] = {{1e-2, 4, 16}, {1e-3, 4, 16}, {1e-4, 4, 16}, {1e-2, 2, 4}, {1e-3, 2, 4}, {1e-4, 2, 4}};
+  // levels/blocks 0: the default partition from the dimensions.
+  const Case cases[] = {{1e-2, 0, 0}, {1e-3, 0, 0}, {1e-4, 0, 0}, {1e-2, 4, 16}, {1e-3, 4, 16},
+                        {1e-4, 4, 16}, {1e-2, 2, 4}, {1e-3, 2, 4}, {1e-4, 2, 4}};
   for (const Volume& vol : extremeVolumes()) {
     for (const Case& c : cases) {
       SCOPED_TRACE(vol.name + " bound " + std::to_string(c.bound) + " levels " + std::to_string(c.levels) +
@@ -127,6 +129,8 @@ TEST(ExtremeVolumes, ReusedBlocksOverTheBoundAreSearched) {
   EncoderOptions opt;
   opt.errorBound = 1e-4;
   opt.relativeBound = true;
+  opt.levels = 4;
+  opt.blocksPerAxis = 16;
   opt.compact = false;  // float splines: compact storage keeps noise as coded samples, whose children all search
   InMemoryModels m;
   const EncodeStats st = encodeVolume(src, opt, m);
@@ -203,6 +207,6 @@ TEST(ExtremeVolumes, BadBoundsAndPartitionsSayWhatToChange) {
   opt.levels = 40;
   EXPECT_NE(message(opt).find("levels"), std::string::npos) << message(opt);
   opt.levels = 2;
-  opt.blocksPerAxis = 0;
+  opt.blocksPerAxis = -1;
   EXPECT_NE(message(opt).find("blocks"), std::string::npos) << message(opt);
 }

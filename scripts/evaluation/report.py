@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Plots and summary of the evaluation report (issue 8), called by scripts/evaluate.sh.
 
-    report.py encoding|quality|compressors|latency|summary OUTDIR [--size S --wall SECONDS]
+    report.py encoding|quality|compressors|latency|codecs|summary|check OUTDIR [--size S --wall SECONDS]
 
 Every PNG is written beside the CSV it plots (same stem) together with STEM.cmd.txt, the
 commands that made the CSV and the plot (taken from OUTDIR/commands.log).
@@ -228,6 +228,39 @@ def latency(out):
     os.path.exists(path[:-4] + ".csv") or os.symlink("latency_summary.csv", path[:-4] + ".csv")
 
 
+def codec_pairs(out):
+    """(volume, bound, Adaptive-FAM row, ZFP row) from codecs/compare_codecs.csv, in file order."""
+    rows = read(os.path.join(out, "codecs", "compare_codecs.csv"))
+    afam = {(r["volume"], r["bound"]): r for r in rows if r["codec"] == "adaptive-fam"}
+    return [(r["volume"], r["bound"], afam[(r["volume"], r["bound"])], r) for r in rows
+            if r["codec"] == "zfp" and (r["volume"], r["bound"]) in afam]
+
+
+def codecs(out):
+    """Adaptive-FAM against ZFP at the same RMSE (afam compare-codecs): ratio per volume, one
+    panel per relative bound, log scale, the line at ratio 1 = the raw file's size."""
+    pairs = codec_pairs(out)
+    bounds = list(dict.fromkeys(b for _, b, _, _ in pairs))
+    fig, axes = plt.subplots(1, len(bounds), figsize=(5.5 * len(bounds), 3.8), squeeze=False)
+    for ax, b in zip(axes[0], bounds):
+        pts = [p for p in pairs if p[1] == b]
+        xs = range(len(pts))
+        for k, (name, key, color) in enumerate((("Adaptive-FAM (all levels)", 2, COLORS["Adaptive-FAM"]),
+                                                 ("ZFP accuracy, RMSE <= Adaptive-FAM's", 3, COLORS["zfp"]))):
+            ax.bar([x + (k - 0.5) * 0.4 for x in xs], [num(p[key]["ratio"]) for p in pts], 0.4, color=color,
+                   label=name)
+        ax.axhline(1, color="k", lw=0.6, ls=":")
+        ax.set_yscale("log")
+        ax.set_ylim(top=8 * max(num(p[key]["ratio"]) for p in pts for key in (2, 3)))  # room for the legend
+        ax.set_xticks(list(xs))
+        ax.set_xticklabels([p[0].rsplit("_", 2)[0] for p in pts], rotation=30, ha="right", fontsize=7)
+        ax.set_ylabel("ratio: raw file bytes / compressed bytes", fontsize=8)
+        ax.set_title("relative RMSE bound %s" % b, fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+        ax.legend(fontsize=7, loc="upper left")
+    save(fig, os.path.join(out, "codecs", "compare_codecs.png"), out, [" compare-codecs "])
+
+
 def median(xs):
     xs = sorted(x for x in xs if math.isfinite(x))
     if not xs:
@@ -386,6 +419,13 @@ def summary(out, size, wall):
             "yes" if r["pareto"] else "no (%s)" % r["dominated_by"],
             "yes" if r["pareto_caching"] else "no (%s)" % r["caching_dominated_by"]))
     lines.append("")
+    if os.path.exists(os.path.join(out, "codecs", "compare_codecs.csv")):
+        lines.append("| volume | bound | Adaptive-FAM ratio | its RMSE | ZFP ratio, RMSE <= it | ZFP RMSE |")
+        lines.append("|---|---|---|---|---|---|")
+        for v, b, a, z in codec_pairs(out):
+            lines.append("| %s | %s | %.3g | %.4g | %.3g | %.4g |" % (v, b, num(a["ratio"]), num(a["rmse"]),
+                                                                  num(z["ratio"]), num(z["rmse"])))
+        lines.append("")
     lat = read(os.path.join(out, "latency", "latency_summary.csv"))
     lines.append("| trajectory | method | prefetch | median latency | caching | render | miss rate |")
     lines.append("|---|---|---|---|---|---|---|")
@@ -425,7 +465,7 @@ def check(out):
     expected = ["encoding/encoding.csv", "quality/quality.csv", "compressors/compressors_codec.csv",
                 "compressors/compressors_quality.csv", "compressors/compressors_vs_ratio.csv",
                 "latency/latency_summary.csv", "stability/stability.csv", "stability/seams.csv",
-                "quality/pareto_error_vs_latency.csv", "latency/pareto_replays.csv"]
+                "quality/pareto_error_vs_latency.csv", "latency/pareto_replays.csv", "codecs/compare_codecs.csv"]
     bad = []
     for name in expected:
         path = os.path.join(out, name)
@@ -464,6 +504,8 @@ def main():
         compressors(out)
     elif part == "latency":
         latency(out)
+    elif part == "codecs":
+        codecs(out)
     elif part == "check":
         check(out)
     elif part == "summary":

@@ -55,8 +55,11 @@ struct VolumeHeader {
 ///   Samples:  the block's samples as a degree-1 spline with NCP = samples (the implied knots put
 ///             each control point on its sample: trilinear interpolation, exact at the samples).
 ///   Constant: one value; decoded to a spline of the header's degree with p+1 equal control points.
+///   Interpolant: the block's samples (always coded), decoded to the spline of the header's degree
+///             with NCP = samples that interpolates them: smooth value and gradient like a fitted
+///             spline, exact at the (quantized) samples.
 /// Spline and Samples payloads are float32 control points, or `coded` (block_codec.hpp).
-enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2 };
+enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2, Interpolant = 3 };
 const char* blockKindName(BlockKind kind);
 
 struct ModelEntry {

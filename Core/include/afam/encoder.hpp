@@ -43,8 +43,8 @@ namespace afam {
 enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 
 struct EncoderOptions {
-  int levels = 4;
-  int blocksPerAxis = 16;
+  int levels = 0;              ///< 0: from the volume's dimensions (defaultPartition)
+  int blocksPerAxis = 0;       ///< finest blocks per axis; 0: from the dimensions (defaultPartition)
   int degree = 2;
   double errorBound = 1e-4;
   bool relativeBound = false;  ///< bound = errorBound * (valueMax - valueMin)
@@ -94,6 +94,7 @@ struct EncodeStats {
   double bound = 0;            ///< absolute RMSE bound used
   double valueMin = 0, valueMax = 0;
   int threads = 1;
+  int levelsUsed = 0, blocksPerAxisUsed = 0;  ///< the partition encoded (defaults resolved)
   /// Input voxels per second per thread over the whole encode (wall clock / threads).
   double voxelsPerSecondPerThread() const {
     return seconds > 0 ? double(inputVoxels) / seconds / threads : 0;

@@ -23,6 +23,19 @@ namespace afam {
 using Int3 = std::array<int, 3>;
 using Index3 = std::array<int64_t, 3>;
 
+/// The finest block edge, in samples, of the default partition (studied on the corpus and on
+/// Marschner-Lobb: see docs/BENCHMARKS.md, "Default partition").
+constexpr int kDefaultBlockEdge = 32;
+
+/// Levels and finest blocks per axis that fit a volume: blocks of about kDefaultBlockEdge samples
+/// along the longest axis (B = round((N - 1) / edge), at least 1), and levels down to a coarsest
+/// level of 2 blocks along it (L = 1 + floor(log2(B / 2)); 1 when B < 4). For 1025^3 and an edge of
+/// 64 that is the paper's 16 blocks and 4 levels.
+struct PartitionShape {
+  int levels = 1, blocksPerAxis = 1;
+};
+PartitionShape defaultPartition(const Index3& dims, int blockEdge = kDefaultBlockEdge);
+
 /// How the samples of a coarse level (stride r > 1) are taken from the volume. Point: the sampling
 /// rule above (linear interpolation at the sample positions), the paper's strided downsampling.
 /// Box: the mean of the volume's (multi)linear interpolant over a window of r samples per axis

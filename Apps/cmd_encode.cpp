@@ -14,7 +14,7 @@ int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads", "search",
              "spacing", "window"},
-            {"relative", "progress", "quiet"});
+            {"relative", "float-payloads", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw OUT.afam [--dims X,Y,Z] [--type float32|float64|uint8|uint16|int16]\n"
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
@@ -27,6 +27,8 @@ int runEncode(int argc, char** argv) {
         "Dims and type default to what a name like name_64x64x93_int16.raw says.\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
+        "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest of a\n"
+        "                    constant, a coded spline and coded samples per block\n"
         "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks along\n"
         "                    the longest axis; level 0 is the coarsest)\n"
         "  --blocks B        blocks per axis at the finest level (default: about 32 samples a block)\n"
@@ -50,6 +52,7 @@ int runEncode(int argc, char** argv) {
   opt.degree = int(args.integer("degree", 2));
   opt.errorBound = args.real("error-bound", 1e-4);
   opt.relativeBound = args.has("relative");
+  opt.compact = !args.has("float-payloads");
   opt.mode = parseMode(args.str("mode", "adaptive"));
   opt.fixedNcp = int(args.integer("ncp", 0));
   if (args.has("ncp") && opt.mode != EncodingMode::Fixed) throw InvalidArgument("--ncp needs --mode fixed");

@@ -10,6 +10,7 @@ set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build-gpu}"
 logs="${OUT:-$build/gpu_check}"
+source "$root/scripts/gpu_deps.sh"  # zstd headers where the machine lacks them
 mkdir -p "$logs"
 jobs="${AFAM_JOBS:-16}"
 status() { printf '%-28s %s\n' "$1" "$2" >>"$logs/summary.txt"; }
@@ -70,8 +71,9 @@ if [ -x "$afam" ] && [ -f "$traj" ]; then
   n="${AFAM_GPU_ML:-512}"
   t0=$(date +%s)
   "$afam" ml --size "$n" "$e2e/ml.raw" >/dev/null &&
-    "$afam" encode "$e2e/ml.raw" "$e2e/ml.afam" --dims "$n,$n,$n" --type float32 >"$e2e/encode.log" 2>&1
-  status "afam ml+encode ${n}^3" "rc=$? in $(( $(date +%s) - t0 )) s (levels 4, blocks 16, p=2, bound 1e-4)"
+    "$afam" encode "$e2e/ml.raw" "$e2e/ml.afam" --dims "$n,$n,$n" --type float32 --levels 4 --blocks 16 \
+      --error-bound 1e-4 >"$e2e/encode.log" 2>&1
+  status "afam ml+encode ${n}^3" "rc=$? in $(( $(date +%s) - t0 )) s (levels 4, blocks 16, p=2, bound 1e-4), $(grep -o 'bytes_out=[0-9]*' "$e2e/encode.log"), $(grep -o 'voxels_per_s_per_thread=[0-9.e+]*' "$e2e/encode.log")"
   for view in 0 100 200 300; do
     for dev in gpu cpu; do
       "$afam" render "$e2e/ml.afam" --trajectory "$traj" --view $view --size 512,512 \

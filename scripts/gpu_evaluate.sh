@@ -7,10 +7,7 @@
 # (setsid) and this script waits for it at most WAIT_SECONDS; call it again to go on waiting. The
 # first call starts it; a call after it ended packs the report (CSVs, plots, summary.md,
 # commands.log; not the images) into $OUT/evaluation_full.tar.gz and prints summary.md.
-# ZFP and fpzip: the GPU machine has neither; Debian's libzfp1, libzfp-dev, libfpzip1 and
-# libfpzip-dev unpacked into gpu-deps/ (git-ignored, carried) are found there:
-#   for p in libzfp1 libzfp-dev libfpzip1 libfpzip-dev; do apt-get download $p; done
-#   for f in *.deb; do dpkg -x $f gpu-deps; done
+# zstd headers, ZFP and fpzip: the GPU machine lacks them; see scripts/gpu_deps.sh.
 # Corpus volumes and trajectories: $AFAM_GPU_DATA, else gpu-data/ (carried), else ../shared/data.
 # Scratch: $AFAM_EVAL_WORK (default /tmp/afam_eval_full). AFAM_EVAL_SIZE=smoke|small|full (default
 # full) picks evaluate.sh's sizes (smoke: a check of this script's plumbing).
@@ -24,12 +21,7 @@ data="${AFAM_GPU_DATA:-$root/gpu-data}"
 [ -d "$data/trajectories" ] || data="$root/../shared/data"
 
 if [ ! -f "$work/started" ]; then
-  deps="$root/gpu-deps/usr"
-  if [ -d "$deps" ]; then
-    export CMAKE_PREFIX_PATH="$deps${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
-    export LD_LIBRARY_PATH="$deps/lib/x86_64-linux-gnu${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-    export CPATH="$deps/include${CPATH:+:$CPATH}"
-  fi
+  source "$root/scripts/gpu_deps.sh"
   date +%s >"$work/started"
   echo "GPU: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null | head -1)"
   echo "starting: scripts/evaluate.sh --$size $work/report (AFAM_DEVICE=gpu, AFAM_JOBS=$(nproc))"

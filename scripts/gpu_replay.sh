@@ -30,6 +30,7 @@ mkdir -p "$work" "$logs"
 data="${AFAM_GPU_DATA:-$root/gpu-data}"
 [ -d "$data/trajectories" ] || data="$root/../shared/data"
 afam="$build/Apps/afam"
+source "$root/scripts/gpu_deps.sh"  # zstd headers where the machine lacks them
 if [ ! -x "$afam" ]; then
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DAFAM_ENABLE_PARAVIEW=OFF \
     -DAFAM_ENABLE_CUDA=ON >"$logs/replay_configure.log" 2>&1 &&

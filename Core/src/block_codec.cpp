@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -135,6 +136,23 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
   if (!(step > 0) || !std::isfinite(step)) return false;
   std::vector<int64_t> codes;
   return predictQuantize(values, n, step, predictor, codes, reconstructed);
+}
+
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor) {
+  if (!(step > 0) || !std::isfinite(step)) return std::numeric_limits<double>::infinity();
+  std::vector<int64_t> codes;
+  std::vector<float> recon;
+  if (!predictQuantize(values, n, step, predictor, codes, recon)) return std::numeric_limits<double>::infinity();
+  std::sort(codes.begin(), codes.end());
+  double bits = 0;
+  for (size_t i = 0; i < codes.size();) {
+    size_t j = i;
+    while (j < codes.size() && codes[j] == codes[i]) ++j;
+    const double p = double(j - i) / double(codes.size());
+    bits -= double(j - i) * std::log2(p);
+    i = j;
+  }
+  return kCodedHeaderBytes + bits / 8;
 }
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,

@@ -119,6 +119,25 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
   m.storedSize = t.stored.size();
 }
 
+/// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
+/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails.
+template <typename Passes>
+int largestPassingStep(Passes&& passes) {
+  const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
+  if (!passes(kStepFactors[n - 1])) return -1;
+  int fail = -1, pass = n - 1;  // kStepFactors[fail] fails (-1: beyond the ladder), [pass] passes
+  if (passes(kStepFactors[0])) return 0;
+  fail = 0;
+  while (pass - fail > 1) {
+    const int mid = (pass + fail) / 2;
+    if (passes(kStepFactors[mid]))
+      pass = mid;
+    else
+      fail = mid;
+  }
+  return pass;
+}
+
 /// A candidate stored form of the block.
 struct Candidate {
   BlockKind kind = BlockKind::Spline;
@@ -150,53 +169,65 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
   FitResult q = fr;
-  for (double k : kStepFactors) {
-    const double step = 2 * std::sqrt(3.0) * budget * k;
-    if (!quantizeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, q.control)) return false;
-    const ErrorStats es = fitter.error(s.data(), n, q);
-    if (es.rmse <= bound) {
-      std::vector<uint8_t> bytes;
-      std::vector<float> recon;
-      encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, recon);
-      out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
-      return true;
+  bool lattice = true;
+  auto passes = [&](double k) {
+    if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
+      lattice = false;
+      return false;
     }
-  }
-  return false;
+    return fitter.error(s.data(), n, q).rmse <= bound;
+  };
+  const int best = largestPassingStep(passes);
+  if (best < 0 || !lattice) return false;
+  const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
+  std::vector<uint8_t> bytes;
+  if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, fitter.error(s.data(), n, q), std::move(bytes)};
+  return out.error.rmse <= bound;
 }
 
 /// The samples, predicted and coded, as an Interpolant: the step is chosen on the quantized samples,
 /// then the decoded model (the interpolating spline) is measured on the samples.
-bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, BlockFitter& fitter, Candidate& out) {
+bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, double beat, BlockFitter& fitter,
+                 Candidate& out) {
   if (!(bound > 0)) return false;
   std::vector<float> recon;
-  for (double k : kStepFactors) {
-    const double step = 2 * std::sqrt(3.0) * bound * k;
-    if (!quantizeValues(s.data(), n, step, Predictor::Interpolation, recon)) return false;
-    if (!(compare(recon.data(), s).rmse <= bound)) continue;
-    Candidate c;
-    c.kind = BlockKind::Interpolant;
-    c.ncp = n;
-    for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-    encodeValues(s.data(), n, step, Predictor::Interpolation, kZstdLevel, c.bytes, recon);
-    ModelEntry probe;
-    probe.kind = c.kind;
-    probe.coded = true;
-    probe.ncp = c.ncp;
-    probe.degree = c.degree;
-    probe.size = payloadBytes(n);
-    probe.storedSize = c.bytes.size();
-    FitResult model;
-    model.ncp = n;
-    model.degree = c.degree;
-    model.control.resize(s.size());
-    decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
-    c.error = fitter.error(s.data(), n, model);
-    if (!(c.error.rmse <= bound)) return false;  // float rounding of the interpolant: leave it to the others
-    out = std::move(c);
-    return true;
-  }
-  return false;
+  bool lattice = true;
+  auto passes = [&](double k) {
+    if (!quantizeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation, recon)) {
+      lattice = false;
+      return false;
+    }
+    return compare(recon.data(), s).rmse <= bound;
+  };
+  const int best = largestPassingStep(passes);
+  if (best < 0 || !lattice) return false;
+  if (estimateCodedBytes(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation) >
+      beat)
+    return false;  // cannot win: spare the coding
+  Candidate c;
+  c.kind = BlockKind::Interpolant;
+  c.ncp = n;
+  for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
+  if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation, kZstdLevel,
+                    c.bytes, recon))
+    return false;
+  ModelEntry probe;
+  probe.kind = c.kind;
+  probe.coded = true;
+  probe.ncp = c.ncp;
+  probe.degree = c.degree;
+  probe.size = payloadBytes(n);
+  probe.storedSize = c.bytes.size();
+  FitResult model;
+  model.ncp = n;
+  model.degree = c.degree;
+  model.control.resize(s.size());
+  decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
+  c.error = fitter.error(s.data(), n, model);
+  if (!(c.error.rmse <= bound)) return false;  // float rounding of the interpolant: leave it to the others
+  out = std::move(c);
+  return true;
 }
 
 void storeCandidate(Candidate& c, BlockTask& t) {
@@ -224,8 +255,11 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
                           codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
-  // Samples pay when the spline is missing or spends more than a bit per sample.
-  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) && codeSamples(t.samples, e.samples, c.opt.degree, c.bound, fitter, other) &&
+  // Samples pay when the spline is missing or spends more than a bit per sample; they are coded only
+  // when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
+  const double beat = haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
+  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) &&
+      codeSamples(t.samples, e.samples, c.opt.degree, c.bound, beat, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;

@@ -47,6 +47,10 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a step).
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor, std::vector<float>& reconstructed);
 
+/// Order-0 entropy, in bytes, of the codes encodeValues would produce (a cheap estimate of its
+/// coded size, to skip coding a candidate that cannot win); infinity when the step does not fit.
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor);
+
 /// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
 /// `where` in the message) when the bytes are not a valid coded payload of that size.
 void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);

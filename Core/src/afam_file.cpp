@@ -29,37 +29,39 @@ constexpr uint64_t kAlign = 64;         // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
 
-// On-disk header, version 1: 1024 bytes, every member at a fixed offset (asserted below).
+// On-disk header, version 1: 1024 bytes, little-endian; each member's byte offset and size beside
+// it (@offset, size), checked by the static_asserts below.
 struct FileHeaderV1 {
-  char magic[8];
-  uint32_t version;
-  uint32_t endianTag;
-  uint32_t headerSize;
-  uint32_t entrySize;
-  int64_t dims[3];
-  double origin[3];
-  double spacing[3];
-  double valueMin;
-  double valueMax;
-  double errorBound;
-  int32_t levels;
-  int32_t blocksPerAxis;
-  int32_t degree;
-  int32_t fixedNcp;
-  uint8_t mode;
-  uint8_t relativeBound;
-  uint16_t reserved0;
-  uint32_t indexChecksum;
-  uint64_t entryCount;
-  uint64_t indexOffset;
-  uint64_t payloadOffset;
-  uint64_t fileSize;
-  char scalarName[64];
-  int32_t levelBlocks[kMaxLevels][3];
-  uint64_t totalPayloadBytes;
-  uint32_t payloadAlignment;  // power of two in [4, 4096]: every payload offset is a multiple
-  uint8_t reserved1[576];
-  uint32_t headerChecksum;  // CRC32 of bytes [0, 1020)
+  char magic[8];                  // @0, 8 B
+  uint32_t version;               // @8, 4 B
+  uint32_t endianTag;             // @12, 4 B
+  uint32_t headerSize;            // @16, 4 B
+  uint32_t entrySize;             // @20, 4 B
+  int64_t dims[3];                // @24, 24 B
+  double origin[3];               // @48, 24 B
+  double spacing[3];              // @72, 24 B
+  double valueMin;                // @96, 8 B
+  double valueMax;                // @104, 8 B
+  double errorBound;              // @112, 8 B
+  int32_t levels;                 // @120, 4 B
+  int32_t blocksPerAxis;          // @124, 4 B
+  int32_t degree;                 // @128, 4 B
+  int32_t fixedNcp;               // @132, 4 B
+  uint8_t mode;                   // @136, 1 B
+  uint8_t relativeBound;          // @137, 1 B
+  uint16_t reserved0;             // @138, 2 B
+  uint32_t indexChecksum;         // @140, 4 B
+  uint64_t entryCount;            // @144, 8 B
+  uint64_t indexOffset;           // @152, 8 B
+  uint64_t payloadOffset;         // @160, 8 B
+  uint64_t fileSize;              // @168, 8 B
+  char scalarName[64];            // @176, 64 B
+  int32_t levelBlocks[kMaxLevels][3];  // @240, 192 B
+  uint64_t totalPayloadBytes;     // @432, 8 B
+  uint32_t payloadAlignment;      // @440, 4 B; a power of two in [4, 4096] that every payload
+                                  // offset is a multiple of
+  uint8_t reserved1[576];         // @444, 576 B
+  uint32_t headerChecksum;        // @1020, 4 B; CRC32 of bytes [0, 1020)
 };
 static_assert(sizeof(FileHeaderV1) == 1024, "header size");
 static_assert(offsetof(FileHeaderV1, version) == 8, "layout");
@@ -90,20 +92,20 @@ static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
 static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
 static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
 
-// On-disk index entry, version 1: 40 bytes. Level, block ijk, samples and degree are implied by
+// On-disk index entry, version 1: 40 bytes, offsets and sizes beside the members. Level, block ijk, samples and degree are implied by
 // the entry's position (the index is complete and ordered) and the header; the payload size by
 // the NCP. Keeping the entry this small is what makes the file smaller than the paper's layout
 // even for the smallest models (NCP 3: 108 + 40 bytes against 169).
 struct IndexEntryV1 {
-  uint64_t offset;
-  uint16_t ncp[3];
-  uint16_t flags;  // 0; any other value is an unknown feature
-  float minValue;
-  float maxValue;
-  float rmse;
-  float maxError;
-  uint32_t checksum;
-  uint32_t reserved;  // 0
+  uint64_t offset;                // @0, 8 B
+  uint16_t ncp[3];                // @8, 6 B
+  uint16_t flags;                 // @14, 2 B; 0 (any other value is an unknown feature)
+  float minValue;                 // @16, 4 B
+  float maxValue;                 // @20, 4 B
+  float rmse;                     // @24, 4 B
+  float maxError;                 // @28, 4 B
+  uint32_t checksum;              // @32, 4 B
+  uint32_t reserved;              // @36, 4 B; written 0
 };
 static_assert(sizeof(IndexEntryV1) == 40, "entry size");
 static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Partition: coverage, shared boundaries, parents/children, and the sizes of issue 3.
+// Partition: coverage, shared boundaries, parents/children, and the paper's level sizes.
 #include <gtest/gtest.h>
 
 #include <cmath>

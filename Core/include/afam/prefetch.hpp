@@ -26,6 +26,7 @@
 namespace afam {
 
 /// Predicts the camera of the next point of view from the history of cameras (oldest first).
+/// makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds every kind by name.
 class Predictor {
  public:
   virtual ~Predictor() = default;
@@ -47,11 +48,6 @@ class LinearPredictor : public Predictor {
   const char* name() const override { return "linear"; }
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
 };
-
-/// none | linear (camera-only predictors). appa, forecache and lstm need the file and the view
-/// settings: makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds them, and this
-/// throws InvalidArgument saying so.
-std::unique_ptr<Predictor> makePredictor(const std::string& name);
 
 struct PrefetchStats {
   uint64_t jobs = 0, blocksLoaded = 0, stoppedEarly = 0;

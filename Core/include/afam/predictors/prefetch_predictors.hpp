@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The issue-5 predictors behind the renderer's Predictor interface (prefetch.hpp): appa, forecache
-// and lstm, run live in the prefetch thread.
+// The renderer's predictors and their one factory: none and linear (prefetch.hpp) and the
+// data-aware appa, forecache and lstm, run live in the prefetch thread.
 //
 // The renderer calls predict(history, next) (or predictEntries) once per frame in the prefetch
 // thread, with its bounded history of cameras; the stateful predictors here learn from the cameras
@@ -43,12 +43,13 @@ struct PredictorContext {
   AppaBuildReport* appaReport = nullptr;  ///< filled when the APPA table is loaded or built
 };
 
-/// appa | forecache | lstm (none and linear stay with makePredictor). Throws InvalidArgument for
-/// other names or when appa/forecache get no file.
-std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx);
+/// The one factory of the renderer's predictors: none | linear (camera only) | appa | forecache |
+/// lstm (these use ctx). Throws InvalidArgument for other names or when appa/forecache get no
+/// file, and whatever a loader throws (a missing or corrupt LSTM weights file, for example).
+std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx = {});
 
-/// True for the names makePrefetchPredictor handles.
-bool isPrefetchPredictorName(const std::string& name);
+/// The names makePrefetchPredictor takes, in the order the command line lists them.
+const std::vector<std::string>& predictorNames();
 
 /// A PosePredictor behind the camera interface (lstm; forecache without data).
 class PosePredictorAdapter : public Predictor {

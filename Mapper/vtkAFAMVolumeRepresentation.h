@@ -78,6 +78,9 @@ public:
   vtkTypeInt64 GetLastDepthLimitedPixels();
   double GetLastImageScale();
   const char* GetLastDeviceMessage();
+  vtkTypeInt64 GetLastGpuModelsUploaded();
+  vtkTypeInt64 GetNumberOfRendererBuilds();
+  const char* GetLastSettingWarning();
   ///@}
 
   vtkAFAMVolumeMapper* GetVolumeMapper() { return this->Mapper; }

@@ -115,4 +115,9 @@ Int3 Partition::parent(int level, Int3 ijk) const {
   return {ijk[0] / 2, ijk[1] / 2, ijk[2] / 2};
 }
 
+std::string Partition::blockName(int level, Int3 ijk) {
+  return "level " + std::to_string(level) + " block (" + std::to_string(ijk[0]) + ", " +
+         std::to_string(ijk[1]) + ", " + std::to_string(ijk[2]) + ")";
+}
+
 }  // namespace afam

@@ -88,7 +88,7 @@ inline vtkSmartPointer<vtkAFAMVolumeMapper> MarschnerLobbMapper(vtkSmartPointer<
   }
   auto mapper = vtkSmartPointer<vtkAFAMVolumeMapper>::New();
   mapper->SetInputConnection(encoder->GetOutputPort());
-  mapper->SetLodPolicy(1);
+  mapper->SetLodPolicyToScreenSpace();
   return mapper;
 }
 

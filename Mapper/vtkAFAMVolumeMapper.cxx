@@ -36,6 +36,10 @@ vtkStandardNewMacro(vtkAFAMVolumeMapper);
 vtkAFAMVolumeMapper::vtkAFAMVolumeMapper()
   : Core(new vtkAFAMCoreRenderer)
 {
+  // vtkVolume skips a mapper that has no input data object, so a mapper given only FileName
+  // would never be asked to render: an empty multiblock stands in until an input is connected.
+  vtkNew<vtkMultiBlockDataSet> placeholder;
+  this->SetInputDataObject(0, placeholder);
 }
 
 vtkAFAMVolumeMapper::~vtkAFAMVolumeMapper()

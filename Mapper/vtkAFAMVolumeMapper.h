@@ -66,6 +66,7 @@ public:
 
   ///@{
   /// The .afam file to render. Default: none, then the file named by the input's field data.
+  /// FileName alone is enough: no input connection is needed.
   vtkSetFilePathMacro(FileName);
   vtkGetFilePathMacro(FileName);
   ///@}

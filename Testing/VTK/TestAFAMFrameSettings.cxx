@@ -52,23 +52,16 @@ bool Contains(const std::string& text, const std::string& part)
 
 int main(int, char*[])
 {
-  vtkSmartPointer<vtkImageData> image;
-  vtkSmartPointer<vtkAFAMVolumeMapper> mapper = afam_vtk_test::MarschnerLobbMapper(image);
-  if (!mapper)
+  afam_vtk_test::Scene scene;
+  if (!scene.Build())
   {
     return EXIT_FAILURE;
   }
-  mapper->SetRenderDeviceToCPU();
+  vtkAFAMVolumeMapper* mapper = scene.Mapper;
+  vtkVolumeProperty* property = scene.Property;
+  vtkRenderWindow* window = scene.Window;
   std::vector<std::string> warnings;
   auto watch = afam_vtk_test::CollectWarnings(mapper, warnings);
-  vtkSmartPointer<vtkVolumeProperty> property = afam_vtk_test::VolumeProperty();
-  vtkSmartPointer<vtkVolume> volume = afam_vtk_test::MakeVolume(mapper, property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(0.1, 0.1, 0.15);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  vtkNew<vtkRenderWindowInteractor> interactor;
-  afam_vtk_test::SetUpWindow(renderer, window, interactor);
 
   window->Render();
   const vtkTypeInt64 visible = mapper->GetLastVisibleBlocks();

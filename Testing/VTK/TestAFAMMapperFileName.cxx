@@ -14,21 +14,13 @@
 
 int main(int, char*[])
 {
-  vtkSmartPointer<vtkImageData> image;
-  vtkSmartPointer<vtkAFAMVolumeMapper> connected = afam_vtk_test::MarschnerLobbMapper(image);
-  if (!connected)
+  afam_vtk_test::Scene scene;
+  if (!scene.Build())
   {
     return EXIT_FAILURE;
   }
-  connected->SetRenderDeviceToCPU();
-  vtkSmartPointer<vtkVolumeProperty> property = afam_vtk_test::VolumeProperty();
-  vtkSmartPointer<vtkVolume> volume = afam_vtk_test::MakeVolume(connected, property);
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(0.1, 0.1, 0.15);
-  renderer->AddVolume(volume);
-  vtkNew<vtkRenderWindow> window;
-  vtkNew<vtkRenderWindowInteractor> interactor;
-  afam_vtk_test::SetUpWindow(renderer, window, interactor);
+  vtkAFAMVolumeMapper* connected = scene.Mapper;
+  vtkRenderWindow* window = scene.Window;
   window->Render();
   const std::vector<unsigned char> expected = afam_vtk_test::ReadPixels(window);
 
@@ -41,7 +33,7 @@ int main(int, char*[])
   alone->SetFileName(file.c_str());
   alone->SetLodPolicyToScreenSpace();
   alone->SetRenderDeviceToCPU();
-  volume->SetMapper(alone);
+  scene.Volume->SetMapper(alone);
   window->Render();
   const std::vector<unsigned char> got = afam_vtk_test::ReadPixels(window);
   long differing = 0, foreground = 0;

@@ -23,11 +23,16 @@ std::string points(const TransferFunction& tf) {
 
 const char* blendName(int mode) {
   switch (mode) {
-    case kBlendComposite: return "composite";
-    case kBlendMaximum: return "maximum intensity";
-    case kBlendMinimum: return "minimum intensity";
-    case kBlendAverage: return "average intensity";
-    default: return "unknown";
+    case kBlendComposite:
+      return "composite";
+    case kBlendMaximum:
+      return "maximum intensity";
+    case kBlendMinimum:
+      return "minimum intensity";
+    case kBlendAverage:
+      return "average intensity";
+    default:
+      return "unknown";
   }
 }
 
@@ -38,7 +43,8 @@ std::string transferFunctionProblem(const TransferFunction& tf) {
   if (tf.opacities.empty()) return "the opacity transfer function has no points";
   for (size_t i = 0; i < tf.colors.size(); ++i) {
     const ColorPoint& p = tf.colors[i];
-    if (!std::isfinite(p.value) || !std::isfinite(p.r) || !std::isfinite(p.g) || !std::isfinite(p.b))
+    if (!std::isfinite(p.value) || !std::isfinite(p.r) || !std::isfinite(p.g) ||
+        !std::isfinite(p.b))
       return "colour point " + std::to_string(i) + " (value " + number(p.value) + ", rgb " +
              number(p.r) + " " + number(p.g) + " " + number(p.b) + ") is not finite";
   }
@@ -49,7 +55,8 @@ std::string transferFunctionProblem(const TransferFunction& tf) {
              number(p.alpha) + ") is not a finite value with an opacity in [0, 1]";
   }
   if (!(tf.referenceDistance > 0) || !std::isfinite(tf.referenceDistance))
-    return "the opacity unit distance " + number(tf.referenceDistance) + " is not a finite number > 0";
+    return "the opacity unit distance " + number(tf.referenceDistance) +
+           " is not a finite number > 0";
   return {};
 }
 
@@ -82,8 +89,8 @@ std::string tableProblem(const FrameSettings& s) {
 }  // namespace
 
 std::string frameSettingsProblem(const FrameSettings& s) {
-  for (const std::string& p : {sampleDistanceProblem(s), blendModeProblem(s), lodProblem(s),
-                               tableProblem(s)})
+  for (const std::string& p :
+       {sampleDistanceProblem(s), blendModeProblem(s), lodProblem(s), tableProblem(s)})
     if (!p.empty()) return p;
   if (s.hasTransferFunction) return transferFunctionProblem(s.transferFunction);
   return {};

@@ -20,22 +20,25 @@ Vec3 FrameMap::apply(const Vec3& w) const {
           m[6] * w[0] + m[7] * w[1] + m[8] * w[2] + offset[2]};
 }
 
-FrameMap frameMapFromWorld(const std::array<double, 16>& worldToData, const Vec3& lo, const Vec3& hi) {
+FrameMap frameMapFromWorld(const std::array<double, 16>& worldToData, const Vec3& lo,
+                           const Vec3& hi) {
   FrameMap map;
   for (int r = 0; r < 3; ++r) {
     const double center = 0.5 * (lo[r] + hi[r]);
     double half = 0.5 * (hi[r] - lo[r]);
     if (!(half > 0)) half = 1;
-    for (int c = 0; c < 3; ++c) map.linear[size_t(3 * r + c)] = worldToData[size_t(4 * r + c)] / half;
+    for (int c = 0; c < 3; ++c)
+      map.linear[size_t(3 * r + c)] = worldToData[size_t(4 * r + c)] / half;
     map.offset[size_t(r)] = (worldToData[size_t(4 * r + 3)] - center) / half;
   }
   return map;
 }
 
 Camera cameraFromFrustum(const ViewFrustum& f, const FrameMap& map, int width, int height) {
-  Camera world = f.parallel
-      ? Camera::parallelLookAt(f.position, f.focalPoint, f.viewUp, f.parallelScale, width, height)
-      : Camera::lookAt(f.position, f.focalPoint, f.viewUp, f.viewAngleDeg, width, height);
+  Camera world = f.parallel ? Camera::parallelLookAt(f.position, f.focalPoint, f.viewUp,
+                                                     f.parallelScale, width, height)
+                            : Camera::lookAt(f.position, f.focalPoint, f.viewUp, f.viewAngleDeg,
+                                             width, height);
   // The half extents follow the viewport's aspect ratio (not the image's, which may be rounded),
   // the angle (or scale) vertical unless horizontalViewAngle; the window centre shifts the view
   // in units of the half extents.
@@ -62,7 +65,8 @@ float nearestDepth(const float* depth, int tileWidth, int tileHeight, int width,
   const int x0 = x * tileWidth / width, x1 = std::max(x0 + 1, (x + 1) * tileWidth / width);
   float z = 1.0f;
   for (int yt = y0; yt < y1; ++yt)
-    for (int xt = x0; xt < x1; ++xt) z = std::min(z, depth[size_t(yt) * size_t(tileWidth) + size_t(xt)]);
+    for (int xt = x0; xt < x1; ++xt)
+      z = std::min(z, depth[size_t(yt) * size_t(tileWidth) + size_t(xt)]);
   return z;
 }
 
@@ -73,7 +77,8 @@ int64_t rayLengthsFromDepth(const float* depth, int tileWidth, int tileHeight,
                             const Camera& camera, std::vector<float>& limits) {
   if (tileWidth < 1 || tileHeight < 1 || camera.width < 1 || camera.height < 1 ||
       camera.width > tileWidth || camera.height > tileHeight)
-    throw InvalidArgument("depth limits: the image must be at least 1x1 and no larger than the tile");
+    throw InvalidArgument(
+        "depth limits: the image must be at least 1x1 and no larger than the tile");
   const int w = camera.width, h = camera.height;
   const Vec3 n = cross(camera.right, camera.up);  // the image plane's normal
   const double dn = dot(camera.forward, n) / std::sqrt(dot(camera.forward, camera.forward));

@@ -77,7 +77,8 @@ TEST(FrameSettings, EditsKeepTheCacheAndReadOnlyNewlyVisibleModels) {
   const std::set<int64_t> after = visibleEntries(r, c);
   size_t added = 0;
   for (int64_t e : after) added += before.count(e) ? 0 : 1;
-  std::printf("visible before %zu, after %zu, newly visible %zu\n", before.size(), after.size(), added);
+  std::printf("visible before %zu, after %zu, newly visible %zu\n", before.size(), after.size(),
+              added);
   ASSERT_GT(added, 0u) << "the wider ramp should uncull blocks";
   FrameStats wider;
   r.renderFrame(c, wider);

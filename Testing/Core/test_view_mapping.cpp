@@ -22,7 +22,8 @@ M4 mul(const M4& a, const M4& b) {
   M4 c{};
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j)
-      for (int k = 0; k < 4; ++k) c[size_t(4 * i + j)] += a[size_t(4 * i + k)] * b[size_t(4 * k + j)];
+      for (int k = 0; k < 4; ++k)
+        c[size_t(4 * i + j)] += a[size_t(4 * i + k)] * b[size_t(4 * k + j)];
   return c;
 }
 
@@ -57,8 +58,8 @@ M4 inverse(M4 a) {
 /// World -> clip of a look-at camera (OpenGL conventions, centred frustum).
 M4 composite(const Camera& c, double nearClip, double farClip) {
   const Vec3 &r = c.right, &u = c.up, &f = c.forward, &e = c.eye;
-  const M4 view{r[0], r[1], r[2], -dot(r, e), u[0], u[1], u[2], -dot(u, e),
-                -f[0], -f[1], -f[2], dot(f, e), 0, 0, 0, 1};
+  const M4 view{r[0],  r[1],  r[2],  -dot(r, e), u[0], u[1], u[2], -dot(u, e),
+                -f[0], -f[1], -f[2], dot(f, e),  0,    0,    0,    1};
   const double n = nearClip, fa = farClip;
   M4 proj{};
   proj[0] = 1 / c.tanHalfX;
@@ -108,8 +109,8 @@ TEST(ViewMapping, FrameMapTakesTheDataBoxOntoTheUnitCube) {
     EXPECT_NEAR(b[size_t(k)], 1.0, 1e-12);
   }
   // A flat axis keeps half-width 1 about its centre instead of dividing by zero.
-  const FrameMap flat = frameMapFromWorld({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1},
-                                          {0, 0, 4}, {2, 2, 4});
+  const FrameMap flat =
+      frameMapFromWorld({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}, {0, 0, 4}, {2, 2, 4});
   EXPECT_NEAR(flat.apply({1, 1, 6})[2], 2.0, 1e-12);
 }
 
@@ -169,8 +170,9 @@ TEST(ViewMapping, DepthOfAPointOnAPixelRayStopsThatRayThere) {
     // Perspective: the frame distance from the mapped eye; parallel: along the mapped ray from
     // the eye plane. Both are the frame length of the world segment from o to p.
     const Vec3 a = map.apply({o[0], o[1], o[2]}), b = map.apply(p);
-    const double expected = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
-                                      (b[2] - a[2]) * (b[2] - a[2]));
+    const double expected =
+        std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) +
+                  (b[2] - a[2]) * (b[2] - a[2]));
     EXPECT_NEAR(limits[size_t(py) * w + px], expected, 2e-4 * expected) << "parallel " << parallel;
     EXPECT_TRUE(std::isinf(limits[0]));
   }
@@ -183,8 +185,8 @@ TEST(ViewMapping, ASmallerImageTakesTheNearestDepthItCovers) {
   const Camera half = cameraFromFrustum(f, identity, 20, 15);
   const M4 m = composite(world, 0.5, 20.0);
   std::vector<float> depth(size_t(40) * 30, 1.0f);
-  depth[size_t(1) * 40 + 1] = 0.9f;  // tile pixel (1, 1), bottom-left
-  depth[size_t(0) * 40 + 0] = 0.95f; // farther, in the same 2 x 2 cell
+  depth[size_t(1) * 40 + 1] = 0.9f;   // tile pixel (1, 1), bottom-left
+  depth[size_t(0) * 40 + 0] = 0.95f;  // farther, in the same 2 x 2 cell
   std::vector<float> limits;
   ASSERT_EQ(rayLengthsFromDepth(depth.data(), 40, 30, inverse(m), identity, half, limits), 1);
   const float got = limits[size_t(14) * 20 + 0];  // image row 14 (of 15) from the top = bottom

@@ -18,12 +18,12 @@ namespace afam {
 struct ViewFrustum {
   Vec3 position{0, 0, 1}, focalPoint{0, 0, 0}, viewUp{0, 1, 0};
   bool parallel = false;
-  double viewAngleDeg = 30;          ///< perspective: full angle, vertical unless horizontalViewAngle
-  bool horizontalViewAngle = false;  ///< viewAngleDeg spans the width instead of the height
-  double parallelScale = 1;          ///< parallel: half the view's height
-  double aspect = 1;                 ///< width / height of the viewport (the tile)
+  double viewAngleDeg = 30;  ///< perspective: full angle, vertical unless horizontalViewAngle
+  bool horizontalViewAngle = false;          ///< viewAngleDeg spans the width instead of the height
+  double parallelScale = 1;                  ///< parallel: half the view's height
+  double aspect = 1;                         ///< width / height of the viewport (the tile)
   std::array<double, 2> windowCenter{0, 0};  ///< shift of the view, in units of its half extents
-  double nearClip = 0;               ///< world distance of the near clipping plane
+  double nearClip = 0;                       ///< world distance of the near clipping plane
 };
 
 /// World -> normalised frame: x' = linear x + offset (row-major 3x3).
@@ -36,7 +36,8 @@ struct FrameMap {
 /// The map that takes the world through worldToData (row-major 4x4, affine: the inverse of the
 /// placed volume's matrix) into the data, then the data box [lo, hi] onto [-1, 1]^3, each axis
 /// on its own (a flat axis, lo == hi, is taken as half-width 1).
-FrameMap frameMapFromWorld(const std::array<double, 16>& worldToData, const Vec3& lo, const Vec3& hi);
+FrameMap frameMapFromWorld(const std::array<double, 16>& worldToData, const Vec3& lo,
+                           const Vec3& hi);
 
 /// The camera of `frustum` for a width x height image, mapped into the normalised frame through
 /// `map` (Camera::mapped). Rays start at the near clipping plane, and never closer to the eye than

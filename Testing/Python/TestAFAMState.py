@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""pvbatch: a ParaView state with the "Adaptive-FAM Volume" representation saves and loads back:
+"""pvbatch: an .afam shows itself as "Adaptive-FAM Volume" in a render view (the reader's
+representation hint), and a ParaView state with that representation saves and loads back:
 after ResetSession + LoadState the view shows the same representation with the same Adaptive-FAM
 settings and draws the same image (no pixel differs by more than 2/255)."""
 import os
@@ -20,7 +21,10 @@ model = AdaptiveFAMReader(FileName=path)  # noqa: F821
 view = CreateView("RenderView")
 u.setup_view(view)
 display = Show(model, view)
-display.Representation = "Adaptive-FAM Volume"
+# The reader's hint: a render view shows the model set as "Adaptive-FAM Volume", not an outline.
+print("shown as %s" % display.Representation)
+if display.Representation != "Adaptive-FAM Volume":
+    u.fail("Show gave %s, not the reader's default 'Adaptive-FAM Volume'" % display.Representation)
 u.apply_transfer_function(display)
 display.AFAMSampleDistance = 0.75
 display.AFAMRenderDevice = "CPU"

@@ -217,8 +217,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
     prefetcher_->start([cache, self, predictor, history = history_](const std::atomic<bool>& stop,
                                                                     uint64_t& loaded) {
       std::vector<int64_t> entries;
-      const auto* direct = dynamic_cast<const EntryPredictor*>(predictor);
-      if (!(direct && direct->predictEntries(history, entries))) {
+      if (!predictor->predictEntries(history, entries)) {
         Camera next;
         if (!predictor->predict(history, next)) return;
         for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);

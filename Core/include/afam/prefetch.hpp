@@ -33,6 +33,16 @@ class Predictor {
   virtual const char* name() const = 0;
   /// False when no prediction is made (too little history, or the `none` predictor).
   virtual bool predict(const std::vector<Camera>& history, Camera& next) const = 0;
+  /// Predictors that know the blocks (file entries) the next view needs without a visibility
+  /// computation (APPA's table, ForeCache's signature ranking) fill `entries`, most important
+  /// first, and return true; the others return false and the caller selects the view of
+  /// predict()'s camera.
+  virtual bool predictEntries(const std::vector<Camera>& history,
+                              std::vector<int64_t>& entries) const {
+    (void)history;
+    (void)entries;
+    return false;
+  }
 };
 
 /// Never predicts: no prefetching.

@@ -6,8 +6,8 @@
 // thread, with its bounded history of cameras; the stateful predictors here learn from the cameras
 // they have not seen yet and start over when the history does not continue the previous one.
 // Predictors that know the blocks to fetch without a visibility computation (APPA's table,
-// ForeCache's signature ranking) also implement EntryPredictor; the renderer's prefetch job asks
-// for it first and falls back to selecting the predicted camera's view.
+// ForeCache's signature ranking) also override Predictor::predictEntries; the renderer's prefetch
+// job asks for the entries first and falls back to selecting the predicted camera's view.
 #pragma once
 
 #include <memory>
@@ -22,13 +22,6 @@
 #include "afam/prefetch.hpp"
 
 namespace afam {
-
-/// Blocks (file entries) to prefetch for the next view, most important first.
-class EntryPredictor {
- public:
-  virtual ~EntryPredictor() = default;
-  virtual bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const = 0;
-};
 
 /// What the data-aware predictors need to know about the scene.
 struct PredictorContext {
@@ -68,7 +61,7 @@ class PosePredictorAdapter : public Predictor {
   mutable std::vector<Vec3> seen_;
 };
 
-class AppaPredictor : public Predictor, public EntryPredictor {
+class AppaPredictor : public Predictor {
  public:
   AppaPredictor(AppaTable table) : table_(std::move(table)) {}
   const char* name() const override { return "appa"; }
@@ -81,7 +74,7 @@ class AppaPredictor : public Predictor, public EntryPredictor {
   AppaTable table_;
 };
 
-class ForeCachePredictor : public PosePredictorAdapter, public EntryPredictor {
+class ForeCachePredictor : public PosePredictorAdapter {
  public:
   ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options = {});
   bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;

@@ -62,6 +62,13 @@ int runEncode(int argc, char** argv) {
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
   bar.finish();
+  int64_t reduced = 0;
+  for (const LevelStats& ls : s.levels) reduced += ls.reducedDegree;
+  if (reduced > 0)
+    std::fprintf(stderr,
+                 "afam encode: notice: %lld blocks have an axis of fewer than %d samples; the degree is lowered "
+                 "there (fewer --blocks or --levels give larger blocks)\n",
+                 (long long)reduced, opt.degree + 1);
   if (args.has("quiet")) return 0;
   const Index3 d = source->dims();
   std::printf("encoded %s -> %s\n", args.positional()[0].c_str(), args.positional()[1].c_str());
@@ -77,13 +84,15 @@ int runEncode(int argc, char** argv) {
               (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
               double(s.bytesIn) / double(s.bytesOut), double(s.inputVoxels) * 4.0 / double(s.bytesOut),
               (unsigned long long)s.paperBytes);
-  std::printf("max_block_rmse=%.6g max_block_error=%.6g value_range=[%.6g, %.6g]\n", s.maxRmse, s.maxError,
-              s.valueMin, s.valueMax);
+  std::printf("max_block_rmse=%.6g max_block_error=%.6g bound=%.6g value_range=[%.6g, %.6g]\n", s.maxRmse,
+              s.maxError, s.bound, s.valueMin, s.valueMax);
   for (size_t l = 0; l < s.levels.size(); ++l) {
     const LevelStats& ls = s.levels[l];
-    std::printf("level %zu: blocks=%lld searched=%lld complex=%lld fits=%lld bytes=%llu seconds=%.3f ncp:", l,
-                (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.fits,
-                (unsigned long long)ls.payloadBytes, ls.seconds);
+    std::printf("level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld bytes=%llu "
+                "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f ncp:",
+                l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.refits,
+                (long long)ls.exact, (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse,
+                ls.maxError, s.bound, ls.seconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

@@ -52,7 +52,7 @@ int runVerify(int argc, char** argv) {
   double sumSq = 0, maxErr = 0;
   int64_t count = 0;
   for (int kz = 0; kz < nb[2]; ++kz) {
-    reader.readRow(level, kz, false, raw);
+    reader.readRow(level, kz, false, h.sampling, raw);
     for (int j = 0; j < nb[1]; ++j)
       for (int i = 0; i < nb[0]; ++i) {
         const Int3 ijk{i, j, kz};

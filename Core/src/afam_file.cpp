@@ -12,6 +12,7 @@
 #include <limits>
 #include <sstream>
 
+#include "afam/block_codec.hpp"
 #include "afam/errors.hpp"
 
 namespace afam {
@@ -23,7 +24,7 @@ namespace afam {
 namespace {
 
 constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;      // written; version 1 is still read
 constexpr uint32_t kEndianTag = 0x01020304u;
 constexpr uint64_t kAlign = 64;         // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
@@ -49,7 +50,8 @@ struct FileHeaderV1 {
   int32_t fixedNcp;               // @132, 4 B
   uint8_t mode;                   // @136, 1 B
   uint8_t relativeBound;          // @137, 1 B
-  uint16_t reserved0;             // @138, 2 B
+  uint8_t levelSampling;          // @138, 1 B; LevelSampling: 0 point (older files), 1 box
+  uint8_t reserved0;              // @139, 1 B
   uint32_t indexChecksum;         // @140, 4 B
   uint64_t entryCount;            // @144, 8 B
   uint64_t indexOffset;           // @152, 8 B
@@ -80,6 +82,7 @@ static_assert(offsetof(FileHeaderV1, degree) == 128, "layout");
 static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
 static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
 static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
+static_assert(offsetof(FileHeaderV1, levelSampling) == 138, "layout");
 static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
 static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
 static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
@@ -92,20 +95,23 @@ static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
 static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
 static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
 
-// On-disk index entry, version 1: 40 bytes, offsets and sizes beside the members. Level, block ijk, samples and degree are implied by
-// the entry's position (the index is complete and ordered) and the header; the payload size by
-// the NCP. Keeping the entry this small is what makes the file smaller than the paper's layout
-// even for the smallest models (NCP 3: 108 + 40 bytes against 169).
+// On-disk index entry, version 1: 40 bytes, each member's offset and size beside it. Level, block
+// ijk, samples and degree are implied by the entry's position (the index is complete and ordered)
+// and the header; the payload size by the NCP. Keeping the entry this small is what makes the
+// file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
+// against 169).
 struct IndexEntryV1 {
   uint64_t offset;                // @0, 8 B
   uint16_t ncp[3];                // @8, 6 B
-  uint16_t flags;                 // @14, 2 B; 0 (any other value is an unknown feature)
+  uint16_t flags;                 // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
+                                  // bits: an unknown feature
   float minValue;                 // @16, 4 B
   float maxValue;                 // @20, 4 B
   float rmse;                     // @24, 4 B
   float maxError;                 // @28, 4 B
   uint32_t checksum;              // @32, 4 B
-  uint32_t reserved;              // @36, 4 B; written 0
+  uint32_t storedBytes;           // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
+                                  // the NCP's floats)
 };
 static_assert(sizeof(IndexEntryV1) == 40, "entry size");
 static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
@@ -115,7 +121,7 @@ static_assert(offsetof(IndexEntryV1, maxValue) == 20, "layout");
 static_assert(offsetof(IndexEntryV1, rmse) == 24, "layout");
 static_assert(offsetof(IndexEntryV1, maxError) == 28, "layout");
 static_assert(offsetof(IndexEntryV1, checksum) == 32, "layout");
-static_assert(offsetof(IndexEntryV1, reserved) == 36, "layout");
+static_assert(offsetof(IndexEntryV1, storedBytes) == 36, "layout");
 
 struct CrcTables {
   uint32_t t[8][256];
@@ -192,6 +198,61 @@ bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
 
 int effDegree(int degree, int samples) { return std::max(0, std::min(degree, samples - 1)); }
 
+
+/// NCP and degree a model of this kind must have on one axis of n samples.
+struct AxisRule {
+  int degree, ncpLo, ncpHi;
+};
+AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
+  if (mode == EncodingMode::Downsampled) return {1, n + 2, n + 2};
+  if (kind == BlockKind::Samples) return {effDegree(1, n), n, n};
+  const int p = effDegree(headerDegree, n);
+  if (kind == BlockKind::Constant) return {p, p + 1, p + 1};
+  return {p, p + 1, n};
+}
+
+/// Empty when the model is valid for its block, else what is wrong.
+std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree, const BlockExtent& e) {
+  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Constant))
+    return "unknown block kind " + std::to_string(static_cast<int>(m.kind));
+  if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded))
+    return "a downsampled file holds raw samples only";
+  if (m.kind == BlockKind::Constant && m.coded) return "a constant block is never coded";
+  for (int a = 0; a < 3; ++a) {
+    const AxisRule r = axisRule(m.kind, mode, headerDegree, e.samples[a]);
+    if (m.ncp[a] < r.ncpLo || m.ncp[a] > r.ncpHi || m.degree[a] != r.degree || m.ncp[a] > 65535)
+      return std::string(blockKindName(m.kind)) + " NCP " + std::to_string(m.ncp[a]) + " / degree " +
+             std::to_string(m.degree[a]) + " invalid on axis " + std::to_string(a) + " (NCP in [" +
+             std::to_string(r.ncpLo) + ", " + std::to_string(r.ncpHi) + "], degree " + std::to_string(r.degree) + ")";
+  }
+  return {};
+}
+
+/// Stored bytes of an uncoded model.
+uint64_t uncodedBytes(const ModelEntry& m) { return m.kind == BlockKind::Constant ? 4 : payloadBytes(m.ncp); }
+
+void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh, const BlockExtent& e,
+                const std::string& where, ModelEntry& m) {
+  const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
+  if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
+  if ((r.flags & ~uint16_t(0x1ff)) != 0) throw bad("unknown entry flags " + std::to_string(r.flags));
+  m.kind = static_cast<BlockKind>(r.flags & 0xff);
+  m.coded = (r.flags & 0x100) != 0;
+  m.samples = e.samples;
+  for (int a = 0; a < 3; ++a) {
+    m.ncp[a] = r.ncp[a];
+    m.degree[a] = axisRule(m.kind, vh.mode, vh.degree, e.samples[a]).degree;
+  }
+  const std::string problem = modelProblem(m, vh.mode, vh.degree, e);
+  if (!problem.empty()) throw bad(problem);
+  if (!checkedPayloadBytes(r.ncp, m.size)) throw bad("payload size overflows");
+  m.storedSize = version == 1 ? m.size : r.storedBytes;
+  if (!m.coded && m.storedSize != uncodedBytes(m))
+    throw bad("stored size " + std::to_string(m.storedSize) + " is not the " + std::to_string(uncodedBytes(m)) +
+              " bytes of an uncoded " + blockKindName(m.kind));
+  if (m.coded && m.storedSize <= kCodedHeaderBytes) throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
+}
+
 }  // namespace
 
 uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
@@ -212,6 +273,10 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
   return ~crc;
 }
 
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes) {
+  return sizeof(FileHeaderV1) + entries * sizeof(IndexEntryV1) + payloadBytes;
+}
+
 uint64_t payloadBytes(const Int3& ncp) {
   const int32_t n[3] = {ncp[0], ncp[1], ncp[2]};
   uint64_t out = 0;
@@ -223,6 +288,28 @@ uint64_t paperModelBytes(const Int3& ncp, const Int3& degree) {
   uint64_t knots = 0;
   for (int a = 0; a < 3; ++a) knots += static_cast<uint64_t>(ncp[a] + degree[a]);
   return 1 + (knots + uint64_t(ncp[0]) * uint64_t(ncp[1]) * uint64_t(ncp[2])) * 4;
+}
+
+const char* blockKindName(BlockKind kind) {
+  switch (kind) {
+    case BlockKind::Spline: return "spline";
+    case BlockKind::Samples: return "samples";
+    case BlockKind::Constant: return "constant";
+  }
+  return "unknown";
+}
+
+void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out, const std::string& where) {
+  const size_t count = e.size / sizeof(float);
+  if (e.kind == BlockKind::Constant) {
+    float c;
+    std::memcpy(&c, stored, 4);
+    std::fill(out, out + count, c);
+  } else if (e.coded) {
+    decodeValues(stored, e.storedSize, e.ncp, out, where.c_str());
+  } else {
+    std::memcpy(out, stored, e.size);
+  }
 }
 
 const char* modeName(EncodingMode mode) {
@@ -274,13 +361,13 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   preadAll(f->fd_, &h, sizeof h, 0, path, "header");
   if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
   if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
-  if (h.version != kVersion)
-    throw bad("unknown format version " + std::to_string(h.version) + " (this reader knows version " +
+  if (h.version != 1 && h.version != kVersion)
+    throw bad("unsupported format version " + std::to_string(h.version) + " (this reader knows versions 1 and " +
               std::to_string(kVersion) + ")");
   if (crc32(&h, offsetof(FileHeaderV1, headerChecksum)) != h.headerChecksum)
     throw bad("header checksum mismatch (header damaged)");
   if (h.headerSize != sizeof(FileHeaderV1) || h.entrySize != sizeof(IndexEntryV1))
-    throw bad("header or index entry size does not match version 1");
+    throw bad("header or index entry size does not match version " + std::to_string(h.version));
   if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 || (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
     throw bad("payload alignment " + std::to_string(h.payloadAlignment) + " is not a power of two in [4, 4096]");
   if (h.fileSize != f->fileSize_)
@@ -313,6 +400,9 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   vh.errorBound = h.errorBound;
   vh.relativeBound = h.relativeBound != 0;
   vh.mode = static_cast<EncodingMode>(h.mode);
+  if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
+    throw bad("unknown level sampling " + std::to_string(h.levelSampling));
+  vh.sampling = static_cast<LevelSampling>(h.levelSampling);
   vh.fixedNcp = h.fixedNcp;
   vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
   f->version_ = h.version;
@@ -348,7 +438,6 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   for (int l = 0; l < vh.levels; ++l)
     f->levelStart_[static_cast<size_t>(l) + 1] = f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
 
-  const bool ds = vh.mode == EncodingMode::Downsampled;
   f->entries_.resize(raw.size());
   uint64_t payloadSum = 0;
   int level = 0;
@@ -357,35 +446,17 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     const IndexEntryV1& r = raw[i];
     const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
     const std::string where = "index entry " + std::to_string(i) + " (" + blockName(level, ijk) + ")";
-    if (r.flags != 0 || r.reserved != 0) throw bad(where + ": unknown entry flags");
-    const BlockExtent e = part.extent(level, ijk);
     ModelEntry& m = f->entries_[i];
     m.level = level;
     m.block = ijk;
-    for (int a = 0; a < 3; ++a) {
-      m.samples[a] = e.samples[a];
-      if (ds) {
-        m.degree[a] = 1;
-        if (r.ncp[a] != e.samples[a] + 2)
-          throw bad(where + ": downsampled block must hold samples + 2 values per axis");
-      } else {
-        const int p = effDegree(vh.degree, e.samples[a]);
-        m.degree[a] = p;
-        if (r.ncp[a] < p + 1 || r.ncp[a] > e.samples[a])
-          throw bad(where + ": NCP " + std::to_string(r.ncp[a]) + " on axis " + std::to_string(a) +
-                    " outside [" + std::to_string(p + 1) + ", " + std::to_string(e.samples[a]) + "]");
-      }
-      m.ncp[a] = r.ncp[a];
-    }
-    uint64_t bytes = 0;
-    if (!checkedPayloadBytes(r.ncp, bytes)) throw bad(where + ": payload size overflows");
+    parseEntry(r, h.version, vh, part.extent(level, ijk), path + ": " + where, m);
     if (r.offset < h.payloadOffset || r.offset % h.payloadAlignment != 0 || r.offset > f->fileSize_ ||
-        bytes > f->fileSize_ - r.offset)
-      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(bytes) +
+        m.storedSize > f->fileSize_ - r.offset)
+      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(m.storedSize) +
                 ") lies outside the payload area or is misaligned (file size " + std::to_string(f->fileSize_) + ")");
+    const uint64_t bytes = m.storedSize;
     payloadSum += bytes;
     m.offset = r.offset;
-    m.size = bytes;
     m.minValue = r.minValue;
     m.maxValue = r.maxValue;
     m.rmse = r.rmse;
@@ -408,9 +479,18 @@ void AfamFile::readPayload(int64_t entry, void* out) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];
-  preadAll(fd_, out, e.size, e.offset, path_, "payload of " + blockName(e.level, e.block));
-  if (crc32(out, e.size) != e.checksum)
+  const std::string where = path_ + ": " + blockName(e.level, e.block);
+  if (e.storedSize == e.size) {  // uncoded floats: read in place
+    preadAll(fd_, out, e.size, e.offset, path_, "payload of " + blockName(e.level, e.block));
+    if (crc32(out, e.size) != e.checksum) throw FormatError(path_ + ": payload checksum mismatch at " + blockName(e.level, e.block));
+    return;
+  }
+  thread_local std::vector<uint8_t> stored;
+  stored.resize(e.storedSize);
+  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_, "payload of " + blockName(e.level, e.block));
+  if (crc32(stored.data(), e.storedSize) != e.checksum)
     throw FormatError(path_ + ": payload checksum mismatch at " + blockName(e.level, e.block));
+  decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
 }
 
 std::vector<float> AfamFile::readPayload(int64_t entry) const {
@@ -464,6 +544,13 @@ uint64_t AfamWriter::bytesWritten() const {
 }
 
 void AfamWriter::add(const ModelEntry& in, const float* payload) {
+  ModelEntry e = in;
+  e.coded = false;
+  e.storedSize = uncodedBytes(e);
+  addStored(e, payload);
+}
+
+void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   if (in.level < 0 || in.level >= header_.levels)
     throw InvalidArgument(path_ + ": level " + std::to_string(in.level) + " out of range");
   const Int3 b = partition_.blocksPerAxis(in.level);
@@ -471,32 +558,28 @@ void AfamWriter::add(const ModelEntry& in, const float* payload) {
     if (in.block[a] < 0 || in.block[a] >= b[a])
       throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " out of range");
   const BlockExtent e = partition_.extent(in.level, in.block);
-  const bool ds = header_.mode == EncodingMode::Downsampled;
-  for (int a = 0; a < 3; ++a) {
-    if (in.samples[a] != e.samples[a])
-      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": samples disagree with the partition");
-    const int p = effDegree(header_.degree, e.samples[a]);
-    const bool ok = (ds ? (in.ncp[a] == e.samples[a] + 2 && in.degree[a] == 1)
-                        : (in.degree[a] == p && in.ncp[a] >= p + 1 && in.ncp[a] <= e.samples[a])) &&
-                    in.ncp[a] <= 65535;
-    if (!ok)
-      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": NCP/degree invalid on axis " +
-                            std::to_string(a));
-  }
-  const uint64_t bytes = payloadBytes(in.ncp);
-  const uint32_t crc = crc32(payload, bytes);
+  if (in.samples != e.samples)
+    throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": samples disagree with the partition");
+  const std::string problem = modelProblem(in, header_.mode, header_.degree, e);
+  if (!problem.empty()) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": " + problem);
+  const uint64_t bytes = in.storedSize;
+  if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
+               : bytes != uncodedBytes(in))
+    throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": stored size " + std::to_string(bytes) +
+                          " invalid");
+  const uint32_t crc = crc32(stored, bytes);
   const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
                                           partition_.linearIndex(in.level, in.block));
   std::lock_guard<std::mutex> lock(mutex_);
   if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
   if (present_[slot]) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " added twice");
   const uint64_t offset = end_;
-  pwriteAll(fd_, payload, bytes, offset, tmpPath_);
+  pwriteAll(fd_, stored, bytes, offset, tmpPath_);
   end_ = alignUp(offset + bytes, kPayloadAlign);
   ModelEntry& m = entries_[slot];
   m = in;
   m.offset = offset;
-  m.size = bytes;
+  m.size = payloadBytes(in.ncp);
   m.checksum = crc;
   present_[slot] = 1;
 }
@@ -524,7 +607,9 @@ void AfamWriter::commit() {
     r.rmse = m.rmse;
     r.maxError = m.maxError;
     r.checksum = m.checksum;
-    payloadSum += m.size;
+    r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0));
+    r.storedBytes = static_cast<uint32_t>(m.storedSize);
+    payloadSum += m.storedSize;
   }
   const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
   const uint64_t fileSize = end_;
@@ -549,6 +634,7 @@ void AfamWriter::commit() {
   h.fixedNcp = header_.fixedNcp;
   h.mode = static_cast<uint8_t>(header_.mode);
   h.relativeBound = header_.relativeBound ? 1 : 0;
+  h.levelSampling = static_cast<uint8_t>(header_.sampling);
   h.indexChecksum = crc32(raw.data(), indexBytes);
   h.entryCount = raw.size();
   h.indexOffset = sizeof(FileHeaderV1);

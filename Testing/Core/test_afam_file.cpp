@@ -294,10 +294,10 @@ TEST_F(CorruptFile, BadMagic) {
 
 TEST_F(CorruptFile, UnknownVersion) {
   const std::string w = expectFormatError(path_, [](std::vector<char>& b) {
-    const uint32_t v = 2;
+    const uint32_t v = 3;
     std::memcpy(&b[8], &v, 4);
   });
-  EXPECT_NE(w.find("version 2"), std::string::npos) << w;
+  EXPECT_NE(w.find("version 3"), std::string::npos) << w;
 }
 
 TEST_F(CorruptFile, HeaderChecksum) {
@@ -391,8 +391,10 @@ TEST_F(CorruptFile, OffsetsPastTheEnd) {
   EXPECT_NE(n.find("NCP 65535"), std::string::npos) << n;
   const uint16_t zeroNcp[3] = {0, 1, 1};
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, zeroNcp, 6); });
-  const uint16_t flags = 1;
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
+  for (const uint16_t flags : {uint16_t(0x200), uint16_t(3), uint16_t(0x102)}) {  // unknown bit, kind, coded constant
+    const std::string f = expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
+    EXPECT_NE(f.find("index entry 2"), std::string::npos) << f;
+  }
   const uint32_t alignment = 3;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 440, &alignment, 4); });
   const uint64_t total = 12345;

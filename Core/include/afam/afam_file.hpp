@@ -46,7 +46,18 @@ struct VolumeHeader {
   bool relativeBound = false;
   EncodingMode mode = EncodingMode::Adaptive;
   int fixedNcp = 0;        ///< Fixed mode: requested NCP (0 = n)
+  /// How coarse levels were sampled (and what their error is measured against).
+  LevelSampling sampling = LevelSampling::Point;
 };
+
+/// How a micro-model is stored (format version 2; version-1 files hold float32 splines only).
+///   Spline:   B-spline of the header's degree (lowered per axis by short axes), NCP per axis.
+///   Samples:  the block's samples as a degree-1 spline with NCP = samples (the implied knots put
+///             each control point on its sample: trilinear interpolation, exact at the samples).
+///   Constant: one value; decoded to a spline of the header's degree with p+1 equal control points.
+/// Spline and Samples payloads are float32 control points, or `coded` (block_codec.hpp).
+enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2 };
+const char* blockKindName(BlockKind kind);
 
 struct ModelEntry {
   int level = 0;
@@ -55,10 +66,17 @@ struct ModelEntry {
   Int3 degree{};    ///< effective degree per axis (DS: 1)
   Int3 samples{};   ///< micro-block samples per axis (Partition::extent)
   uint64_t offset = 0;
-  uint64_t size = 0;
+  uint64_t size = 0;        ///< bytes of the decoded float32 control points (what readPayload gives)
   float minValue = 0, maxValue = 0, rmse = 0, maxError = 0;
-  uint32_t checksum = 0;
+  uint32_t checksum = 0;    ///< CRC32 of the stored bytes
+  BlockKind kind = BlockKind::Spline;
+  bool coded = false;       ///< quantized, predicted and zstd-coded (block_codec.hpp)
+  uint64_t storedSize = 0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
 };
+
+/// The decoded control points of a stored payload (entry.storedSize bytes) into out
+/// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
+void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out, const std::string& where);
 // For B-spline modes the payload is ncp.x*ncp.y*ncp.z float32 control points, x fastest.
 // For Downsampled (DS) the payload is (samples+2) per axis float32 raw samples with a one-voxel
 // ghost layer (clamped at the volume edge), x fastest, and ncp holds samples+2, degree holds 1.
@@ -68,6 +86,10 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0);
 
 /// Payload bytes of a model: ncp product * 4.
 uint64_t payloadBytes(const Int3& ncp);
+
+/// Bytes of a file holding `entries` models whose payloads total `payloadBytes` (header + index +
+/// payloads, before the payload area's alignment padding).
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes);
 
 /// Size in bytes the paper's layout gives the same model: 1 + ((NCP + p) * 3 + NCP^3) * 4, with
 /// per-axis NCP and degree: 1 + (sum_a (ncp_a + p_a) + prod_a ncp_a) * 4.
@@ -123,11 +145,14 @@ class AfamWriter {
   AfamWriter(const AfamWriter&) = delete;
   AfamWriter& operator=(const AfamWriter&) = delete;
 
-  /// entry's offset/size/checksum are filled in here; payload holds payloadBytes(entry.ncp) bytes.
-  /// Payloads are stored in the order they are added, 4-byte aligned (no padding for float32).
-  /// Throws InvalidArgument for a block out of range, added twice, or whose samples do not match
-  /// the partition; IoError when the write fails.
+  /// An uncoded model: payload holds its float32 control points (payloadBytes(entry.ncp) bytes; a
+  /// Constant stores payload[0] only). entry's offset/size/checksum/storedSize are filled in here.
+  /// Payloads are stored in the order they are added, 4-byte aligned.
+  /// Throws InvalidArgument for a block out of range, added twice, or whose samples, kind, NCP or
+  /// degree do not match the partition; IoError when the write fails.
   void add(const ModelEntry& entryWithoutOffsets, const float* payload);
+  /// A model in its stored form: entry.storedSize bytes (coded payloads, or as add() stores them).
+  void addStored(const ModelEntry& entryWithoutOffsets, const void* stored);
   /// Writes the index and header, fsyncs and renames onto the final path. Throws InvalidArgument
   /// if blocks are missing, IoError on failure (the temporary file is then removed).
   void commit();

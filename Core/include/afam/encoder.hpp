@@ -31,8 +31,12 @@
 #include <vector>
 
 #include "afam/afam_file.hpp"
+#include "afam/block_sampling.hpp"
+#include "afam/decode.hpp"
 #include "afam/errors.hpp"
+#include "afam/model_sink.hpp"
 #include "afam/partition.hpp"
+#include "afam/volume_source.hpp"
 
 namespace afam {
 
@@ -49,6 +53,9 @@ struct EncoderOptions {
   int threads = 0;             ///< 0 = hardware concurrency
   SearchMethod search = SearchMethod::Fast;
   int fastWindow = 3;          ///< Fast search: NCPs checked below the bisection result
+  /// Bounded modes: store each block in its smallest form within the bound (a constant, a coded
+  /// spline or coded samples; block_codec.hpp). false: float32 splines, the paper's payloads.
+  bool compact = true;
   /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
   /// (encodeVolume then throws afam::Cancelled; nothing is written).
   std::function<bool(double fraction)> progress;
@@ -58,9 +65,13 @@ struct LevelStats {
   int64_t blocks = 0;          ///< micro-blocks of the level
   int64_t searched = 0;        ///< blocks that ran the in-level search
   int64_t complex = 0;         ///< blocks with NCP* > p+1
+  int64_t refits = 0;          ///< blocks whose cross-level reuse missed the bound and were searched
+  int64_t exact = 0;           ///< blocks no NCP could fit within the bound, stored as their samples
+  int64_t reducedDegree = 0;   ///< blocks with an axis of 2..degree samples (degree lowered there)
   int64_t fits = 0;            ///< fits performed at this level
   int64_t samples = 0;         ///< micro-block samples fitted (sum of n0 n1 n2)
-  uint64_t payloadBytes = 0;   ///< sum of payload sizes
+  uint64_t payloadBytes = 0;   ///< sum of stored payload sizes
+  std::array<int64_t, 3> kinds{};  ///< blocks per BlockKind (spline, samples, constant)
   uint64_t paperBytes = 0;     ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;
@@ -92,114 +103,6 @@ struct EncodeStats {
   double voxelsPerCpuSecond() const { return cpuSeconds > 0 ? double(inputVoxels) / cpuSeconds : 0; }
 };
 
-/// A scalar volume read by whole z-planes. Implementations: ArraySource, RawFileSource,
-/// MarschnerLobbSource. readSlab is called from one thread at a time.
-class VolumeSource {
- public:
-  virtual ~VolumeSource() = default;
-  virtual Index3 dims() const = 0;
-  virtual std::array<double, 3> origin() const { return {0, 0, 0}; }
-  virtual std::array<double, 3> spacing() const { return {1, 1, 1}; }
-  virtual std::string name() const { return "scalars"; }
-  /// dims[0] * dims[1] * zCount floats, x fastest, planes z0 .. z0+zCount-1.
-  virtual void readSlab(int64_t z0, int64_t zCount, float* out) = 0;
-  /// If the source knows its value range without a pass over the data, it says so here; else
-  /// the encoder computes it (and checks for NaN/Inf) in one streaming pass.
-  virtual bool knownRange(double& lo, double& hi) const {
-    (void)lo;
-    (void)hi;
-    return false;
-  }
-  /// Bytes per voxel of the original data (for the compression ratio).
-  virtual int bytesPerVoxel() const { return 4; }
-};
-
-/// Over a caller-owned float array (x fastest). The array must outlive the source.
-class ArraySource : public VolumeSource {
- public:
-  ArraySource(const float* data, Index3 dims, std::string name = "scalars",
-              std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
-  Index3 dims() const override { return dims_; }
-  std::array<double, 3> origin() const override { return origin_; }
-  std::array<double, 3> spacing() const override { return spacing_; }
-  std::string name() const override { return name_; }
-  void readSlab(int64_t z0, int64_t zCount, float* out) override;
-
- private:
-  const float* data_;
-  Index3 dims_;
-  std::string name_;
-  std::array<double, 3> origin_, spacing_;
-};
-
-enum class ScalarType : uint8_t { Float32, Float64, UInt8, UInt16, Int16 };
-const char* scalarTypeName(ScalarType t);
-ScalarType parseScalarType(const std::string& name);  ///< float32|float64|uint8|uint16|int16
-int scalarTypeSize(ScalarType t);
-
-/// Parses name_XxYxZ_type.raw (the convention of shared/data/volumes); false if it does not match.
-bool parseRawName(const std::string& path, Index3& dims, ScalarType& type);
-
-/// Over a raw little-endian file, converted to float32; reads only the planes asked for.
-class RawFileSource : public VolumeSource {
- public:
-  /// Throws IoError if the file cannot be opened, InvalidArgument if its size is not dims * type.
-  RawFileSource(const std::string& path, Index3 dims, ScalarType type,
-                std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
-  ~RawFileSource() override;
-  Index3 dims() const override { return dims_; }
-  std::array<double, 3> origin() const override { return origin_; }
-  std::array<double, 3> spacing() const override { return spacing_; }
-  std::string name() const override;
-  void readSlab(int64_t z0, int64_t zCount, float* out) override;
-  int bytesPerVoxel() const override { return scalarTypeSize(type_); }
-  ScalarType type() const { return type_; }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-  Index3 dims_;
-  ScalarType type_;
-  std::array<double, 3> origin_, spacing_;
-  std::vector<unsigned char> buffer_;
-};
-
-/// The Marschner-Lobb function sampled on dims over [-1, 1]^3, generated plane by plane.
-class MarschnerLobbSource : public VolumeSource {
- public:
-  explicit MarschnerLobbSource(Index3 dims) : dims_(dims) {}
-  Index3 dims() const override { return dims_; }
-  std::string name() const override { return "marschner_lobb"; }
-  void readSlab(int64_t z0, int64_t zCount, float* out) override;
-
- private:
-  Index3 dims_;
-};
-
-/// Receives the header first, then every model (from the calling thread of encodeVolume).
-class ModelSink {
- public:
-  virtual ~ModelSink() = default;
-  virtual void begin(const VolumeHeader& header) = 0;
-  virtual void add(const ModelEntry& entry, const float* payload) = 0;
-};
-
-/// Keeps every model in memory (for the VTK filter and for tests).
-class InMemoryModels : public ModelSink {
- public:
-  void begin(const VolumeHeader& h) override;
-  void add(const ModelEntry& entry, const float* payload) override;
-  VolumeHeader header;
-  Partition partition;
-  std::vector<ModelEntry> entries;            ///< ordered like the file: level, then linear index
-  std::vector<std::vector<float>> payloads;   ///< same order
-  std::vector<int64_t> levelStart;
-  int64_t entryIndex(int level, Int3 ijk) const;
-  /// Writes everything to an .afam file (atomic).
-  void write(const std::string& path) const;
-};
-
 /// Encodes into a sink. Throws InvalidArgument (options), NumericError (NaN/Inf, naming the block),
 /// IoError (source), Cancelled.
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink);
@@ -210,45 +113,5 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, co
 /// the fit at NCP* in `result`; `fits` counts the fits performed.
 int searchNcp(class BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
               SearchMethod method, int window, struct FitResult& result, int64_t& fits);
-
-/// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
-/// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample
-/// on each side at the same spacing, clamped to the volume (DS payload layout).
-std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk,
-                                bool ghost = false);
-
-/// Streams the micro-block samples of one z-row of blocks of a level from a source, reading only
-/// the planes needed (two cached). Used by the encoder, `afam verify --against` and tests.
-class BlockRowReader {
- public:
-  BlockRowReader(VolumeSource& source, const Partition& partition);
-  ~BlockRowReader();
-  /// out[j * bx + i] = samples of block (i, j, kz), x fastest; ghost as in extractBlock.
-  void readRow(int level, int kz, bool ghost, std::vector<std::vector<float>>& out);
-  uint64_t bytesRead() const;
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-};
-
-/// Samples of a decoded micro-block on its own n0 x n1 x n2 grid: the spline evaluated at the
-/// sample parameters (B-spline modes) or the stored samples without the ghost layer (DS).
-void decodeBlockSamples(const ModelEntry& entry, const float* payload, EncodingMode mode, std::vector<float>& out);
-
-/// The sample grid of one decoded level: per axis the level's blocks' samples joined on their
-/// shared boundary samples (dims), and where block i starts on each axis (start[a][i]).
-struct LevelGrid {
-  Index3 dims{};
-  std::array<std::vector<int64_t>, 3> start;
-};
-LevelGrid levelGrid(const Partition& partition, int level);
-
-/// Decodes level `level` of `file` inside the box [lo, hi] of its level grid (inclusive indices)
-/// into `out`, x fastest, (hi - lo + 1) samples per axis. Reads only the blocks that own samples
-/// of the box (a shared boundary sample belongs to the later block, as in `afam decode`).
-/// `progress` (optional) gets fractions in [0, 1]. Throws InvalidArgument for a bad level or box.
-void decodeLevelBox(const AfamFile& file, int level, const Index3& lo, const Index3& hi, float* out,
-                    const std::function<void(double)>& progress = {});
 
 }  // namespace afam

@@ -1,0 +1,271 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "block_encoding.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "afam/block_codec.hpp"
+
+namespace afam {
+
+namespace {
+
+// Compact mode: the spline is fitted to kFitShare of the bound, the rest of the budget (in
+// quadrature) goes to the quantization of its control points. Steps are tried from the largest
+// (the basis averages independent rounding errors, so the model moves less than the points) down.
+constexpr double kFitShare = 0.9;
+constexpr double kSplineStepFactors[] = {2.5, 1.6, 1.0, 0.6};
+constexpr double kSampleStepFactors[] = {1.0, 0.8, 0.6, 0.4};
+constexpr int kZstdLevel = 6;
+
+template <typename T>
+std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
+  std::vector<uint8_t> out(v.size() * sizeof(T));
+  if (!out.empty()) std::memcpy(out.data(), v.data(), out.size());
+  return out;
+}
+
+/// Error of model values (on the block's sample grid) against the samples; min/max of the model.
+ErrorStats compare(const float* model, const std::vector<float>& s) {
+  ErrorStats es;
+  es.minValue = std::numeric_limits<double>::infinity();
+  es.maxValue = -es.minValue;
+  double sum = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const double d = double(model[i]) - double(s[i]);
+    sum += d * d;
+    es.maxError = std::max(es.maxError, std::fabs(d));
+    es.minValue = std::min(es.minValue, double(model[i]));
+    es.maxValue = std::max(es.maxValue, double(model[i]));
+  }
+  es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
+  return es;
+}
+
+void setError(BlockTask& t, const ErrorStats& es) {
+  ModelEntry& m = t.entry;
+  t.rmse = es.rmse;
+  t.maxError = es.maxError;
+  m.minValue = float(es.minValue);
+  m.maxValue = float(es.maxValue);
+  m.rmse = float(es.rmse);
+  m.maxError = float(es.maxError);
+}
+
+/// The block's samples themselves as a degree-1 spline with NCP = n per axis: its implied knots
+/// put the control points on the sample parameters, so it reproduces every (float) sample exactly.
+void exactModel(const BlockExtent& e, const std::vector<float>& samples, FitResult& fr) {
+  fr.ncp = e.samples;
+  for (int a = 0; a < 3; ++a) fr.degree[a] = effectiveDegree(1, e.samples[a]);
+  fr.control = samples;
+  const auto mm = std::minmax_element(samples.begin(), samples.end());
+  fr.error = ErrorStats{0, 0, double(*mm.first), double(*mm.second)};
+}
+
+/// Fits one block to `bound`: the searched NCP*, or the mode's NCP without a search. In bounded
+/// modes the error is then checked on the block's own samples: a block that skipped the search
+/// (cross-level reuse) and misses the bound is searched, and one that misses it even at NCP = n is
+/// the exact model (t.exact).
+void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, double bound, BlockTask& t,
+              FitResult& fr) {
+  Int3 degs{};
+  int nmax = 1;
+  for (int a = 0; a < 3; ++a) {
+    degs[a] = effectiveDegree(c.opt.degree, e.samples[a]);
+    nmax = std::max(nmax, e.samples[a]);
+  }
+  const int lo = std::min(c.opt.degree + 1, nmax);
+  auto search = [&]() {
+    t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search, c.opt.fastWindow,
+                          fr, t.fits);
+    t.complex = t.ncpStar > lo;
+  };
+  if (t.search) {
+    search();
+  } else {
+    const Int3 ncp = c.opt.mode == EncodingMode::Fixed
+                         ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
+                         : clampNcp(lo, e.samples, degs);
+    fitter.fitInto(t.samples.data(), e.samples, ncp, c.opt.degree, true, fr);
+    ++t.fits;
+    t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
+  }
+  if (!bounded(c.opt.mode) || fr.error.rmse <= bound) return;
+  if (!t.search) {
+    t.search = true;
+    t.refit = true;
+    search();
+    if (fr.error.rmse <= bound) return;
+  }
+  exactModel(e, t.samples, fr);
+  t.exact = true;
+  t.complex = true;
+}
+
+/// Float32 payload of a fitted model (Spline, or Samples for the exact model).
+void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  m.kind = exact ? BlockKind::Samples : BlockKind::Spline;
+  m.coded = false;
+  m.ncp = fr.ncp;
+  m.degree = fr.degree;
+  setError(t, fr.error);
+  t.stored = bytesOf(fr.control);
+  m.storedSize = t.stored.size();
+}
+
+/// A candidate stored form of the block.
+struct Candidate {
+  BlockKind kind = BlockKind::Spline;
+  Int3 ncp{}, degree{};
+  ErrorStats error;
+  std::vector<uint8_t> bytes;
+};
+
+bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound, Candidate& out) {
+  double mean = 0;
+  for (float v : s) mean += double(v);
+  const float c = float(mean / double(s.size()));
+  const std::vector<float> model(s.size(), c);
+  const ErrorStats es = compare(model.data(), s);
+  if (!(es.rmse <= bound)) return false;
+  out.kind = BlockKind::Constant;
+  for (int a = 0; a < 3; ++a) {
+    out.degree[a] = effectiveDegree(degree, e.samples[a]);
+    out.ncp[a] = out.degree[a] + 1;
+  }
+  out.error = es;
+  out.bytes.resize(4);
+  std::memcpy(out.bytes.data(), &c, 4);
+  return true;
+}
+
+bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound, BlockFitter& fitter,
+                Candidate& out) {
+  const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
+  if (!(budget > 0)) return false;
+  FitResult q = fr;
+  std::vector<uint8_t> bytes;
+  for (double k : kSplineStepFactors) {
+    if (!encodeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, kZstdLevel, bytes,
+                      q.control))
+      return false;
+    const ErrorStats es = fitter.error(s.data(), n, q);
+    if (es.rmse <= bound) {
+      out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
+      return true;
+    }
+  }
+  return false;
+}
+
+bool codeSamples(const std::vector<float>& s, Int3 n, double bound, Candidate& out) {
+  if (!(bound > 0)) return false;
+  std::vector<uint8_t> bytes;
+  std::vector<float> recon;
+  for (double k : kSampleStepFactors) {
+    if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation, kZstdLevel, bytes, recon))
+      return false;
+    const ErrorStats es = compare(recon.data(), s);
+    if (es.rmse <= bound) {
+      Int3 deg{};
+      for (int a = 0; a < 3; ++a) deg[a] = effectiveDegree(1, n[a]);
+      out = Candidate{BlockKind::Samples, n, deg, es, std::move(bytes)};
+      return true;
+    }
+  }
+  return false;
+}
+
+void storeCandidate(Candidate& c, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  m.kind = c.kind;
+  m.coded = c.kind != BlockKind::Constant;
+  m.ncp = c.ncp;
+  m.degree = c.degree;
+  setError(t, c.error);
+  t.stored = std::move(c.bytes);
+  m.storedSize = t.stored.size();
+}
+
+/// Compact storage: a constant where one meets the bound; else the smaller of the coded spline
+/// (fitted to kFitShare of the bound) and the coded samples; the float samples where neither does.
+void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  Candidate best, other;
+  if (constantFits(e, t.samples, c.opt.degree, c.bound, best)) {
+    t.complex = false;
+    storeCandidate(best, t);
+    return;
+  }
+  FitResult fr;
+  fitBlock(c, e, fitter, kFitShare * c.bound, t, fr);
+  const int64_t count = int64_t(t.samples.size());
+  const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
+                          codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
+  // Samples pay when the spline is missing or spends more than a bit per sample.
+  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) && codeSamples(t.samples, e.samples, c.bound, other) &&
+      (!haveSpline || other.bytes.size() < best.bytes.size())) {
+    best = std::move(other);
+    t.complex = true;
+  } else if (!haveSpline) {
+    exactModel(e, t.samples, fr);
+    t.exact = true;
+    t.complex = true;
+    storeFloat(fr, true, t);
+    return;
+  }
+  storeCandidate(best, t);
+}
+
+}  // namespace
+
+void storeDownsampled(const BlockExtent& e, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  for (int a = 0; a < 3; ++a) {
+    m.ncp[a] = e.samples[a] + 2;
+    m.degree[a] = 1;
+  }
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  const int gx = m.ncp[0], gy = m.ncp[1];
+  for (int z = 1; z <= e.samples[2]; ++z)
+    for (int y = 1; y <= e.samples[1]; ++y)
+      for (int x = 1; x <= e.samples[0]; ++x) {
+        const float v = t.samples[(size_t(z) * size_t(gy) + size_t(y)) * size_t(gx) + size_t(x)];
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+  m.minValue = lo;
+  m.maxValue = hi;
+  m.kind = BlockKind::Spline;
+  t.stored = bytesOf(t.samples);
+  m.storedSize = t.stored.size();
+  std::vector<float>().swap(t.samples);
+}
+
+void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  try {
+    if (c.opt.compact && bounded(c.opt.mode)) {
+      encodeCompact(c, e, fitter, t);
+    } else {
+      FitResult fr;
+      fitBlock(c, e, fitter, c.bound, t, fr);
+      storeFloat(fr, t.exact, t);
+    }
+  } catch (const NumericError& ex) {
+    throw NumericError("encode: " + blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
+  }
+  if (bounded(c.opt.mode) && !(t.rmse <= c.bound)) {
+    std::ostringstream msg;
+    msg << "encode: " << blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << t.entry.rmse
+        << " over the bound " << c.bound << " even stored exactly";
+    throw NumericError(msg.str());
+  }
+  for (int a = 0; a < 3; ++a)
+    if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
+  std::vector<float>().swap(t.samples);
+}
+
+}  // namespace afam

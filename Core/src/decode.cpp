@@ -1,0 +1,95 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/decode.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "afam/errors.hpp"
+#include "afam/fit.hpp"
+
+namespace afam {
+
+void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode mode, std::vector<float>& out) {
+  const Int3 n = e.samples;
+  if (mode == EncodingMode::Downsampled) {
+    out.resize(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+    const size_t gx = size_t(e.ncp[0]), gy = size_t(e.ncp[1]);
+    for (int z = 0; z < n[2]; ++z)
+      for (int y = 0; y < n[1]; ++y)
+        std::memcpy(out.data() + (size_t(z) * size_t(n[1]) + size_t(y)) * size_t(n[0]),
+                    payload + ((size_t(z) + 1) * gy + size_t(y) + 1) * gx + 1, size_t(n[0]) * sizeof(float));
+    return;
+  }
+  FitResult model;
+  model.ncp = e.ncp;
+  model.degree = e.degree;
+  model.control.assign(payload, payload + size_t(e.ncp[0]) * size_t(e.ncp[1]) * size_t(e.ncp[2]));
+  evaluateOnGrid(model, n, out);
+}
+
+LevelGrid levelGrid(const Partition& part, int level) {
+  if (level < 0 || level >= part.levels())
+    throw InvalidArgument("level " + std::to_string(level) + " outside [0, " + std::to_string(part.levels() - 1) + "]");
+  LevelGrid g;
+  const Int3 nb = part.blocksPerAxis(level);
+  for (int a = 0; a < 3; ++a) {
+    Int3 ijk{0, 0, 0};
+    int64_t pos = 0;
+    for (int i = 0; i < nb[a]; ++i) {
+      ijk[a] = i;
+      g.start[size_t(a)].push_back(pos);
+      pos += part.extent(level, ijk).samples[a] - 1;
+    }
+    g.dims[a] = pos + 1;
+  }
+  return g;
+}
+
+void decodeLevelBox(const AfamFile& f, int level, const Index3& lo, const Index3& hi, float* out,
+                    const std::function<void(double)>& progress) {
+  const Partition& part = f.partition();
+  const LevelGrid g = levelGrid(part, level);
+  const Int3 nb = part.blocksPerAxis(level);
+  Index3 n{};
+  int first[3], last[3];  // blocks owning samples of the box, per axis
+  for (int a = 0; a < 3; ++a) {
+    if (lo[a] < 0 || hi[a] >= g.dims[a] || lo[a] > hi[a])
+      throw InvalidArgument("decode box outside the level grid on axis " + std::to_string(a));
+    n[a] = hi[a] - lo[a] + 1;
+    const auto& st = g.start[size_t(a)];
+    // Block i owns [start[i], start[i+1]) (the last block up to dims-1).
+    first[a] = int(std::upper_bound(st.begin(), st.end(), lo[a]) - st.begin()) - 1;
+    last[a] = int(std::upper_bound(st.begin(), st.end(), hi[a]) - st.begin()) - 1;
+  }
+  const double total = double(last[0] - first[0] + 1) * (last[1] - first[1] + 1) * (last[2] - first[2] + 1);
+  double done = 0;
+  std::vector<float> payload, dec;
+  for (int k = first[2]; k <= last[2]; ++k)
+    for (int j = first[1]; j <= last[1]; ++j)
+      for (int i = first[0]; i <= last[0]; ++i) {
+        const int64_t ei = f.entryIndex(level, {i, j, k});
+        const ModelEntry& m = f.entries()[size_t(ei)];
+        payload.resize(m.size / 4);
+        f.readPayload(ei, payload.data());
+        decodeBlockSamples(m, payload.data(), f.header().mode, dec);
+        const int ijk[3] = {i, j, k};
+        int64_t b0[3], b1[3];  // owned samples of the block inside the box, level-grid indices
+        for (int a = 0; a < 3; ++a) {
+          const auto& st = g.start[size_t(a)];
+          const int64_t s0 = st[size_t(ijk[a])];
+          const int64_t ownedEnd = ijk[a] + 1 < nb[a] ? st[size_t(ijk[a]) + 1] - 1 : g.dims[a] - 1;
+          b0[a] = std::max(s0, lo[a]);
+          b1[a] = std::min(ownedEnd, hi[a]);
+        }
+        for (int64_t z = b0[2]; z <= b1[2]; ++z)
+          for (int64_t y = b0[1]; y <= b1[1]; ++y) {
+            const int64_t sz = z - g.start[2][size_t(k)], sy = y - g.start[1][size_t(j)];
+            const int64_t sx = b0[0] - g.start[0][size_t(i)];
+            std::memcpy(out + ((z - lo[2]) * n[1] + (y - lo[1])) * n[0] + (b0[0] - lo[0]),
+                        dec.data() + (sz * m.samples[1] + sy) * m.samples[0] + sx,
+                        size_t(b1[0] - b0[0] + 1) * sizeof(float));
+          }
+        if (progress) progress(++done / total);
+      }
+}
+}  // namespace afam

@@ -5,6 +5,7 @@
 // the setting and the kept value, by acceptFrameSettings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -177,4 +178,22 @@ TEST(FrameSettings, AcceptNamesEachUnusableSettingAndKeepsTheLastGoodValue) {
     EXPECT_NE(warnings[0].find("the file's default"), std::string::npos) << warnings[0];
     EXPECT_FALSE(got.hasTransferFunction);
   }
+}
+
+TEST(FrameSettings, PointsGivenHighToLowAreTheSameFunction) {
+  // An inverted range (points listed from the top of the range down, as a reversed colour map
+  // arrives) is no error: the points are sorted, and the table is the one of the sorted points.
+  const TransferFunction sorted = ramp(-2.0, 5.0, 1.0, 0.3);
+  TransferFunction inverted = sorted;
+  std::reverse(inverted.colors.begin(), inverted.colors.end());
+  std::reverse(inverted.opacities.begin(), inverted.opacities.end());
+  EXPECT_TRUE(transferFunctionProblem(inverted).empty());
+  EXPECT_EQ(inverted.table(256, -2.0, 5.0), sorted.table(256, -2.0, 5.0));
+  FrameSettings s;
+  s.hasTransferFunction = true;
+  s.transferFunction = inverted;
+  std::vector<std::string> warnings;
+  const FrameSettings got = acceptFrameSettings(s, FrameSettings{}, warnings);
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_TRUE(got.hasTransferFunction);
 }

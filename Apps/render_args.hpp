@@ -2,6 +2,7 @@
 // Options shared by `afam render` and `afam replay` (renderer settings, image size, trajectory).
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -66,7 +67,10 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   o.cold = a.has("cold");
   o.storageMBps = a.real("storage-mbps", 0);
   if (o.storageMBps < 0) throw InvalidArgument("--storage-mbps must be >= 0");
-  if (!isPrefetchPredictorName(o.prefetch)) (void)makePredictor(o.prefetch);  // validates the name
+  const auto& names = predictorNames();
+  if (std::find(names.begin(), names.end(), o.prefetch) == names.end())
+    throw InvalidArgument("--prefetch must be none, linear, appa, forecache or lstm, not '" +
+                          o.prefetch + "'");
   return o;
 }
 

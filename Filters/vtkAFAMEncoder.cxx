@@ -16,10 +16,13 @@
 #include "vtkMatrix3x3.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkObjectFactory.h"
+#include "vtkPointData.h"
 
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <string>
+#include <vector>
 #include <unistd.h>
 
 vtkStandardNewMacro(vtkAFAMEncoder);
@@ -51,20 +54,81 @@ int vtkAFAMEncoder::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
+vtkDataArray* vtkAFAMEncoder::ChooseArray(vtkImageData* input, vtkInformationVector** inputVector)
+{
+  vtkInformation* selection = this->GetInputArrayInformation(0);
+  const char* name = selection && selection->Has(vtkDataObject::FIELD_NAME())
+    ? selection->Get(vtkDataObject::FIELD_NAME())
+    : nullptr;
+  vtkPointData* pd = input->GetPointData();
+  vtkDataArray* array = nullptr;
+  if (name && *name)
+  {
+    array = this->GetInputArrayToProcess(0, inputVector);
+  }
+  else // no name: the active scalars, else the only one-component point array
+  {
+    array = pd->GetScalars();
+    std::vector<vtkDataArray*> single;
+    for (int i = 0; i < pd->GetNumberOfArrays(); ++i)
+    {
+      vtkDataArray* a = pd->GetArray(i);
+      if (a && a->GetNumberOfComponents() == 1)
+      {
+        single.push_back(a);
+      }
+    }
+    if (!array && single.size() == 1)
+    {
+      array = single[0];
+    }
+  }
+  if (array && array->GetNumberOfComponents() == 1)
+  {
+    return array;
+  }
+  std::string candidates;
+  for (int i = 0; i < pd->GetNumberOfArrays(); ++i)
+  {
+    vtkDataArray* a = pd->GetArray(i);
+    if (a && a->GetNumberOfComponents() == 1)
+    {
+      candidates += std::string(candidates.empty() ? "" : ", ") + "'" +
+        (a->GetName() ? a->GetName() : "(unnamed)") + "'";
+    }
+  }
+  if (name && *name && !array)
+  {
+    vtkErrorMacro(<< "the input has no point-data array '" << name << "'; one-component point "
+                  << "arrays: " << (candidates.empty() ? "none" : candidates));
+  }
+  else if (array)
+  {
+    vtkErrorMacro(<< "array '" << (array->GetName() ? array->GetName() : "") << "' has "
+                  << array->GetNumberOfComponents() << " components; choose one of the "
+                  << "one-component point arrays: " << (candidates.empty() ? "none" : candidates));
+  }
+  else
+  {
+    vtkErrorMacro(<< "no array chosen and no active point scalars; choose one of the "
+                  << "one-component point arrays: " << (candidates.empty() ? "none" : candidates));
+  }
+  return nullptr;
+}
+
 int vtkAFAMEncoder::RequestData(
   vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
-  vtkDataArray* array = this->GetInputArrayToProcess(0, inputVector);
   if (!input || !output)
   {
     vtkErrorMacro(<< "needs a vtkImageData input");
     return 0;
   }
-  if (!array || array->GetNumberOfComponents() != 1)
+  vtkDataArray* array = this->ChooseArray(input, inputVector);
+  if (!array)
   {
-    vtkErrorMacro(<< "select a point-data array with one component to encode");
     return 0;
   }
   int dims[3];
@@ -110,6 +174,11 @@ int vtkAFAMEncoder::RequestData(
   options.degree = this->Degree;
   options.errorBound = this->ErrorBound;
   options.relativeBound = this->RelativeBound;
+  static_assert(MODE_ADAPTIVE == static_cast<int>(afam::EncodingMode::Adaptive) &&
+      MODE_IN_LEVEL == static_cast<int>(afam::EncodingMode::InLevel) &&
+      MODE_FIXED_NCP == static_cast<int>(afam::EncodingMode::Fixed) &&
+      MODE_DOWNSAMPLED == static_cast<int>(afam::EncodingMode::Downsampled),
+    "the filter's modes are Core's");
   options.mode = static_cast<afam::EncodingMode>(this->Mode);
   options.fixedNcp = this->FixedNcp;
   options.threads = this->NumberOfThreads;

@@ -6,7 +6,9 @@
  *
  * Input: vtkImageData with a point-data array of any scalar type (selected with
  * SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, name); default: the
- * active scalars), converted to float32 for fitting. The encoding runs in Core (encodeVolume);
+ * active scalars), converted to float32 for fitting. With no array selected (or an empty name, as
+ * a ParaView proxy leaves it) the active point scalars are encoded, else the only one-component
+ * point array; when none fits, the error lists the arrays that could be chosen. The encoding runs in Core (encodeVolume);
  * progress is reported and the abort flag (ParaView's abort button) cancels it.
  *
  * Output: the same metadata multiblock as vtkAFAMReader (one block per level, one leaf per
@@ -21,6 +23,9 @@
 #include "vtkMultiBlockDataSetAlgorithm.h"
 
 #include <string> // for std::string
+
+class vtkDataArray;
+class vtkImageData;
 
 class VTKAFAM_EXPORT vtkAFAMEncoder : public vtkMultiBlockDataSetAlgorithm
 {
@@ -54,11 +59,23 @@ public:
   vtkGetMacro(Degree, int);
   ///@}
 
+  enum EncoderModes
+  {
+    MODE_ADAPTIVE = 0,   ///< the paper's in-level search with cross-level reuse
+    MODE_IN_LEVEL = 1,   ///< the in-level search on every block
+    MODE_FIXED_NCP = 2,  ///< the same NCP everywhere (FixedNcp)
+    MODE_DOWNSAMPLED = 3 ///< raw downsampled blocks, no splines
+  };
+
   ///@{
-  /// Mode: 0 adaptive (default, the paper's cross-level search), 1 in-level, 2 fixed NCP,
-  /// 3 downsampled raw blocks. FixedNcp: NCP per axis for mode 2 (0 = n).
-  vtkSetClampMacro(Mode, int, 0, 3);
+  /// Mode: MODE_ADAPTIVE (default), MODE_IN_LEVEL, MODE_FIXED_NCP or MODE_DOWNSAMPLED.
+  /// FixedNcp: NCP per axis for MODE_FIXED_NCP (0 = the block's sample count n).
+  vtkSetClampMacro(Mode, int, MODE_ADAPTIVE, MODE_DOWNSAMPLED);
   vtkGetMacro(Mode, int);
+  void SetModeToAdaptive() { this->SetMode(MODE_ADAPTIVE); }
+  void SetModeToInLevel() { this->SetMode(MODE_IN_LEVEL); }
+  void SetModeToFixedNcp() { this->SetMode(MODE_FIXED_NCP); }
+  void SetModeToDownsampled() { this->SetMode(MODE_DOWNSAMPLED); }
   vtkSetClampMacro(FixedNcp, int, 0, 4096);
   vtkGetMacro(FixedNcp, int);
   ///@}
@@ -86,13 +103,16 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   void RemoveModelFile();
+  /// The array to encode (see the class documentation); nullptr after an error naming the
+  /// candidates.
+  vtkDataArray* ChooseArray(vtkImageData* input, vtkInformationVector** inputVector);
 
   double ErrorBound = 1e-3;
   bool RelativeBound = true;
   int Levels = 0;
   int BlocksPerAxis = 0;
   int Degree = 2;
-  int Mode = 0;
+  int Mode = MODE_ADAPTIVE;
   int FixedNcp = 0;
   int NumberOfThreads = 0;
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastCompressionRatio = 0;

@@ -6,6 +6,7 @@
 #include "afam/renderer.hpp"
 #if defined(AFAM_HAVE_CUDA)
 #include "afam/cuda/gpu_caster.hpp" // plain C++: the CUDA renderer behind Core's caster hook
+#include "afam/cuda/gpu_renderer.hpp" // plain C++: the pool's upload count
 #endif
 
 #include <algorithm>
@@ -15,15 +16,29 @@ struct vtkAFAMCoreRenderer::Internals
 {
   std::shared_ptr<const afam::AfamFile> File;
   std::unique_ptr<afam::Renderer> Renderer;
-  // The settings the Renderer was built with; Core's Renderer takes its options at construction,
-  // so a change of transfer function or settings builds a new one (and a new cache).
-  afam::RenderOptions Options;
-  // GPU: the renderer kept alive while Renderer casts through it, whether it was asked for with
-  // the current Renderer, and (once the GPU proved unusable) why, so it is not probed again.
-  std::shared_ptr<void> Gpu;
+  // What Renderer was built from; per-frame settings are not part of it (setFrameSettings).
+  afam::RendererResources Resources;
   bool GpuWanted = false;
+  // The last settings that could be drawn: unusable requested settings fall back to these.
+  afam::FrameSettings LastGood;
+  // GPU: the renderer kept alive while Renderer casts through it, and (once the GPU proved
+  // unusable) why, so it is not probed again.
+#if defined(AFAM_HAVE_CUDA)
+  std::shared_ptr<afam::GpuRenderer> Gpu;
+#else
+  std::shared_ptr<void> Gpu;
+#endif
   std::string GpuUnusable;
   std::vector<std::string> Messages; // filled by the GPU caster, drained into each frame's stats
+
+  int64_t GpuUploads() const
+  {
+#if defined(AFAM_HAVE_CUDA)
+    return this->Gpu ? static_cast<int64_t>(this->Gpu->pool().stats().uploads) : -1;
+#else
+    return -1;
+#endif
+  }
 
   void InstallGpu(double budgetMB)
   {
@@ -61,36 +76,11 @@ struct vtkAFAMCoreRenderer::Internals
 
 namespace
 {
-bool SameOptions(const afam::RenderOptions& a, const afam::RenderOptions& b)
+bool SameResources(const afam::RendererResources& a, const afam::RendererResources& b)
 {
-  auto sameTf = [](const afam::TransferFunction& x, const afam::TransferFunction& y) {
-    if (x.colors.size() != y.colors.size() || x.opacities.size() != y.opacities.size() ||
-      x.referenceDistance != y.referenceDistance)
-    {
-      return false;
-    }
-    for (size_t i = 0; i < x.colors.size(); ++i)
-    {
-      const auto &p = x.colors[i], &q = y.colors[i];
-      if (p.value != q.value || p.r != q.r || p.g != q.g || p.b != q.b)
-      {
-        return false;
-      }
-    }
-    for (size_t i = 0; i < x.opacities.size(); ++i)
-    {
-      if (x.opacities[i].value != y.opacities[i].value ||
-        x.opacities[i].alpha != y.opacities[i].alpha)
-      {
-        return false;
-      }
-    }
-    return true;
-  };
-  return a.threads == b.threads && a.sampleDistance == b.sampleDistance &&
-    a.shading == b.shading && a.lod.policy == b.lod.policy && a.cache.bytes == b.cache.bytes &&
-    a.prefetch == b.prefetch && a.hasTransferFunction == b.hasTransferFunction &&
-    a.blendMode == b.blendMode && sameTf(a.transferFunction, b.transferFunction);
+  return a.threads == b.threads && a.cache.bytes == b.cache.bytes &&
+    a.cache.blocks == b.cache.blocks && a.cold == b.cold && a.storageMBps == b.storageMBps &&
+    a.prefetch == b.prefetch;
 }
 }
 
@@ -131,37 +121,34 @@ void vtkAFAMCoreRenderer::Volume(
 void vtkAFAMCoreRenderer::Render(
   const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats)
 {
-  afam::RenderOptions options;
-  options.threads = request.Threads;
-  if (request.SampleDistance > 0)
-  {
-    options.sampleDistance = static_cast<float>(request.SampleDistance);
-  }
-  options.shading = request.Shading;
-  options.lod.policy = request.LodPolicy == 1 ? afam::LodPolicy::Screen : afam::LodPolicy::Distance;
-  options.cache = afam::CacheBudget{ static_cast<uint64_t>(request.CacheBudgetMB * 1e6), 0 };
-  options.prefetch = request.Prefetcher == 1 ? "linear" : "none";
-  options.hasTransferFunction =
-    !request.Transfer.colors.empty() && !request.Transfer.opacities.empty();
-  options.transferFunction = request.Transfer;
-  options.blendMode = request.BlendMode;
-
+  afam::RendererResources resources;
+  resources.threads = request.Threads;
+  resources.cache = afam::CacheBudget{ static_cast<uint64_t>(request.CacheBudgetMB * 1e6), 0 };
+  resources.prefetch = request.Prefetcher == 1 ? "linear" : "none";
   const bool wantGpu = request.Device != 1;
+
   Internals& m = *this->Impl;
   m.Messages.clear();
-  if (!m.Renderer || !SameOptions(options, m.Options) || wantGpu != m.GpuWanted)
+  const afam::FrameSettings settings =
+    afam::acceptFrameSettings(request.Settings, m.LastGood, stats.SettingWarnings);
+  stats.RendererBuilt = false;
+  if (!m.Renderer || !SameResources(resources, m.Resources) || wantGpu != m.GpuWanted)
   {
     m.Gpu.reset();
-    m.Renderer = std::make_unique<afam::Renderer>(m.File, options);
-    m.Options = options;
+    m.Renderer.reset(); // the old cache and prefetch thread go before the new ones come
+    m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings);
+    m.Resources = resources;
     m.GpuWanted = wantGpu;
+    stats.RendererBuilt = true;
     if (wantGpu)
     {
       m.InstallGpu(request.CacheBudgetMB);
     }
   }
+  m.LastGood = settings;
+  const int64_t uploadsBefore = m.GpuUploads();
   afam::FrameStats frame;
-  image = m.Renderer->renderFrame(request.Camera, frame, request.MaxDistance);
+  image = m.Renderer->renderFrame(request.Camera, settings, frame, request.MaxDistance);
   stats.CachingSeconds = frame.cachingMs * 1e-3;
   stats.RenderSeconds = frame.renderMs * 1e-3;
   stats.CacheHits = static_cast<int64_t>(frame.hits);
@@ -170,6 +157,7 @@ void vtkAFAMCoreRenderer::Render(
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
   stats.UsedGpu = m.Gpu != nullptr;
+  stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
   stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)
   if (wantGpu && !m.Gpu)
   {

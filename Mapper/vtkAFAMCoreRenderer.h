@@ -1,14 +1,16 @@
 // SPDX-FileCopyrightText: Adaptive-FAM authors
 // SPDX-License-Identifier: BSD-3-Clause
-// Private helper of vtkAFAMVolumeMapper (not wrapped, not installed): the ONE place where the
-// mapper calls Core's out-of-core renderer. Everything VTK-specific (reading the camera, the
-// transfer functions, compositing) stays in the mapper; everything numeric stays in Core.
+// Private helper of vtkAFAMVolumeMapper (not wrapped, not installed): the one place where the
+// mapper calls Core's out-of-core renderer. It keeps one afam::Renderer (RAM cache, prefetch
+// thread, GPU model pool) for as long as the file and the resources stay the same, and hands each
+// frame its own settings. Everything VTK-specific (reading the camera, the transfer functions,
+// compositing) stays in the mapper; everything numeric stays in Core.
 #ifndef vtkAFAMCoreRenderer_h
 #define vtkAFAMCoreRenderer_h
 
 #include "afam/camera.hpp"
+#include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
-#include "afam/transfer_function.hpp"
 
 #include <cstdint>
 #include <memory>
@@ -17,16 +19,16 @@
 
 struct vtkAFAMFrameRequest
 {
-  afam::Camera Camera;              ///< normalised frame ([-1, 1]^3 volume)
-  afam::TransferFunction Transfer;  ///< values in data units
-  bool Shading = false;
-  double SampleDistance = 0.0;      ///< normalised-frame units; <= 0: Core's default
-  int LodPolicy = 0;                ///< 0 distance bands, 1 screen-space error
+  afam::Camera Camera; ///< normalised frame ([-1, 1]^3 volume)
+  /// Transfer function (values in data units), shading, sample distance, LOD policy and blend
+  /// mode: may change with every frame without touching the cache or the GPU pool. Unusable
+  /// settings are replaced by the last usable ones, with a warning in the frame's statistics.
+  afam::FrameSettings Settings;
+  // What the renderer is built from: a change builds a new one (new cache, new GPU pool).
   double CacheBudgetMB = 512;
-  int Prefetcher = 0;               ///< 0 none, 1 linear
-  int Device = 0;                   ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
+  int Prefetcher = 0; ///< 0 none, 1 linear
+  int Device = 0;     ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
   int Threads = 0;
-  int BlendMode = 0;                ///< 0 composite, 1 maximum, 2 minimum, 3 average intensity
   /// Optional per-pixel ray length limit from opaque geometry (normalised-frame distance from the
   /// eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
   const float* MaxDistance = nullptr;
@@ -38,10 +40,17 @@ struct vtkAFAMFrameStats
   int64_t CacheHits = 0, CacheMisses = 0, CulledBlocks = 0, VisibleBlocks = 0;
   uint64_t BytesRead = 0;
   bool UsedGpu = false;
+  /// True when this frame built the renderer anew (first frame, a new file, or a change of cache
+  /// budget, prefetcher, device or threads): a new RAM cache and a new GPU pool.
+  bool RendererBuilt = false;
+  /// Models this frame copied to the GPU's pool (0 when every one was resident); -1 on the CPU.
+  int64_t GpuModelsUploaded = -1;
   /// Why the GPU is not (or not always) used, in words, from the frame that found out (e.g. "no
   /// usable GPU: CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)"); empty
   /// otherwise. Only set when the GPU was asked for (Device 0 or 2).
   std::vector<std::string> DeviceMessages;
+  /// One sentence per unusable setting of the request: what was asked and what was kept.
+  std::vector<std::string> SettingWarnings;
 };
 
 class vtkAFAMCoreRenderer

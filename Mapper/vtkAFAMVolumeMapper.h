@@ -11,6 +11,14 @@
  * transfer functions, shading and sample distance to Core's types, asks Core for an RGBA image of
  * the viewport size and blends it (premultiplied alpha) over what the render window holds.
  *
+ * Resources apart from settings: the RAM cache, the prefetch thread and the GPU model pool live
+ * as long as the file, CacheBudgetMB, Prefetcher, RenderDevice and NumberOfThreads stay the same
+ * (NumberOfRendererBuilds counts them). Transfer functions, shading, blend mode, sample distance
+ * and LOD policy go with each frame: editing them reads and uploads only the models that become
+ * visible. Unusable settings (a transfer function without points or with NaN, a
+ * ScalarOpacityUnitDistance or sample distance that is not > 0) give one warning naming the
+ * setting and its value, and the last usable value is drawn (GetLastSettingWarning).
+ *
  * Placement: the camera (perspective or parallel projection) is mapped from the world through
  * the inverse of the vtkVolume's matrix (position, orientation, scale, origin, user matrix) into
  * the data, then each axis of the data box onto [-1, 1] (the paper's normalised frame). Every
@@ -41,9 +49,12 @@
 #include <vector> // for std::vector
 
 class vtkAFAMCoreRenderer;
+class vtkOpenGLRenderWindow;
+class vtkVolumeProperty;
+struct vtkAFAMFrameStats;
 namespace afam
 {
-struct Camera;
+struct ImageRGBA;
 }
 
 class VTKAFAM_EXPORT vtkAFAMVolumeMapper : public vtkVolumeMapper
@@ -55,26 +66,44 @@ public:
 
   ///@{
   /// The .afam file to render. Default: none, then the file named by the input's field data.
+  /// FileName alone is enough: no input connection is needed.
   vtkSetFilePathMacro(FileName);
   vtkGetFilePathMacro(FileName);
   ///@}
 
+  enum LodPolicies
+  {
+    LOD_DISTANCE_BANDS = 0, ///< the paper's bands of distance from the eye
+    LOD_SCREEN_SPACE = 1    ///< the coarsest level whose samples project to at most a pixel
+  };
+
   ///@{
-  /// LOD policy: 0 = the paper's distance bands (default), 1 = screen-space error.
-  vtkSetClampMacro(LodPolicy, int, 0, 1);
+  /// LOD policy: LOD_DISTANCE_BANDS (default) or LOD_SCREEN_SPACE.
+  vtkSetClampMacro(LodPolicy, int, LOD_DISTANCE_BANDS, LOD_SCREEN_SPACE);
   vtkGetMacro(LodPolicy, int);
+  void SetLodPolicyToDistanceBands() { this->SetLodPolicy(LOD_DISTANCE_BANDS); }
+  void SetLodPolicyToScreenSpace() { this->SetLodPolicy(LOD_SCREEN_SPACE); }
   ///@}
 
   ///@{
-  /// RAM cache budget for micro-models in MB. Default 512, range [16, 1e6].
+  /// RAM cache budget for micro-models in MB. Default 512, range [16, 1e6]. A change starts a new
+  /// cache (and GPU pool); transfer functions, shading and sample distance do not.
   vtkSetClampMacro(CacheBudgetMB, double, 16.0, 1e6);
   vtkGetMacro(CacheBudgetMB, double);
   ///@}
 
+  enum Prefetchers
+  {
+    PREFETCH_NONE = 0,  ///< no prefetching
+    PREFETCH_LINEAR = 1 ///< linear extrapolation of the camera path
+  };
+
   ///@{
-  /// Prefetcher: 0 none (default), 1 linear extrapolation of the camera path.
-  vtkSetClampMacro(Prefetcher, int, 0, 1);
+  /// Prefetcher: PREFETCH_NONE (default) or PREFETCH_LINEAR.
+  vtkSetClampMacro(Prefetcher, int, PREFETCH_NONE, PREFETCH_LINEAR);
   vtkGetMacro(Prefetcher, int);
+  void SetPrefetcherToNone() { this->SetPrefetcher(PREFETCH_NONE); }
+  void SetPrefetcherToLinear() { this->SetPrefetcher(PREFETCH_LINEAR); }
   ///@}
 
   enum RenderDevices
@@ -91,7 +120,12 @@ public:
   void SetRenderDeviceToAuto() { this->SetRenderDevice(DEVICE_AUTO); }
   void SetRenderDeviceToCPU() { this->SetRenderDevice(DEVICE_CPU); }
   void SetRenderDeviceToGPU() { this->SetRenderDevice(DEVICE_GPU); }
+  /// The device that cast the last frame: DEVICE_CPU or DEVICE_GPU.
+  int GetLastUsedRenderDevice() { return this->LastUsedGpu ? DEVICE_GPU : DEVICE_CPU; }
   ///@}
+
+  /// The blend mode the last frame was drawn with (composite for modes this mapper lacks).
+  vtkGetMacro(LastUsedBlendMode, int);
 
   /// True when this build contains the CUDA renderer (whether or not a GPU is present).
   static bool HasCudaRenderer();
@@ -141,6 +175,15 @@ public:
   vtkGetMacro(LastVisibleBlocks, vtkTypeInt64);
   vtkGetMacro(LastBytesRead, vtkTypeInt64);
   vtkGetMacro(LastUsedGpu, bool);
+  /// Models the last frame copied into the GPU's model pool (0: all were resident); -1 when the
+  /// frame was cast on the CPU.
+  vtkGetMacro(LastGpuModelsUploaded, vtkTypeInt64);
+  /// Times the mapper built its renderer (RAM cache, prefetch thread, GPU pool): the first frame,
+  /// a new file, and changes of CacheBudgetMB, Prefetcher, RenderDevice or NumberOfThreads.
+  /// Editing the transfer functions, shading, blend mode, sample distance or LOD policy does not.
+  vtkGetMacro(NumberOfRendererBuilds, vtkTypeInt64);
+  /// What was wrong with the last frame's settings and what was kept instead (empty: nothing).
+  const char* GetLastSettingWarning() { return this->LastSettingWarning.c_str(); }
   /// Pixels of the last frame whose rays were cut short by opaque geometry.
   vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
   /// Image scale of the last frame (1 = full size; below 1 for interactive frames).
@@ -164,19 +207,20 @@ protected:
   std::string ResolveFileName();
   /// Opens the file in Core when it changed; false (and an error) when it cannot.
   bool EnsureOpen();
-  /// Per-pixel ray length limits (normalised frame, row 0 = top) from the viewport's z-buffer;
-  /// false when no pixel holds opaque geometry (or the z-buffer cannot be read).
-  /// toFrame: world -> normalised frame (row-major 3x4, linear part then offset column);
-  /// camera: the mapped camera the rays come from.
-  /// The image may be smaller than the tile (width x height): camera.width x camera.height
-  /// pixels, each limited by the nearest opaque depth among the tile pixels it covers.
-  bool ReadDepthLimits(vtkRenderer* ren, const double toFrame[12], const afam::Camera& camera,
-    int width, int height, std::vector<float>& limits);
+  /// The steps of Render, in order. Each false means nothing is drawn (and an error was given).
+  struct Frame;
+  bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
+  bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
+  void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
+  /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far).
+  void ReadDepthLimits(vtkRenderer* ren, Frame& frame);
+  void DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image);
+  void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;
-  int LodPolicy = 0;
+  int LodPolicy = LOD_DISTANCE_BANDS;
   double CacheBudgetMB = 512;
-  int Prefetcher = 0;
+  int Prefetcher = PREFETCH_NONE;
   int RenderDevice = DEVICE_AUTO;
   bool DepthCompositing = true;
   bool WarnedDevice = false;
@@ -192,8 +236,11 @@ protected:
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
   bool LastUsedGpu = false;
+  int LastUsedBlendMode = COMPOSITE_BLEND;
+  vtkTypeInt64 LastGpuModelsUploaded = -1, NumberOfRendererBuilds = 0;
   vtkTypeInt64 LastDepthLimitedPixels = 0;
   std::string LastDeviceMessage;
+  std::string LastSettingWarning;
 
   std::unique_ptr<vtkAFAMCoreRenderer> Core;
 

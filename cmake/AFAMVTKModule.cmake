@@ -8,7 +8,6 @@ set(_afam_classes
   Readers/vtkAFAMWriter
   Filters/vtkAFAMEncoder
   Mapper/vtkAFAMVolumeMapper
-  Mapper/vtkAFAMVolumeRepresentation
   )
 
 set(_afam_sources)

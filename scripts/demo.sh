@@ -26,7 +26,7 @@ for mode in adaptive fixed ds; do
   "$afam" encode "$out/ml.raw" "$out/ml_$mode.afam" --dims 129,129,129 --mode "$mode" --error-bound 1e-4
   methods+=(--method "$mode=$out/ml_$mode.afam")
 done
-# Headless ParaView: Xvfb with -noreset, and a time limit (see ../shared/PLATFORM.md).
+# Headless ParaView: Xvfb with -noreset, and a time limit (Xvfb resets when its last client leaves).
 timeout 1800 xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" \
   pvbatch "$root/Apps/pvbatch/afam_demo.py" --plugin "$plugin" --afam "$afam" --trajectory "$traj" \
     --out "$out" "${methods[@]}" --raw "$out/ml.raw" --views "${AFAM_DEMO_VIEWS:-0,100,200}" \

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# The evaluation report of issue 8, from scratch, with one command:
+# The evaluation report, from scratch, with one command:
 #   scripts/evaluate.sh [--smoke|--small|--full] OUTDIR
 # Writes OUTDIR/{encoding,quality,compressors,latency,stability,codecs}/*.csv, a PNG plot beside each
 # CSV (same stem), OUTDIR/commands.log (every command run, in order, with its wall time) and

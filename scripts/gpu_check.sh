@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# GPU check of issue 6, for the GPU machine (CUDA, no VTK): configure Core + CudaKernels + Apps,
+# GPU check, for the GPU machine (CUDA, no VTK): configure Core + CudaKernels + Apps,
 # build, run the GPU tests, compute-sanitizer memcheck + racecheck on one frame, the GPU
 # benchmarks, and print a short table LAST.
 #   scripts/gpu_check.sh [BUILD_DIR]

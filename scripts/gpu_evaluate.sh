@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# The evaluation report of issue 8 at full size on the GPU machine: scripts/evaluate.sh --full with
+# The evaluation report at full size on the GPU machine: scripts/evaluate.sh --full with
 # AFAM_DEVICE=gpu (replays and quality renders on the CUDA ray caster) and every core.
 #   scripts/gpu_evaluate.sh [WAIT_SECONDS]      (default 540)
 # The device tool stops a command after 10 minutes, so the report runs in its own process session

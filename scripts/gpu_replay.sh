@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 6 latency bar on the GPU machine: Marschner-Lobb N^3 (default 1024) encoded with the paper's
+# The latency bar on the GPU machine: Marschner-Lobb N^3 (default 1024) encoded with the paper's
 # settings (4 levels, 16 finest blocks per axis, p = 2, RMSE bound 1e-4) as Adaptive-FAM, FAM
 # (fixed NCP = n) and DS; every trajectory replayed at 512 x 512 with --device gpu from a cold page
 # cache (--cold: the file is evicted from the OS page cache before each point of view), the same

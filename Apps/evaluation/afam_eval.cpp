@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// afam_eval: the measurement programs behind scripts/evaluate.sh (issue 8) that the `afam`
+// afam_eval: the measurement programs behind scripts/evaluate.sh that the `afam`
 // command line does not cover. Every sub-command writes one CSV.
 //
 //   afam_eval quality  --trajectory T --view I|auto --size N --sd a,b,.. --csv OUT

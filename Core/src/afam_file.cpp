@@ -31,38 +31,40 @@ constexpr uint64_t kAlign = 64;         // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
 
-// On-disk header, version 1: 1024 bytes, every member at a fixed offset (asserted below).
+// On-disk header, version 1: 1024 bytes, little-endian; each member's byte offset and size beside
+// it (@offset, size), checked by the static_asserts below.
 struct FileHeaderV1 {
-  char magic[8];
-  uint32_t version;
-  uint32_t endianTag;
-  uint32_t headerSize;
-  uint32_t entrySize;
-  int64_t dims[3];
-  double origin[3];
-  double spacing[3];
-  double valueMin;
-  double valueMax;
-  double errorBound;
-  int32_t levels;
-  int32_t blocksPerAxis;
-  int32_t degree;
-  int32_t fixedNcp;
-  uint8_t mode;
-  uint8_t relativeBound;
-  uint8_t levelSampling;  // LevelSampling: 0 point (files before it existed), 1 box
-  uint8_t reserved0;
-  uint32_t indexChecksum;
-  uint64_t entryCount;
-  uint64_t indexOffset;
-  uint64_t payloadOffset;
-  uint64_t fileSize;
-  char scalarName[64];
-  int32_t levelBlocks[kMaxLevels][3];
-  uint64_t totalPayloadBytes;
-  uint32_t payloadAlignment;  // power of two in [4, 4096]: every payload offset is a multiple
-  uint8_t reserved1[576];
-  uint32_t headerChecksum;  // CRC32 of bytes [0, 1020)
+  char magic[8];                  // @0, 8 B
+  uint32_t version;               // @8, 4 B
+  uint32_t endianTag;             // @12, 4 B
+  uint32_t headerSize;            // @16, 4 B
+  uint32_t entrySize;             // @20, 4 B
+  int64_t dims[3];                // @24, 24 B
+  double origin[3];               // @48, 24 B
+  double spacing[3];              // @72, 24 B
+  double valueMin;                // @96, 8 B
+  double valueMax;                // @104, 8 B
+  double errorBound;              // @112, 8 B
+  int32_t levels;                 // @120, 4 B
+  int32_t blocksPerAxis;          // @124, 4 B
+  int32_t degree;                 // @128, 4 B
+  int32_t fixedNcp;               // @132, 4 B
+  uint8_t mode;                   // @136, 1 B
+  uint8_t relativeBound;          // @137, 1 B
+  uint8_t levelSampling;          // @138, 1 B; LevelSampling: 0 point (older files), 1 box
+  uint8_t reserved0;              // @139, 1 B
+  uint32_t indexChecksum;         // @140, 4 B
+  uint64_t entryCount;            // @144, 8 B
+  uint64_t indexOffset;           // @152, 8 B
+  uint64_t payloadOffset;         // @160, 8 B
+  uint64_t fileSize;              // @168, 8 B
+  char scalarName[64];            // @176, 64 B
+  int32_t levelBlocks[kMaxLevels][3];  // @240, 192 B
+  uint64_t totalPayloadBytes;     // @432, 8 B
+  uint32_t payloadAlignment;      // @440, 4 B; a power of two in [4, 4096] that every payload
+                                  // offset is a multiple of
+  uint8_t reserved1[576];         // @444, 576 B
+  uint32_t headerChecksum;        // @1020, 4 B; CRC32 of bytes [0, 1020)
 };
 static_assert(sizeof(FileHeaderV1) == 1024, "header size");
 static_assert(offsetof(FileHeaderV1, version) == 8, "layout");
@@ -94,20 +96,23 @@ static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
 static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
 static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
 
-// On-disk index entry, version 1: 40 bytes. Level, block ijk, samples and degree are implied by
-// the entry's position (the index is complete and ordered) and the header; the payload size by
-// the NCP. Keeping the entry this small is what makes the file smaller than the paper's layout
-// even for the smallest models (NCP 3: 108 + 40 bytes against 169).
+// On-disk index entry, version 1: 40 bytes, each member's offset and size beside it. Level, block
+// ijk, samples and degree are implied by the entry's position (the index is complete and ordered)
+// and the header; the payload size by the NCP. Keeping the entry this small is what makes the
+// file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
+// against 169).
 struct IndexEntryV1 {
-  uint64_t offset;
-  uint16_t ncp[3];
-  uint16_t flags;  // v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other bits: unknown feature
-  float minValue;
-  float maxValue;
-  float rmse;
-  float maxError;
-  uint32_t checksum;
-  uint32_t storedBytes;  // v2: payload bytes on disk; v1: 0 (the payload is the NCP's floats)
+  uint64_t offset;                // @0, 8 B
+  uint16_t ncp[3];                // @8, 6 B
+  uint16_t flags;                 // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
+                                  // bits: an unknown feature
+  float minValue;                 // @16, 4 B
+  float maxValue;                 // @20, 4 B
+  float rmse;                     // @24, 4 B
+  float maxError;                 // @28, 4 B
+  uint32_t checksum;              // @32, 4 B
+  uint32_t storedBytes;           // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
+                                  // the NCP's floats)
 };
 static_assert(sizeof(IndexEntryV1) == 40, "entry size");
 static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
@@ -140,11 +145,6 @@ uint64_t alignUp(uint64_t v, uint64_t a = kAlign) { return (v + a - 1) / a * a; 
 
 std::string sysError() { return std::strerror(errno); }
 
-std::string blockName(int level, const Int3& b) {
-  std::ostringstream s;
-  s << "level " << level << " block (" << b[0] << ", " << b[1] << ", " << b[2] << ")";
-  return s.str();
-}
 
 void preadAll(int fd, void* out, uint64_t bytes, uint64_t offset, const std::string& path,
               const std::string& what) {
@@ -192,7 +192,6 @@ bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
   return true;
 }
 
-int effDegree(int degree, int samples) { return std::max(0, std::min(degree, samples - 1)); }
 
 
 /// NCP and degree a model of this kind must have on one axis of n samples.
@@ -201,8 +200,8 @@ struct AxisRule {
 };
 AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
   if (mode == EncodingMode::Downsampled) return {1, n + 2, n + 2};
-  if (kind == BlockKind::Samples) return {effDegree(1, n), n, n};
-  const int p = effDegree(headerDegree, n);
+  if (kind == BlockKind::Samples) return {effectiveDegree(1, n), n, n};
+  const int p = effectiveDegree(headerDegree, n);
   if (kind == BlockKind::Constant) return {p, p + 1, p + 1};
   if (kind == BlockKind::Interpolant) return {p, n, n};
   return {p, p + 1, n};
@@ -456,7 +455,7 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     while (static_cast<int64_t>(i) >= f->levelStart_[static_cast<size_t>(level) + 1]) ++level;
     const IndexEntryV1& r = raw[i];
     const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
-    const std::string where = "index entry " + std::to_string(i) + " (" + blockName(level, ijk) + ")";
+    const std::string where = "index entry " + std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
     ModelEntry& m = f->entries_[i];
     m.level = level;
     m.block = ijk;
@@ -490,17 +489,17 @@ void AfamFile::readPayload(int64_t entry, void* out) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];
-  const std::string where = path_ + ": " + blockName(e.level, e.block);
+  const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
   if (e.storedSize == e.size) {  // uncoded floats: read in place
-    preadAll(fd_, out, e.size, e.offset, path_, "payload of " + blockName(e.level, e.block));
-    if (crc32(out, e.size) != e.checksum) throw FormatError(path_ + ": payload checksum mismatch at " + blockName(e.level, e.block));
+    preadAll(fd_, out, e.size, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
+    if (crc32(out, e.size) != e.checksum) throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
     return;
   }
   thread_local std::vector<uint8_t> stored;
   stored.resize(e.storedSize);
-  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_, "payload of " + blockName(e.level, e.block));
+  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
   if (crc32(stored.data(), e.storedSize) != e.checksum)
-    throw FormatError(path_ + ": payload checksum mismatch at " + blockName(e.level, e.block));
+    throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
   decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
 }
 
@@ -567,23 +566,23 @@ void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   const Int3 b = partition_.blocksPerAxis(in.level);
   for (int a = 0; a < 3; ++a)
     if (in.block[a] < 0 || in.block[a] >= b[a])
-      throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " out of range");
+      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " out of range");
   const BlockExtent e = partition_.extent(in.level, in.block);
   if (in.samples != e.samples)
-    throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": samples disagree with the partition");
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": samples disagree with the partition");
   const std::string problem = modelProblem(in, header_.mode, header_.degree, e);
-  if (!problem.empty()) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": " + problem);
+  if (!problem.empty()) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": " + problem);
   const uint64_t bytes = in.storedSize;
   if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
                : bytes != uncodedBytes(in))
-    throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + ": stored size " + std::to_string(bytes) +
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": stored size " + std::to_string(bytes) +
                           " invalid");
   const uint32_t crc = crc32(stored, bytes);
   const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
                                           partition_.linearIndex(in.level, in.block));
   std::lock_guard<std::mutex> lock(mutex_);
   if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
-  if (present_[slot]) throw InvalidArgument(path_ + ": " + blockName(in.level, in.block) + " added twice");
+  if (present_[slot]) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
   const uint64_t offset = end_;
   pwriteAll(fd_, stored, bytes, offset, tmpPath_);
   end_ = alignUp(offset + bytes, kPayloadAlign);
@@ -603,7 +602,7 @@ void AfamWriter::commit() {
       int level = 0;
       while (static_cast<int64_t>(i) >= levelStart_[static_cast<size_t>(level) + 1]) ++level;
       const Int3 ijk = partition_.blockFromLinear(level, static_cast<int64_t>(i) - levelStart_[static_cast<size_t>(level)]);
-      throw InvalidArgument(path_ + ": commit without " + blockName(level, ijk));
+      throw InvalidArgument(path_ + ": commit without " + Partition::blockName(level, ijk));
     }
   std::vector<IndexEntryV1> raw(entries_.size());
   uint64_t payloadSum = 0;

@@ -308,11 +308,11 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
       storeFloat(fr, t.exact, t);
     }
   } catch (const NumericError& ex) {
-    throw NumericError("encode: " + blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
+    throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
   }
   if (bounded(c.opt.mode) && !(t.rmse <= c.bound)) {
     std::ostringstream msg;
-    msg << "encode: " << blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << t.entry.rmse
+    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << t.entry.rmse
         << " over the bound " << c.bound << " even stored exactly";
     throw NumericError(msg.str());
   }

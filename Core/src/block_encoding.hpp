@@ -13,11 +13,6 @@
 
 namespace afam {
 
-inline std::string blockName(int level, const Int3& b) {
-  std::ostringstream s;
-  s << "block (" << b[0] << ", " << b[1] << ", " << b[2] << ") of level " << level;
-  return s.str();
-}
 
 /// Bounded modes promise each block's RMSE <= the bound on its own samples; Fixed does not.
 inline bool bounded(EncodingMode mode) { return mode == EncodingMode::Adaptive || mode == EncodingMode::InLevel; }

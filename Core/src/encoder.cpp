@@ -194,7 +194,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
         std::ostringstream msg;
         msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of " << source.name()
             << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
-            << blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
+            << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
         throw NumericError(msg.str());
       }
       lo = std::min(lo, v);

@@ -125,4 +125,9 @@ PartitionShape defaultPartition(const Index3& dims, int blockEdge) {
   return s;
 }
 
+std::string Partition::blockName(int level, Int3 ijk) {
+  return "level " + std::to_string(level) + " block (" + std::to_string(ijk[0]) + ", " +
+         std::to_string(ijk[1]) + ", " + std::to_string(ijk[2]) + ")";
+}
+
 }  // namespace afam

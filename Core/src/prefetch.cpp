@@ -22,17 +22,6 @@ bool LinearPredictor::predict(const std::vector<Camera>& h, Camera& next) const 
   return true;
 }
 
-std::unique_ptr<Predictor> makePredictor(const std::string& name) {
-  if (name == "none") return std::make_unique<NoPredictor>();
-  if (name == "linear") return std::make_unique<LinearPredictor>();
-  if (name == "appa" || name == "forecache" || name == "lstm")
-    throw InvalidArgument("prefetch: predictor '" + name +
-                          "' needs the encoded file and the view settings: build it with "
-                          "makePrefetchPredictor (the Renderer does)");
-  throw InvalidArgument("prefetch: unknown predictor '" + name +
-                        "' (expected none, linear, appa, forecache or lstm)");
-}
-
 Prefetcher::Prefetcher() : thread_([this] { run(); }) {}
 
 Prefetcher::~Prefetcher() {

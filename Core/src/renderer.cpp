@@ -27,34 +27,28 @@ void PreparedFrame::bind() {
   view.tfSize = int32_t(tf.size() / 4);
 }
 
-Renderer::Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options)
-    : file_(std::move(file)), options_(std::move(options)), lod_(options_.lod) {
+Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
+                   FrameSettings settings)
+    : file_(std::move(file)), resources_(std::move(resources)) {
   if (!file_) throw InvalidArgument("renderer: no file");
-  if (!(options_.sampleDistance > 0))
-    throw InvalidArgument("renderer: sample distance must be > 0");
-  if (options_.blendMode < kBlendComposite || options_.blendMode > kBlendAverage)
-    throw InvalidArgument("renderer: blend mode must be 0 (composite), 1 (maximum), 2 (minimum) or "
-                          "3 (average), not " + std::to_string(options_.blendMode));
-  cache_ = std::make_unique<LruCache>(file_, options_.cache);
-  if (options_.storageMBps > 0) cache_->setBandwidthCap(options_.storageMBps * 1e6);
-  if (!isPrefetchPredictorName(options_.prefetch)) predictor_ = makePredictor(options_.prefetch);
-  prefetcher_ = std::make_unique<Prefetcher>();
+  if (resources_.threads < 0) throw InvalidArgument("renderer: threads must be >= 0");
   const VolumeHeader& h = file_->header();
   tfLo_ = h.valueMin;
   tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
-  const TransferFunction tf =
-      options_.hasTransferFunction ? options_.transferFunction : TransferFunction::preset(tfLo_, tfHi_);
-  options_.transferFunction = tf;
-  tf_ = tf.table(std::max(2, options_.tfTableSize), tfLo_, tfHi_);
-  if (!predictor_) {  // appa | forecache | lstm (issue 5): they need the file and the view settings
-    PredictorContext ctx;
-    ctx.file = file_;
-    ctx.lod = options_.lod;
-    ctx.tfTable = tf_;
-    ctx.tfLo = tfLo_;
-    ctx.tfHi = tfHi_;
-    predictor_ = makePrefetchPredictor(options_.prefetch, ctx);
-  }
+  setFrameSettings(settings);
+  cache_ = std::make_unique<LruCache>(file_, resources_.cache);
+  if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
+  prefetcher_ = std::make_unique<Prefetcher>();
+  // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
+  // table and ForeCache's visibility are computed for them): later edits change what is drawn,
+  // not what they predict.
+  PredictorContext ctx;
+  ctx.file = file_;
+  ctx.lod = settings_.lod;
+  ctx.tfTable = tf_;
+  ctx.tfLo = tfLo_;
+  ctx.tfHi = tfHi_;
+  predictor_ = makePrefetchPredictor(resources_.prefetch, ctx);
   // Finest boundaries per axis (voxel coordinates) from the partition's finest level.
   const Partition& p = file_->partition();
   const int finest = p.levels() - 1;
@@ -75,9 +69,19 @@ Renderer::~Renderer() {
   if (prefetcher_) prefetcher_->finish();
 }
 
+void Renderer::setFrameSettings(const FrameSettings& settings) {
+  const std::string problem = frameSettingsProblem(settings);
+  if (!problem.empty()) throw InvalidArgument("renderer: " + problem);
+  FrameSettings next = settings;
+  if (!next.hasTransferFunction) next.transferFunction = TransferFunction::preset(tfLo_, tfHi_);
+  tf_ = next.transferFunction.table(next.tfTableSize, tfLo_, tfHi_);
+  lod_ = LodSelector(next.lod);
+  settings_ = std::move(next);
+}
+
 Selection Renderer::select(const Camera& camera) const {
   static const std::vector<float> none;
-  return lod_.select(*file_, camera, options_.blendMode == kBlendComposite ? tf_ : none, tfLo_, tfHi_);
+  return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_, tfHi_);
 }
 
 void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
@@ -103,23 +107,23 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   // Opacity corrected for the sample distance once per frame, not per sample.
   fr.tf = tf_;
   const float ratio =
-      float(double(options_.sampleDistance) / options_.transferFunction.referenceDistance);
+      float(double(settings_.sampleDistance) / settings_.transferFunction.referenceDistance);
   // Compositing uses opacities per sample step; the projections use the table's own opacity.
-  if (options_.blendMode == kBlendComposite)
+  if (settings_.blendMode == kBlendComposite)
     for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
-  v.blendMode = options_.blendMode;
+  v.blendMode = settings_.blendMode;
   v.tfMin = float(tfLo_);
   v.tfMax = float(tfHi_);
-  v.tfReferenceDistance = options_.sampleDistance;
-  v.sampleDistance = options_.sampleDistance;
-  v.shading = options_.shading ? 1 : 0;
+  v.tfReferenceDistance = settings_.sampleDistance;
+  v.sampleDistance = settings_.sampleDistance;
+  v.shading = settings_.shading ? 1 : 0;
   // Splines: one value+gradient evaluation per shaded sample is cheaper (H200, ae8b2c9). Raw DS
   // blocks: a gradient is six more trilinear fetches, so only visible samples pay for it.
   v.gradientWithValue = file_->header().mode == EncodingMode::Downsampled ? 0 : 1;
-  v.ambient = options_.ambient;
-  v.diffuse = options_.diffuse;
-  v.specular = options_.specular;
-  v.specularPower = options_.specularPower;
+  v.ambient = settings_.ambient;
+  v.diffuse = settings_.diffuse;
+  v.specular = settings_.specular;
+  v.specularPower = settings_.specularPower;
   fr.bind();
 }
 
@@ -188,9 +192,15 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.cachingMs = msSince(t0);
 }
 
+ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& st,
+                                const float* maxDistance) {
+  setFrameSettings(settings);
+  return renderFrame(camera, st, maxDistance);
+}
+
 ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
   st = FrameStats{};
-  if (options_.cold) cache_->dropOsCache();
+  if (resources_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
   prepare(camera, fr, st);
@@ -200,15 +210,14 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   // Prefetch the predicted next view while this one renders. The prediction itself runs in the
   // prefetch thread (off the frame's critical path); predictors that know the blocks directly
   // (APPA's table, ForeCache's signature ranking) hand them over without a view selection.
-  if (options_.prefetch != "none") {
+  if (resources_.prefetch != "none") {
     LruCache* cache = cache_.get();
     const Renderer* self = this;
     const Predictor* predictor = predictor_.get();
     prefetcher_->start([cache, self, predictor, history = history_](const std::atomic<bool>& stop,
                                                                     uint64_t& loaded) {
       std::vector<int64_t> entries;
-      const auto* direct = dynamic_cast<const EntryPredictor*>(predictor);
-      if (!(direct && direct->predictEntries(history, entries))) {
+      if (!predictor->predictEntries(history, entries)) {
         Camera next;
         if (!predictor->predict(history, next)) return;
         for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
@@ -224,7 +233,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   if (caster_)
     caster_(fr, image);
   else
-    renderCpu(fr.view, image, options_.threads);
+    renderCpu(fr.view, image, resources_.threads);
   st.renderMs = msSince(t0);
   prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
   cache_->clearPinned();

@@ -32,7 +32,7 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
     report("no GPU memory for a model pool");
     return result;
   }
-  const int threads = renderer.options().threads;
+  const int threads = renderer.resources().threads;
   auto warned = std::make_shared<bool>(false);
   renderer.setRayCaster([gpu, threads, warned, report](const PreparedFrame& frame, ImageRGBA& image) {
     image.resize(frame.view.camera.width, frame.view.camera.height);

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The DS baseline through 3D textures (issue 6, "state of the art multi-resolution framework
+// The DS baseline through 3D textures (the paper's "state of the art multi-resolution framework
 // through down sampling utilizing GPU 3D texture"): raw (kSlotRaw) blocks live in CUDA arrays, a
 // sample is one hardware-trilinear fetch and the gradient six more (central differences of one
 // sample spacing). Ray setup, O(1) lookup, classification, shading and compositing are the shared

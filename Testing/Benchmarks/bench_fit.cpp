@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Fit and evaluation speed of the B-spline core (issue 2), each next to a baseline in the same run.
+// Fit and evaluation speed of the B-spline core, each next to a baseline in the same run.
 //
 //   BM_FitBanded/ncp/p      our separable banded fit of a 64^3 Marschner-Lobb block, with the
 //                           error on all 262,144 samples (the issue's bar: NCP 32, p 2 <= 6 ms)

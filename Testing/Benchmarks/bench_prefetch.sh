@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Prefetching benchmark (issue 5): next-pose error of every predictor on the recorded trajectories
+# Prefetching benchmark: next-pose error of every predictor on the recorded trajectories
 # (`afam predict`), and replay of Marschner-Lobb 256^3 with the paper's 200-block cache with each
 # prefetcher (`afam replay`), warm and in the paper's regime (cold storage capped at 100 MB/s).
 # Usage: Testing/Benchmarks/bench_prefetch.sh BUILD_DIR [WORK_DIR]

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Renderer benchmarks (issue 4). Run by hand; numbers and commands in docs/BENCHMARKS.md.
+// Renderer benchmarks. Run by hand; numbers and commands in docs/BENCHMARKS.md.
 //
 //  * BM_LookupVisibleBlocks/<level>: O(1) model lookup. A FAM (fixed NCP) encoding of ML 129^3
 //    with 8 finest blocks per axis and 4 levels is rendered with every block forced to one level:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Issue 3 encoding table: Marschner-Lobb 128/256/512 and every corpus volume, Adaptive-FAM with the
+# The encoding table: Marschner-Lobb 128/256/512 and every corpus volume, Adaptive-FAM with the
 # fast search against the exhaustive in-level encoder (the paper's loop) measured in the same run,
 # fast == exhaustive check (byte-identical files), sizes against the paper's layout, peak RSS.
 #

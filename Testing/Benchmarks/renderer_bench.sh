@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Renderer benchmarks of issue 4 (docs/BENCHMARKS.md, "Renderer (issue 4)").
+# Renderer benchmarks (docs/BENCHMARKS.md, "Renderer").
 #
 # usage: [PHASE=all|replay|quality] renderer_bench.sh AFAM_BIN BENCH_RENDER_BIN WORKDIR TRAJECTORY [PARALLEL]
 #   Makes ML 256^3, encodes it three ways (Adaptive-FAM, FAM = fixed NCP = n, DS), then

@@ -7,6 +7,7 @@
 
 #include "afam/cache.hpp"
 #include "afam/errors.hpp"
+#include "afam/predictors/prefetch_predictors.hpp"
 #include "afam/prefetch.hpp"
 #include "render_test_util.hpp"
 
@@ -113,10 +114,11 @@ TEST(Prefetch, StopsWhenTheFrameEnds) {
 }
 
 TEST(Prefetch, PredictorsAndNames) {
-  EXPECT_EQ(std::string(makePredictor("none")->name()), "none");
-  EXPECT_EQ(std::string(makePredictor("linear")->name()), "linear");
-  EXPECT_THROW(makePredictor("appa"), InvalidArgument);
-  EXPECT_THROW(makePredictor("bogus"), InvalidArgument);
+  EXPECT_EQ(std::string(makePrefetchPredictor("none")->name()), "none");
+  EXPECT_EQ(std::string(makePrefetchPredictor("linear")->name()), "linear");
+  EXPECT_THROW(makePrefetchPredictor("appa"), InvalidArgument);  // needs the file
+  EXPECT_THROW(makePrefetchPredictor("bogus"), InvalidArgument);
+  EXPECT_EQ(predictorNames().size(), 5u);
   LinearPredictor lp;
   std::vector<Camera> h = {Camera::fromPose({1.5, 30, 10}, 8, 8), Camera::fromPose({1.5, 30, 12}, 8, 8)};
   Camera next;

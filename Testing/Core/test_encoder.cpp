@@ -406,7 +406,7 @@ TEST(Encoder, NonFiniteInputNamesTheBlock) {
   } catch (const NumericError& e) {
     const std::string w = e.what();
     EXPECT_NE(w.find("(30, 5, 20)"), std::string::npos) << w;
-    EXPECT_NE(w.find("block (14, 2, 9) of level 3"), std::string::npos) << w;
+    EXPECT_NE(w.find("level 3 block (14, 2, 9)"), std::string::npos) << w;
     EXPECT_NE(w.find("NaN"), std::string::npos) << w;
   }
 }

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Partition: coverage, shared boundaries, parents/children, and the sizes of issue 3.
+// Partition: coverage, shared boundaries, parents/children, and the paper's level sizes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -105,7 +105,7 @@ TEST(Partition, Ml512) {
   checkPartition({513, 513, 513}, 4, 16);
 }
 
-TEST(Partition, IssueSizes) {
+TEST(Partition, LevelSizes) {
   checkPartition({1024, 1024, 1024}, 4, 16);
   checkPartition({1024, 1024, 1088}, 4, 16);
   checkPartition({50, 50, 50}, 4, 16);
@@ -141,4 +141,9 @@ TEST(Partition, InvalidArguments) {
   const Partition p({8, 8, 8}, 2, 4);
   EXPECT_THROW(p.extent(0, {2, 0, 0}), afam::InvalidArgument);
   EXPECT_THROW(p.extent(1, {0, -1, 0}), afam::InvalidArgument);
+}
+
+TEST(Partition, BlockName) {
+  EXPECT_EQ(Partition::blockName(2, {3, 0, 7}), "level 2 block (3, 0, 7)");
+  EXPECT_EQ(Partition::blockName(0, {0, 0, 0}), "level 0 block (0, 0, 0)");
 }

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Prefetch predictors (issue 5): LSTM forward pass against torch's output for the shipped weights,
+// Prefetch predictors: LSTM forward pass against torch's output for the shipped weights,
 // the held-out trajectory bar (LSTM below linear extrapolation on user_2.dat), APPA table against a
 // brute-force visibility computation, its cache file (round trip, stale and corrupt files rebuilt),
 // ForeCache's Markov chain on a known pattern and its phase switch.

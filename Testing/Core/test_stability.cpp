@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Stiff and extreme cases of issue 2, part 5. Each asserts a number that could fail; the measured
+// Stiff and extreme cases of the spline fit. Each asserts a number that could fail; the measured
 // values are printed as "[ measured ]" lines and the bounds carry a margin over them.
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// GPU benchmarks of issue 6 (a timing program: CUDA events, medians over repetitions).
+// GPU benchmarks (a timing program: CUDA events, medians over repetitions).
 //   bench_gpu [--volume N] [--reps R] [--table FILE]   full benchmark, table printed last
 //   bench_gpu --sanitize                               one small frame (for compute-sanitizer)
 // Measures: the anchor views 0/100/200/300 of user_1.dat (512 x 512, sample distance 0.005,

@@ -88,7 +88,7 @@ inline vtkSmartPointer<vtkAFAMVolumeMapper> MarschnerLobbMapper(vtkSmartPointer<
   }
   auto mapper = vtkSmartPointer<vtkAFAMVolumeMapper>::New();
   mapper->SetInputConnection(encoder->GetOutputPort());
-  mapper->SetLodPolicy(1);
+  mapper->SetLodPolicyToScreenSpace();
   return mapper;
 }
 
@@ -245,6 +245,36 @@ inline bool PixelsMatchBaseline(vtkRenderWindow* window, int argc, char* argv[],
   }
   return true;
 }
+
+/// The scene most tests draw: the Marschner-Lobb mapper cast on the CPU, VolumeProperty(), the
+/// volume in a renderer (background 0.1, 0.1, 0.15) of the tests' window. Ready once Build()
+/// returned true (false: encoding failed).
+struct Scene
+{
+  vtkSmartPointer<vtkImageData> Image;
+  vtkSmartPointer<vtkAFAMVolumeMapper> Mapper;
+  vtkSmartPointer<vtkVolumeProperty> Property;
+  vtkSmartPointer<vtkVolume> Volume;
+  vtkNew<vtkRenderer> Renderer;
+  vtkNew<vtkRenderWindow> Window;
+  vtkNew<vtkRenderWindowInteractor> Interactor;
+
+  bool Build()
+  {
+    this->Mapper = MarschnerLobbMapper(this->Image);
+    if (!this->Mapper)
+    {
+      return false;
+    }
+    this->Mapper->SetRenderDeviceToCPU();
+    this->Property = VolumeProperty();
+    this->Volume = MakeVolume(this->Mapper, this->Property);
+    this->Renderer->SetBackground(0.1, 0.1, 0.15);
+    this->Renderer->AddVolume(this->Volume);
+    SetUpWindow(this->Renderer, this->Window, this->Interactor);
+    return true;
+  }
+};
 }
 
 #endif

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Latency for the Pareto bar of issue 8, measured so that CPU noise cannot decide it: DS, FAM and
+# Latency for the evaluation's Pareto bar, measured so that CPU noise cannot decide it: DS, FAM and
 # Adaptive-FAM replayed side by side (no prefetching, cold page cache, emulated storage), REPS
 # rounds, the order of the methods rotated every round so that no method always runs first or
 # last. Called by scripts/evaluate.sh; can be re-run on its own:

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: BSD-3-Clause
-"""Plots and summary of the evaluation report (issue 8), called by scripts/evaluate.sh.
+"""Plots and summary of the evaluation report, called by scripts/evaluate.sh.
 
     report.py encoding|quality|compressors|latency|codecs|summary|check OUTDIR [--size S --wall SECONDS]
 

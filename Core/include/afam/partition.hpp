@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace afam {
@@ -73,6 +74,9 @@ class Partition {
   /// Children at level+1 of a block (1 to 8 of them), as ijk.
   std::vector<Int3> children(int level, Int3 ijk) const;
   Int3 parent(int level, Int3 ijk) const;  ///< block at level-1 holding this one
+
+  /// How every message names a block: "level 2 block (3, 0, 7)".
+  static std::string blockName(int level, Int3 ijk);
 
   /// Sample positions (voxel index coordinate, possibly fractional) of a micro-block on one axis.
   double samplePosition(const BlockExtent& e, int axis, int k) const;

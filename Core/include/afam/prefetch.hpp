@@ -26,12 +26,23 @@
 namespace afam {
 
 /// Predicts the camera of the next point of view from the history of cameras (oldest first).
+/// makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds every kind by name.
 class Predictor {
  public:
   virtual ~Predictor() = default;
   virtual const char* name() const = 0;
   /// False when no prediction is made (too little history, or the `none` predictor).
   virtual bool predict(const std::vector<Camera>& history, Camera& next) const = 0;
+  /// Predictors that know the blocks (file entries) the next view needs without a visibility
+  /// computation (APPA's table, ForeCache's signature ranking) fill `entries`, most important
+  /// first, and return true; the others return false and the caller selects the view of
+  /// predict()'s camera.
+  virtual bool predictEntries(const std::vector<Camera>& history,
+                              std::vector<int64_t>& entries) const {
+    (void)history;
+    (void)entries;
+    return false;
+  }
 };
 
 /// Never predicts: no prefetching.
@@ -47,11 +58,6 @@ class LinearPredictor : public Predictor {
   const char* name() const override { return "linear"; }
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
 };
-
-/// none | linear (camera-only predictors). appa, forecache and lstm need the file and the view
-/// settings: makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds them, and this
-/// throws InvalidArgument saying so.
-std::unique_ptr<Predictor> makePredictor(const std::string& name);
 
 struct PrefetchStats {
   uint64_t jobs = 0, blocksLoaded = 0, stoppedEarly = 0;

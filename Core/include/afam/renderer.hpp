@@ -1,14 +1,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The out-of-core multi-resolution renderer of one .afam file (the paper's Algorithms 2-4).
 //
+// A Renderer is built from what owns memory and threads (RendererResources: the RAM cache, the
+// prefetch thread, ray-casting threads); what a person edits while looking (FrameSettings: transfer
+// function, shading, blend mode, sample distance, LOD) goes with each frame, so an edit keeps the
+// cache, the prefetcher's history and an installed GPU caster's model pool.
+//
 // One frame:  prepare()  = LOD cut -> frustum and TF culling -> cache lookups (misses read from the
 //                          file) -> FrameView + float pool of the visible models     ("caching")
-//             then castRays (CPU here; the CUDA path and the VTK mapper take the PreparedFrame)
-//                          while the prefetch thread loads the predicted next view   ("rendering")
+//             then the ray caster (the CPU's, or one installed with setRayCaster such as the CUDA
+//                          path) while the prefetch thread loads the predicted next view ("rendering")
 //             latency = caching + rendering.
-// The "build the FrameView for a frame" step (prepare) is separate from "cast rays on the CPU"
-// (renderFrame), so the GPU path and the VTK mapper reuse it unchanged: a PreparedFrame owns every
-// array its FrameView points to (host memory); a GPU path copies them and re-points the view.
+// A PreparedFrame owns every array its FrameView points to (host memory); a GPU caster copies them
+// and re-points the view.
 // The method follows the file: Adaptive-FAM / FAM files give spline slots, DS files raw slots.
 #pragma once
 
@@ -21,6 +25,7 @@
 #include "afam/afam_file.hpp"
 #include "afam/cache.hpp"
 #include "afam/camera.hpp"
+#include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
 #include "afam/lod.hpp"
 #include "afam/prefetch.hpp"
@@ -29,25 +34,19 @@
 
 namespace afam {
 
-struct RenderOptions {
+/// What a Renderer owns for its whole life: memory (the RAM cache), threads (ray casting, the
+/// prefetch thread and its predictor) and the way the file is read. Changing any of these needs a
+/// new Renderer.
+struct RendererResources {
   int threads = 0;                ///< ray-casting threads (0 = all cores)
-  float sampleDistance = 0.005f;  ///< normalised units ([-1, 1]^3 volume)
-  bool shading = true;
-  LodOptions lod;
   CacheBudget cache{0, 200};      ///< the paper's 200 micro-models by default
   bool cold = false;              ///< drop the file from the OS page cache before each frame
   double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none
-  std::string prefetch = "none";  ///< none | linear
-  int tfTableSize = 1024;
-  bool hasTransferFunction = false;  ///< false: TransferFunction::preset over the file's range
-  TransferFunction transferFunction;
-  float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
-  /// BlendMode (raycast.hpp): composite (0) or maximum / minimum / average intensity projection
-  /// (average: VTK's opaque grey level of the opacity-weighted mean value). Projections use the
-  /// table's own opacity, not corrected for the sample distance. No projection culls blocks by the transfer function (a block the table makes
-  /// transparent can still hold a ray's largest or smallest value, and counts in the mean).
-  int blendMode = 0;
+  std::string prefetch = "none";  ///< none | linear | appa | forecache | lstm
 };
+
+/// Both at once, for front ends that set everything in one place (the command line, benchmarks).
+struct RenderOptions : RendererResources, FrameSettings {};
 
 struct FrameStats {
   double cachingMs = 0, renderMs = 0, latencyMs = 0;
@@ -73,15 +72,28 @@ struct PreparedFrame {
 
 class Renderer {
  public:
-  Renderer(std::shared_ptr<const AfamFile> file, RenderOptions options);
+  Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
+           FrameSettings settings = {});
+  Renderer(std::shared_ptr<const AfamFile> file, const RenderOptions& options)
+      : Renderer(std::move(file), RendererResources(options), FrameSettings(options)) {}
   ~Renderer();
 
   const AfamFile& file() const { return *file_; }
-  const RenderOptions& options() const { return options_; }
+  const RendererResources& resources() const { return resources_; }
+  /// The settings of the next frame; settings().transferFunction is the table's function (the
+  /// preset when none was given).
+  const FrameSettings& settings() const { return settings_; }
   LruCache& cache() { return *cache_; }
   const std::vector<float>& tfTable() const { return tf_; }
   double tfLo() const { return tfLo_; }
   double tfHi() const { return tfHi_; }
+
+  /// Settings for the frames from now on: the transfer-function table, LOD and culling follow at
+  /// once; the cache, the prefetcher and an installed ray caster are kept. Throws InvalidArgument
+  /// (and changes nothing) for a sample distance that is not > 0, an unknown blend mode or a
+  /// transfer function with non-finite points (frame_settings.hpp checks these for front ends that
+  /// warn and keep the last good value instead). Not while a frame renders.
+  void setFrameSettings(const FrameSettings& settings);
 
   /// LOD cut + culling for a camera (no I/O).
   Selection select(const Camera& camera) const;
@@ -95,6 +107,9 @@ class Renderer {
   /// length limit from opaque geometry (FrameView::maxDistance); the installed caster sees it too.
   ImageRGBA renderFrame(const Camera& camera, FrameStats& stats,
                         const float* maxDistance = nullptr);
+  /// setFrameSettings(settings), then renderFrame.
+  ImageRGBA renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& stats,
+                        const float* maxDistance = nullptr);
 
   /// Replaces renderFrame's CPU ray casting (the CUDA path of `--device gpu` plugs in here): the
   /// caster fills `image` (premultiplied RGBA of frame.view's size) from the prepared frame.
@@ -103,7 +118,8 @@ class Renderer {
 
  private:
   std::shared_ptr<const AfamFile> file_;
-  RenderOptions options_;
+  RendererResources resources_;
+  FrameSettings settings_;
   LodSelector lod_;
   std::unique_ptr<LruCache> cache_;
   std::unique_ptr<Predictor> predictor_;

@@ -24,15 +24,6 @@ int cellsOf(double span, double step) {
   return std::max(1, static_cast<int>(std::ceil(span / step - 1e-9)));
 }
 
-uint32_t fnv1a32(const unsigned char* p, std::size_t n) {
-  uint32_t h = 0x811C9DC5u;
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 0x01000193u;
-  }
-  return h;
-}
-
 template <class T>
 void put(std::vector<unsigned char>& b, const T& v) {
   const auto* p = reinterpret_cast<const unsigned char*>(&v);  // little-endian hosts only
@@ -55,15 +46,6 @@ struct In {
 };
 
 }  // namespace
-
-uint64_t fnv1a64(const void* data, std::size_t bytes, uint64_t h) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < bytes; ++i) {
-    h ^= p[i];
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
 
 int AppaGrid::distanceCells() const { return cellsOf(dMax - dMin, dStep); }
 int AppaGrid::thetaCells() const { return cellsOf(180.0, angleStep); }

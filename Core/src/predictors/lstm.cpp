@@ -8,6 +8,7 @@
 #include <iterator>
 
 #include "afam/errors.hpp"
+#include "afam/hash.hpp"
 
 #ifndef AFAM_DEFAULT_LSTM_WEIGHTS
 #define AFAM_DEFAULT_LSTM_WEIGHTS "data/lstm_pose_v1.bin"
@@ -16,15 +17,6 @@
 namespace afam {
 
 namespace {
-
-uint32_t fnv1a(const unsigned char* p, std::size_t n) {
-  uint32_t h = 0x811C9DC5u;
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= p[i];
-    h *= 0x01000193u;
-  }
-  return h;
-}
 
 struct Reader {
   const std::vector<unsigned char>& buf;
@@ -72,7 +64,7 @@ LstmWeights loadLstmWeights(const std::string& path) {
   const std::size_t body = buf.size() - 4;
   uint32_t stored = 0;
   for (int i = 0; i < 4; ++i) stored |= uint32_t(buf[body + i]) << (8 * i);
-  if (fnv1a(buf.data(), body) != stored)
+  if (fnv1a32(buf.data(), body) != stored)
     throw FormatError("LSTM weights '" + path + "': checksum mismatch (corrupt file)");
   Reader r{buf, 8, path};
   LstmWeights w;

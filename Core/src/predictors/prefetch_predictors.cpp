@@ -24,8 +24,9 @@ std::string appaContext(const PredictorContext& ctx) {
 }
 }  // namespace
 
-bool isPrefetchPredictorName(const std::string& name) {
-  return name == "appa" || name == "forecache" || name == "lstm";
+const std::vector<std::string>& predictorNames() {
+  static const std::vector<std::string> names = {"none", "linear", "appa", "forecache", "lstm"};
+  return names;
 }
 
 BlockSignature entrySignature(const AfamFile& file, int64_t entry) {
@@ -38,6 +39,8 @@ BlockSignature entrySignature(const AfamFile& file, int64_t entry) {
 }
 
 std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx) {
+  if (name == "none") return std::make_unique<NoPredictor>();
+  if (name == "linear") return std::make_unique<LinearPredictor>();
   if (name == "lstm") {
     return std::make_unique<PosePredictorAdapter>(std::make_unique<LstmPosePredictor>(
         ctx.lstmWeights.empty() ? defaultLstmWeightsPath() : ctx.lstmWeights));
@@ -52,7 +55,8 @@ std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const 
                                              visible, ctx.appaReport, ctx.appaThreads);
     return std::make_unique<AppaPredictor>(std::move(table));
   }
-  throw InvalidArgument("prefetch: unknown predictor '" + name + "' (expected appa, forecache or lstm)");
+  throw InvalidArgument("prefetch: unknown predictor '" + name +
+                        "' (expected none, linear, appa, forecache or lstm)");
 }
 
 void PosePredictorAdapter::update(const std::vector<Camera>& history) const {

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/hash.hpp"
 #include "afam/predictors/pose_predictor.hpp"
 
 namespace afam {
@@ -96,7 +97,6 @@ class AppaTable {
 /// Key of a .afam file for the table cache: size, modification time and the index (offsets, sizes,
 /// checksums), combined with `context` (settings that change visibility).
 uint64_t appaSourceKey(const AfamFile& file, const std::string& context);
-uint64_t fnv1a64(const void* data, std::size_t bytes, uint64_t h = 0xcbf29ce484222325ull);
 
 /// The visibility APPA stores, computed as the renderer does: the recorded-trajectory camera of the
 /// pose (width x height), LodSelector::select with the transfer function, entries ordered by the

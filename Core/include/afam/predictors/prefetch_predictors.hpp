@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The issue-5 predictors behind the renderer's Predictor interface (prefetch.hpp): appa, forecache
-// and lstm, run live in the prefetch thread.
+// The renderer's predictors and their one factory: none and linear (prefetch.hpp) and the
+// data-aware appa, forecache and lstm, run live in the prefetch thread.
 //
 // The renderer calls predict(history, next) (or predictEntries) once per frame in the prefetch
 // thread, with its bounded history of cameras; the stateful predictors here learn from the cameras
 // they have not seen yet and start over when the history does not continue the previous one.
 // Predictors that know the blocks to fetch without a visibility computation (APPA's table,
-// ForeCache's signature ranking) also implement EntryPredictor; the renderer's prefetch job asks
-// for it first and falls back to selecting the predicted camera's view.
+// ForeCache's signature ranking) also override Predictor::predictEntries; the renderer's prefetch
+// job asks for the entries first and falls back to selecting the predicted camera's view.
 #pragma once
 
 #include <memory>
@@ -23,13 +23,6 @@
 
 namespace afam {
 
-/// Blocks (file entries) to prefetch for the next view, most important first.
-class EntryPredictor {
- public:
-  virtual ~EntryPredictor() = default;
-  virtual bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const = 0;
-};
-
 /// What the data-aware predictors need to know about the scene.
 struct PredictorContext {
   std::shared_ptr<const AfamFile> file;
@@ -43,12 +36,13 @@ struct PredictorContext {
   AppaBuildReport* appaReport = nullptr;  ///< filled when the APPA table is loaded or built
 };
 
-/// appa | forecache | lstm (none and linear stay with makePredictor). Throws InvalidArgument for
-/// other names or when appa/forecache get no file.
-std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx);
+/// The one factory of the renderer's predictors: none | linear (camera only) | appa | forecache |
+/// lstm (these use ctx). Throws InvalidArgument for other names or when appa/forecache get no
+/// file, and whatever a loader throws (a missing or corrupt LSTM weights file, for example).
+std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx = {});
 
-/// True for the names makePrefetchPredictor handles.
-bool isPrefetchPredictorName(const std::string& name);
+/// The names makePrefetchPredictor takes, in the order the command line lists them.
+const std::vector<std::string>& predictorNames();
 
 /// A PosePredictor behind the camera interface (lstm; forecache without data).
 class PosePredictorAdapter : public Predictor {
@@ -67,7 +61,7 @@ class PosePredictorAdapter : public Predictor {
   mutable std::vector<Vec3> seen_;
 };
 
-class AppaPredictor : public Predictor, public EntryPredictor {
+class AppaPredictor : public Predictor {
  public:
   AppaPredictor(AppaTable table) : table_(std::move(table)) {}
   const char* name() const override { return "appa"; }
@@ -80,7 +74,7 @@ class AppaPredictor : public Predictor, public EntryPredictor {
   AppaTable table_;
 };
 
-class ForeCachePredictor : public PosePredictorAdapter, public EntryPredictor {
+class ForeCachePredictor : public PosePredictorAdapter {
  public:
   ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options = {});
   bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Errors of the CUDA back end and the "is there a usable GPU" probe. Plain C++: no CUDA header, so
-// Apps and (later) VTK adapters can include it and catch afam::GpuError without nvcc.
+// Apps and the VTK mapper can include it and catch afam::GpuError without nvcc.
 #pragma once
 
 #include <string>

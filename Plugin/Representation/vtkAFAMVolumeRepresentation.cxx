@@ -182,6 +182,9 @@ vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames() { return this->Map
 int vtkAFAMVolumeRepresentation::GetLastUsedGpu() { return this->Mapper->GetLastUsedGpu() ? 1 : 0; }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastDepthLimitedPixels() { return this->Mapper->GetLastDepthLimitedPixels(); }
 const char* vtkAFAMVolumeRepresentation::GetLastDeviceMessage() { return this->Mapper->GetLastDeviceMessage(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastGpuModelsUploaded() { return this->Mapper->GetLastGpuModelsUploaded(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfRendererBuilds() { return this->Mapper->GetNumberOfRendererBuilds(); }
+const char* vtkAFAMVolumeRepresentation::GetLastSettingWarning() { return this->Mapper->GetLastSettingWarning(); }
 
 void vtkAFAMVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {

@@ -17,7 +17,7 @@
 #ifndef vtkAFAMVolumeRepresentation_h
 #define vtkAFAMVolumeRepresentation_h
 
-#include "vtkAFAMModule.h" // for export macro
+#include "vtkAFAMParaViewModule.h" // for export macro
 #include "vtkImageData.h"  // for vtkNew<vtkImageData>
 #include "vtkNew.h"        // for vtkNew
 #include "vtkVolumeRepresentation.h"
@@ -28,7 +28,7 @@ class vtkAFAMVolumeMapper;
 class vtkImageData;
 class vtkPolyDataMapper;
 
-class VTKAFAM_EXPORT vtkAFAMVolumeRepresentation : public vtkVolumeRepresentation
+class VTKAFAMPARAVIEW_EXPORT vtkAFAMVolumeRepresentation : public vtkVolumeRepresentation
 {
 public:
   static vtkAFAMVolumeRepresentation* New();
@@ -78,6 +78,9 @@ public:
   vtkTypeInt64 GetLastDepthLimitedPixels();
   double GetLastImageScale();
   const char* GetLastDeviceMessage();
+  vtkTypeInt64 GetLastGpuModelsUploaded();
+  vtkTypeInt64 GetNumberOfRendererBuilds();
+  const char* GetLastSettingWarning();
   ///@}
 
   vtkAFAMVolumeMapper* GetVolumeMapper() { return this->Mapper; }

@@ -1,0 +1,22 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""pvbatch: the Adaptive-FAM Encoder on an image with one point array encodes it with no array
+chosen (its Scalars property left as ParaView creates it), as ParaView's own filters take the
+active scalars."""
+import os
+import sys
+
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
+import afam_test_util as u  # noqa: E402
+
+from paraview.simple import Wavelet  # noqa: E402
+
+u.load_plugin(globals())
+wavelet = Wavelet(WholeExtent=[0, 16, 0, 16, 0, 16])
+encoder = AdaptiveFAMEncoder(Input=wavelet, Levels=2, BlocksPerAxis=2)  # noqa: F821
+print("Scalars property as created: %s" % (encoder.GetProperty("SelectInputScalars").GetData(),))
+encoder.UpdatePipeline()
+leaves = encoder.GetDataInformation().GetNumberOfDataSets()
+expected = 2 ** 3 + 1 + 1  # levels 1 and 0, and the value-range probe
+print("encoded without a chosen array: %d leaves (expected %d)" % (leaves, expected))
+if leaves != expected:
+    u.fail("the encoder did not encode the image's only point array")

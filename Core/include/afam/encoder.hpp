@@ -71,7 +71,7 @@ struct LevelStats {
   int64_t fits = 0;            ///< fits performed at this level
   int64_t samples = 0;         ///< micro-block samples fitted (sum of n0 n1 n2)
   uint64_t payloadBytes = 0;   ///< sum of stored payload sizes
-  std::array<int64_t, 3> kinds{};  ///< blocks per BlockKind (spline, samples, constant)
+  std::array<int64_t, 4> kinds{};  ///< blocks per BlockKind (spline, samples, constant, interpolant)
   uint64_t paperBytes = 0;     ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;

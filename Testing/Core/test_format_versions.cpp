@@ -1,0 +1,150 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Format versions: a version-1 file written before version 2 still opens and decodes the same
+// values; version-2 files carry mixed block kinds and survive damage to every structure.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "afam/afam_file.hpp"
+#include "afam/encoder.hpp"
+
+using namespace afam;
+
+namespace {
+
+const std::string kFormat = std::string(AFAM_TEST_DATA_DIR) + "/format/";
+
+std::vector<char> readAll(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+}
+
+void writeAll(const std::string& path, const std::vector<char>& b) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(b.data(), std::streamsize(b.size()));
+}
+
+std::string scratch(const std::string& name) {
+  return ::testing::TempDir() + "afam_format_" + std::to_string(::getpid()) + "_" + name;
+}
+
+/// A small volume mixing every block kind: a constant half, a smooth quarter and a noisy quarter.
+std::vector<float> mixedVolume(Index3& dims) {
+  dims = {65, 40, 33};
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1, 1);
+  size_t i = 0;
+  for (int64_t z = 0; z < dims[2]; ++z)
+    for (int64_t y = 0; y < dims[1]; ++y)
+      for (int64_t x = 0; x < dims[0]; ++x, ++i)
+        v[i] = x < 32 ? 5.0f : (y < 20 ? 5.0f + 3.0f * float(std::sin(0.2 * double(x + y + z))) : 5.0f + u(rng));
+  return v;
+}
+
+}  // namespace
+
+TEST(FormatVersions, VersionOneFileStillDecodesTheSameValues) {
+  auto f = AfamFile::open(kFormat + "ml17_levels2_blocks2_v1.afam");
+  EXPECT_EQ(f->version(), 1u);
+  EXPECT_EQ(f->header().sampling, LevelSampling::Point);
+  for (const ModelEntry& e : f->entries()) {
+    EXPECT_EQ(e.kind, BlockKind::Spline);
+    EXPECT_FALSE(e.coded);
+    EXPECT_EQ(e.storedSize, e.size);
+  }
+  const Index3 dims = f->header().dims;
+  ASSERT_EQ(dims, (Index3{17, 17, 17}));
+  std::vector<float> decoded(size_t(17 * 17 * 17));
+  decodeLevelBox(*f, 1, {0, 0, 0}, {16, 16, 16}, decoded.data());
+  const std::vector<char> expected = readAll(kFormat + "ml17_levels2_blocks2_v1_level1_decoded_17x17x17_float32.raw");
+  ASSERT_EQ(expected.size(), decoded.size() * sizeof(float));
+  EXPECT_EQ(std::memcmp(expected.data(), decoded.data(), expected.size()), 0) << "version-1 decode changed";
+}
+
+TEST(FormatVersions, VersionTwoHoldsEveryKindAndRoundTrips) {
+  Index3 dims;
+  const std::vector<float> v = mixedVolume(dims);
+  ArraySource src(v.data(), dims);
+  EncoderOptions opt;
+  opt.errorBound = 1e-2;
+  opt.relativeBound = true;
+  opt.levels = 2;
+  opt.blocksPerAxis = 4;
+  InMemoryModels mem;
+  const EncodeStats st = encodeVolume(src, opt, mem);
+  const std::string path = scratch("mixed.afam");
+  mem.write(path);
+  auto f = AfamFile::open(path);
+  EXPECT_EQ(f->version(), 2u);
+  EXPECT_EQ(f->header().sampling, LevelSampling::Box);
+  int kinds[4] = {0, 0, 0, 0};
+  std::vector<float> payload;
+  for (size_t i = 0; i < f->entries().size(); ++i) {
+    const ModelEntry& e = f->entries()[i];
+    ++kinds[int(e.kind)];
+    EXPECT_EQ(e.storedSize, mem.entries[i].storedSize);
+    payload.resize(e.size / 4);
+    f->readPayload(int64_t(i), payload.data());
+    EXPECT_EQ(payload, mem.payloads[i]) << "entry " << i << " decodes as in memory";
+  }
+  EXPECT_GT(kinds[int(BlockKind::Constant)], 0);
+  EXPECT_GT(kinds[int(BlockKind::Spline)] + kinds[int(BlockKind::Interpolant)], 0);
+  int64_t counted = 0;
+  for (const LevelStats& ls : st.levels) counted += ls.kinds[0] + ls.kinds[1] + ls.kinds[2] + ls.kinds[3];
+  EXPECT_EQ(counted, int64_t(f->entries().size()));
+  std::remove(path.c_str());
+}
+
+TEST(FormatVersions, VersionTwoDamageIsRefusedNamingTheBlock) {
+  Index3 dims;
+  const std::vector<float> v = mixedVolume(dims);
+  ArraySource src(v.data(), dims);
+  EncoderOptions opt;
+  opt.errorBound = 1e-2;
+  opt.relativeBound = true;
+  opt.levels = 2;
+  opt.blocksPerAxis = 4;
+  const std::string path = scratch("damage.afam");
+  encodeVolume(src, opt, path);
+  const std::vector<char> good = readAll(path);
+  const std::string bad = scratch("damage_bad.afam");
+  std::mt19937 rng(5);
+  int refusedOpen = 0, refusedRead = 0, accepted = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<char> b = good;
+    if (trial % 4 == 0) {
+      b.resize(std::uniform_int_distribution<size_t>(0, b.size() - 1)(rng));  // truncation anywhere
+    } else {
+      const size_t at = std::uniform_int_distribution<size_t>(0, b.size() - 1)(rng);
+      b[at] = char(b[at] ^ char(1 + trial % 255));
+    }
+    writeAll(bad, b);
+    try {
+      auto f = AfamFile::open(bad);
+      std::vector<float> out;
+      for (size_t i = 0; i < f->entries().size(); ++i) {
+        out.resize(f->entries()[i].size / 4);
+        f->readPayload(int64_t(i), out.data());
+      }
+      ++accepted;  // a flip inside padding or an unused header byte
+    } catch (const FormatError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find(bad), std::string::npos) << w;
+      if (w.find("block (") != std::string::npos) ++refusedRead; else ++refusedOpen;
+    }
+  }
+  EXPECT_GT(refusedOpen, 50);
+  EXPECT_GT(refusedRead, 20) << "payload damage names the block";
+  EXPECT_LT(accepted, 40);
+  std::remove(path.c_str());
+  std::remove(bad.c_str());
+}

@@ -40,7 +40,8 @@ int runVerify(int argc, char** argv) {
   std::printf("checksums ok: %zu micro-models, %llu bytes\n", n, (unsigned long long)f->fileSize());
   if (!args.has("against")) return 0;
 
-  auto src = openRaw(args.str("against"), args);
+  const InputVolume input = openInput(args.str("against"), args);
+  VolumeSource* src = input.source.get();
   if (src->dims() != h.dims)
     throw InvalidArgument(args.str("against") + ": dims differ from the .afam file's");
   const int level = int(args.integer("level", h.levels - 1));

@@ -91,7 +91,7 @@ endif ()
 # A generated exploration path (afam trajectory) stands in for a recorded one.
 run_ok(out ${AFAM} trajectory walk.dat --kind walk --views 400 --seed 3)
 file(SIZE "${WORK}/walk.dat" sz)
-if (NOT sz EQUAL 4800 OR NOT out MATCHES "walk, 400 views, distance 1[.][0-9]*-1[.][0-9]*")
+if (NOT sz EQUAL 4800 OR NOT out MATCHES "walk, 400 views, distance 1[.0-9]*-1[.0-9]*")
   message(FATAL_ERROR "trajectory wrote ${sz} bytes (expected 400 * 12): ${out}")
 endif ()
 run_ok(out ${AFAM} trajectory orbit.dat --kind orbit --views 36 --distance 1.25)

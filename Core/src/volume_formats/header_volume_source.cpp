@@ -206,12 +206,15 @@ void HeaderVolumeSource::inflateAll() {
   inflateEnd(&z);
   if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
     throw FormatError(header_.dataPath + ": compressed data are damaged (zlib: " + (msg.empty() ? "error" : msg) + ")");
-  if (out != expected)
-    throw FormatError(header_.dataPath + ": the compressed data hold " +
-                      (out > expected ? "more than " + std::to_string(expected) : std::to_string(out)) +
+  if (out > expected)
+    throw FormatError(header_.dataPath + ": the compressed data hold more than " + std::to_string(expected) +
                       " bytes, but " + headerNeeds(header_));
   if (rc != Z_STREAM_END)
-    throw FormatError(header_.dataPath + ": the compressed data end early (truncated file?), and " + headerNeeds(header_));
+    throw FormatError(header_.dataPath + ": the compressed data end after " + std::to_string(out) +
+                      " bytes without their trailer (truncated file?); " + headerNeeds(header_));
+  if (out != expected)
+    throw FormatError(header_.dataPath + ": the compressed data hold " + std::to_string(out) + " bytes, but " +
+                      headerNeeds(header_));
   inflated_.resize(expected);
 }
 

@@ -226,6 +226,5 @@ run "$EVAL" seams --csv "$OUT/stability/seams.csv" "${SFILES[@]}" > "$W/seams.lo
 T_END=$(date +%s)
 echo "# total_wall_s=$((T_END - T_START)) size=$SIZE" >> "$LOG"
 run $PY "$ROOT/scripts/evaluation/report.py" summary "$OUT" --size "$SIZE" --wall "$((T_END - T_START))"
-printf '\nPoints of view (user_1, user_2): %s\n' "$TRAJ_NOTE" >> "$OUT/summary.md"
 [[ ${AFAM_EVAL_KEEP_WORK:-0} == 1 ]] || rm -rf "$W"
 stamp "done in $((T_END - T_START)) s: $OUT/summary.md"

@@ -24,6 +24,7 @@ import afam_demo as demo  # Scene, run, field, compare, value_range: one copy of
 
 RAW_TYPES = {"uint8": "unsigned char", "int16": "short", "uint16": "unsigned short", "float32": "float",
              "float64": "double"}
+RAW_SIZES = {"uint8": 1, "int16": 2, "uint16": 2, "float32": 4, "float64": 8}
 
 
 def parse_args():
@@ -96,9 +97,11 @@ def main():
     report = os.path.join(a.out, "report_real.csv")
     fmt = "%-5s %12s %14s %8s %8s %7s"
     print()
-    print("%s: raw %d bytes, .afam %d bytes (ratio %.2f); data error (finest level) rmse %.4g = %.3g%% "
-          "of the range, max %.4g" % (name, raw_bytes, afam_bytes, raw_bytes / afam_bytes, rmse,
-                                      100.0 * rmse / (hi - lo), max_error))
+    float32_bytes = raw_bytes // RAW_SIZES[re.search(r"_([a-z0-9]+)\.raw$", name).group(1)] * 4
+    print("%s: raw %d bytes, .afam %d bytes (ratio %.2f; %.2f against float32); data error (finest level) "
+          "rmse %.4g = %.3g%% of the range, max %.4g" % (name, raw_bytes, afam_bytes, raw_bytes / afam_bytes,
+                                                        float32_bytes / afam_bytes, rmse, 100.0 * rmse / (hi - lo),
+                                                        max_error))
     print(fmt % ("view", "plugin_ms", "paraview_ms", "psnr", "ssim", "images"))
     with open(report, "w", newline="") as f:
         w = csv.writer(f)

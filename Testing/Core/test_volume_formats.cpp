@@ -107,7 +107,8 @@ TEST(VolumeFormats, EveryLayoutReadsTheRawSamples) {
   const std::vector<float> want = samples(reference);
   const std::string sizes = "64 64 93";
   spit(work("head_attached.nrrd"),
-       nrrdHeader("short", sizes, "endian: little\nencoding: raw\nspacings: 3.2 3.2 1.5\n\n") + raw);
+       nrrdHeader("short", sizes, "endian: little\nencoding: raw\nspacings: 3.2 3.2 1.5\nnote:=a: b\n"
+                                  "content: CT: head\n\n") + raw);
   spit(work("head_gzip.nrrd"), nrrdHeader("int16", sizes, "endian: little\nencoding: gzip\n\n") + gzipped(raw, true));
   spit(work("head_big.raw"), "skip me\nand me\n" + std::string(5, 'x') + swapped16(raw));
   spit(work("head_detached.nhdr"),

@@ -58,10 +58,9 @@ std::array<double, 3> nrrdVector(const std::string& path, const std::string& fie
 
 /// Space directions: one vector per axis; the spacing is its length.
 std::array<double, 3> spacingFromDirections(const std::string& path, const std::string& value) {
-  std::string v = value;  // vectors may hold spaces after commas: "(1, 0, 0)"
-  std::string compact;
+  std::string compact;  // vectors may hold spaces after commas: "(1, 0, 0)"
   int depth = 0;
-  for (char c : v) {
+  for (char c : value) {
     if (c == '(') ++depth;
     if (c == ')') --depth;
     if (depth > 0 && (c == ' ' || c == '\t')) continue;
@@ -148,9 +147,12 @@ VolumeFileHeader readNrrdHeader(const std::string& path) {
       blank = true;
       break;
     }
-    if (line[0] == '#' || line.find(":=") != std::string::npos) continue;  // comments, key/value pairs
+    if (line[0] == '#') continue;
+    const size_t first = line.find(':');
+    if (first != std::string::npos && first + 1 < line.size() && line[first + 1] == '=') continue;  // key:=value
     const size_t colon = line.find(": ");
-    if (colon == std::string::npos) fieldError(path, trim(line), "a header line is not 'field: value'");
+    if (colon == std::string::npos || colon != first)
+      fieldError(path, trim(line), "a header line is not 'field: value'");
     applyField(h, canonicalKey(lowercase(trim(line.substr(0, colon)))), trim(line.substr(colon + 2)), seen);
   }
   for (const char* required : {"dimension", "type", "sizes", "encoding"})

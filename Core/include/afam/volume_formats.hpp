@@ -17,9 +17,10 @@
 // anyway (teem reads only NRRD), and both formats reduce to the same few `key: value` fields over
 // the same payload (raw or zlib-compressed bytes in this or another file), so one payload path
 // serves both. nrrdLoad reads and converts the whole array at once, while raw payloads here stream
-// plane by plane like RawFileSource; it accepts a raw payload longer than the header says, which
-// must be an error here; and its errors come as biff text we cannot tie to a field. zlib, a
-// packaged library, does the part that needs care (inflating gzip and zlib streams).
+// plane by plane like RawFileSource; it reads only the bytes the header asks for, so a raw payload
+// longer than the header says (an error here) passes; and its errors come as biff text that does
+// not name the field. zlib, a packaged library, does the part that needs care (inflating gzip and
+// zlib streams).
 //
 // Memory: a raw payload is read plane by plane (pread) as the encoder asks; a compressed one is
 // inflated once, when the source is opened, and held in its original type (1-8 bytes a voxel).

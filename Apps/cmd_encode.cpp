@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// afam encode IN.raw OUT.afam [options]
+// afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [options]
 #include <cstdio>
 #include <thread>
 
@@ -16,15 +16,18 @@ int runEncode(int argc, char** argv) {
              "spacing", "window"},
             {"relative", "float-payloads", "progress", "quiet"});
   const char* usage =
-      "afam encode IN.raw OUT.afam [--dims X,Y,Z] [--type float32|float64|uint8|uint16|int16]\n"
+      "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [--dims X,Y,Z]\n"
+      "       [--type float32|float64|uint8|uint16|int16]\n"
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search fast|exhaustive]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Encodes a raw little-endian volume (x fastest) into Adaptive-FAM micro-models (paper,\n"
-        "Algorithm 1), streaming: only the z-planes the current blocks need are in memory.\n"
-        "Dims and type default to what a name like name_64x64x93_int16.raw says.\n\n"
+        "Encodes a volume into Adaptive-FAM micro-models (paper, Algorithm 1), streaming: only the\n"
+        "z-planes the current blocks need are in memory. Inputs: a raw little-endian volume (x\n"
+        "fastest; dims and type default to what a name like name_64x64x93_int16.raw says), or NRRD\n"
+        "(.nrrd, .nhdr) and MetaImage (.mha, .mhd), raw or gzip/zlib-compressed, whose header gives\n"
+        "dims, type, spacing and origin (stored in the .afam header).\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest of a\n"
@@ -38,14 +41,15 @@ int runEncode(int argc, char** argv) {
         "  --ncp K           NCP per axis for --mode fixed (default n)\n"
         "  --threads T       worker threads (default: all cores)\n"
         "  --search S        fast (default) or exhaustive (the paper's loop over every NCP)\n"
-        "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1)\n"
+        "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1, or the input header's)\n"
         "  --progress        draw the progress bar even when stderr is not a terminal\n"
         "  --quiet           print nothing on success\n",
         usage);
     return 0;
   }
   args.expectPositional(2, usage);
-  auto source = openRaw(args.positional()[0], args);
+  const InputVolume input = openInput(args.positional()[0], args);
+  VolumeSource* source = input.source.get();
   EncoderOptions opt;
   opt.levels = int(args.integer("levels", 0));
   opt.blocksPerAxis = int(args.integer("blocks", 0));
@@ -77,7 +81,7 @@ int runEncode(int argc, char** argv) {
   const Index3 d = source->dims();
   std::printf("encoded %s -> %s\n", args.positional()[0].c_str(), args.positional()[1].c_str());
   std::printf("dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
-              (long long)d[0], (long long)d[1], (long long)d[2], scalarTypeName(source->type()),
+              (long long)d[0], (long long)d[1], (long long)d[2], input.typeName.c_str(),
               modeName(opt.mode), search.c_str(), s.levelsUsed, s.blocksPerAxisUsed, opt.degree, s.bound,
               opt.relativeBound ? " (relative)" : "");
   std::printf("seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "

@@ -28,8 +28,8 @@ int runRender(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Renders point of view I (0-based) of a recorded trajectory (../shared/data/trajectories\n"
-        "format; the authors' camera) from FILE (.afam of any mode: adaptive, inlevel and fixed\n"
+        "Renders point of view I (0-based) of a trajectory file (recorded, or from `afam trajectory`;\n"
+        "the authors' camera) from FILE (.afam of any mode: adaptive, inlevel and fixed\n"
         "render the B-spline micro-models, ds the raw blocks with trilinear interpolation) with\n"
         "the CPU ray caster, writes IMG.png and prints render_ms=<x> (plus caching statistics).\n\n"
         "  --trajectory T.dat     trajectory file (required)\n"

@@ -39,7 +39,7 @@ int runReplay(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Replays every point of view of a trajectory (../shared/data/trajectories format) through\n"
+        "Replays every point of view of a trajectory file (recorded, or from `afam trajectory`) through\n"
         "the out-of-core renderer on the CPU: LOD cut, culling, LRU cache, prefetch while the\n"
         "frame renders. The method follows FILE's mode (adaptive/inlevel = Adaptive-FAM,\n"
         "fixed = FAM, ds = downsampling). Caching time = LOD selection + cache lookups and reads +\n"

@@ -20,6 +20,7 @@ int runVerify(int argc, char** argv) {
         "Reads every micro-model and checks its CRC32. With --against, also decodes the finest level\n"
         "(or --level K) on its sample grid and compares it with the raw volume at the same sample\n"
         "positions, each sample once, streaming; prints rmse=<number> and max_error=<number>.\n"
+        "IN may be raw (name_XxYxZ_type.raw or --dims/--type), NRRD or MetaImage, as for encode.\n"
         "With --max-rmse E the exit status is 1 when the RMSE is above E.\n"
         "Exit status 1 on any checksum mismatch or error.\n",
         usage);
@@ -39,7 +40,8 @@ int runVerify(int argc, char** argv) {
   std::printf("checksums ok: %zu micro-models, %llu bytes\n", n, (unsigned long long)f->fileSize());
   if (!args.has("against")) return 0;
 
-  auto src = openRaw(args.str("against"), args);
+  const InputVolume input = openInput(args.str("against"), args);
+  VolumeSource* src = input.source.get();
   if (src->dims() != h.dims)
     throw InvalidArgument(args.str("against") + ": dims differ from the .afam file's");
   const int level = int(args.integer("level", h.levels - 1));

@@ -13,7 +13,9 @@
 #   --full   the paper-scale sizes (GPU machine / big hosts)
 # Environment: AFAM_DEVICE=cpu|gpu (ray caster of the replays and the quality renders; gpu builds
 # with CUDA), AFAM_JOBS (threads, default 2), AFAM_PYTHON (default /usr/bin/python3), AFAM_ML_N
-# (Marschner-Lobb size, overrides the size's default), AFAM_DATA (default ../shared/data),
+# (Marschner-Lobb size, overrides the size's default), AFAM_VOLUMES (corpus volumes, default
+# Testing/Data/volumes), AFAM_TRAJECTORIES (folder of the recorded user_1.dat, user_2.dat; without
+# it generated exploration walks are replayed, and the summary says so: scripts/trajectories.sh),
 # AFAM_STORAGE_MBPS (emulated storage, default 100), AFAM_PARETO_REPS. On the GPU machine,
 # scripts/gpu_evaluate.sh runs the --full report this way.
 set -euo pipefail
@@ -31,7 +33,7 @@ done
 [[ $# -eq 1 ]] || { echo "usage: scripts/evaluate.sh [--smoke|--small|--full] OUTDIR" >&2; exit 2; }
 OUT=$(mkdir -p "$1" && cd "$1" && pwd)
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-DATA=${AFAM_DATA:-$ROOT/../shared/data}
+VOLUMES_DIR=${AFAM_VOLUMES:-$ROOT/Testing/Data/volumes}
 BUILD=${AFAM_BUILD:-$ROOT/build-eval}
 PY=${AFAM_PYTHON:-/usr/bin/python3}
 DEVICE=${AFAM_DEVICE:-cpu}
@@ -56,13 +58,13 @@ case $SIZE in
   small)
     ML_N=257; BLOCKS=16; IMG=96; FRAMES=400; PREFETCHERS="none linear appa forecache lstm"
     BOUNDS="3e-2 1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="5 9 13"
-    VOLUMES=$(cd "$DATA/volumes" && ls *.raw | tr '\n' ' ')
+    VOLUMES=$(cd "$VOLUMES_DIR" && ls *.raw | tr '\n' ' ')
     SDS="0.02,0.01,0.005,0.0025"; ZFP_RATES="0.25 0.5 1 2 4 8"; FPZIP_PRECS="4 6 8 12 16 20"
     QUALITY_BOUNDS="1e-3 1e-4"; REPLAY_IMG=32; REPLAY_SD=0.01; PARETO_REPS=3 ;;
   full)
     ML_N=513; BLOCKS=16; IMG=512; FRAMES=400; PREFETCHERS="none linear appa forecache lstm"
     BOUNDS="3e-2 1e-2 3e-3 1e-3 3e-4 1e-4"; REL_BOUNDS="3e-2 1e-2 3e-3 1e-3"; FIXED_NCPS="5 9 17 25"
-    VOLUMES=$(cd "$DATA/volumes" && ls *.raw | tr '\n' ' ')
+    VOLUMES=$(cd "$VOLUMES_DIR" && ls *.raw | tr '\n' ' ')
     SDS="0.01,0.005,0.0025,0.00125"; ZFP_RATES="0.25 0.5 1 2 4 8"; FPZIP_PRECS="4 6 8 12 16 20"
     QUALITY_BOUNDS="1e-3 1e-4"; REPLAY_IMG=512; REPLAY_SD=0.005; PARETO_REPS=3 ;;
 esac
@@ -97,6 +99,14 @@ run() {
 stamp() { echo "[$(date +%T)] $*" >&2; }
 kv() { grep -o "$1=[^ ]*" | tail -1 | cut -d= -f2; }  # kv KEY < text
 
+# The two exploration paths replayed below: recorded (AFAM_TRAJECTORIES) or generated walks.
+source "$ROOT/scripts/trajectories.sh"
+afam_trajectories "$AFAM" "$W/trajectories" > "$W/trajectories.txt"
+TRAJ_DIR=$AFAM_TRAJ_DIR
+TRAJ_NOTE=$(cat "$W/trajectories.txt")
+stamp "$TRAJ_NOTE"
+echo "# $TRAJ_NOTE" >> "$LOG"
+
 T_START=$(date +%s)
 
 # ---- (2) encoding ------------------------------------------------------------------------------
@@ -127,16 +137,16 @@ encode_one ml "$ML" ds - 0 - "$W/ml_ds.afam"
 for vol in $VOLUMES; do
   name=${vol%%_[0-9]*x*}
   for b in $REL_BOUNDS; do
-    for m in adaptive inlevel; do encode_one "$name" "$DATA/volumes/$vol" $m "$b" 1 - "$W/${name}_${m}_$b.afam"; done
+    for m in adaptive inlevel; do encode_one "$name" "$VOLUMES_DIR/$vol" $m "$b" 1 - "$W/${name}_${m}_$b.afam"; done
   done
-  for k in $FIXED_NCPS; do encode_one "$name" "$DATA/volumes/$vol" fixed - 1 "$k" "$W/${name}_fixed_$k.afam"; done
+  for k in $FIXED_NCPS; do encode_one "$name" "$VOLUMES_DIR/$vol" fixed - 1 "$k" "$W/${name}_fixed_$k.afam"; done
 done
 run $PY "$ROOT/scripts/evaluation/report.py" encoding "$OUT"
 
 # ---- (3) rendering quality vs time at the cross-level view ------------------------------------
 stamp "rendering quality"
-TRAJ1=$DATA/trajectories/user_1.dat
-TRAJ2=$DATA/trajectories/user_2.dat
+TRAJ1=$TRAJ_DIR/user_1.dat
+TRAJ2=$TRAJ_DIR/user_2.dat
 QFILES=("DS=$W/ml_ds.afam" "FAM=$W/ml_fixed_n.afam")
 for b in $QUALITY_BOUNDS; do QFILES+=("Adaptive-FAM_$b=$W/ml_adaptive_$b.afam"); done
 QFILES+=("inlevel_${QUALITY_BOUNDS##* }=$W/ml_inlevel_${QUALITY_BOUNDS##* }.afam")
@@ -171,7 +181,7 @@ run "$EVAL" quality --trajectory "$TRAJ1" --view "$VIEW" --size "$IMG" --sd "$SD
   "DS=$W/ml_ds.afam" "${AFILES[@]}" "${CFILES[@]}" > "$W/compressors.log"
 run $PY "$ROOT/scripts/evaluation/report.py" compressors "$OUT"
 
-# ---- (5) input latency over the recorded trajectories -----------------------------------------
+# ---- (5) input latency over the two exploration paths -----------------------------------------
 stamp "latency replays"
 LAT_CSV=$OUT/latency/latency_summary.csv
 echo "trajectory,method,file,prefetch,median_latency_ms,median_caching_ms,median_render_ms,miss_rate,csv" > "$LAT_CSV"
@@ -185,7 +195,7 @@ for traj in user_1 user_2; do
     esac
     for pf in $PREFETCHERS; do
       csv=$OUT/latency/replay_${traj}_${meth}_${pf}.csv
-      o=$(set -o pipefail; run "$AFAM" replay "$f" --trajectory "$DATA/trajectories/$traj.dat" --frames "$FRAMES" \
+      o=$(set -o pipefail; run "$AFAM" replay "$f" --trajectory "$TRAJ_DIR/$traj.dat" --frames "$FRAMES" \
             --size "$REPLAY_IMG,$REPLAY_IMG" --sample-distance "$REPLAY_SD" --cache-blocks 200 \
             --cold --storage-mbps "$STORAGE_MBPS" --prefetch "$pf" --threads "$JOBS" --device "$DEVICE" --quiet --csv "$csv" 2>&1 | tail -1) || {
         echo "# replay $traj $meth $pf failed: $o" >> "$LOG"; continue; }
@@ -197,14 +207,14 @@ done
 # PARETO_REPS rounds with the order rotated, pooled per point of view by report.py, so that the
 # verdict does not hang on which replay a burst of load hit.
 stamp "Pareto replays ($PARETO_REPS rounds, methods interleaved)"
-run "$ROOT/scripts/evaluation/pareto_replays.sh" "$AFAM" "$OUT/latency" "$DATA/trajectories" "$FRAMES" \
+run "$ROOT/scripts/evaluation/pareto_replays.sh" "$AFAM" "$OUT/latency" "$TRAJ_DIR" "$FRAMES" \
   "$REPLAY_IMG" "$REPLAY_SD" "$STORAGE_MBPS" "$JOBS" "$PARETO_REPS" \
   "DS=$W/ml_ds.afam" "FAM=$W/ml_fixed_n.afam" "Adaptive-FAM=$W/ml_adaptive_$REPLAY_BOUND.afam"
 run $PY "$ROOT/scripts/evaluation/report.py" latency "$OUT"
 
 # ---- (6) numerical stability and seams --------------------------------------------------------
 stamp "stability and seams"
-run "$EVAL" stability --csv "$OUT/stability/stability.csv" --chi "$DATA/volumes/chi_field_50x50x50_float32.raw" > "$W/stability.log"
+run "$EVAL" stability --csv "$OUT/stability/stability.csv" --chi "$VOLUMES_DIR/chi_field_50x50x50_float32.raw" > "$W/stability.log"
 SFILES=("ml_adaptive=$W/ml_adaptive_${REPLAY_BOUND}.afam" "ml_fam=$W/ml_fixed_n.afam" "ml_ds=$W/ml_ds.afam")
 for vol in $VOLUMES; do
   name=${vol%%_[0-9]*x*}
@@ -217,7 +227,7 @@ run "$EVAL" seams --csv "$OUT/stability/seams.csv" "${SFILES[@]}" > "$W/seams.lo
 # Adaptive-FAM reached.
 stamp "compression against ZFP (compare-codecs)"
 CC_VOLS=()
-for vol in $VOLUMES; do CC_VOLS+=("$DATA/volumes/$vol"); done
+for vol in $VOLUMES; do CC_VOLS+=("$VOLUMES_DIR/$vol"); done
 run "$AFAM" compare-codecs "${CC_VOLS[@]}" --bounds 1e-2,1e-3 --threads "$JOBS" --work "$W" \
   --csv "$OUT/codecs/compare_codecs.csv" > "$W/compare_codecs.log"
 run $PY "$ROOT/scripts/evaluation/report.py" codecs "$OUT"

@@ -3,9 +3,10 @@
 # build, run the GPU tests, compute-sanitizer memcheck + racecheck on one frame, the GPU
 # benchmarks, and print a short table LAST.
 #   scripts/gpu_check.sh [BUILD_DIR]
-# Corpus volumes and trajectories are read from $AFAM_GPU_DATA, else gpu-data/ in the repository
-# (a git-ignored copy of ../shared/data/{volumes,trajectories} carried to the GPU machine), else
-# ../shared/data. Logs go to $OUT when set (device tool), else to BUILD_DIR/gpu_check/.
+# Corpus volumes: $AFAM_GPU_DATA/volumes when set, else the repository's Testing/Data/volumes.
+# Trajectory: user_1.dat from $AFAM_TRAJECTORIES, else $AFAM_GPU_DATA/trajectories or gpu-data/
+# (git-ignored, carried), else a generated exploration walk (the summary says which). Logs go to
+# $OUT when set (device tool), else to BUILD_DIR/gpu_check/.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build-gpu}"
@@ -64,10 +65,13 @@ status "bench_gpu" "$([ $bench_rc -eq 0 ] && echo ok || echo "rc=$bench_rc")"
 # --- End to end through the command line: afam ml -> encode (Adaptive-FAM, paper settings) ->
 # render the anchor views and replay user_1.dat with --device gpu and --device cpu.
 afam="$build/Apps/afam"
-traj="${AFAM_GPU_DATA:-$root/gpu-data}/trajectories/user_1.dat"
-[ -f "$traj" ] || traj="$root/../shared/data/trajectories/user_1.dat"
 e2e="$build/gpu_check_e2e"; mkdir -p "$e2e"
-if [ -x "$afam" ] && [ -f "$traj" ]; then
+carried="${AFAM_GPU_DATA:-$root/gpu-data}/trajectories"
+[ -n "${AFAM_TRAJECTORIES:-}" ] || [ ! -d "$carried" ] || export AFAM_TRAJECTORIES="$carried"
+source "$root/scripts/trajectories.sh"
+if [ -x "$afam" ] && afam_trajectories "$afam" "$e2e/trajectories" >"$e2e/trajectories.txt"; then
+  traj="$AFAM_TRAJ_DIR/user_1.dat"
+  status "trajectory" "$(cat "$e2e/trajectories.txt")"
   n="${AFAM_GPU_ML:-512}"
   t0=$(date +%s)
   "$afam" ml --size "$n" "$e2e/ml.raw" >/dev/null &&
@@ -96,7 +100,7 @@ print('max diff %d/255, %d px differ' % (abs(a-b).max(), (abs(a-b).max(axis=2)>0
   "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device gpu --frames 12 --quiet >"$e2e/replay_gpu12.log" 2>&1
   status "afam replay user_1 gpu (12)" "$(tail -1 "$e2e/replay_gpu12.log")"
 else
-  status "afam end to end" "skipped (no afam binary or trajectory)"
+  status "afam end to end" "not run: no afam binary"
 fi
 
 echo

@@ -8,7 +8,9 @@
 # first call starts it; a call after it ended packs the report (CSVs, plots, summary.md,
 # commands.log; not the images) into $OUT/evaluation_full.tar.gz and prints summary.md.
 # zstd headers, ZFP and fpzip: the GPU machine lacks them; see scripts/gpu_deps.sh.
-# Corpus volumes and trajectories: $AFAM_GPU_DATA, else gpu-data/ (carried), else ../shared/data.
+# Corpus volumes: the repository's Testing/Data/volumes. Trajectories: $AFAM_TRAJECTORIES, else
+# $AFAM_GPU_DATA/trajectories or gpu-data/trajectories (carried), else generated exploration walks
+# (evaluate.sh says which, in its log and summary.md).
 # Scratch: $AFAM_EVAL_WORK (default /tmp/afam_eval_full). AFAM_EVAL_SIZE=smoke|small|full (default
 # full) picks evaluate.sh's sizes (smoke: a check of this script's plumbing).
 set -uo pipefail
@@ -17,16 +19,15 @@ wait_s="${1:-540}"
 size="${AFAM_EVAL_SIZE:-full}"
 work="${AFAM_EVAL_WORK:-/tmp/afam_eval_full}"
 mkdir -p "$work"
-data="${AFAM_GPU_DATA:-$root/gpu-data}"
-[ -d "$data/trajectories" ] || data="$root/../shared/data"
+carried="${AFAM_GPU_DATA:-$root/gpu-data}/trajectories"
+[ -n "${AFAM_TRAJECTORIES:-}" ] || [ ! -d "$carried" ] || export AFAM_TRAJECTORIES="$carried"
 
 if [ ! -f "$work/started" ]; then
   source "$root/scripts/gpu_deps.sh"
   date +%s >"$work/started"
   echo "GPU: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null | head -1)"
   echo "starting: scripts/evaluate.sh --$size $work/report (AFAM_DEVICE=gpu, AFAM_JOBS=$(nproc))"
-  AFAM_DEVICE=gpu AFAM_JOBS="$(nproc)" AFAM_PYTHON="${AFAM_PYTHON:-$(command -v python3)}" AFAM_DATA="$data" \
-    AFAM_BUILD="$work/build" \
+  AFAM_DEVICE=gpu AFAM_JOBS="$(nproc)" AFAM_PYTHON="${AFAM_PYTHON:-$(command -v python3)}" AFAM_BUILD="$work/build" \
     setsid bash -c "'$root/scripts/evaluate.sh' --$size '$work/report' >'$work/run.log' 2>&1; echo \$? >'$work/rc'" \
     </dev/null >/dev/null 2>&1 &
 fi

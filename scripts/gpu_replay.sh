@@ -9,7 +9,10 @@
 # paper's 200 micro-models of FAM at 1024^3), AFAM_REPLAY_PREFETCH ("none appa forecache lstm"),
 # AFAM_REPLAY_CACHE_BLOCKS (when set: a budget of that many micro-models instead of bytes, e.g. the
 # paper's 200), AFAM_REPLAY_METHODS ("adaptive fixed ds"), AFAM_REPLAY_TRAJECTORIES ("user_1 user_2"),
-# AFAM_REPLAY_WORK (scratch folder, default /tmp/afam_replay). Logs and CSVs go to $OUT when set.
+# AFAM_REPLAY_WORK (scratch folder, default /tmp/afam_replay), AFAM_TRAJECTORIES (folder of the
+# recorded user_1.dat, user_2.dat; default $AFAM_GPU_DATA/trajectories or gpu-data/trajectories when
+# carried; generated exploration walks otherwise, and the script says so). Logs and CSVs go to $OUT
+# when set.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$root/build-gpu}"
@@ -27,8 +30,6 @@ fi
 work="${AFAM_REPLAY_WORK:-/tmp/afam_replay}"
 logs="${OUT:-$work/logs}"
 mkdir -p "$work" "$logs"
-data="${AFAM_GPU_DATA:-$root/gpu-data}"
-[ -d "$data/trajectories" ] || data="$root/../shared/data"
 afam="$build/Apps/afam"
 source "$root/scripts/gpu_deps.sh"  # zstd headers where the machine lacks them
 if [ ! -x "$afam" ]; then
@@ -36,6 +37,11 @@ if [ ! -x "$afam" ]; then
     -DAFAM_ENABLE_CUDA=ON >"$logs/replay_configure.log" 2>&1 &&
     ninja -C "$build" afam >"$logs/replay_build.log" 2>&1 || { tail -20 "$logs/replay_build.log"; exit 1; }
 fi
+carried="${AFAM_GPU_DATA:-$root/gpu-data}/trajectories"
+[ -n "${AFAM_TRAJECTORIES:-}" ] || [ ! -d "$carried" ] || export AFAM_TRAJECTORIES="$carried"
+source "$root/scripts/trajectories.sh"
+afam_trajectories "$afam" "$work/trajectories" >"$logs/trajectories.txt" || exit 1
+cat "$logs/trajectories.txt"
 t0=$(date +%s)
 [ -f "$work/ml.raw" ] || "$afam" ml --size "$n" "$work/ml.raw" >/dev/null || exit 1
 echo "afam ml ${n}^3: $(( $(date +%s) - t0 )) s"
@@ -56,7 +62,7 @@ for traj in $trajectories; do
   for mode in $methods; do
     for pf in $prefetchers; do
       name="${traj}_${mode}_${pf}"
-      "$afam" replay "$work/ml_$mode.afam" --trajectory "$data/trajectories/$traj.dat" \
+      "$afam" replay "$work/ml_$mode.afam" --trajectory "$AFAM_TRAJ_DIR/$traj.dat" \
         --size 512,512 --device gpu --cold "${budget[@]}" --prefetch "$pf" \
         --quiet --csv "$logs/$name.csv" >"$logs/$name.log" 2>&1
       last=$(tail -1 "$logs/$name.log")
@@ -70,4 +76,5 @@ for traj in $trajectories; do
 done
 grep -h -m1 -i "device" "$logs"/*.log | head -1 || true
 echo "ML ${n}^3, 512x512, --device gpu --cold, $budget_text"
+cat "$logs/trajectories.txt"
 cat "$table"

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libeigen3-dev libgtest-dev libbenchmark-dev libpng-dev zlib1g-dev libzstd-dev
+  libeigen3-dev libgtest-dev libbenchmark-dev libpng-dev zlib1g-dev libzstd-dev gzip
   paraview paraview-dev python3-paraview python3-numpy python3-matplotlib
   xvfb xauth mesa-utils openmpi-bin libopenmpi-dev
   libzfp-dev libfpzip-dev

@@ -6,13 +6,15 @@ Offline only; the weights are committed as data/lstm_pose_v1.bin, so neither CI 
 needs Python or torch. Re-run with Debian's torch:
 
     apt-get install -y --no-install-recommends python3-torch
-    /usr/bin/python3 scripts/train_lstm.py --out data/lstm_pose_v1.bin
+    /usr/bin/python3 scripts/train_lstm.py --afam build/Apps/afam --out data/lstm_pose_v1.bin
 
-Training data: synthetic exploration paths (smooth orbits with varying speed and turning, distance
-drifting in [1, 2] and often resting on 1, rare jumps as in the recorded paths) plus the first 75% of
-../shared/data/trajectories/user_1.dat; the last 25% of user_1.dat is the validation set used for
-model selection. user_2.dat is held back: it is only evaluated (and printed) after training, never used
-to choose anything.
+Training data, all generated: synthetic exploration paths (smooth orbits with varying speed and
+turning, distance drifting in [1, 2] and often resting on 1, rare jumps) plus exploration walks of
+`afam trajectory --kind walk` (Core's generator, trajectory_gen.hpp) with seeds 1000-1059; walks with
+seeds 2000-2009 are the validation set used for model selection. The walks with seeds 101, 202 and
+303 are held out for the unit test (LSTM below linear extrapolation) and never used here. Recorded
+paths carry no licence and are not trained on: with --trajectories DIR (or AFAM_TRAJECTORIES) the
+user_1.dat and user_2.dat there are only evaluated and printed after training.
 
 Model (mirrored exactly by the C++ forward pass):
   positions P_t = d (sin th cos ph, sin th sin ph, cos th) in the volume's normalised frame;
@@ -32,7 +34,9 @@ import argparse
 import math
 import os
 import struct
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
 import torch
@@ -47,7 +51,8 @@ DELTA_SCALE = 0.05
 FLAG_RESIDUAL = 1
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TRAJ = os.path.join(ROOT, "..", "shared", "data", "trajectories")
+TRAIN_SEEDS = range(1000, 1060)
+VALIDATION_SEEDS = range(2000, 2010)
 
 
 def load_trajectory(path):
@@ -56,6 +61,15 @@ def load_trajectory(path):
     d, th, ph = a[:n], np.radians(a[n:2 * n]), np.radians(a[2 * n:3 * n])
     return np.stack([d * np.sin(th) * np.cos(ph), d * np.sin(th) * np.sin(ph), d * np.cos(th)],
                     1).astype(np.float64)
+
+
+def generated_walk(afam, seed, n=400):
+    """Core's exploration walk (`afam trajectory --kind walk --seed SEED`) as eye positions."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "walk.dat")
+        subprocess.run([afam, "trajectory", path, "--kind", "walk", "--views", str(n), "--seed", str(seed),
+                        "--quiet"], check=True)
+        return load_trajectory(path)
 
 
 def synthetic_path(rng, n=400):
@@ -187,7 +201,9 @@ def export(model, path, test_input):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=os.path.join(ROOT, "data", "lstm_pose_v1.bin"))
-    ap.add_argument("--trajectories", default=TRAJ)
+    ap.add_argument("--afam", default=os.path.join(ROOT, "build", "Apps", "afam"), help="the afam command line")
+    ap.add_argument("--trajectories", default=os.environ.get("AFAM_TRAJECTORIES"),
+                    help="folder of recorded user_1.dat / user_2.dat, evaluated after training only")
     ap.add_argument("--synthetic", type=int, default=150, help="synthetic training paths of 400 poses")
     ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--seed", type=int, default=5)
@@ -197,8 +213,8 @@ def main():
     torch.manual_seed(args.seed)
     rng = np.random.default_rng(args.seed)
 
-    u1 = load_trajectory(os.path.join(args.trajectories, "user_1.dat"))
-    cut = int(0.75 * len(u1))
+    walks = [generated_walk(args.afam, s) for s in TRAIN_SEEDS]
+    walks_val = [generated_walk(args.afam, s) for s in VALIDATION_SEEDS]
     syn = [synthetic_path(rng) for _ in range(args.synthetic)]
     syn_val = [synthetic_path(rng) for _ in range(15)]
 
@@ -206,10 +222,10 @@ def main():
         parts = [windows(p) for p in paths] * repeat
         return tuple(np.concatenate([q[i] for q in parts]) for i in range(4))
 
-    Xtr, Ytr, _, _ = stack(syn + [u1[:cut]] * 20)  # weight the recorded path like 20 synthetic ones
-    Xv, _, Bv, Nv = windows(u1[cut - WINDOW - 1:])
+    Xtr, Ytr, _, _ = stack(syn + walks)
+    Xv, _, Bv, Nv = stack(walks_val)
     Xs, _, Bs, Ns = stack(syn_val)
-    print(f"train windows {len(Xtr)}, user_1 validation windows {len(Xv)}", flush=True)
+    print(f"train windows {len(Xtr)}, walk validation windows {len(Xv)}", flush=True)
 
     model = PoseLSTM()
     opt = torch.optim.Adam(model.parameters(), lr=3e-3)
@@ -237,7 +253,7 @@ def main():
         score = ev + es
         if score < best:
             best, best_state = score, {k: v.clone() for k, v in model.state_dict().items()}
-        print(f"epoch {ep:2d} loss {tot / len(Xt):.4f}  user_1 val lstm {ev:.4f} (linear {lv:.4f})  "
+        print(f"epoch {ep:2d} loss {tot / len(Xt):.4f}  walk val lstm {ev:.4f} (linear {lv:.4f})  "
               f"synthetic val lstm {es:.4f} (linear {ls:.4f})", flush=True)
     model.load_state_dict(best_state)
     model.eval()
@@ -245,10 +261,14 @@ def main():
     test_input = np.asarray(rng.normal(0, 1, size=(WINDOW, INPUT)), np.float32)
     test_out, size = export(model, args.out, test_input)
     print(f"wrote {args.out} ({size} bytes); test output {test_out}")
-    u2_path = os.path.join(args.trajectories, "user_2.dat")
-    if os.path.exists(u2_path):
-        el, en = full_trajectory_errors(model, load_trajectory(u2_path))
-        print(f"held-out user_2.dat: lstm mean_position_error={el:.5f} linear={en:.5f}")
+    for seed in (101, 202, 303):
+        el, en = full_trajectory_errors(model, generated_walk(args.afam, seed))
+        print(f"held-out walk seed {seed}: lstm mean_position_error={el:.5f} linear={en:.5f}")
+    for name in ("user_1.dat", "user_2.dat"):
+        path = os.path.join(args.trajectories or "", name)
+        if args.trajectories and os.path.exists(path):
+            el, en = full_trajectory_errors(model, load_trajectory(path))
+            print(f"recorded {name} (never trained on): lstm mean_position_error={el:.5f} linear={en:.5f}")
     return 0
 
 

@@ -1,11 +1,11 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""The README's main job, rendering side (pvbatch): points of view of a recorded trajectory rendered
+"""The README's main job, rendering side (pvbatch): points of view of a trajectory file rendered
 through the Adaptive-FAM ParaView plugin ("Adaptive-FAM Volume" representation), next to Core's
 `afam render` of the same view and, optionally, ParaView's own "Volume" representation of the raw
 volume; every image is scored against the analytic Marschner-Lobb ground truth.
 
     xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" pvbatch afam_demo.py \\
-        --plugin AdaptiveFAM.so --afam afam --trajectory user_1.dat --out DIR \\
+        --plugin AdaptiveFAM.so --afam afam --trajectory walk.dat --out DIR \\
         --method adaptive=ml_adaptive.afam --method fixed=ml_fixed.afam --method ds=ml_ds.afam \\
         [--raw ml.raw] [--views 0,100,200] [--size 256] [--repeats 3] [--sample-distance 0.005]
 
@@ -305,4 +305,5 @@ def main():
     print("image against afam render's (>= 96: equal up to 8-bit rounding of a few pixels); time_x:")
     print("plugin median / afam render median on the same view. Report: %s" % report)
 
-main()
+if __name__ == "__main__":  # afam_demo_real.py imports the helpers above
+    main()

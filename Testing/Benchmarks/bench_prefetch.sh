@@ -1,21 +1,24 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
-# Prefetching benchmark: next-pose error of every predictor on the recorded trajectories
+# Prefetching benchmark: next-pose error of every predictor on two exploration paths
 # (`afam predict`), and replay of Marschner-Lobb 256^3 with the paper's 200-block cache with each
 # prefetcher (`afam replay`), warm and in the paper's regime (cold storage capped at 100 MB/s).
 # Usage: Testing/Benchmarks/bench_prefetch.sh BUILD_DIR [WORK_DIR]
 # Env: SIZE (image, default 64,64), SD (sample distance, default 0.02), SHADING (off), THREADS (1),
-#      TRAJ (trajectories replayed, default "user_2"), REGIMES (default "warm cold100").
+#      TRAJ (trajectories replayed, default "user_2"), REGIMES (default "warm cold100"),
+#      AFAM_TRAJECTORIES (folder of recorded user_1.dat, user_2.dat; generated walks otherwise).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 build="$(cd "${1:?usage: bench_prefetch.sh BUILD_DIR [WORK_DIR]}" && pwd)"
 work="${2:-/tmp/afam_bench_prefetch}"
 afam="$build/Apps/afam"
-data="$root/../shared/data/trajectories"
 SIZE="${SIZE:-64,64}"; SD="${SD:-0.02}"; SHADING="${SHADING:-off}"; THREADS="${THREADS:-1}"
 TRAJ="${TRAJ:-user_2}"; REGIMES="${REGIMES:-warm cold100}"
 mkdir -p "$work"
 cd "$work"
+source "$root/scripts/trajectories.sh"
+afam_trajectories "$afam" "$work/trajectories"
+data="$AFAM_TRAJ_DIR"
 if [ ! -f ml_256.afam ]; then
   "$afam" ml --size 256 ml_256.raw
   "$afam" encode ml_256.raw ml_256.afam --error-bound 1e-3 --quiet

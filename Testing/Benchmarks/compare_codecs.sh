@@ -7,8 +7,7 @@
 #
 # usage: Testing/Benchmarks/compare_codecs.sh [AFAM_EXE] [OUT_CSV] [-- extra compare-codecs options]
 #   AFAM_EXE  default build/Apps/afam;  OUT_CSV default /tmp/afam_compare_codecs.csv
-# Env: DATA (folder of name_XxYxZ_type.raw volumes; default ../shared/data/volumes when present,
-# else Testing/Data/volumes), BOUNDS (default "1e-2 1e-3"), THREADS (default 2).
+# Env: DATA (folder of name_XxYxZ_type.raw volumes; default Testing/Data/volumes, the corpus), BOUNDS (default "1e-2 1e-3"), THREADS (default 2).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 AFAM="$here/build/Apps/afam"
@@ -18,7 +17,6 @@ CSV=/tmp/afam_compare_codecs.csv
 [[ $# -gt 0 && $1 == -- ]] && shift
 if [[ -z ${DATA:-} ]]; then
   DATA="$here/Testing/Data/volumes"
-  [[ -d $here/../shared/data/volumes ]] && DATA="$(cd "$here/../shared/data/volumes" && pwd)"
 fi
 BOUNDS="${BOUNDS:-1e-2 1e-3}"
 THREADS="${THREADS:-2}"

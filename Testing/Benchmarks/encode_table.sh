@@ -16,7 +16,7 @@ T="${3:-2}"
 SIZES="${SIZES:-128 256 512}"
 EXHAUSTIVE_MAX="${EXHAUSTIVE_MAX:-512}"
 CORPUS_BOUNDS="${CORPUS_BOUNDS:-1e-3 1e-2}"
-DATA="${DATA:-$here/../shared/data/volumes}"
+DATA="${DATA:-$here/Testing/Data/volumes}"
 mkdir -p "$WORK"
 TIME=/usr/bin/time
 
@@ -68,7 +68,7 @@ for n in $SIZES; do
   echo "| ${n}^3 | verify adaptive | $(grep -o 'rmse=[^ ]*' <<<"$v") $(grep -o 'max_error=[^ ]*' <<<"$v") (whole finest level vs raw) | | | | | | | | | | |"
 done
 echo
-echo "### Corpus (../shared/data/volumes; 4 levels, 16 blocks, p = 2, relative RMSE bound)"
+echo "### Corpus ($DATA; 4 levels, 16 blocks, p = 2, relative RMSE bound)"
 echo
 echo "| volume | bound | encoder | wall s | fits | fast==exhaustive | ratio (original type) | ratio (float32) | file bytes | paper-layout bytes | max block RMSE | NCP histogram per level |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|"

@@ -37,15 +37,6 @@ TEST(Camera, PoseFrameFollowsTheDataReadme) {
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(d[a], c.forward[a], 1e-6);
 }
 
-TEST(Camera, LoadsTheRecordedTrajectory) {
-  const auto poses = loadTrajectory(std::string(AFAM_SHARED_DATA_DIR) + "/trajectories/user_1.dat");
-  ASSERT_EQ(poses.size(), 400u);
-  for (const Pose& p : poses) {
-    EXPECT_GT(p.distance, 0.9);
-    EXPECT_LT(p.distance, 1.8);
-  }
-}
-
 TEST(Camera, RejectsDamagedTrajectories) {
   const std::string path = "/tmp/afam_bad_traj_" + std::to_string(::getpid()) + ".dat";
   {

@@ -20,7 +20,7 @@ using namespace afam;
 
 namespace {
 
-const std::string kVolumes = std::string(AFAM_SHARED_DATA_DIR) + "/volumes/";
+const std::string kVolumes = std::string(AFAM_TEST_DATA_DIR) + "/volumes/";
 const char* kCorpus[] = {
     "neghip_66x66x66_uint8.raw",          "ironProt_68x68x68_uint8.raw",
     "headsq_quarter_64x64x93_int16.raw",  "HeadMRVolume_48x62x42_uint8.raw",

@@ -91,9 +91,9 @@ int main(int argc, char** argv) {
     std::vector<Row> rows;
 
     // --- Anchor views of user_1.dat.
-    const std::string path = trajectoryPath("user_1.dat");
-    std::vector<Pose> poses;
-    if (!path.empty()) poses = loadTrajectory(path);
+    std::string trajectorySource;
+    const std::vector<Pose> poses = explorationPoses("user_1.dat", &trajectorySource);
+    std::printf("points of view: %s\n", trajectorySource.c_str());
     for (int view : {0, 100, 200, 300}) {
       const Pose pose = size_t(view) < poses.size() ? poses[size_t(view)]
                                                     : Pose{1.5, 40.0 + view * 0.1, view * 0.9};
@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
       const double cpuMs = (seconds() - c0) * 1e3;
       const ImageDiff d = compareImages(cpu.rgba, image);
       Row r;
-      r.name = "user_1 view " + std::to_string(view) + (path.empty() ? " (synthetic pose)" : "");
+      r.name = "user_1 view " + std::to_string(view);
       r.ms = full.median();
       r.samples = full.samples;
       r.gsps = double(full.samples) / (r.ms * 1e-3) / 1e9;

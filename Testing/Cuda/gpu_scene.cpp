@@ -14,6 +14,7 @@
 #include "afam/errors.hpp"
 #include "afam/lod.hpp"
 #include "afam/marschner_lobb.hpp"
+#include "afam/trajectory_gen.hpp"
 #include "afam/transfer_function.hpp"
 
 namespace afam::gputest {
@@ -328,18 +329,22 @@ ImageDiff compareImages(const std::vector<float>& cpu, const std::vector<float>&
 
 std::string dataDirectory() {
   if (const char* env = std::getenv("AFAM_GPU_DATA"))
-    if (exists(env)) return env;
-  const std::string source = AFAM_SOURCE_DIR;
-  for (const std::string& candidate : {source + "/gpu-data", source + "/../shared/data"})
-    if (exists(candidate + "/volumes")) return candidate;
-  return {};
+    if (exists(std::string(env) + "/volumes")) return env;
+  return std::string(AFAM_SOURCE_DIR) + "/Testing/Data";
 }
 
-std::string trajectoryPath(const std::string& name) {
-  const std::string dir = dataDirectory();
-  if (dir.empty()) return {};
-  const std::string path = dir + "/trajectories/" + name;
-  return exists(path) ? path : std::string();
+std::vector<Pose> explorationPoses(const std::string& name, std::string* source) {
+  for (const char* env : {"AFAM_TRAJECTORIES", "AFAM_GPU_DATA"}) {
+    const char* dir = std::getenv(env);
+    if (!dir) continue;
+    const std::string path = std::string(dir) + (env[5] == 'G' ? "/trajectories/" : "/") + name;
+    if (!exists(path)) continue;
+    if (source) *source = "recorded " + path;
+    return loadTrajectory(path);
+  }
+  const uint64_t seed = name == "user_2.dat" ? 2 : 1;
+  if (source) *source = "generated walk, seed " + std::to_string(seed);
+  return explorationWalk(400, seed);
 }
 
 }  // namespace afam::gputest

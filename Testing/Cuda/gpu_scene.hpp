@@ -88,10 +88,12 @@ struct ImageDiff {
 };
 ImageDiff compareImages(const std::vector<float>& cpu, const std::vector<float>& gpu);
 
-/// Where the corpus volumes are: $AFAM_GPU_DATA, else gpu-data/ in the source tree, else
-/// ../shared/data/volumes next to it. Empty when none exists.
+/// Where the corpus volumes are: $AFAM_GPU_DATA when it has volumes/, else the repository's
+/// Testing/Data (which always has them).
 std::string dataDirectory();
-/// The user_1.dat / user_2.dat trajectory file, found the same way ("" when absent).
-std::string trajectoryPath(const std::string& name);
+/// The points of view of a human exploration: the recorded `name` (user_1.dat, user_2.dat) from
+/// $AFAM_TRAJECTORIES or $AFAM_GPU_DATA/trajectories when there, else a generated exploration
+/// walk of 400 views (seed 1 for user_1, 2 for user_2). `source` (optional) says which.
+std::vector<Pose> explorationPoses(const std::string& name, std::string* source = nullptr);
 
 }  // namespace afam::gputest

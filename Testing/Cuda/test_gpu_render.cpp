@@ -34,7 +34,6 @@ const EncodedVolume* encoded(const std::string& name, int degree) {
     v = marschnerLobbVolume(65);
   } else {
     const std::string dir = dataDirectory();
-    if (dir.empty()) return nullptr;
     if (name == "neghip")
       v = loadRawVolume(dir + "/volumes/neghip_66x66x66_uint8.raw", {66, 66, 66}, "uint8");
     else
@@ -78,7 +77,7 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
   AFAM_SKIP_WITHOUT_GPU();
   const auto& [name, degree, shaded] = GetParam();
   const EncodedVolume* e = encoded(name, degree);
-  if (!e) GTEST_SKIP() << "corpus volume " << name << " not found (set AFAM_GPU_DATA)";
+  ASSERT_NE(e, nullptr);
   GpuRenderer gpu(size_t(256) << 20);
   gpu.setPoisonOutput(true);
   // One view from outside (mixed LOD by distance bands) and one from inside the volume.
@@ -304,14 +303,9 @@ TEST(GpuDsBaseline, RawBlocksMatchCpuAndTexturePathWritesEveryPixel) {
 TEST(GpuModelPool, ReplayUploadsMatchLedgerAndStayUnderBudget) {
   AFAM_SKIP_WITHOUT_GPU();
   const EncodedVolume* e = encoded("marschner_lobb", 2);
-  const std::string path = trajectoryPath("user_1.dat");
+  const std::vector<Pose> all = explorationPoses("user_1.dat");
   std::vector<Pose> poses;
-  if (!path.empty()) {
-    const std::vector<Pose> all = loadTrajectory(path);
-    for (size_t i = 0; i < all.size(); i += 10) poses.push_back(all[i]);
-  } else {
-    for (int i = 0; i < 40; ++i) poses.push_back({1.2 + 0.02 * i, 30.0 + 3.0 * i, 9.0 * i});
-  }
+  for (size_t i = 0; i < all.size(); i += 10) poses.push_back(all[i]);
   // Budget: 60% of all models of all levels, so the replay must evict.
   size_t total = 0;
   for (const auto& level : e->models)

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Cameras in the normalised frame (the volume spans [-1, 1]^3) and the paper's recorded user
-// trajectories (their convention, below).
+// Cameras in the normalised frame (the volume spans [-1, 1]^3) and trajectory files: recorded
+// human explorations (the paper's) or generated paths (trajectory_gen.hpp), in one convention.
 //
 // Trajectory file: 3 N little-endian float32: N distances, N theta (degrees), N phi (degrees).
 // A pose puts the eye at distance * (sin t cos p, sin t sin p, cos t), looking at the origin, with

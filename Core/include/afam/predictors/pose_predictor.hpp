@@ -25,7 +25,7 @@ Pose poseFromPosition(const Vec3& eye);
 /// Euclidean distance between the eye positions of two poses.
 double poseDistance(const Pose& a, const Pose& b);
 
-/// Writes poses in the recorded-trajectory format (3 N float32: distances, theta, phi),
+/// Writes poses in the trajectory format of camera.hpp (3 N float32: distances, theta, phi),
 /// to a temporary file renamed into place. Throws IoError.
 void writeTrajectory(const std::string& path, const std::vector<Pose>& poses);
 

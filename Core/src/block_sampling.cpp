@@ -43,16 +43,30 @@ void addPointTaps(double pos, int64_t dim, AxisTaps& t) {
   if (w != 0) t.unit = false;
 }
 
-/// Mean of the axis' linear interpolant over [a, b] (0 <= a < b <= dim - 1): per unit interval
-/// the trapezoid rule is exact for a linear function.
-void addBoxTaps(double a, double b, AxisTaps& t) {
-  const double width = b - a;
+/// Adds scale x the integral of the axis' linear interpolant over [a, b] (0 <= a < b <= dim - 1):
+/// per unit interval the trapezoid rule is exact for a linear function.
+void addIntegral(double a, double b, double scale, AxisTaps& t) {
   for (int64_t i = int64_t(std::floor(a)); double(i) < b; ++i) {
     const double s = std::max(a, double(i)) - double(i), e = std::min(b, double(i + 1)) - double(i);
     if (e <= s) continue;
-    const double len = (e - s) / width, mid = 0.5 * (s + e);  // the interpolant's mean is at mid
+    const double len = (e - s) * scale, mid = 0.5 * (s + e);  // the interpolant's mean is at mid
     t.add(i, len * (1 - mid));
     t.add(i + 1, len * mid);
+  }
+}
+
+/// Mean of the interpolant over a window of `width` centred on pos, the volume mirrored at its
+/// ends (the filtered field stays smooth up to the boundary; a shifted window would freeze it there
+/// and leave a kink that splines pay for); the whole axis when the window is longer than it.
+void addBoxTaps(double pos, double width, int64_t dim, AxisTaps& t) {
+  const double last = double(dim - 1);
+  if (width >= last) {
+    addIntegral(0, last, 1 / last, t);
+  } else {
+    const double lo = pos - 0.5 * width, hi = pos + 0.5 * width;
+    addIntegral(std::max(lo, 0.0), std::min(hi, last), 1 / width, t);
+    if (lo < 0) addIntegral(0, -lo, 1 / width, t);
+    if (hi > last) addIntegral(2 * last - hi, last, 1 / width, t);
   }
   t.close();
   t.unit = false;
@@ -79,10 +93,7 @@ AxisTaps axisTaps(const Partition& part, const BlockExtent& e, int level, int ax
       addPointTaps(pos, dim, t);
       continue;
     }
-    // A window of r samples centred on pos, shifted inside the volume (the whole axis if shorter).
-    const double width = std::min(double(r), double(dim - 1));
-    const double lo = std::min(std::max(pos - 0.5 * width, 0.0), double(dim - 1) - width);
-    addBoxTaps(lo, lo + width, t);
+    addBoxTaps(std::min(std::max(pos, 0.0), double(dim - 1)), double(r), dim, t);
   }
   if (t.first.size() != t.index.size() + 1) t.unit = false;
   return t;

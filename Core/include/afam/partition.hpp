@@ -40,7 +40,7 @@ PartitionShape defaultPartition(const Index3& dims, int blockEdge = kDefaultBloc
 /// How the samples of a coarse level (stride r > 1) are taken from the volume. Point: the sampling
 /// rule above (linear interpolation at the sample positions), the paper's strided downsampling.
 /// Box: the mean of the volume's (multi)linear interpolant over a window of r samples per axis
-/// centred on each position (shifted inside the volume; the whole axis when it is shorter), i.e. the
+/// centred on each position (the volume mirrored at its ends; the whole axis when it is shorter), i.e. the
 /// volume filtered for the level's spacing, so that coarse levels do not alias. The finest level
 /// (r = 1) is point-sampled either way.
 enum class LevelSampling : uint8_t { Point = 0, Box = 1 };

@@ -6,6 +6,7 @@
 
 #include "afam/camera.hpp"
 #include "afam/errors.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -47,7 +48,7 @@ TEST(Camera, LoadsTheRecordedTrajectory) {
 }
 
 TEST(Camera, RejectsDamagedTrajectories) {
-  const std::string path = "/tmp/afam_bad_traj_" + std::to_string(::getpid()) + ".dat";
+  const std::string path = afam_test::scratchPath("bad_trajectory.dat");
   {
     std::ofstream f(path, std::ios::binary);
     f.write("12345678", 8);

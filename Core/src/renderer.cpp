@@ -190,6 +190,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
 
 ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
   st = FrameStats{};
+  cache_->takePeakResidentBytes();  // the frame's peak starts here
   if (options_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
@@ -233,6 +234,8 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;
   st.prefetchedBytes = after.prefetchBytes - before.prefetchBytes;
   st.latencyMs = st.cachingMs + st.renderMs;
+  st.cachePeakBytes = cache_->takePeakResidentBytes();
+  st.cacheBytes = cache_->residentBytes();
   return image;
 }
 

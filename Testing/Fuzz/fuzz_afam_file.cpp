@@ -16,23 +16,35 @@
 
 namespace {
 
-// Decoding is skipped for blocks larger than this (a valid file may hold big blocks; the fuzzer
-// looks for memory errors, not for how long a huge decode takes).
-constexpr int64_t kMaxDecodedSamples = int64_t(1) << 18;
+// Decoding is skipped for blocks and levels larger than these (a valid file may hold big ones,
+// and decoding them is slow under the fuzzer's instrumentation; the fuzzer looks for memory
+// errors, not for how long a large decode takes).
+constexpr int64_t kMaxDecodedSamples = int64_t(1) << 12;
+constexpr int64_t kMaxDecodedLevelSamples = int64_t(1) << 15;
 
-int64_t sampleCount(const afam::Int3& s) { return int64_t(s[0]) * s[1] * s[2]; }
+// Whether n0 * n1 * n2 <= limit, without overflowing on huge sizes.
+template <typename Sizes>
+bool atMost(const Sizes& n, int64_t limit) {
+  int64_t product = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 0 || n[a] > limit) return false;
+    product *= n[a];
+    if (product > limit) return false;
+  }
+  return true;
+}
 
 // The one place where a payload becomes samples: a new payload kind hooks its decoder in here.
 void decodeEntry(const afam::AfamFile& file, int64_t i, std::vector<float>& samples) {
   const afam::ModelEntry& e = file.entries()[static_cast<size_t>(i)];
   const std::vector<float> payload = file.readPayload(i);
-  if (sampleCount(e.samples) > kMaxDecodedSamples) return;
+  if (!atMost(e.samples, kMaxDecodedSamples)) return;
   afam::decodeBlockSamples(e, payload.data(), file.header().mode, samples);
 }
 
 void decodeCoarsestLevel(const afam::AfamFile& file) {
   const afam::LevelGrid grid = afam::levelGrid(file.partition(), 0);
-  if (grid.dims[0] * grid.dims[1] * grid.dims[2] > kMaxDecodedSamples) return;
+  if (!atMost(grid.dims, kMaxDecodedLevelSamples)) return;
   std::vector<float> out(static_cast<size_t>(grid.dims[0] * grid.dims[1] * grid.dims[2]));
   afam::decodeLevelBox(file, 0, {0, 0, 0}, {grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1}, out.data());
 }

@@ -81,7 +81,7 @@ int runReplay(int argc, char** argv) {
   }
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend;
-  uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0;
+  uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0, poolPeak = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
@@ -92,6 +92,7 @@ int runReplay(int argc, char** argv) {
     misses += st.misses;
     bytes += st.bytesRead;
     cachePeak = std::max(cachePeak, st.cachePeakBytes);
+    poolPeak = std::max(poolPeak, st.poolBytes);
     if (csv.is_open())
       csv << i << ',' << st.cachingMs << ',' << st.renderMs << ',' << st.latencyMs << ',' << st.hits
           << ',' << st.misses << ',' << st.bytesRead << ',' << st.slots << ','
@@ -123,7 +124,8 @@ int runReplay(int argc, char** argv) {
               median(lat), median(cach), median(rend), missRate);
   rusage self{};
   ::getrusage(RUSAGE_SELF, &self);
-  std::printf("cache_peak_bytes=%llu peak_rss_kb=%ld\n", (unsigned long long)cachePeak, self.ru_maxrss);
+  std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n", (unsigned long long)cachePeak,
+              (unsigned long long)poolPeak, self.ru_maxrss);
   std::fflush(stdout);
   return 0;
 }

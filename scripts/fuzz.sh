@@ -74,6 +74,7 @@ for t in "${targets[@]}"; do
   [ -z "$seconds" ] || limit=(-max_total_time="$seconds")
   t0=$(date +%s)
   pids=()
+  rm -f "$build"/fuzz-logs/"$t"-*.log
   for ((p = 0; p < parallel; ++p)); do
     "$bins/fuzz_$t" "$corpus" "$seeds/$t" "${limit[@]}" -seed=$((1000 + p)) \
       -max_len="$(max_len "$t")" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
@@ -82,14 +83,14 @@ for t in "${targets[@]}"; do
   done
   rc=0
   for pid in "${pids[@]}"; do wait "$pid" || rc=$?; done
-  execs=$(cat "$build"/fuzz-logs/"$t"-*.log | grep -oE 'stat::number_of_executed_units: [0-9]+' |
+  execs=$(cat "$build"/fuzz-logs/"$t"-*.log | { grep -oE 'stat::number_of_executed_units: [0-9]+' || true; } |
           awk '{s += $2} END {print s + 0}')
-  cov=$(grep -hoE 'cov: [0-9]+' "$build"/fuzz-logs/"$t"-0.log | tail -1 | awk '{print $2}')
+  cov=$({ grep -hoE 'cov: [0-9]+' "$build"/fuzz-logs/"$t"-0.log || true; } | tail -1 | awk '{print $2}')
   printf 'fuzz_%-13s executions=%s processes=%s seconds=%s coverage_edges=%s %s\n' "$t" "$execs" "$parallel" \
     "$(( $(date +%s) - t0 ))" "${cov:-?}" "$([ $rc -eq 0 ] && echo clean || echo "FAILED rc=$rc")"
   if [ $rc -ne 0 ]; then
     failed=1
-    grep -hE "ERROR|SUMMARY|runtime error|Test unit written" "$build"/fuzz-logs/"$t"-*.log | head -20
+    grep -hE "ERROR|SUMMARY|runtime error|Test unit written" "$build"/fuzz-logs/"$t"-*.log | head -20 || true
   fi
 done
 exit $failed

@@ -4,6 +4,8 @@
 // Replays a recorded trajectory through the out-of-core renderer and reports, per point of view,
 // caching time, rendering time, input latency, hits, misses, bytes read and culled blocks; the
 // last line is  median_latency_ms=<x> median_caching_ms=<y> median_render_ms=<z> miss_rate=<m>.
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -48,7 +50,9 @@ int runReplay(int argc, char** argv) {
         "reads are followed by a sleep so that bytes/time never exceed the cap.\n\n"
         "  --trajectory T.dat     trajectory file (required)\n"
         "  --csv OUT.csv          per point of view: pov,caching_ms,render_ms,latency_ms,hits,misses,\n"
-        "                         bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks\n"
+        "                         bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks,\n"
+        "                         cache_bytes,cache_peak_bytes (resident in the cache at the end\n"
+        "                         of the frame / at most during it; never above --cache-bytes)\n"
         "  --frames N             replay only the first N points of view\n"
         "  --quiet                no per-view lines on stdout\n%s%s",
         usage, renderOptionsHelp(), deviceOptionHelp());
@@ -73,11 +77,11 @@ int runReplay(int argc, char** argv) {
     csv.open(args.str("csv"));
     if (!csv) throw IoError("replay: cannot write " + args.str("csv"));
     csv << "pov,caching_ms,render_ms,latency_ms,hits,misses,bytes_read,visible_blocks,"
-           "frustum_culled,tf_culled,prefetched_blocks\n";
+           "frustum_culled,tf_culled,prefetched_blocks,cache_bytes,cache_peak_bytes\n";
   }
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend;
-  uint64_t hits = 0, misses = 0, bytes = 0;
+  uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0, poolPeak = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
@@ -87,10 +91,13 @@ int runReplay(int argc, char** argv) {
     hits += st.hits;
     misses += st.misses;
     bytes += st.bytesRead;
+    cachePeak = std::max(cachePeak, st.cachePeakBytes);
+    poolPeak = std::max(poolPeak, st.poolBytes);
     if (csv.is_open())
       csv << i << ',' << st.cachingMs << ',' << st.renderMs << ',' << st.latencyMs << ',' << st.hits
           << ',' << st.misses << ',' << st.bytesRead << ',' << st.slots << ','
-          << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks << '\n';
+          << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks << ','
+          << st.cacheBytes << ',' << st.cachePeakBytes << '\n';
     if (!quiet)
       std::printf("pov=%zu caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu misses=%llu "
                   "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld\n",
@@ -115,6 +122,10 @@ int runReplay(int argc, char** argv) {
               (unsigned long long)misses, (unsigned long long)bytes);
   std::printf("median_latency_ms=%.3f median_caching_ms=%.3f median_render_ms=%.3f miss_rate=%.4f\n",
               median(lat), median(cach), median(rend), missRate);
+  rusage self{};
+  ::getrusage(RUSAGE_SELF, &self);
+  std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n", (unsigned long long)cachePeak,
+              (unsigned long long)poolPeak, self.ru_maxrss);
   std::fflush(stdout);
   return 0;
 }

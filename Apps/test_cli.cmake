@@ -101,5 +101,14 @@ endif ()
 run_ok(out ${AFAM} render ml.afam --trajectory "${TRAJ}" --view 200 --size 20,20 --out small.png --threads 2)
 run_fails("sizes differ" ${AFAM} compare img.png small.png)
 run_fails("cannot open|missing.png" ${AFAM} compare img.png missing.png)
+# A cache budget of 20000 bytes holds at every frame (the largest per-frame peak is printed).
+run_ok(out ${AFAM} replay ml.afam --trajectory "${TRAJ}" --frames 12 --size 16,16 --cache-bytes 20000
+       --cache-blocks 0 --lod screen --prefetch linear --threads 2 --quiet)
+if (NOT out MATCHES "cache_peak_bytes=([0-9]+) frame_pool_peak_bytes=([0-9]+)")
+  message(FATAL_ERROR "replay output lacks cache_peak_bytes=: ${out}")
+endif ()
+if (CMAKE_MATCH_1 GREATER 20000 OR CMAKE_MATCH_1 LESS 10000)
+  message(FATAL_ERROR "replay with --cache-bytes 20000: cache peak ${CMAKE_MATCH_1} bytes")
+endif ()
 
 message(STATUS "afam CLI test passed: rmse=${rmse}")

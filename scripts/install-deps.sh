@@ -9,6 +9,9 @@ packages=(
   paraview paraview-dev python3-paraview python3-numpy python3-matplotlib
   xvfb xauth mesa-utils openmpi-bin libopenmpi-dev
   libzfp-dev libfpzip-dev
+  # clang with libFuzzer and its sanitizer runtimes (scripts/fuzz.sh); gcc's ASan/UBSan/TSan
+  # runtimes (scripts/sanitize.sh) come with build-essential
+  clang-14 libclang-rt-14-dev libclang-common-14-dev
   # -dev packages ParaView's CMake config needs but paraview-dev does not declare
   libqt5opengl5-dev qtbase5-dev qttools5-dev libqt5svg5-dev libutfcpp-dev libhdf5-mpi-dev libnetcdf-dev libgdal-dev
   libtiff-dev liblz4-dev libglew-dev libgl2ps-dev libtheora-dev libogg-dev libavformat-dev

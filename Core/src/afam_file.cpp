@@ -15,6 +15,7 @@
 #include "afam/block_codec.hpp"
 #include "afam/errors.hpp"
 #include "afam/fit.hpp"
+#include "afam/temporary_file.hpp"
 
 namespace afam {
 
@@ -534,13 +535,8 @@ AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
       throw InvalidArgument("writer: micro-blocks of more than 65533 samples per axis (use more blocks)");
   end_ = payloadOffset_;
 
-  std::string tmpl = path + ".tmp-XXXXXX";
-  std::vector<char> buf(tmpl.begin(), tmpl.end());
-  buf.push_back('\0');
-  fd_ = ::mkstemp(buf.data());
-  if (fd_ < 0) throw IoError(path + ": cannot create temporary file " + tmpl + ": " + sysError());
-  tmpPath_ = buf.data();
-  ::fchmod(fd_, 0644);
+  removeStaleTemporaries(path);                 // left by writers killed before they finished
+  fd_ = createLockedTemporary(path, tmpPath_);  // locked until the rename (temporary_file.hpp)
 }
 
 AfamWriter::~AfamWriter() {
@@ -664,13 +660,12 @@ void AfamWriter::commit() {
     pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeaderV1), tmpPath_);
     pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
     if (::fsync(fd_) != 0) throw IoError(tmpPath_ + ": fsync failed: " + sysError());
-    if (::close(fd_) != 0) {
-      fd_ = -1;
-      throw IoError(tmpPath_ + ": close failed: " + sysError());
-    }
-    fd_ = -1;
+    // Rename while the descriptor (and so the lock) is still held: a closed, unlocked temporary
+    // file would look abandoned to another writer's removeStaleTemporaries.
     if (::rename(tmpPath_.c_str(), path_.c_str()) != 0)
       throw IoError(path_ + ": cannot rename the temporary file onto it: " + sysError());
+    ::close(fd_);  // the data is already on disk (fsync); nothing is left to fail
+    fd_ = -1;
   } catch (...) {
     if (fd_ >= 0) ::close(fd_);
     fd_ = -1;

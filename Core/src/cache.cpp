@@ -3,6 +3,8 @@
 
 #include <fcntl.h>
 
+#include <algorithm>
+
 #include <thread>
 
 #include "afam/errors.hpp"
@@ -123,6 +125,7 @@ Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
     lru_.push_front(entry);
     map_[entry] = Node{data, bytes, lru_.begin()};
     resident_ += bytes;
+    peakResident_ = std::max(peakResident_, resident_);
   } else if (purpose == Purpose::Frame) {
     stats_.bypasses++;
   } else {
@@ -165,6 +168,13 @@ CacheStats LruCache::stats() const {
 void LruCache::resetStats() {
   std::lock_guard<std::mutex> g(mutex_);
   stats_ = CacheStats{};
+}
+
+uint64_t LruCache::takePeakResidentBytes() {
+  std::lock_guard<std::mutex> g(mutex_);
+  const uint64_t peak = std::max(peakResident_, resident_);
+  peakResident_ = resident_;
+  return peak;
 }
 
 uint64_t LruCache::residentBytes() const {

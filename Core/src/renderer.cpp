@@ -200,6 +200,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& setti
 
 ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
   st = FrameStats{};
+  cache_->takePeakResidentBytes();  // the frame's peak starts here
   if (resources_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
@@ -242,6 +243,8 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;
   st.prefetchedBytes = after.prefetchBytes - before.prefetchBytes;
   st.latencyMs = st.cachingMs + st.renderMs;
+  st.cachePeakBytes = cache_->takePeakResidentBytes();
+  st.cacheBytes = cache_->residentBytes();
   return image;
 }
 

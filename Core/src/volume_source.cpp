@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <regex>
 
 #include "afam/errors.hpp"
@@ -66,7 +67,14 @@ bool parseRawName(const std::string& path, Index3& dims, ScalarType& type) {
   static const std::regex re(R"(_(\d+)x(\d+)x(\d+)_(float32|float64|uint8|uint16|int16)\.raw$)");
   std::smatch m;
   if (!std::regex_search(path, m, re)) return false;
-  for (int a = 0; a < 3; ++a) dims[a] = std::stoll(m[a + 1].str());
+  for (int a = 0; a < 3; ++a) {
+    // A size the .afam header cannot hold (0, or above 2^31 - 1) is not a volume's name.
+    const std::string digits = m[a + 1].str();
+    if (digits.size() > 10) return false;
+    const long long v = std::stoll(digits);
+    if (v < 1 || v > std::numeric_limits<int32_t>::max()) return false;
+    dims[a] = v;
+  }
   type = parseScalarType(m[4].str());
   return true;
 }
@@ -80,7 +88,14 @@ RawFileSource::RawFileSource(const std::string& path, Index3 dims, ScalarType ty
   if (fd_ < 0) throw IoError(path + ": cannot open: " + std::strerror(errno));
   struct stat st {};
   if (::fstat(fd_, &st) != 0) throw IoError(path + ": cannot stat: " + std::strerror(errno));
-  const uint64_t expected = uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]) * uint64_t(scalarTypeSize(type));
+  uint64_t expected = uint64_t(scalarTypeSize(type));
+  for (int a = 0; a < 3; ++a)
+    if (__builtin_mul_overflow(expected, uint64_t(dims[a]), &expected)) {
+      ::close(fd_);
+      fd_ = -1;
+      throw InvalidArgument(path + ": " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
+                            std::to_string(dims[2]) + " " + scalarTypeName(type) + " is more than 2^64 bytes");
+    }
   if (uint64_t(st.st_size) != expected) {
     ::close(fd_);
     fd_ = -1;

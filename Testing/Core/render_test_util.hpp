@@ -10,11 +10,12 @@
 #include "afam/afam_file.hpp"
 #include "afam/encoder.hpp"
 #include "afam/marschner_lobb.hpp"
+#include "scratch_dir.hpp"
 
 namespace afam_test {
 
 inline std::string tempPath(const std::string& stem) {
-  return "/tmp/afam_render_test_" + std::to_string(::getpid()) + "_" + stem + ".afam";
+  return scratchPath(stem + ".afam");
 }
 
 /// ML (default parameters, [-1, 1]^3) sampled on n^3, encoded with the given mode; cached per

@@ -17,19 +17,13 @@
 
 #include "afam/afam_file.hpp"
 #include "afam/errors.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
 namespace {
 
-std::string tempDir() {
-  static std::string dir = [] {
-    char tmpl[] = "/tmp/afam_file_test_XXXXXX";
-    const char* d = mkdtemp(tmpl);
-    return std::string(d ? d : "/tmp");
-  }();
-  return dir;
-}
+std::string tempDir() { return afam_test::scratchDir(); }
 
 std::vector<char> readAll(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

@@ -6,6 +6,7 @@
 
 #include "afam/camera.hpp"
 #include "afam/errors.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -38,7 +39,7 @@ TEST(Camera, PoseFrameFollowsTheDataReadme) {
 }
 
 TEST(Camera, RejectsDamagedTrajectories) {
-  const std::string path = "/tmp/afam_bad_traj_" + std::to_string(::getpid()) + ".dat";
+  const std::string path = afam_test::scratchPath("bad_trajectory.dat");
   {
     std::ofstream f(path, std::ios::binary);
     f.write("12345678", 8);

@@ -15,6 +15,7 @@
 #include "afam/fit.hpp"
 #include "afam/marschner_lobb.hpp"
 #include "render_test_util.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -43,7 +44,7 @@ std::vector<float> mlVolume(int n) {
   return v;
 }
 
-std::string tmpPath(const std::string& name) { return "/tmp/afam_enc_test_" + std::to_string(getpid()) + "_" + name; }
+std::string tmpPath(const std::string& name) { return afam_test::scratchPath(name); }
 
 InMemoryModels encode(const std::vector<float>& v, Index3 dims, EncoderOptions opt, EncodeStats* stats = nullptr) {
   ArraySource src(v.data(), dims);

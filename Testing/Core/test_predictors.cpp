@@ -24,13 +24,14 @@
 #include "afam/trajectory_gen.hpp"
 #include "afam/transfer_function.hpp"
 #include "render_test_util.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
 namespace {
 
 std::string tmp(const std::string& stem) {
-  return "/tmp/afam_pred_test_" + std::to_string(::getpid()) + "_" + stem;
+  return afam_test::scratchPath(stem);
 }
 
 std::vector<unsigned char> slurp(const std::string& p) {

@@ -10,6 +10,7 @@
 #include "afam/png_io.hpp"
 #include "afam/renderer.hpp"
 #include "render_test_util.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -211,7 +212,7 @@ TEST(ImageMetrics, KnownValuesAndPngRoundTrip) {
   EXPECT_GT(e.mse, 0);
   EXPECT_NEAR(e.psnr, 10 * std::log10(255.0 * 255.0 / e.mse), 1e-9);
   EXPECT_LT(e.ssim, 1.0);
-  const std::string path = "/tmp/afam_png_" + std::to_string(::getpid()) + ".png";
+  const std::string path = afam_test::scratchPath("image.png");
   writePng(path, a);
   const ImageRGB8 r = readPng(path);
   EXPECT_EQ(r.width, a.width);

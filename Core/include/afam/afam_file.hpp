@@ -138,7 +138,8 @@ class AfamFile {  // read-only; opening reads only header and index
 };
 
 /// Writes header + index + payloads to PATH.tmp-XXXXXX, then fsync + rename on commit(): atomic.
-/// The destructor without commit() removes the temporary file. add() is thread-safe (one mutex;
+/// The destructor without commit() removes the temporary file; a writer killed before either
+/// leaves it, and the next writer to PATH removes it (temporary_file.hpp says how it knows). add() is thread-safe (one mutex;
 /// the payload write happens under it) and takes the blocks in any order; every block of every
 /// level of the header's Partition must be added exactly once before commit().
 class AfamWriter {

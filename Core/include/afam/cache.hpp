@@ -79,6 +79,9 @@ class LruCache {
   CacheStats stats() const;
   void resetStats();
   uint64_t residentBytes() const;
+  /// The most bytes resident at any moment since the previous call (or construction); the count
+  /// then restarts from the bytes resident now. Never above the byte budget.
+  uint64_t takePeakResidentBytes();
   uint64_t residentBlocks() const;
   /// Entries from most to least recently used (tests).
   std::vector<int64_t> lruOrder() const;
@@ -103,6 +106,7 @@ class LruCache {
   std::unordered_map<int64_t, Node> map_;
   std::unordered_set<int64_t> loading_, pinned_;
   uint64_t resident_ = 0;
+  uint64_t peakResident_ = 0;  // for takePeakResidentBytes
   CacheStats stats_;
   double capBytesPerSecond_ = 0;
   std::mutex deviceMutex_;

@@ -55,6 +55,9 @@ struct FrameStats {
   CullCounts culled;
   int64_t slots = 0;                                 ///< models in the FrameView
   uint64_t poolBytes = 0;
+  /// The cache's resident bytes at the end of the frame, and the most it held during the frame
+  /// (frame and prefetch loads); both stay within the cache's byte budget.
+  uint64_t cacheBytes = 0, cachePeakBytes = 0;
 };
 
 /// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if

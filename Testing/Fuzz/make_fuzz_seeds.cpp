@@ -1,0 +1,161 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Writes the seed corpus of the fuzz targets: small valid inputs of every kind, made by the same
+// code that makes real files (the encoder, the writer), so a format change changes the seeds too.
+//   make_fuzz_seeds OUT_DIR
+// creates OUT_DIR/{afam_file,raw_file,trajectory,lstm_weights}/seed-* (control bytes as each
+// fuzz target expects them).
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "afam/encoder.hpp"
+#include "afam/marschner_lobb.hpp"
+
+namespace {
+
+using Bytes = std::vector<uint8_t>;
+
+Bytes readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void writeSeed(const std::string& dir, const std::string& name, uint8_t control, const Bytes& body,
+               bool withControl = true) {
+  ::mkdir(dir.c_str(), 0755);
+  std::ofstream out(dir + "/seed-" + name, std::ios::binary | std::ios::trunc);
+  if (withControl) out.put(static_cast<char>(control));
+  out.write(reinterpret_cast<const char*>(body.data()), static_cast<std::streamsize>(body.size()));
+  if (!out) throw std::runtime_error("cannot write seed " + dir + "/seed-" + name);
+}
+
+// An .afam file of Marschner-Lobb on dims, encoded in `mode`; returns its bytes.
+Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, int blocks,
+                const std::string& scratch) {
+  std::vector<float> v(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+  afam::marschnerLobbSlab(afam::MarschnerLobb{}, dims, 0, dims[2], v.data());
+  afam::ArraySource source(v.data(), dims);
+  afam::EncoderOptions o;
+  o.levels = levels;
+  o.blocksPerAxis = blocks;
+  o.errorBound = 1e-2;
+  o.mode = mode;
+  o.threads = 1;
+  afam::encodeVolume(source, o, scratch);
+  Bytes b = readFile(scratch);
+  std::remove(scratch.c_str());
+  return b;
+}
+
+void afamSeeds(const std::string& out) {
+  const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
+  using M = afam::EncodingMode;
+  const struct { afam::Index3 dims; M mode; int levels, blocks; const char* name; } cases[] = {
+      {{7, 6, 5}, M::Adaptive, 2, 2, "adaptive"},
+      {{8, 5, 4}, M::InLevel, 2, 2, "inlevel"},
+      {{5, 5, 5}, M::Fixed, 1, 1, "fixed"},
+      {{6, 5, 4}, M::Downsampled, 2, 2, "ds"},
+  };
+  for (const auto& c : cases) {
+    const Bytes b = encodedMl(c.dims, c.mode, c.levels, c.blocks, scratch);
+    writeSeed(dir, std::string(c.name) + "-fixall", 7, b);  // checksums recomputed after mutation
+    writeSeed(dir, std::string(c.name) + "-asis", 0, b);    // checksums left as mutated
+  }
+}
+
+Bytes floatBytes(const std::vector<float>& f) {
+  Bytes b(f.size() * 4);
+  std::memcpy(b.data(), f.data(), b.size());
+  return b;
+}
+
+void rawSeeds(const std::string& out) {
+  const std::string dir = out + "/raw_file";
+  const struct { const char* name; int voxels, bytesPerVoxel; } cases[] = {
+      {"ml_4x3x2_float32.raw", 24, 4}, {"vol_2x2x2_float64.raw", 8, 8}, {"ct_5x1x3_uint8.raw", 15, 1},
+      {"mri_3x3x1_uint16.raw", 9, 2}, {"a/b/c_2x3x4_int16.raw", 24, 2},
+  };
+  for (const auto& c : cases) {
+    const std::string name = c.name;
+    Bytes b(name.begin(), name.end());
+    b.push_back(0);
+    for (int i = 0; i < c.voxels * c.bytesPerVoxel; ++i) b.push_back(static_cast<uint8_t>(i * 37 + 11));
+    std::string file = name;
+    for (char& ch : file)
+      if (ch == '/') ch = '-';
+    writeSeed(dir, file, 0, b, false);
+  }
+}
+
+void trajectorySeeds(const std::string& out) {
+  const std::string dir = out + "/trajectory";
+  // Stored as three planes: distances, then theta, then phi (camera.cpp).
+  writeSeed(dir, "three-views", 0, floatBytes({1.2f, 1.5f, 1.7f, 10.f, 45.f, 170.f, -20.f, 0.f, 80.f}), false);
+  writeSeed(dir, "one-view", 0, floatBytes({1.0f, 0.f, 0.f}), false);
+}
+
+void putU32(Bytes& b, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+void putF32(Bytes& b, float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  putU32(b, u);
+}
+
+// A valid weights file with hidden size H (layout of Core/src/predictors/lstm.cpp).
+Bytes tinyLstm(uint32_t hidden, uint32_t steps) {
+  Bytes b = {'A', 'F', 'L', 'S', 'T', 'M', 0, 0};
+  putU32(b, 1);
+  for (uint32_t v : {6u, hidden, 3u, 4u}) putU32(b, v);
+  putF32(b, 0.05f);
+  putU32(b, 1);
+  const size_t floats = 4 * hidden * 6 + 4 * hidden * hidden + 4 * hidden + 3 * hidden + 3;
+  for (size_t i = 0; i < floats; ++i) putF32(b, 0.01f * std::sin(float(i)));
+  putU32(b, steps);
+  for (size_t i = 0; i < steps * 6 + 3; ++i) putF32(b, 0.1f * float(i % 7));
+  uint32_t h = 0x811C9DC5u;
+  for (uint8_t c : b) {
+    h ^= c;
+    h *= 0x01000193u;
+  }
+  putU32(b, h);
+  return b;
+}
+
+// Small shapes only: the shipped file (hidden 32) has the same layout and would slow every run.
+void lstmSeeds(const std::string& out) {
+  const std::string dir = out + "/lstm_weights";
+  writeSeed(dir, "hidden2", 1, tinyLstm(2, 3));
+  writeSeed(dir, "hidden5-asis", 0, tinyLstm(5, 1));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::cerr << "usage: make_fuzz_seeds OUT_DIR\n";
+    return 2;
+  }
+  try {
+    const std::string out = argv[1];
+    ::mkdir(out.c_str(), 0755);
+    afamSeeds(out);
+    rawSeeds(out);
+    trajectorySeeds(out);
+    lstmSeeds(out);
+  } catch (const std::exception& e) {
+    std::cerr << "make_fuzz_seeds: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

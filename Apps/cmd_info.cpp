@@ -16,9 +16,11 @@ int runInfo(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Prints the header, per level the blocks, the NCP histogram (max NCP over the axes), the\n"
-        "payload bytes and the worst RMSE, then the file size, the size the paper's layout would\n"
-        "take for the same models, and the compression ratio against the float32 volume.\n"
+        "Prints the header, per level the blocks, the representations (spline, samples, constant,\n"
+        "interpolant; how many coded), the bits per coded value, the NCP histogram (max NCP over\n"
+        "the axes), the stored bytes and the worst RMSE, then the file size, the size the paper's\n"
+        "layout would take for the same models, and the compression ratio against the raw input\n"
+        "(when the file records its sample size) and against the float32 volume.\n"
         "Reads only the header and the index.\n",
         usage);
     return 0;
@@ -43,13 +45,20 @@ int runInfo(int argc, char** argv) {
     std::map<int, int64_t> hist;
     uint64_t bytes = 0, paperL = 0;
     double maxRmse = 0, maxErr = 0;
-    int64_t complexCount = 0;
+    int64_t complexCount = 0, kinds[4] = {0, 0, 0, 0}, coded = 0;
+    double codedBits = 0, codedValues = 0;
     const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
     for (int64_t i = s; i < e; ++i) {
       const ModelEntry& m = f->entries()[size_t(i)];
       const int k = std::max({m.ncp[0], m.ncp[1], m.ncp[2]});
       ++hist[k];
-      bytes += m.size;
+      bytes += m.storedSize;
+      ++kinds[int(m.kind)];
+      if (m.coded) {
+        ++coded;
+        codedBits += 8.0 * double(m.storedSize);
+        codedValues += double(m.size) / 4;
+      }
       paperL += h.mode == EncodingMode::Downsampled ? m.size : paperModelBytes(m.ncp, m.degree);
       maxRmse = std::max(maxRmse, double(m.rmse));
       maxErr = std::max(maxErr, double(m.maxError));
@@ -61,7 +70,9 @@ int runInfo(int argc, char** argv) {
                 l, b[0], b[1], b[2], e0.samples[0], e0.samples[1], e0.samples[2], (long long)complexCount,
                 (unsigned long long)bytes, maxRmse, maxErr);
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
-    std::printf("\n");
+    std::printf("\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld bits_per_coded_value=%.3f\n",
+                (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3], (long long)coded,
+                codedValues > 0 ? codedBits / codedValues : 0.0);
     payload += bytes;
     paper += paperL;
   }
@@ -69,7 +80,11 @@ int runInfo(int argc, char** argv) {
   std::printf("payload_bytes=%llu file_bytes=%llu paper_layout_bytes=%llu (file/paper=%.4f)\n",
               (unsigned long long)payload, (unsigned long long)f->fileSize(), (unsigned long long)paper,
               double(f->fileSize()) / double(paper));
-  std::printf("float32_bytes=%.0f compression_ratio=%.2f\n", raw, raw / double(f->fileSize()));
+  std::printf("float32_bytes=%.0f compression_ratio=%.2f", raw, raw / double(f->fileSize()));
+  if (h.sourceBytesPerSample > 0)
+    std::printf(" raw_bytes=%.0f ratio_raw=%.2f", raw / 4 * h.sourceBytesPerSample,
+                raw / 4 * h.sourceBytesPerSample / double(f->fileSize()));
+  std::printf("\n");
   return 0;
 }
 

@@ -53,7 +53,7 @@ struct FileHeaderV1 {
   uint8_t mode;                   // @136, 1 B
   uint8_t relativeBound;          // @137, 1 B
   uint8_t levelSampling;          // @138, 1 B; LevelSampling: 0 point (older files), 1 box
-  uint8_t reserved0;              // @139, 1 B
+  uint8_t sourceBytesPerSample;   // @139, 1 B; bytes of one sample of the encoded input (0: unknown)
   uint32_t indexChecksum;         // @140, 4 B
   uint64_t entryCount;            // @144, 8 B
   uint64_t indexOffset;           // @152, 8 B
@@ -85,6 +85,7 @@ static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
 static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
 static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
 static_assert(offsetof(FileHeaderV1, levelSampling) == 138, "layout");
+static_assert(offsetof(FileHeaderV1, sourceBytesPerSample) == 139, "layout");
 static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
 static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
 static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
@@ -414,6 +415,7 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
     throw bad("unknown level sampling " + std::to_string(h.levelSampling));
   vh.sampling = static_cast<LevelSampling>(h.levelSampling);
+  vh.sourceBytesPerSample = h.sourceBytesPerSample;
   vh.fixedNcp = h.fixedNcp;
   vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
   f->version_ = h.version;
@@ -641,6 +643,7 @@ void AfamWriter::commit() {
   h.mode = static_cast<uint8_t>(header_.mode);
   h.relativeBound = header_.relativeBound ? 1 : 0;
   h.levelSampling = static_cast<uint8_t>(header_.sampling);
+  h.sourceBytesPerSample = static_cast<uint8_t>(std::min(header_.sourceBytesPerSample, 255));
   h.indexChecksum = crc32(raw.data(), indexBytes);
   h.entryCount = raw.size();
   h.indexOffset = sizeof(FileHeaderV1);

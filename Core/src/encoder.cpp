@@ -223,6 +223,7 @@ VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, i
   header.mode = opt.mode;
   header.fixedNcp = opt.fixedNcp;
   header.sampling = levelSampling(opt.mode);
+  header.sourceBytesPerSample = source.bytesPerVoxel();
   return header;
 }
 

@@ -48,6 +48,7 @@ struct VolumeHeader {
   int fixedNcp = 0;        ///< Fixed mode: requested NCP (0 = n)
   /// How coarse levels were sampled (and what their error is measured against).
   LevelSampling sampling = LevelSampling::Point;
+  int sourceBytesPerSample = 0;  ///< of the encoded input (1 for uint8, ...); 0 when unknown
 };
 
 /// How a micro-model is stored (format version 2; version-1 files hold float32 splines only).

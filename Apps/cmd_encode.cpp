@@ -34,7 +34,7 @@ int runEncode(int argc, char** argv) {
         "                    constant, a coded spline and coded samples per block\n"
         "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks along\n"
         "                    the longest axis; level 0 is the coarsest)\n"
-        "  --blocks B        blocks per axis at the finest level (default: about 32 samples a block)\n"
+        "  --blocks B        blocks per axis at the finest level (default: about 64 samples a block, the paper's 16 at 1024^3)\n"
         "  --degree P        B-spline degree (default 2)\n"
         "  --mode M          adaptive (default), inlevel (search every block), fixed (NCP = n or\n"
         "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"

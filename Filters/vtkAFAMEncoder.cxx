@@ -167,6 +167,7 @@ int vtkAFAMEncoder::RequestData(
   afam::ArraySource source(values->GetPointer(0), afam::Index3{ dims[0], dims[1], dims[2] },
     array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
     { spacing[0], spacing[1], spacing[2] });
+  source.setOriginalBytesPerVoxel(array->GetDataTypeSize());
 
   afam::EncoderOptions options;
   options.levels = this->Levels;

@@ -46,7 +46,7 @@ public:
 
   ///@{
   /// Levels of detail, [1, 16]; finest blocks per axis, [1, 4096]. 0 (the default) for each: from
-  /// the image's dimensions (blocks of about 32 samples, levels down to 2 blocks along the longest axis).
+  /// the image's dimensions (blocks of about 64 samples, levels down to 2 blocks along the longest axis).
   vtkSetClampMacro(Levels, int, 0, 16);
   vtkGetMacro(Levels, int);
   vtkSetClampMacro(BlocksPerAxis, int, 0, 4096);

@@ -24,13 +24,14 @@ namespace afam {
 using Int3 = std::array<int, 3>;
 using Index3 = std::array<int64_t, 3>;
 
-/// The finest block edge, in samples, of the default partition (studied on the corpus and on
-/// Marschner-Lobb: see docs/BENCHMARKS.md, "Default partition").
-constexpr int kDefaultBlockEdge = 32;
+/// The finest block edge, in samples, of the default partition: the paper's 16 blocks at 1024^3, and
+/// on the corpus (32-93 samples an axis) the smallest files of the edges tried (16, 32, 64; see
+/// docs/BENCHMARKS.md, "Compression against ZFP").
+constexpr int kDefaultBlockEdge = 64;
 
 /// Levels and finest blocks per axis that fit a volume: blocks of about kDefaultBlockEdge samples
 /// along the longest axis (B = round((N - 1) / edge), at least 1), and levels down to a coarsest
-/// level of 2 blocks along it (L = 1 + floor(log2(B / 2)); 1 when B < 4). For 1025^3 and an edge of
+/// level of 2 blocks along it (L = 1 + floor(log2(B / 2)); 1 when B < 4). For 1025^3 and the default edge of
 /// 64 that is the paper's 16 blocks and 4 levels.
 struct PartitionShape {
   int levels = 1, blocksPerAxis = 1;

@@ -44,12 +44,16 @@ class ArraySource : public VolumeSource {
   std::array<double, 3> spacing() const override { return spacing_; }
   std::string name() const override { return name_; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  /// Bytes a sample had before it was converted to these floats (for the ratio; default 4).
+  void setOriginalBytesPerVoxel(int bytes) { originalBytes_ = bytes; }
+  int bytesPerVoxel() const override { return originalBytes_; }
 
  private:
   const float* data_;
   Index3 dims_;
   std::string name_;
   std::array<double, 3> origin_, spacing_;
+  int originalBytes_ = 4;
 };
 
 enum class ScalarType : uint8_t { Float32, Float64, UInt8, UInt16, Int16 };

@@ -156,6 +156,9 @@ void vtkAFAMCoreRenderer::Render(
   stats.CulledBlocks = frame.culled.frustumBlocks + frame.culled.tfBlocks;
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
+  stats.DamagedBlocks = frame.damagedBlocks;
+  stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
+  stats.DamageReports = std::move(frame.damageReports);
   stats.UsedGpu = m.Gpu != nullptr;
   stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
   stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)

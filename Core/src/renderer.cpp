@@ -127,61 +127,79 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.bind();
 }
 
+std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st) {
+  std::vector<int64_t> pins;
+  pins.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
+  cache_->setPinned(pins);
+  const IntactLoader load = [this](int64_t entry) {
+    return cache_->getIntact(entry, LruCache::Purpose::Frame);
+  };
+  std::vector<Placement> placed;
+  placed.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) {
+    if (auto data = load(b.entry)) {
+      placed.push_back(Placement{b, b, std::move(data)});
+      continue;
+    }
+    st.damagedBlocks++;
+    if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
+  }
+  return placed;
+}
+
+void Renderer::addSlot(const Placement& m, PreparedFrame& fr, uint64_t offset) const {
+  const Partition& p = file_->partition();
+  const bool raw = file_->header().mode == EncodingMode::Downsampled;
+  const ModelEntry& e = file_->entries()[size_t(m.model.entry)];
+  FrameSlot s;
+  s.kind = raw ? kSlotRaw : kSlotSpline;
+  s.level = m.model.level;
+  const BlockExtent ext = p.extent(m.model.level, m.model.ijk);
+  for (int a = 0; a < 3; ++a) {
+    if (raw) {
+      s.knots[a] = Knots{};
+      s.knots[a].ncp = e.ncp[a];
+      s.knots[a].degree = 1;
+    } else {
+      s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
+    }
+    s.lo[a] = float(ext.lo[a]);
+    s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
+  }
+  s.offset = offset;
+  const int32_t slot = int32_t(fr.slots.size());
+  fr.slots.push_back(s);
+  fr.entries.push_back(m.model.entry);
+  // Finest cells of the region this model covers (its own block, or the damaged one it replaces).
+  const Int3 bf = p.blocksPerAxis(p.levels() - 1);
+  const int r = p.stride(m.region.level);
+  int c0[3], c1[3];
+  for (int a = 0; a < 3; ++a) {
+    c0[a] = m.region.ijk[a] * r;
+    c1[a] = std::min((m.region.ijk[a] + 1) * r, bf[a]);
+  }
+  for (int z = c0[2]; z < c1[2]; ++z)
+    for (int y = c0[1]; y < c1[1]; ++y)
+      for (int x = c0[0]; x < c1[0]; ++x) fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+}
+
 void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
   const auto t0 = Clock::now();
   const CacheStats before = cache_->stats();
   const Selection sel = select(camera);
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
-  const Partition& p = file_->partition();
-  const bool raw = file_->header().mode == EncodingMode::Downsampled;
-  const auto& entries = file_->entries();
-  const int finest = p.levels() - 1;
-  const Int3 bf = p.blocksPerAxis(finest);
+  const std::vector<Placement> placed = loadModels(sel, st);
   uint64_t poolFloats = 0;
-  for (const BlockRef& b : sel.visible) poolFloats += entries[size_t(b.entry)].size / sizeof(float);
+  for (const Placement& m : placed) poolFloats += m.data->size();
   fr.pool.resize(poolFloats);
-  fr.slots.reserve(sel.visible.size());
-  std::vector<int64_t> pins;
-  pins.reserve(sel.visible.size());
-  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
-  cache_->setPinned(pins);
+  fr.slots.reserve(placed.size());
   uint64_t offset = 0;
-  for (const BlockRef& b : sel.visible) {
-    const ModelEntry& e = entries[size_t(b.entry)];
-    const Payload data = cache_->get(b.entry, LruCache::Purpose::Frame);
-    std::memcpy(fr.pool.data() + offset, data->data(), data->size() * sizeof(float));
-    FrameSlot s;
-    s.kind = raw ? kSlotRaw : kSlotSpline;
-    s.level = b.level;
-    const BlockExtent ext = p.extent(b.level, b.ijk);
-    for (int a = 0; a < 3; ++a) {
-      if (raw) {
-        s.knots[a] = Knots{};
-        s.knots[a].ncp = e.ncp[a];
-        s.knots[a].degree = 1;
-      } else {
-        s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
-      }
-      s.lo[a] = float(ext.lo[a]);
-      s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
-    }
-    s.offset = offset;
-    offset += data->size();
-    const int32_t slot = int32_t(fr.slots.size());
-    fr.slots.push_back(s);
-    fr.entries.push_back(b.entry);
-    // Finest cells covered by this block.
-    const int r = p.stride(b.level);
-    int c0[3], c1[3];
-    for (int a = 0; a < 3; ++a) {
-      c0[a] = b.ijk[a] * r;
-      c1[a] = std::min((b.ijk[a] + 1) * r, bf[a]);
-    }
-    for (int z = c0[2]; z < c1[2]; ++z)
-      for (int y = c0[1]; y < c1[1]; ++y)
-        for (int x = c0[0]; x < c1[0]; ++x)
-          fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+  for (const Placement& m : placed) {
+    std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+    addSlot(m, fr, offset);
+    offset += m.data->size();
   }
   fr.bind();
   const CacheStats after = cache_->stats();
@@ -189,6 +207,8 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.misses = after.misses - before.misses;
   st.slots = int64_t(fr.slots.size());
   st.poolBytes = fr.pool.size() * sizeof(float);
+  st.damageReports = cache_->damage().takeReports();
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
   st.cachingMs = msSince(t0);
 }
 
@@ -237,6 +257,8 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   st.renderMs = msSince(t0);
   prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
   cache_->clearPinned();
+  for (std::string& r : cache_->damage().takeReports()) st.damageReports.push_back(std::move(r));
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
   const CacheStats after = cache_->stats();
   st.bytesRead = after.bytesRead - before.bytesRead;
   st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;

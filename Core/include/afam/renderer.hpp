@@ -25,6 +25,7 @@
 #include "afam/afam_file.hpp"
 #include "afam/cache.hpp"
 #include "afam/camera.hpp"
+#include "afam/damage.hpp"
 #include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
 #include "afam/lod.hpp"
@@ -55,6 +56,12 @@ struct FrameStats {
   CullCounts culled;
   int64_t slots = 0;                                 ///< models in the FrameView
   uint64_t poolBytes = 0;
+  /// Damaged micro-models (damage.hpp): blocks of this frame's selection that are damaged (drawn
+  /// from a coarser or finer level), of which those whose region stayed empty; every block of the
+  /// file known to be damaged so far; and the reports of blocks first found damaged during this
+  /// frame (by its loads or its prefetching), one sentence each, each handed out once.
+  int64_t damagedBlocks = 0, emptyDamagedBlocks = 0, knownDamagedBlocks = 0;
+  std::vector<std::string> damageReports;
 };
 
 /// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if
@@ -99,7 +106,8 @@ class Renderer {
   Selection select(const Camera& camera) const;
   /// A FrameView with camera, geometry, TF and shading set, and no models (cellSlot all -1).
   void prepareEmpty(const Camera& camera, PreparedFrame& frame) const;
-  /// The caching step: selection, cache loads, FrameView + pool. Fills stats' caching fields.
+  /// The caching step: selection, cache loads (a damaged model replaced as damage.hpp says),
+  /// FrameView + pool. Fills stats' caching and damage fields.
   void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
   /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
   /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
@@ -117,6 +125,9 @@ class Renderer {
   void setRayCaster(RayCaster caster) { caster_ = std::move(caster); }
 
  private:
+  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
+  void addSlot(const Placement& model, PreparedFrame& frame, uint64_t offset) const;
+
   std::shared_ptr<const AfamFile> file_;
   RendererResources resources_;
   FrameSettings settings_;

@@ -28,9 +28,6 @@ for fraction in (0.015, 0.10, 0.45, 0.75):
 with open(bad, "wb") as f:
     f.write(bytes(data))
 
-messages = vtkStringOutputWindow()
-vtkOutputWindow.SetInstance(messages)
-
 
 def render_six(path, tag):
     view = CreateView("RenderView")
@@ -50,8 +47,13 @@ def render_six(path, tag):
 
 
 intact = render_six(good, "intact")
-messages.Initialize()
-damaged = render_six(bad, "damaged")
+console = vtkOutputWindow.GetInstance()  # pvpython's print goes there too: captured only meanwhile
+messages = vtkStringOutputWindow()
+vtkOutputWindow.SetInstance(messages)
+try:
+    damaged = render_six(bad, "damaged")
+finally:
+    vtkOutputWindow.SetInstance(console)
 text = messages.GetOutput()
 reports = text.count("payload checksum mismatch")
 print("foreground: damaged %d of intact %d (%.1f%%); %d damage messages over 6 frames"

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <unordered_map>
 
 #include "afam/cpu_raycaster.hpp"
 #include "afam/errors.hpp"
@@ -28,7 +29,7 @@ void PreparedFrame::bind() {
 }
 
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
-                   FrameSettings settings)
+                   FrameSettings settings, std::shared_ptr<DamageLog> damage)
     : file_(std::move(file)), resources_(std::move(resources)) {
   if (!file_) throw InvalidArgument("renderer: no file");
   if (resources_.threads < 0) throw InvalidArgument("renderer: threads must be >= 0");
@@ -36,7 +37,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   tfLo_ = h.valueMin;
   tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
   setFrameSettings(settings);
-  cache_ = std::make_unique<LruCache>(file_, resources_.cache);
+  cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
   prefetcher_ = std::make_unique<Prefetcher>();
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
@@ -148,14 +149,14 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   return placed;
 }
 
-void Renderer::addSlot(const Placement& m, PreparedFrame& fr, uint64_t offset) const {
+int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
   const Partition& p = file_->partition();
   const bool raw = file_->header().mode == EncodingMode::Downsampled;
-  const ModelEntry& e = file_->entries()[size_t(m.model.entry)];
+  const ModelEntry& e = file_->entries()[size_t(model.entry)];
   FrameSlot s;
   s.kind = raw ? kSlotRaw : kSlotSpline;
-  s.level = m.model.level;
-  const BlockExtent ext = p.extent(m.model.level, m.model.ijk);
+  s.level = model.level;
+  const BlockExtent ext = p.extent(model.level, model.ijk);
   for (int a = 0; a < 3; ++a) {
     if (raw) {
       s.knots[a] = Knots{};
@@ -168,16 +169,19 @@ void Renderer::addSlot(const Placement& m, PreparedFrame& fr, uint64_t offset) c
     s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
   }
   s.offset = offset;
-  const int32_t slot = int32_t(fr.slots.size());
   fr.slots.push_back(s);
-  fr.entries.push_back(m.model.entry);
-  // Finest cells of the region this model covers (its own block, or the damaged one it replaces).
+  fr.entries.push_back(model.entry);
+  return int32_t(fr.slots.size() - 1);
+}
+
+void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr) const {
+  const Partition& p = file_->partition();
   const Int3 bf = p.blocksPerAxis(p.levels() - 1);
-  const int r = p.stride(m.region.level);
+  const int r = p.stride(region.level);
   int c0[3], c1[3];
   for (int a = 0; a < 3; ++a) {
-    c0[a] = m.region.ijk[a] * r;
-    c1[a] = std::min((m.region.ijk[a] + 1) * r, bf[a]);
+    c0[a] = region.ijk[a] * r;
+    c1[a] = std::min((region.ijk[a] + 1) * r, bf[a]);
   }
   for (int z = c0[2]; z < c1[2]; ++z)
     for (int y = c0[1]; y < c1[1]; ++y)
@@ -191,15 +195,23 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
   const std::vector<Placement> placed = loadModels(sel, st);
+  // One slot per model: a coarser model standing in for several damaged blocks is stored once
+  // (the GPU pool keys its models by entry) and covers each of their regions.
+  std::unordered_map<int64_t, int32_t> slotOf;
   uint64_t poolFloats = 0;
-  for (const Placement& m : placed) poolFloats += m.data->size();
+  for (const Placement& m : placed)
+    if (slotOf.emplace(m.model.entry, -1).second) poolFloats += m.data->size();
   fr.pool.resize(poolFloats);
-  fr.slots.reserve(placed.size());
+  fr.slots.reserve(slotOf.size());
   uint64_t offset = 0;
   for (const Placement& m : placed) {
-    std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
-    addSlot(m, fr, offset);
-    offset += m.data->size();
+    int32_t& slot = slotOf[m.model.entry];
+    if (slot < 0) {
+      std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+      slot = addSlot(m.model, fr, offset);
+      offset += m.data->size();
+    }
+    fillCells(m.region, slot, fr);
   }
   fr.bind();
   const CacheStats after = cache_->stats();

@@ -2,6 +2,7 @@
 // Damaged micro-models: skipped, replaced by the nearest intact level, reported once, not re-read.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -216,4 +217,34 @@ TEST(Damage, DamagedFileKeepsMostOfThePictureAndReportsEachBlockOnce) {
   EXPECT_GE(double(fgBad), 0.8 * double(fgGood));
   EXPECT_GE(messages, 1u);
   EXPECT_LE(messages, 4u);
+}
+
+TEST(Damage, OneCoarseModelStandsInForSeveralDamagedSiblingsOnce) {
+  auto intact = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
+  const int64_t a = intact->entryIndex(2, {0, 0, 0}), b = intact->entryIndex(2, {1, 0, 0});
+  auto damaged = damagedCopy(*intact, afam_test::tempPath("damaged_siblings"), {a, b});
+  auto log = std::make_shared<DamageLog>();
+  PreparedFrame fr;
+  {
+    Renderer r(damaged, options(2), FrameSettings(options(2)), log);
+    FrameStats st;
+    r.prepare(camera(48), fr, st);
+    EXPECT_EQ(st.damagedBlocks, 2);
+    EXPECT_EQ(st.damageReports.size(), 2u);
+  }
+  // Both drawn by their parent (level 1, block (0, 0, 0)): one slot, not two.
+  const int64_t parent = damaged->entryIndex(1, {0, 0, 0});
+  EXPECT_EQ(std::count(fr.entries.begin(), fr.entries.end(), parent), 1);
+  std::vector<int64_t> sorted = fr.entries;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
+  EXPECT_EQ(fr.slots.size(), 64u - 2u + 1u);
+  // A new renderer of the same file with the same log (the mapper after a change of cache budget):
+  // nothing reported or read again.
+  Renderer again(damaged, options(2), FrameSettings(options(2)), log);
+  FrameStats st;
+  again.renderFrame(camera(48), st);
+  EXPECT_EQ(st.damageReports.size(), 0u);
+  EXPECT_EQ(st.damagedBlocks, 2);
+  EXPECT_EQ(again.cache().stats().blocksRead, 63u);
 }

@@ -64,7 +64,10 @@ class LruCache {
  public:
   enum class Purpose { Frame, Prefetch };
 
-  LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget);
+  /// damage: the file's damage log, shared with earlier caches of the same file so that a block
+  /// is reported and read once per file (null: a new one).
+  LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
+           std::shared_ptr<DamageLog> damage = nullptr);
 
   /// Returns the payload of an entry, loading it on a miss. Frame lookups count hits and misses
   /// and mark the block most recently used. Throws what AfamFile::readPayload throws.
@@ -91,7 +94,8 @@ class LruCache {
   std::vector<int64_t> lruOrder() const;
   const CacheBudget& budget() const { return budget_; }
   const AfamFile& file() const { return *file_; }
-  DamageLog& damage() { return damage_; }
+  DamageLog& damage() { return *damage_; }
+  const std::shared_ptr<DamageLog>& damageLog() const { return damage_; }
 
  private:
   struct Node {
@@ -105,7 +109,7 @@ class LruCache {
 
   std::shared_ptr<const AfamFile> file_;
   CacheBudget budget_;
-  DamageLog damage_;
+  std::shared_ptr<DamageLog> damage_;
   mutable std::mutex mutex_;
   std::condition_variable loaded_;
   std::list<int64_t> lru_;  // front = most recent

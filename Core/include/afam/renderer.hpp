@@ -79,8 +79,10 @@ struct PreparedFrame {
 
 class Renderer {
  public:
+  /// damage: the file's damage log from an earlier Renderer of the same file (null: a new one),
+  /// so that a damaged block is reported and read once per file however often the resources change.
   Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
-           FrameSettings settings = {});
+           FrameSettings settings = {}, std::shared_ptr<DamageLog> damage = nullptr);
   Renderer(std::shared_ptr<const AfamFile> file, const RenderOptions& options)
       : Renderer(std::move(file), RendererResources(options), FrameSettings(options)) {}
   ~Renderer();
@@ -126,7 +128,8 @@ class Renderer {
 
  private:
   std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
-  void addSlot(const Placement& model, PreparedFrame& frame, uint64_t offset) const;
+  int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
+  void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
 
   std::shared_ptr<const AfamFile> file_;
   RendererResources resources_;

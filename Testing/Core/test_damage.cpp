@@ -4,32 +4,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 
 #include "afam/errors.hpp"
 #include "afam/raycast.hpp"
 #include "afam/renderer.hpp"
+#include "damaged_copy.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;
 
 namespace {
 
-/// A copy of `src` at `path` with 8 bytes overwritten inside the payload of each listed entry.
-std::shared_ptr<const AfamFile> damagedCopy(const AfamFile& src, const std::string& path,
-                                            const std::vector<int64_t>& entries) {
-  std::ifstream in(src.path(), std::ios::binary);
-  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (int64_t i : entries) {
-    const ModelEntry& e = src.entries().at(size_t(i));
-    EXPECT_GE(e.storedSize, 8u) << "entry " << i << " is too small to damage";
-    const uint64_t at = e.offset + (e.storedSize - 8) / 2;
-    for (int k = 0; k < 8; ++k) bytes[at + k] = char(~bytes[at + k]);
-  }
-  std::ofstream(path, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
-  return AfamFile::open(path);
-}
+using afam_test::damagedCopy;
 
 RenderOptions options(int forceLevel) {
   RenderOptions o;

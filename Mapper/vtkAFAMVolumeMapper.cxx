@@ -407,9 +407,22 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
   this->LastDamagedBlocks = stats.DamagedBlocks;
   this->KnownDamagedBlocks = stats.KnownDamagedBlocks;
-  for (const std::string& report : stats.DamageReports)
+  // Blocks first found damaged in this frame: one warning (Core reads and reports each block only
+  // once per file), the first few in full so that a truncated file does not flood the window.
+  if (!stats.DamageReports.empty())
   {
-    vtkWarningMacro(<< report); // once per damaged block: Core reads and reports it only once
+    const size_t shown = std::min<size_t>(stats.DamageReports.size(), 4);
+    std::string text;
+    for (size_t i = 0; i < shown; ++i)
+    {
+      text += (i ? "\n" : "") + stats.DamageReports[i];
+    }
+    if (stats.DamageReports.size() > shown)
+    {
+      text += "\n... and " + std::to_string(stats.DamageReports.size() - shown) +
+        " more damaged micro-models in this frame";
+    }
+    vtkWarningMacro(<< text);
   }
   this->LastUsedGpu = stats.UsedGpu;
   this->LastGpuModelsUploaded = stats.GpuModelsUploaded;

@@ -5,6 +5,7 @@ every default of the "Adaptive-FAM Volume" representation at six 300 x 300 views
 the intact file's foreground pixels, and between 1 and 4 messages about damage over the 6 frames
 (each damaged block is reported once, never on every frame)."""
 import os
+import re
 import sys
 
 sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
@@ -55,9 +56,12 @@ try:
 finally:
     vtkOutputWindow.SetInstance(console)
 text = messages.GetOutput()
-reports = text.count("payload checksum mismatch")
-print("foreground: damaged %d of intact %d (%.1f%%); %d damage messages over 6 frames"
-      % (damaged, intact, 100.0 * damaged / max(intact, 1), reports))
+reports = sum(1 for m in text.split("Warning: In ")[1:] if "payload checksum mismatch" in m)
+blocks = re.findall(r"payload checksum mismatch at (level \d+ block \([0-9, ]+\))", text)
+print("foreground: damaged %d of intact %d (%.1f%%); %d damage messages over 6 frames naming %s"
+      % (damaged, intact, 100.0 * damaged / max(intact, 1), reports, blocks))
+if len(blocks) != len(set(blocks)):
+    u.fail("a damaged block was reported more than once: %s" % blocks)
 print(" ".join(text.split())[:600])
 if damaged < 0.8 * intact:
     u.fail("the damaged file keeps %d of %d foreground pixels (bar 80%%)" % (damaged, intact))

@@ -58,6 +58,7 @@ int runRender(int argc, char** argv) {
   const Camera camera = Camera::fromPose(poses[size_t(view)], size.first, size.second);
   FrameStats st;
   const ImageRGBA image = renderer.renderFrame(camera, st);
+  for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
   const ImageRGB8 rgb = toRGB8(image);
   writePng(args.str("out"), rgb);
   std::printf("method=%s blocks=%lld bytes=%llu caching_ms=%.3f hits=%llu misses=%llu "

@@ -4,6 +4,7 @@
 
 #include "afam/afam_file.hpp"
 #include "afam/encoder.hpp"
+#include "afam/errors.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "level_error.hpp"
@@ -32,11 +33,20 @@ int runVerify(int argc, char** argv) {
   ProgressBar bar("verify", args.has("progress"));
   std::vector<float> payload;
   const size_t n = f->entries().size();
+  size_t damaged = 0;
   for (size_t i = 0; i < n; ++i) {
     payload.resize(f->entries()[i].size / 4);
-    f->readPayload(int64_t(i), payload.data());  // throws FormatError naming the block
+    try {
+      f->readPayload(int64_t(i), payload.data());
+    } catch (const FormatError& e) {  // names the block; every damaged one is listed
+      std::fprintf(stderr, "damaged: %s\n", e.what());
+      ++damaged;
+    }
     bar(0.5 * double(i + 1) / double(n));
   }
+  if (damaged > 0)
+    throw FormatError(args.positional()[0] + ": " + std::to_string(damaged) + " of " +
+                      std::to_string(n) + " micro-models damaged (listed above)");
   std::printf("checksums ok: %zu micro-models, %llu bytes\n", n, (unsigned long long)f->fileSize());
   if (!args.has("against")) return 0;
 

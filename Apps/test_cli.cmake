@@ -38,6 +38,21 @@ endif ()
 # Every block meets the bound, so the whole-volume RMSE does too (verify checks it itself).
 run_ok(out ${AFAM} verify ml.afam --against ml_40x40x40_float32.raw --max-rmse ${bound})
 run_fails("above --max-rmse" ${AFAM} verify ml.afam --against ml_40x40x40_float32.raw --max-rmse 1e-12)
+# Two damaged payloads (8 bytes zeroed at 50% and 95% of the file): verify lists both, then fails.
+file(COPY_FILE "${WORK}/ml.afam" "${WORK}/damaged.afam")
+file(SIZE "${WORK}/damaged.afam" size)
+foreach (fraction 50 95)
+  math(EXPR at "${size} * ${fraction} / 100")
+  execute_process(COMMAND dd if=/dev/zero of=damaged.afam bs=1 seek=${at} count=8 conv=notrunc
+                  WORKING_DIRECTORY "${WORK}" RESULT_VARIABLE rc ERROR_QUIET)
+endforeach ()
+execute_process(COMMAND ${AFAM} verify damaged.afam WORKING_DIRECTORY "${WORK}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(REGEX MATCHALL "damaged: [^\n]*payload checksum mismatch at level [0-9] block" listed "${err}")
+list(LENGTH listed n)
+if (rc EQUAL 0 OR NOT n EQUAL 2 OR NOT err MATCHES "2 of [0-9]+ micro-models damaged")
+  message(FATAL_ERROR "verify of a file with two damaged payloads (rc ${rc}): ${err}")
+endif ()
 
 run_ok(out ${AFAM} decode ml.afam --level 1 l1.raw)
 if (NOT out MATCHES "21x21x21")

@@ -29,6 +29,8 @@ struct vtkAFAMCoreRenderer::Internals
   std::shared_ptr<void> Gpu;
 #endif
   std::string GpuUnusable;
+  // The open file's damaged blocks, kept across renderer rebuilds: each is reported once per file.
+  std::shared_ptr<afam::DamageLog> Damage;
   std::vector<std::string> Messages; // filled by the GPU caster, drained into each frame's stats
 
   int64_t GpuUploads() const
@@ -101,6 +103,7 @@ void vtkAFAMCoreRenderer::Open(const std::string& path)
   this->Impl->File.reset();
   this->OpenPath.clear();
   this->Impl->File = afam::AfamFile::open(path); // throws afam::Error naming the file
+  this->Impl->Damage = std::make_shared<afam::DamageLog>();
   this->OpenPath = path;
 }
 
@@ -136,7 +139,7 @@ void vtkAFAMCoreRenderer::Render(
   {
     m.Gpu.reset();
     m.Renderer.reset(); // the old cache and prefetch thread go before the new ones come
-    m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings);
+    m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);
     m.Resources = resources;
     m.GpuWanted = wantGpu;
     stats.RendererBuilt = true;
@@ -156,6 +159,9 @@ void vtkAFAMCoreRenderer::Render(
   stats.CulledBlocks = frame.culled.frustumBlocks + frame.culled.tfBlocks;
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
+  stats.DamagedBlocks = frame.damagedBlocks;
+  stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
+  stats.DamageReports = std::move(frame.damageReports);
   stats.UsedGpu = m.Gpu != nullptr;
   stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
   stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)

@@ -49,6 +49,10 @@ struct vtkAFAMFrameStats
   /// usable GPU: CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)"); empty
   /// otherwise. Only set when the GPU was asked for (Device 0 or 2).
   std::vector<std::string> DeviceMessages;
+  /// Damaged micro-models: in this frame's selection (drawn from another level), and known in the
+  /// file so far; the reports of blocks first found damaged during this frame (each block once).
+  int64_t DamagedBlocks = 0, KnownDamagedBlocks = 0;
+  std::vector<std::string> DamageReports;
   /// One sentence per unusable setting of the request: what was asked and what was kept.
   std::vector<std::string> SettingWarnings;
 };

@@ -301,6 +301,7 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   settings.sampleDistance = static_cast<float>(sampleWorld / lengthUnit);
   settings.lod.policy =
     this->LodPolicy == LOD_SCREEN_SPACE ? afam::LodPolicy::Screen : afam::LodPolicy::Distance;
+  settings.lod.pixelBudget = this->LodPixelBudget;
   // Composite, maximum, minimum and average intensity (VTK's numbering); other modes are drawn
   // composite, with one warning.
   const int blend = this->GetBlendMode();
@@ -404,6 +405,25 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   this->LastCulledBlocks = stats.CulledBlocks;
   this->LastVisibleBlocks = stats.VisibleBlocks;
   this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
+  this->LastDamagedBlocks = stats.DamagedBlocks;
+  this->KnownDamagedBlocks = stats.KnownDamagedBlocks;
+  // Blocks first found damaged in this frame: one warning (Core reads and reports each block only
+  // once per file), the first few in full so that a truncated file does not flood the window.
+  if (!stats.DamageReports.empty())
+  {
+    const size_t shown = std::min<size_t>(stats.DamageReports.size(), 4);
+    std::string text;
+    for (size_t i = 0; i < shown; ++i)
+    {
+      text += (i ? "\n" : "") + stats.DamageReports[i];
+    }
+    if (stats.DamageReports.size() > shown)
+    {
+      text += "\n... and " + std::to_string(stats.DamageReports.size() - shown) +
+        " more damaged micro-models in this frame";
+    }
+    vtkWarningMacro(<< text);
+  }
   this->LastUsedGpu = stats.UsedGpu;
   this->LastGpuModelsUploaded = stats.GpuModelsUploaded;
   this->LastUsedBlendMode = frame.Request.Settings.blendMode;
@@ -441,6 +461,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "LodPolicy: " << this->LodPolicy << "\n";
+  os << indent << "LodPixelBudget: " << this->LodPixelBudget << "\n";
   os << indent << "CacheBudgetMB: " << this->CacheBudgetMB << "\n";
   os << indent << "Prefetcher: " << this->Prefetcher << "\n";
   os << indent << "RenderDevice: " << this->RenderDevice << "\n";
@@ -458,6 +479,8 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";
   os << indent << "LastVisibleBlocks: " << this->LastVisibleBlocks << "\n";
   os << indent << "LastBytesRead: " << this->LastBytesRead << "\n";
+  os << indent << "LastDamagedBlocks: " << this->LastDamagedBlocks << "\n";
+  os << indent << "KnownDamagedBlocks: " << this->KnownDamagedBlocks << "\n";
   os << indent << "LastUsedGpu: " << this->LastUsedGpu << "\n";
   os << indent << "LastUsedBlendMode: " << this->LastUsedBlendMode << "\n";
   os << indent << "LastGpuModelsUploaded: " << this->LastGpuModelsUploaded << "\n";

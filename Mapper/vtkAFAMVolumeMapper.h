@@ -78,11 +78,19 @@ public:
   };
 
   ///@{
-  /// LOD policy: LOD_DISTANCE_BANDS (default) or LOD_SCREEN_SPACE.
+  /// LOD policy: LOD_SCREEN_SPACE (default: a still frame as sharp as VTK's own volume mappers
+  /// draw the samples) or LOD_DISTANCE_BANDS (the paper's benchmarks).
   vtkSetClampMacro(LodPolicy, int, LOD_DISTANCE_BANDS, LOD_SCREEN_SPACE);
   vtkGetMacro(LodPolicy, int);
   void SetLodPolicyToDistanceBands() { this->SetLodPolicy(LOD_DISTANCE_BANDS); }
   void SetLodPolicyToScreenSpace() { this->SetLodPolicy(LOD_SCREEN_SPACE); }
+  ///@}
+
+  ///@{
+  /// Screen-space LOD: a region is refined while its sample spacing projects to more than this
+  /// many pixels. Default 1 (every sample the screen can show), range [0.25, 64].
+  vtkSetClampMacro(LodPixelBudget, double, 0.25, 64.0);
+  vtkGetMacro(LodPixelBudget, double);
   ///@}
 
   ///@{
@@ -184,6 +192,11 @@ public:
   vtkGetMacro(NumberOfRendererBuilds, vtkTypeInt64);
   /// What was wrong with the last frame's settings and what was kept instead (empty: nothing).
   const char* GetLastSettingWarning() { return this->LastSettingWarning.c_str(); }
+  /// Damaged micro-models (checksum mismatch) in the last frame's selection, drawn from the nearest
+  /// intact level instead; and all the blocks of the file found damaged so far. Each is reported
+  /// once with a vtkWarning naming the file, level and block, and never read again.
+  vtkGetMacro(LastDamagedBlocks, vtkTypeInt64);
+  vtkGetMacro(KnownDamagedBlocks, vtkTypeInt64);
   /// Pixels of the last frame whose rays were cut short by opaque geometry.
   vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
   /// Image scale of the last frame (1 = full size; below 1 for interactive frames).
@@ -218,7 +231,8 @@ protected:
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;
-  int LodPolicy = LOD_DISTANCE_BANDS;
+  int LodPolicy = LOD_SCREEN_SPACE;
+  double LodPixelBudget = 1.0;
   double CacheBudgetMB = 512;
   int Prefetcher = PREFETCH_NONE;
   int RenderDevice = DEVICE_AUTO;
@@ -235,6 +249,7 @@ protected:
   double LastCachingTime = 0, LastRenderTime = 0, LastTotalTime = 0;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
+  vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0;
   bool LastUsedGpu = false;
   int LastUsedBlendMode = COMPOSITE_BLEND;
   vtkTypeInt64 LastGpuModelsUploaded = -1, NumberOfRendererBuilds = 0;

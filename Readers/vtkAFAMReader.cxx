@@ -21,6 +21,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdio>
+#include <string>
 
 vtkStandardNewMacro(vtkAFAMReader);
 
@@ -62,15 +64,25 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   {
     return 0;
   }
-  try
+  // Claimed without parsing the rest: a damaged, truncated or newer file is the reader's to
+  // explain (RequestData names what is wrong), not ParaView's "No reader found".
+  if (afam::startsWithAfamMagic(filename))
   {
-    afam::AfamFile::open(filename);
     return 1;
   }
-  catch (const std::exception&)
+  // An .afam name that cannot be read at all (missing, no permission) is claimed for the same
+  // reason; any other file is not ours.
+  const std::string name(filename);
+  const std::string ext = ".afam";
+  const bool afamName =
+    name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
+  FILE* f = afamName ? std::fopen(filename, "rb") : nullptr;
+  if (f)
   {
-    return 0;
+    std::fclose(f);
+    return 0; // readable, but not an .afam file
   }
+  return afamName ? 1 : 0;
 }
 
 int vtkAFAMReader::RequestInformation(

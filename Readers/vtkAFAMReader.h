@@ -50,7 +50,9 @@ public:
   vtkGetMacro(DecodeLevel, int);
   ///@}
 
-  /// 1 when `filename` starts with the .afam magic and its header parses, 0 otherwise. Never throws.
+  /// 1 when `filename` starts with the .afam magic (whether or not the rest is valid: the reader
+  /// then reports what is wrong: truncated, checksum, version), or is an .afam name that cannot be
+  /// read (missing, no permission); 0 otherwise. Never throws.
   static int CanReadFile(const char* filename);
 
 protected:

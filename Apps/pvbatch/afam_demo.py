@@ -223,6 +223,7 @@ def main():
             mean_half = scene.point_of_view(a.trajectory, v, display, reader, bounds, lo, hi)
             display.AFAMSampleDistance = a.sample_distance * mean_half
             display.AFAMThreads = a.threads
+            display.AFAMLodPolicy = "Distance bands"  # the paper's policy, as `afam render` uses
             scene.warm_up()
             cli_png = os.path.join(a.out, "afam_%s_%d.png" % (name, v))
             plugin, core, cli = [], [], []

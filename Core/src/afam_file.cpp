@@ -480,6 +480,15 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   return f;
 }
 
+bool startsWithAfamMagic(const std::string& path) {
+  char m[8] = {};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const ssize_t r = ::pread(fd, m, sizeof m, 0);
+  ::close(fd);
+  return r == ssize_t(sizeof m) && std::memcmp(m, kMagic, sizeof m) == 0;
+}
+
 int64_t AfamFile::entryIndex(int level, Int3 ijk) const {
   if (level < 0 || level >= header_.levels) return -1;
   const Int3 b = partition_.blocksPerAxis(level);

@@ -13,8 +13,10 @@ namespace afam {
 
 using Clock = std::chrono::steady_clock;
 
-LruCache::LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget)
-    : file_(std::move(file)), budget_(budget) {
+LruCache::LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
+                   std::shared_ptr<DamageLog> damage)
+    : file_(std::move(file)), budget_(budget),
+      damage_(damage ? std::move(damage) : std::make_shared<DamageLog>()) {
   if (!file_) throw InvalidArgument("cache: no file");
 }
 
@@ -53,7 +55,12 @@ Payload LruCache::load(int64_t entry) {
   const ModelEntry& e = file_->entries().at(size_t(entry));
   auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
   const auto t0 = Clock::now();
-  file_->readPayload(entry, data->data());
+  try {
+    file_->readPayload(entry, data->data());
+  } catch (const FormatError& ex) {
+    damage_->record(*file_, entry, ex.what());
+    throw;
+  }
   throttle(e.size, t0);
   const double s = std::chrono::duration<double>(Clock::now() - t0).count();
   std::lock_guard<std::mutex> g(mutex_);
@@ -101,6 +108,11 @@ Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
     if (!loading_.count(entry)) break;
     loaded_.wait(lock);  // another thread is reading it
   }
+  if (damage_->isDamaged(entry)) {  // found damaged before: not read again
+    const ModelEntry& e = file_->entries().at(size_t(entry));
+    throw FormatError(file_->path() + ": " + Partition::blockName(e.level, e.block) +
+                      " is damaged (its checksum failed before)");
+  }
   if (purpose == Purpose::Frame) stats_.misses++;
   if (wasHit) *wasHit = false;
   loading_.insert(entry);
@@ -135,13 +147,23 @@ Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
   return data;
 }
 
+Payload LruCache::getIntact(int64_t entry, Purpose purpose) {
+  if (damage_->isDamaged(entry)) return nullptr;
+  try {
+    return get(entry, purpose);
+  } catch (const FormatError&) {
+    if (damage_->isDamaged(entry)) return nullptr;  // recorded by load(), here or in another thread
+    throw;
+  }
+}
+
 bool LruCache::prefetch(int64_t entry) {
   {
     std::lock_guard<std::mutex> g(mutex_);
     if (map_.count(entry) || loading_.count(entry)) return false;
   }
-  get(entry, Purpose::Prefetch);
-  return true;
+  if (damage_->isDamaged(entry)) return false;
+  return getIntact(entry, Purpose::Prefetch) != nullptr;
 }
 
 bool LruCache::contains(int64_t entry) const {

@@ -79,8 +79,9 @@ void Prefetcher::run() {
     try {
       if (job) job(stop_, loaded);
     } catch (...) {
-      // A failed prefetch read is not fatal: the frame that needs the block reads it again and
-      // reports the error there.
+      // A failed prefetch read is not fatal. A damaged payload never gets here (the cache records
+      // it and skips it); another error (I/O) is met again by the frame that needs the block,
+      // which reports it.
     }
     lock.lock();
     running_ = false;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <unordered_map>
 
 #include "afam/cpu_raycaster.hpp"
 #include "afam/errors.hpp"
@@ -28,7 +29,7 @@ void PreparedFrame::bind() {
 }
 
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
-                   FrameSettings settings)
+                   FrameSettings settings, std::shared_ptr<DamageLog> damage)
     : file_(std::move(file)), resources_(std::move(resources)) {
   if (!file_) throw InvalidArgument("renderer: no file");
   if (resources_.threads < 0) throw InvalidArgument("renderer: threads must be >= 0");
@@ -36,7 +37,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   tfLo_ = h.valueMin;
   tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
   setFrameSettings(settings);
-  cache_ = std::make_unique<LruCache>(file_, resources_.cache);
+  cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
   prefetcher_ = std::make_unique<Prefetcher>();
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
@@ -127,61 +128,90 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.bind();
 }
 
+std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st) {
+  std::vector<int64_t> pins;
+  pins.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
+  cache_->setPinned(pins);
+  const IntactLoader load = [this](int64_t entry) {
+    return cache_->getIntact(entry, LruCache::Purpose::Frame);
+  };
+  std::vector<Placement> placed;
+  placed.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) {
+    if (auto data = load(b.entry)) {
+      placed.push_back(Placement{b, b, std::move(data)});
+      continue;
+    }
+    st.damagedBlocks++;
+    if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
+  }
+  return placed;
+}
+
+int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
+  const Partition& p = file_->partition();
+  const bool raw = file_->header().mode == EncodingMode::Downsampled;
+  const ModelEntry& e = file_->entries()[size_t(model.entry)];
+  FrameSlot s;
+  s.kind = raw ? kSlotRaw : kSlotSpline;
+  s.level = model.level;
+  const BlockExtent ext = p.extent(model.level, model.ijk);
+  for (int a = 0; a < 3; ++a) {
+    if (raw) {
+      s.knots[a] = Knots{};
+      s.knots[a].ncp = e.ncp[a];
+      s.knots[a].degree = 1;
+    } else {
+      s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
+    }
+    s.lo[a] = float(ext.lo[a]);
+    s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
+  }
+  s.offset = offset;
+  fr.slots.push_back(s);
+  fr.entries.push_back(model.entry);
+  return int32_t(fr.slots.size() - 1);
+}
+
+void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr) const {
+  const Partition& p = file_->partition();
+  const Int3 bf = p.blocksPerAxis(p.levels() - 1);
+  const int r = p.stride(region.level);
+  int c0[3], c1[3];
+  for (int a = 0; a < 3; ++a) {
+    c0[a] = region.ijk[a] * r;
+    c1[a] = std::min((region.ijk[a] + 1) * r, bf[a]);
+  }
+  for (int z = c0[2]; z < c1[2]; ++z)
+    for (int y = c0[1]; y < c1[1]; ++y)
+      for (int x = c0[0]; x < c1[0]; ++x) fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+}
+
 void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
   const auto t0 = Clock::now();
   const CacheStats before = cache_->stats();
   const Selection sel = select(camera);
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
-  const Partition& p = file_->partition();
-  const bool raw = file_->header().mode == EncodingMode::Downsampled;
-  const auto& entries = file_->entries();
-  const int finest = p.levels() - 1;
-  const Int3 bf = p.blocksPerAxis(finest);
+  const std::vector<Placement> placed = loadModels(sel, st);
+  // One slot per model: a coarser model standing in for several damaged blocks is stored once
+  // (the GPU pool keys its models by entry) and covers each of their regions.
+  std::unordered_map<int64_t, int32_t> slotOf;
   uint64_t poolFloats = 0;
-  for (const BlockRef& b : sel.visible) poolFloats += entries[size_t(b.entry)].size / sizeof(float);
+  for (const Placement& m : placed)
+    if (slotOf.emplace(m.model.entry, -1).second) poolFloats += m.data->size();
   fr.pool.resize(poolFloats);
-  fr.slots.reserve(sel.visible.size());
-  std::vector<int64_t> pins;
-  pins.reserve(sel.visible.size());
-  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
-  cache_->setPinned(pins);
+  fr.slots.reserve(slotOf.size());
   uint64_t offset = 0;
-  for (const BlockRef& b : sel.visible) {
-    const ModelEntry& e = entries[size_t(b.entry)];
-    const Payload data = cache_->get(b.entry, LruCache::Purpose::Frame);
-    std::memcpy(fr.pool.data() + offset, data->data(), data->size() * sizeof(float));
-    FrameSlot s;
-    s.kind = raw ? kSlotRaw : kSlotSpline;
-    s.level = b.level;
-    const BlockExtent ext = p.extent(b.level, b.ijk);
-    for (int a = 0; a < 3; ++a) {
-      if (raw) {
-        s.knots[a] = Knots{};
-        s.knots[a].ncp = e.ncp[a];
-        s.knots[a].degree = 1;
-      } else {
-        s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
-      }
-      s.lo[a] = float(ext.lo[a]);
-      s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
+  for (const Placement& m : placed) {
+    int32_t& slot = slotOf[m.model.entry];
+    if (slot < 0) {
+      std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+      slot = addSlot(m.model, fr, offset);
+      offset += m.data->size();
     }
-    s.offset = offset;
-    offset += data->size();
-    const int32_t slot = int32_t(fr.slots.size());
-    fr.slots.push_back(s);
-    fr.entries.push_back(b.entry);
-    // Finest cells covered by this block.
-    const int r = p.stride(b.level);
-    int c0[3], c1[3];
-    for (int a = 0; a < 3; ++a) {
-      c0[a] = b.ijk[a] * r;
-      c1[a] = std::min((b.ijk[a] + 1) * r, bf[a]);
-    }
-    for (int z = c0[2]; z < c1[2]; ++z)
-      for (int y = c0[1]; y < c1[1]; ++y)
-        for (int x = c0[0]; x < c1[0]; ++x)
-          fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+    fillCells(m.region, slot, fr);
   }
   fr.bind();
   const CacheStats after = cache_->stats();
@@ -189,6 +219,8 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.misses = after.misses - before.misses;
   st.slots = int64_t(fr.slots.size());
   st.poolBytes = fr.pool.size() * sizeof(float);
+  st.damageReports = cache_->damage().takeReports();
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
   st.cachingMs = msSince(t0);
 }
 
@@ -238,6 +270,8 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   st.renderMs = msSince(t0);
   prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
   cache_->clearPinned();
+  for (std::string& r : cache_->damage().takeReports()) st.damageReports.push_back(std::move(r));
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
   const CacheStats after = cache_->stats();
   st.bytesRead = after.bytesRead - before.bytesRead;
   st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;

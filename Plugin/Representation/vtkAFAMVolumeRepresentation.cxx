@@ -161,6 +161,7 @@ void vtkAFAMVolumeRepresentation::SetDiffuse(double v) { this->Property->SetDiff
 void vtkAFAMVolumeRepresentation::SetSpecular(double v) { this->Property->SetSpecular(v); }
 void vtkAFAMVolumeRepresentation::SetSpecularPower(double v) { this->Property->SetSpecularPower(v); }
 void vtkAFAMVolumeRepresentation::SetLodPolicy(int v) { this->Mapper->SetLodPolicy(v); }
+void vtkAFAMVolumeRepresentation::SetLodPixelBudget(double v) { this->Mapper->SetLodPixelBudget(v); }
 void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v) { this->Mapper->SetCacheBudgetMB(v); }
 void vtkAFAMVolumeRepresentation::SetPrefetcher(int v) { this->Mapper->SetPrefetcher(v); }
 void vtkAFAMVolumeRepresentation::SetRenderDevice(int v) { this->Mapper->SetRenderDevice(v); }

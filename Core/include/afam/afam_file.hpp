@@ -99,6 +99,10 @@ uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes);
 /// per-axis NCP and degree: 1 + (sum_a (ncp_a + p_a) + prod_a ncp_a) * 4.
 uint64_t paperModelBytes(const Int3& ncp, const Int3& degree);
 
+/// True when the file's first 8 bytes are the .afam magic; false when they are not or the file
+/// cannot be read. Readers claim such files and let AfamFile::open say what is wrong with them.
+bool startsWithAfamMagic(const std::string& path);
+
 class AfamFile {  // read-only; opening reads only header and index
  public:
   /// Throws FormatError (not an .afam file, damaged) or IoError (cannot open/read), each message

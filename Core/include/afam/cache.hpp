@@ -22,6 +22,9 @@
 // per wall-clock second never exceed the cap. Real read time is included (the sleep only tops it
 // up). It models throughput, not seek latency.
 //
+// Damage: a load whose payload fails its checksum (FormatError) records the entry in the cache's
+// DamageLog; getIntact() and prefetch() never read a recorded entry again (damage.hpp).
+//
 // Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
 // the lock, and a block being loaded by one thread is waited for, not read twice.
 #pragma once
@@ -37,6 +40,7 @@
 #include <vector>
 
 #include "afam/afam_file.hpp"
+#include "afam/damage.hpp"
 
 namespace afam {
 
@@ -60,13 +64,19 @@ class LruCache {
  public:
   enum class Purpose { Frame, Prefetch };
 
-  LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget);
+  /// damage: the file's damage log, shared with earlier caches of the same file so that a block
+  /// is reported and read once per file (null: a new one).
+  LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
+           std::shared_ptr<DamageLog> damage = nullptr);
 
   /// Returns the payload of an entry, loading it on a miss. Frame lookups count hits and misses
   /// and mark the block most recently used. Throws what AfamFile::readPayload throws.
   Payload get(int64_t entry, Purpose purpose = Purpose::Frame, bool* wasHit = nullptr);
-  /// Prefetch: loads the entry if absent (never evicting pinned blocks). Returns true if a read
-  /// happened.
+  /// Like get(), but null for a damaged entry: one found damaged now (recorded in damage()) or
+  /// before (not read again). Other errors (I/O) are thrown.
+  Payload getIntact(int64_t entry, Purpose purpose = Purpose::Frame);
+  /// Prefetch: loads the entry if absent (never evicting pinned blocks) and not known damaged.
+  /// Returns true if a read happened; a damaged payload is recorded, not thrown.
   bool prefetch(int64_t entry);
   bool contains(int64_t entry) const;
 
@@ -87,6 +97,8 @@ class LruCache {
   std::vector<int64_t> lruOrder() const;
   const CacheBudget& budget() const { return budget_; }
   const AfamFile& file() const { return *file_; }
+  DamageLog& damage() { return *damage_; }
+  const std::shared_ptr<DamageLog>& damageLog() const { return damage_; }
 
  private:
   struct Node {
@@ -100,6 +112,7 @@ class LruCache {
 
   std::shared_ptr<const AfamFile> file_;
   CacheBudget budget_;
+  std::shared_ptr<DamageLog> damage_;
   mutable std::mutex mutex_;
   std::condition_variable loaded_;
   std::list<int64_t> lru_;  // front = most recent

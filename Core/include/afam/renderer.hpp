@@ -25,6 +25,7 @@
 #include "afam/afam_file.hpp"
 #include "afam/cache.hpp"
 #include "afam/camera.hpp"
+#include "afam/damage.hpp"
 #include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
 #include "afam/lod.hpp"
@@ -58,6 +59,12 @@ struct FrameStats {
   /// The cache's resident bytes at the end of the frame, and the most it held during the frame
   /// (frame and prefetch loads); both stay within the cache's byte budget.
   uint64_t cacheBytes = 0, cachePeakBytes = 0;
+  /// Damaged micro-models (damage.hpp): blocks of this frame's selection that are damaged (drawn
+  /// from a coarser or finer level), of which those whose region stayed empty; every block of the
+  /// file known to be damaged so far; and the reports of blocks first found damaged during this
+  /// frame (by its loads or its prefetching), one sentence each, each handed out once.
+  int64_t damagedBlocks = 0, emptyDamagedBlocks = 0, knownDamagedBlocks = 0;
+  std::vector<std::string> damageReports;
 };
 
 /// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if
@@ -75,8 +82,10 @@ struct PreparedFrame {
 
 class Renderer {
  public:
+  /// damage: the file's damage log from an earlier Renderer of the same file (null: a new one),
+  /// so that a damaged block is reported and read once per file however often the resources change.
   Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
-           FrameSettings settings = {});
+           FrameSettings settings = {}, std::shared_ptr<DamageLog> damage = nullptr);
   Renderer(std::shared_ptr<const AfamFile> file, const RenderOptions& options)
       : Renderer(std::move(file), RendererResources(options), FrameSettings(options)) {}
   ~Renderer();
@@ -102,7 +111,8 @@ class Renderer {
   Selection select(const Camera& camera) const;
   /// A FrameView with camera, geometry, TF and shading set, and no models (cellSlot all -1).
   void prepareEmpty(const Camera& camera, PreparedFrame& frame) const;
-  /// The caching step: selection, cache loads, FrameView + pool. Fills stats' caching fields.
+  /// The caching step: selection, cache loads (a damaged model replaced as damage.hpp says),
+  /// FrameView + pool. Fills stats' caching and damage fields.
   void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
   /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
   /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
@@ -120,6 +130,10 @@ class Renderer {
   void setRayCaster(RayCaster caster) { caster_ = std::move(caster); }
 
  private:
+  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
+  int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
+  void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
+
   std::shared_ptr<const AfamFile> file_;
   RendererResources resources_;
   FrameSettings settings_;

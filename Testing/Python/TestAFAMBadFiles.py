@@ -1,0 +1,84 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""pvpython: a file that starts with the .afam magic is claimed by the reader, which says what is
+wrong with it (truncated with the bytes expected and found, a damaged header, an unreadable file),
+naming the path, instead of ParaView's "No reader found"."""
+import os
+import shutil
+import sys
+
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
+import afam_test_util as u  # noqa: E402
+
+from paraview.simple import OpenDataFile  # noqa: E402
+from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow  # noqa: E402
+
+u.load_plugin(globals())
+out = u.out_dir()
+good = os.path.join(out, "wavelet.afam")
+u.encode_wavelet(globals(), [-10, 10, -10, 10, -10, 10], 3, 4, 0.01, good)
+data = open(good, "rb").read()
+
+def open_and_report(path):
+    """The errors ParaView's output window shows for opening `path` and updating the reader.
+    (pvpython's print goes through the output window too: it is captured only meanwhile.)"""
+    console = vtkOutputWindow.GetInstance()
+    messages = vtkStringOutputWindow()
+    vtkOutputWindow.SetInstance(messages)
+    produced = 0
+    try:
+        reader = OpenDataFile(path)
+        if reader is not None:
+            reader.UpdatePipeline()
+            produced = reader.GetDataInformation().GetNumberOfDataSets()
+        text = messages.GetOutput() if reader is not None else "no reader found " + messages.GetOutput()
+    except RuntimeError as e:
+        text = "OpenDataFile refused it: %s %s" % (e, messages.GetOutput())
+    finally:
+        vtkOutputWindow.SetInstance(console)
+    if produced != 0:
+        u.fail("%s produced data" % path)
+    return text
+
+
+def expect(path, *words):
+    text = open_and_report(path)
+    print("%s -> %s" % (os.path.basename(path), " ".join(text.split())[:400]))
+    for w in (path,) + words:
+        if w not in text:
+            u.fail("the message for %s lacks '%s': %s" % (path, w, text))
+    if "No reader found" in text or "no reader found" in text:
+        u.fail("ParaView's generic message for %s" % path)
+
+
+# The first 60% of a valid file.
+truncated = os.path.join(out, "truncated.afam")
+cut = int(0.6 * len(data))
+with open(truncated, "wb") as f:
+    f.write(data[:cut])
+expect(truncated, "truncated", "%d bytes" % cut, "header says %d" % len(data))
+
+# A damaged header (a byte inside the volume's dimensions flipped): its checksum fails.
+header = os.path.join(out, "header.afam")
+damaged = bytearray(data)
+damaged[40] ^= 0xFF
+with open(header, "wb") as f:
+    f.write(bytes(damaged))
+text = open_and_report(header)
+print("header.afam -> %s" % " ".join(text.split())[:400])
+if header not in text or not ("checksum" in text or "absurd" in text or "unsupported" in text):
+    u.fail("the damaged header is not named: %s" % text)
+
+# A newer format version (docs/FORMAT.md: the version is the uint32 at byte 8).
+newer = os.path.join(out, "newer.afam")
+damaged = bytearray(data)
+damaged[8:12] = (99).to_bytes(4, "little")
+with open(newer, "wb") as f:
+    f.write(bytes(damaged))
+expect(newer, "unsupported format version 99")
+
+# An .afam that cannot be read at all: ParaView's own check names it before any reader is asked.
+missing = os.path.join(out, "missing.afam")
+if os.path.exists(missing):
+    os.remove(missing)
+expect(missing, "not readable")
+print("bad files: every message names the file and the problem")

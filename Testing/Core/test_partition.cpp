@@ -147,3 +147,17 @@ TEST(Partition, BlockName) {
   EXPECT_EQ(Partition::blockName(2, {3, 0, 7}), "level 2 block (3, 0, 7)");
   EXPECT_EQ(Partition::blockName(0, {0, 0, 0}), "level 0 block (0, 0, 0)");
 }
+
+TEST(Partition, DefaultShapeFollowsTheDimensions) {
+  auto shape = [](afam::Index3 d) {
+    const afam::PartitionShape s = afam::defaultPartition(d);
+    return std::array<int, 2>{s.levels, s.blocksPerAxis};
+  };
+  EXPECT_EQ(shape({1025, 1025, 1025}), (std::array<int, 2>{4, 16})) << "the paper's setting at 1024^3";
+  EXPECT_EQ(shape({1024, 1024, 1024}), (std::array<int, 2>{4, 16}));
+  EXPECT_EQ(shape({257, 257, 257}), (std::array<int, 2>{2, 4}));
+  EXPECT_EQ(shape({66, 66, 66}), (std::array<int, 2>{1, 1}));
+  EXPECT_EQ(shape({2049, 100, 3}), (std::array<int, 2>{5, 32})) << "the longest axis decides";
+  EXPECT_EQ(shape({1, 1, 1}), (std::array<int, 2>{1, 1}));
+  EXPECT_THROW(afam::defaultPartition({64, 64, 64}, 1), afam::InvalidArgument);
+}

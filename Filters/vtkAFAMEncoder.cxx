@@ -21,6 +21,7 @@
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 #include <unistd.h>
@@ -199,6 +200,16 @@ int vtkAFAMEncoder::RequestData(
     this->ModelFile = path;
     this->LastEncodeSeconds = stats.seconds;
     this->LastMaxRmse = stats.maxRmse;
+    this->LastMaxError = stats.maxError;
+    this->LastBound = stats.bound;
+    std::ostringstream report;
+    for (size_t l = 0; l < stats.levels.size(); ++l)
+    {
+      report << (l ? "\n" : "") << "level " << l << ": max_rmse=" << stats.levels[l].maxRmse
+             << " max_error=" << stats.levels[l].maxError << " bound=" << stats.bound;
+    }
+    this->LastLevelReport = report.str();
+    vtkDebugMacro(<< "encoded within the bound " << stats.bound << ":\n" << this->LastLevelReport);
     this->LastCompressionRatio =
       stats.bytesOut > 0 ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut) : 0;
     auto file = afam::AfamFile::open(path);

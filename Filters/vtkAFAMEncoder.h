@@ -90,10 +90,14 @@ public:
   const char* GetModelFileName() { return this->ModelFile.c_str(); }
 
   ///@{
-  /// Statistics of the last encoding.
+  /// Statistics of the last encoding: the largest block RMSE and absolute error (each block's on its
+  /// own samples) beside the absolute RMSE bound every block met, and one line per level with the same.
   vtkGetMacro(LastEncodeSeconds, double);
   vtkGetMacro(LastMaxRmse, double);
+  vtkGetMacro(LastMaxError, double);
+  vtkGetMacro(LastBound, double);
   vtkGetMacro(LastCompressionRatio, double);
+  const char* GetLastLevelReport() { return this->LastLevelReport.c_str(); }
   ///@}
 
 protected:
@@ -115,7 +119,8 @@ protected:
   int Mode = MODE_ADAPTIVE;
   int FixedNcp = 0;
   int NumberOfThreads = 0;
-  double LastEncodeSeconds = 0, LastMaxRmse = 0, LastCompressionRatio = 0;
+  double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0, LastCompressionRatio = 0;
+  std::string LastLevelReport;
   std::string ModelFile;
 
 private:

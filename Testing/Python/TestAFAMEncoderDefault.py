@@ -20,3 +20,15 @@ expected = 2 ** 3 + 1 + 1  # levels 1 and 0, and the value-range probe
 print("encoded without a chosen array: %d leaves (expected %d)" % (leaves, expected))
 if leaves != expected:
     u.fail("the encoder did not encode the image's only point array")
+
+# The encode reports what it achieved beside the bound, per level.
+encoder.UpdatePropertyInformation()
+rmse = encoder.GetProperty("LastMaxRmse").GetData()
+error = encoder.GetProperty("LastMaxError").GetData()
+bound = encoder.GetProperty("LastBound").GetData()
+report = encoder.GetProperty("LastLevelReport").GetData()
+print("max block rmse %g, max error %g, bound %g\n%s" % (rmse, error, bound, report))
+if not (0 < bound and 0 <= rmse <= bound and error >= rmse):
+    u.fail("encoder statistics: rmse %g error %g bound %g" % (rmse, error, bound))
+if report.count("level ") != 2 or "bound=" not in report:
+    u.fail("per-level report: %r" % report)

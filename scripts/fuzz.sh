@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
     *) targets+=("$1"); shift ;;
   esac
 done
-[ ${#targets[@]} -gt 0 ] || targets=(afam_file raw_file trajectory lstm_weights)
+[ ${#targets[@]} -gt 0 ] || targets=(afam_file raw_file volume_header trajectory lstm_weights)
 jobs="${AFAM_JOBS:-$(nproc)}"
 generator=()
 if command -v ninja >/dev/null 2>&1; then generator=(-G Ninja); fi

@@ -2,7 +2,7 @@
 // Writes the seed corpus of the fuzz targets: small valid inputs of every kind, made by the same
 // code that makes real files (the encoder, the writer), so a format change changes the seeds too.
 //   make_fuzz_seeds OUT_DIR
-// creates OUT_DIR/{afam_file,raw_file,trajectory,lstm_weights}/seed-* (control bytes as each
+// creates OUT_DIR/{afam_file,raw_file,volume_header,trajectory,lstm_weights}/seed-* (control bytes as each
 // fuzz target expects them).
 #include <sys/stat.h>
 
@@ -96,6 +96,34 @@ void rawSeeds(const std::string& out) {
   }
 }
 
+// NRRD (control 0) and MetaImage (control 1) files with their samples attached: raw and compressed.
+void volumeHeaderSeeds(const std::string& out) {
+  const std::string dir = out + "/volume_header";
+  Bytes samples;
+  for (int i = 0; i < 24; ++i) samples.push_back(static_cast<uint8_t>(i * 11));
+  auto withText = [&](const std::string& text, const Bytes& payload) {
+    Bytes b(text.begin(), text.end());
+    b.insert(b.end(), payload.begin(), payload.end());
+    return b;
+  };
+  writeSeed(dir, "nrrd-raw", 0,
+            withText("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nspacings: 1 2 3\nencoding: raw\n\n", samples));
+  writeSeed(dir, "nrrd-int16", 0,
+            withText("NRRD0004\ntype: short\ndimension: 3\nsizes: 2 3 2\nendian: little\nencoding: raw\n\n", samples));
+  writeSeed(dir, "mha-raw", 1,
+            withText("NDims = 3\nDimSize = 4 3 2\nElementType = MET_UCHAR\nElementSpacing = 1 1 2\n"
+                     "ElementDataFile = LOCAL\n",
+                     samples));
+  // zlib stream of 24 zero bytes (stored block: header 78 01, then 01 18 00 e7 ff, data, adler32)
+  Bytes zlib = {0x78, 0x01, 0x01, 0x18, 0x00, 0xe7, 0xff};
+  zlib.insert(zlib.end(), 24, 0);
+  for (uint8_t v : {0x00, 0x18, 0x00, 0x01}) zlib.push_back(v);
+  writeSeed(dir, "mha-zlib", 1,
+            withText("NDims = 3\nDimSize = 4 3 2\nElementType = MET_UCHAR\nCompressedData = True\n"
+                     "ElementDataFile = LOCAL\n",
+                     zlib));
+}
+
 void trajectorySeeds(const std::string& out) {
   const std::string dir = out + "/trajectory";
   // Stored as three planes: distances, then theta, then phi (camera.cpp).
@@ -151,6 +179,7 @@ int main(int argc, char** argv) {
     ::mkdir(out.c_str(), 0755);
     afamSeeds(out);
     rawSeeds(out);
+    volumeHeaderSeeds(out);
     trajectorySeeds(out);
     lstmSeeds(out);
   } catch (const std::exception& e) {

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "afam/cpu_raycaster.hpp"
+#include "afam/device_selection.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
 
 namespace afam {
@@ -16,11 +17,13 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
     report("no usable GPU: " + why);
     return result;
   }
+  // One GPU per MPI rank on a node with several (device_selection.hpp).
+  const int device = selectGpuDevice(gpuDeviceCount());
   std::shared_ptr<GpuRenderer> gpu;
   const size_t minBudget = size_t(16) << 20;
   for (size_t budget = budgetBytes; !gpu && budget >= minBudget; budget /= 2) {
     try {
-      gpu = std::make_shared<GpuRenderer>(budget);
+      gpu = std::make_shared<GpuRenderer>(budget, device);
     } catch (const GpuOutOfMemory& e) {
       report("GPU pool of " + std::to_string(budget >> 20) + " MiB: " + e.what() + "; trying half");
     } catch (const GpuError& e) {

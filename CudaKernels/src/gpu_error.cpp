@@ -1,11 +1,22 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/cuda/gpu_error.hpp"
 
+#include "afam/device_selection.hpp"
+
 #include <cuda_runtime_api.h>
 
 #include <cstdio>
 
 namespace afam {
+
+int gpuDeviceCount() {
+  int count = 0;
+  if (cudaGetDeviceCount(&count) != cudaSuccess) {
+    (void)cudaGetLastError();
+    return 0;
+  }
+  return count;
+}
 
 bool gpuAvailable(std::string* why) {
   int count = 0;
@@ -30,12 +41,15 @@ bool gpuAvailable(std::string* why) {
     return false;
   }
   // A device may be listed but unusable (compute-prohibited, wrong architecture for this binary):
-  // touch the context once.
-  const cudaError_t touch = cudaFree(nullptr);
+  // touch the context once, on the device this process will use (one per MPI rank), so that ranks
+  // do not all open a context on device 0.
+  const int device = selectGpuDevice(count);
+  const cudaError_t chosen = cudaSetDevice(device);
+  const cudaError_t touch = chosen != cudaSuccess ? chosen : cudaFree(nullptr);
   if (touch != cudaSuccess) {
     (void)cudaGetLastError();
     if (why)
-      *why = std::string("CUDA device 0 is not usable: ") + cudaGetErrorName(touch) + " (" +
+      *why = "CUDA device " + std::to_string(device) + " is not usable: " + cudaGetErrorName(touch) + " (" +
              std::to_string(int(touch)) + ")";
     return false;
   }

@@ -39,6 +39,8 @@ class GpuOutOfMemory : public GpuError {
 /// words, e.g. "CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)" or
 /// "no CUDA device", so the caller can print it and take the CPU path. Never throws.
 bool gpuAvailable(std::string* why = nullptr);
+/// CUDA devices visible to this process (0 when CUDA is unusable).
+int gpuDeviceCount();
 
 /// "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)" for device `device`; "" when there is none.
 std::string gpuDescription(int device = 0);

@@ -94,11 +94,11 @@ print('max diff %d/255, %d px differ' % (abs(a-b).max(), (abs(a-b).max(axis=2)>0
   done
   grep -h "device=" "$e2e/render_0_gpu.log"
   "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device gpu --quiet >"$e2e/replay_gpu.log" 2>&1
-  status "afam replay user_1 gpu" "$(tail -1 "$e2e/replay_gpu.log")"
+  status "afam replay user_1 gpu" "$(grep "median_latency_ms=" "$e2e/replay_gpu.log" | tail -1)"
   "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device cpu --frames 12 --quiet >"$e2e/replay_cpu.log" 2>&1
-  status "afam replay user_1 cpu (12)" "$(tail -1 "$e2e/replay_cpu.log")"
+  status "afam replay user_1 cpu (12)" "$(grep "median_latency_ms=" "$e2e/replay_cpu.log" | tail -1)"
   "$afam" replay "$e2e/ml.afam" --trajectory "$traj" --size 512,512 --device gpu --frames 12 --quiet >"$e2e/replay_gpu12.log" 2>&1
-  status "afam replay user_1 gpu (12)" "$(tail -1 "$e2e/replay_gpu12.log")"
+  status "afam replay user_1 gpu (12)" "$(grep "median_latency_ms=" "$e2e/replay_gpu12.log" | tail -1)"
 else
   status "afam end to end" "not run: no afam binary"
 fi

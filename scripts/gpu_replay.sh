@@ -65,7 +65,7 @@ for traj in $trajectories; do
       "$afam" replay "$work/ml_$mode.afam" --trajectory "$AFAM_TRAJ_DIR/$traj.dat" \
         --size 512,512 --device gpu --cold "${budget[@]}" --prefetch "$pf" \
         --quiet --csv "$logs/$name.csv" >"$logs/$name.log" 2>&1
-      last=$(tail -1 "$logs/$name.log")
+      last=$(grep "median_latency_ms=" "$logs/$name.log" | tail -1)
       lat=$(sed -n 's/.*median_latency_ms=\([^ ]*\).*/\1/p' <<<"$last")
       cac=$(sed -n 's/.*median_caching_ms=\([^ ]*\).*/\1/p' <<<"$last")
       ren=$(sed -n 's/.*median_render_ms=\([^ ]*\).*/\1/p' <<<"$last")

@@ -83,6 +83,16 @@ double levelRmse(const InMemoryModels& m, VolumeSource& src, int level) {
   return std::sqrt(sum / double(count));
 }
 
+EncoderOptions relativeOptions(double bound, int levels, int blocks) {
+  EncoderOptions opt;
+  opt.errorBound = bound;
+  opt.relativeBound = true;
+  opt.levels = levels;
+  opt.blocksPerAxis = blocks;
+  opt.threads = 2;
+  return opt;
+}
+
 struct Case {
   double bound;
   int levels, blocks;
@@ -99,12 +109,7 @@ TEST(ExtremeVolumes, EveryLevelMeetsItsBound) {
       SCOPED_TRACE(vol.name + " bound " + std::to_string(c.bound) + " levels " + std::to_string(c.levels) +
                    " blocks " + std::to_string(c.blocks));
       ArraySource src(vol.v.data(), vol.dims);
-      EncoderOptions opt;
-      opt.errorBound = c.bound;
-      opt.relativeBound = true;
-      opt.levels = c.levels;
-      opt.blocksPerAxis = c.blocks;
-      opt.threads = 2;
+      const EncoderOptions opt = relativeOptions(c.bound, c.levels, c.blocks);
       InMemoryModels m;
       EncodeStats st;
       ASSERT_NO_THROW(st = encodeVolume(src, opt, m));
@@ -126,11 +131,7 @@ TEST(ExtremeVolumes, ReusedBlocksOverTheBoundAreSearched) {
   std::uniform_real_distribution<double> u(0, 1);
   const Volume vol = make("noise", {40, 40, 40}, [&](int64_t, int64_t, int64_t) { return u(rng); });
   ArraySource src(vol.v.data(), vol.dims);
-  EncoderOptions opt;
-  opt.errorBound = 1e-4;
-  opt.relativeBound = true;
-  opt.levels = 4;
-  opt.blocksPerAxis = 16;
+  EncoderOptions opt = relativeOptions(1e-4, 4, 16);
   opt.compact = false;  // float splines: compact storage keeps noise as coded samples, whose children all search
   InMemoryModels m;
   const EncodeStats st = encodeVolume(src, opt, m);
@@ -144,13 +145,8 @@ TEST(ExtremeVolumes, ReusedBlocksOverTheBoundAreSearched) {
 TEST(ExtremeVolumes, CoarsestCheckerboardLevelIsItsMean) {
   const Volume vol = make("checkerboard", {24, 24, 24}, [](int64_t x, int64_t y, int64_t z) { return double((x + y + z) % 2); });
   ArraySource src(vol.v.data(), vol.dims);
-  EncoderOptions opt;
-  opt.errorBound = 1e-3;
-  opt.relativeBound = true;
-  opt.levels = 3;
-  opt.blocksPerAxis = 4;
   InMemoryModels m;
-  encodeVolume(src, opt, m);
+  encodeVolume(src, relativeOptions(1e-3, 3, 4), m);
   std::vector<float> decoded;
   double sum = 0;
   int64_t count = 0;

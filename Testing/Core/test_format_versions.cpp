@@ -50,6 +50,16 @@ std::vector<float> mixedVolume(Index3& dims) {
   return v;
 }
 
+/// The options both version-2 tests encode the mixed volume with.
+EncoderOptions mixedOptions() {
+  EncoderOptions opt;
+  opt.errorBound = 1e-2;
+  opt.relativeBound = true;
+  opt.levels = 2;
+  opt.blocksPerAxis = 4;
+  return opt;
+}
+
 }  // namespace
 
 TEST(FormatVersions, VersionOneFileStillDecodesTheSameValues) {
@@ -74,11 +84,7 @@ TEST(FormatVersions, VersionTwoHoldsEveryKindAndRoundTrips) {
   Index3 dims;
   const std::vector<float> v = mixedVolume(dims);
   ArraySource src(v.data(), dims);
-  EncoderOptions opt;
-  opt.errorBound = 1e-2;
-  opt.relativeBound = true;
-  opt.levels = 2;
-  opt.blocksPerAxis = 4;
+  const EncoderOptions opt = mixedOptions();
   InMemoryModels mem;
   const EncodeStats st = encodeVolume(src, opt, mem);
   const std::string path = scratch("mixed.afam");
@@ -108,11 +114,7 @@ TEST(FormatVersions, VersionTwoDamageIsRefusedNamingTheBlock) {
   Index3 dims;
   const std::vector<float> v = mixedVolume(dims);
   ArraySource src(v.data(), dims);
-  EncoderOptions opt;
-  opt.errorBound = 1e-2;
-  opt.relativeBound = true;
-  opt.levels = 2;
-  opt.blocksPerAxis = 4;
+  const EncoderOptions opt = mixedOptions();
   const std::string path = scratch("damage.afam");
   encodeVolume(src, opt, path);
   const std::vector<char> good = readAll(path);

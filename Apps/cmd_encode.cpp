@@ -14,7 +14,7 @@ int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads", "search",
              "spacing", "window"},
-            {"relative", "float-payloads", "progress", "quiet"});
+            {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [--dims X,Y,Z]\n"
       "       [--type float32|float64|uint8|uint16|int16]\n"
@@ -32,6 +32,8 @@ int runEncode(int argc, char** argv) {
         "  --relative        the bound is E * (max - min) of the volume\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest of a\n"
         "                    constant, a coded spline and coded samples per block\n"
+        "  --isotropic-ncp   one NCP for all three axes (the paper's); by default blocks much smoother\n"
+        "                    along some axes get fewer control points there\n"
         "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks along\n"
         "                    the longest axis; level 0 is the coarsest)\n"
         "  --blocks B        blocks per axis at the finest level (default: about 64 samples a block, the paper's 16 at 1024^3)\n"
@@ -57,6 +59,7 @@ int runEncode(int argc, char** argv) {
   opt.errorBound = args.real("error-bound", 1e-4);
   opt.relativeBound = args.has("relative");
   opt.compact = !args.has("float-payloads");
+  opt.perAxisNcp = !args.has("isotropic-ncp");
   opt.mode = parseMode(args.str("mode", "adaptive"));
   opt.fixedNcp = int(args.integer("ncp", 0));
   if (args.has("ncp") && opt.mode != EncodingMode::Fixed) throw InvalidArgument("--ncp needs --mode fixed");
@@ -97,10 +100,10 @@ int runEncode(int argc, char** argv) {
   for (size_t l = 0; l < s.levels.size(); ++l) {
     const LevelStats& ls = s.levels[l];
     std::printf("level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld bytes=%llu "
-                "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f ncp:",
+                "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f ncp:",
                 l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.refits,
                 (long long)ls.exact, (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse,
-                ls.maxError, s.bound, ls.seconds);
+                ls.maxError, s.bound, ls.seconds, ls.sampleSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

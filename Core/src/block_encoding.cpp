@@ -84,6 +84,8 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
     t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search, c.opt.fastWindow,
                           fr, t.fits);
     t.complex = t.ncpStar > lo;
+    if (c.opt.perAxisNcp && t.complex && fr.error.rmse <= bound)
+      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits);
   };
   if (t.search) {
     search();

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <ctime>
 #include <limits>
+#include <future>
 #include <mutex>
 #include <sstream>
 #include <thread>
 
 #include "afam/fit.hpp"
+#include "afam/ncp_search.hpp"
 #include "block_encoding.hpp"
 #include "worker_pool.hpp"
 
@@ -31,71 +33,6 @@ double secondsSince(Clock::time_point t0) {
 
 
 }  // namespace
-
-// ------------------------------------------------------------------------------------------------
-// Search
-
-int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound, SearchMethod method,
-              int window, FitResult& result, int64_t& fits) {
-  Int3 degs{};
-  int nmax = 1;
-  for (int a = 0; a < 3; ++a) {
-    degs[a] = effectiveDegree(degree, n[a]);
-    nmax = std::max(nmax, n[a]);
-  }
-  const int lo = std::min(degree + 1, nmax), hi = nmax;
-  FitResult tmp, best, top;
-  int bestK = std::numeric_limits<int>::max();
-  bool haveTop = false;
-  std::vector<signed char> state(size_t(hi) + 1, -1);  // -1 unknown, 0 fails, 1 passes
-  auto pass = [&](int k) -> bool {
-    if (state[size_t(k)] >= 0) return state[size_t(k)] == 1;
-    fitter.fitInto(samples, n, clampNcp(k, n, degs), degree, true, tmp);
-    ++fits;
-    const bool ok = tmp.error.rmse <= bound;
-    state[size_t(k)] = ok ? 1 : 0;
-    if (ok && k < bestK) {
-      bestK = k;
-      std::swap(best, tmp);
-    } else if (k == hi) {
-      std::swap(top, tmp);
-      haveTop = true;
-    }
-    return ok;
-  };
-  auto finish = [&]() {
-    if (bestK <= hi) {
-      result = std::move(best);
-      return bestK;
-    }
-    if (!haveTop) pass(hi);
-    result = std::move(top);
-    return hi;
-  };
-  if (method == SearchMethod::Exhaustive || hi - lo < 2) {
-    for (int k = lo; k <= hi; ++k) pass(k);
-    return finish();
-  }
-  if (pass(lo)) return finish();
-  if (!pass(hi)) {
-    for (int k = lo + 1; k < hi; ++k)
-      if (pass(k)) break;
-    return finish();
-  }
-  int a = lo, b = hi;  // a fails, b passes
-  while (b - a > 1) {
-    const int m = a + (b - a) / 2;
-    if (pass(m))
-      b = m;
-    else
-      a = m;
-  }
-  // Local check below the boundary: a non-monotone error curve may pass again just below it.
-  int stop = std::max(lo + 1, b - 1 - window);
-  for (int j = b - 2; j >= stop; --j)
-    if (pass(j)) stop = std::max(lo + 1, j - 1 - window);
-  return finish();
-}
 
 // ------------------------------------------------------------------------------------------------
 // Encoder, in steps: value range, header, then per level batches of block rows (sample, fit in
@@ -263,6 +200,8 @@ class LevelEncoder {
       : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink),
         fitters_(size_t(threads)), pool_(threads), planes_(source, part.dims()) {}
 
+  /// Batches of block rows: the next batch is sampled (I/O and filtering, one thread) while the
+  /// pool fits the current one, so reading the volume does not leave the fitting threads idle.
   LevelStats encodeLevel(int l) {
     const auto tl = Clock::now();
     LevelStats ls;
@@ -270,16 +209,28 @@ class LevelEncoder {
     complexCur_.assign(size_t(ls.blocks), 0);
     double levelDone = 0;
     const int rows = part_.blocksPerAxis(l)[2];
-    for (int kz = 0; kz < rows;) {
-      std::vector<BlockTask> tasks = gatherRows(l, kz, levelDone);
-      fitBatch(l, tasks, levelDone);
+    int kz = 0;
+    std::vector<BlockTask> tasks = gatherRows(l, kz, ls.sampleSeconds);
+    while (!tasks.empty()) {
+      std::future<std::vector<BlockTask>> next;
+      if (kz < rows) next = std::async(std::launch::async, [&] { return gatherRows(l, kz, ls.sampleSeconds); });
+      try {
+        fitBatch(l, tasks, levelDone);
+      } catch (...) {
+        if (next.valid()) next.wait();  // the sampling thread uses members: let it finish first
+        throw;
+      }
       for (BlockTask& t : tasks) {
         sink_.add(t.entry, t.stored.data());
         complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
         countBlock(t, ds(), ls);
         levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
       }
-      if (!progress_.report(levelDone)) throw cancelled();
+      if (!progress_.report(levelDone)) {
+        if (next.valid()) next.wait();
+        throw cancelled();
+      }
+      tasks = next.valid() ? next.get() : std::vector<BlockTask>{};
     }
     complexPrev_.swap(complexCur_);
     ls.seconds = secondsSince(tl);
@@ -296,7 +247,10 @@ class LevelEncoder {
   }
 
   /// Rows of blocks from kz on, sampled, until the batch holds ~24 M samples (at least one row).
-  std::vector<BlockTask> gatherRows(int l, int& kz, double levelDone) {
+  /// Runs beside the fitting pool: it touches only planes_, kz and its own tasks (no progress
+  /// callback, which the frame thread owns).
+  std::vector<BlockTask> gatherRows(int l, int& kz, double& seconds) {
+    const auto t0 = Clock::now();
     const size_t budgetFloats = size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
     std::vector<BlockTask> tasks;
@@ -317,8 +271,8 @@ class LevelEncoder {
       sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
       ++kz;
-      if (!progress_.report(levelDone)) throw cancelled();
     }
+    seconds += secondsSince(t0);
     return tasks;
   }
 

@@ -10,6 +10,7 @@
 #include "afam/afam_file.hpp"
 #include "afam/encoder.hpp"
 #include "afam/marschner_lobb.hpp"
+#include "afam/transfer_function.hpp"
 #include "scratch_dir.hpp"
 
 namespace afam_test {
@@ -42,6 +43,15 @@ inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode 
     afam::encodeVolume(src, o, path);
   }
   return afam::AfamFile::open(path);
+}
+
+/// A ramp from transparent below `from` to opaque at the top of [lo, hi], coloured from `red`.
+inline afam::TransferFunction ramp(double lo, double hi, double from, double red) {
+  afam::TransferFunction tf;
+  tf.colors = {{lo, red, 0.2, 0.3}, {hi, 1.0, 0.9, red}};
+  tf.opacities = {{lo, 0.0}, {from, 0.0}, {hi, 0.8}};
+  tf.referenceDistance = 0.02;
+  return tf;
 }
 
 }  // namespace afam_test

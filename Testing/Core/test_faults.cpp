@@ -72,7 +72,8 @@ struct Child {
 // Starts `afam encode raw out ...`; stdout and stderr go to `log`. fileSizeLimit > 0 sets
 // RLIMIT_FSIZE in the child and ignores SIGXFSZ, so a write past it fails with EFBIG.
 // Float payloads: the file grows block by block over the whole encode, so every kill moment is met
-// (compact payloads make a file too small to be caught part-way on a fast machine).
+// (compact payloads, or per-axis NCP on this smooth volume, make a file too small to be caught
+// part-way on a fast machine).
 Child startEncode(const std::string& raw, const std::string& out, const std::string& log,
                   rlim_t fileSizeLimit = 0) {
   Child c;
@@ -87,7 +88,7 @@ Child startEncode(const std::string& raw, const std::string& out, const std::str
       ::setrlimit(RLIMIT_FSIZE, &limit);
     }
     ::execl(AFAM_EXE, AFAM_EXE, "encode", raw.c_str(), out.c_str(), "--levels", "3", "--blocks", "8",
-            "--error-bound", "1e-4", "--float-payloads", "--threads", "2", "--quiet", static_cast<char*>(nullptr));
+            "--error-bound", "1e-4", "--float-payloads", "--isotropic-ncp", "--threads", "2", "--quiet", static_cast<char*>(nullptr));
     ::_exit(127);
   }
   return c;

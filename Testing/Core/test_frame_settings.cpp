@@ -22,14 +22,7 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// A ramp from transparent below `from` to opaque at the top of [lo, hi].
-TransferFunction ramp(double lo, double hi, double from, double red) {
-  TransferFunction tf;
-  tf.colors = {{lo, red, 0.2, 0.3}, {hi, 1.0, 0.9, red}};
-  tf.opacities = {{lo, 0.0}, {from, 0.0}, {hi, 0.8}};
-  tf.referenceDistance = 0.02;
-  return tf;
-}
+using afam_test::ramp;
 
 std::set<int64_t> visibleEntries(const Renderer& r, const Camera& c) {
   std::set<int64_t> s;

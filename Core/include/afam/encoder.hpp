@@ -10,6 +10,9 @@
 //     bisect between them for a passing NCP whose predecessor fails, then check the `window` NCPs
 //     below it (and below any smaller passing NCP found) so that a non-monotone error curve that
 //     dips under the bound just below the bisection point is still found.
+// A searched block whose samples are much smoother along some axes than along the roughest one
+// (layers, sheets, Marschner-Lobb's slow z) then gets fewer control points on those axes
+// (refineNcpPerAxis, ncp_search.hpp; EncoderOptions::perAxisNcp), the bound still met.
 // Modes: Adaptive searches every level-0 block and, at finer levels, only the children of complex
 // blocks (NCP* > p+1); the others get NCP = p+1 without a search. InLevel searches every block.
 // Fixed fits NCP = fixedNcp (0 = n) per axis. Downsampled stores the micro-block's samples with a
@@ -19,7 +22,8 @@
 // Memory: the encoder never holds the volume. Per level it walks the rows of blocks along z, reads
 // only the z-planes its sample positions need (one or two per sample, via VolumeSource::readSlab),
 // and keeps the samples of the blocks being fitted: rows of blocks are gathered up to ~24 M samples
-// (96 MB) per batch, at least one row. Measured peak RSS of `afam encode`: 174 MB at 512^3,
+// (96 MB) per batch, at least one row, and the next batch is sampled while the current one is
+// fitted (two batches in memory). Measured peak RSS before that overlap of `afam encode`: 174 MB at 512^3,
 // 497 MB at 1024^3 (2 threads).
 #pragma once
 
@@ -35,12 +39,11 @@
 #include "afam/decode.hpp"
 #include "afam/errors.hpp"
 #include "afam/model_sink.hpp"
+#include "afam/ncp_search.hpp"
 #include "afam/partition.hpp"
 #include "afam/volume_source.hpp"
 
 namespace afam {
-
-enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 
 struct EncoderOptions {
   int levels = 0;              ///< 0: from the volume's dimensions (defaultPartition)
@@ -56,6 +59,9 @@ struct EncoderOptions {
   /// Bounded modes: store each block in its smallest form within the bound (a constant, a coded
   /// spline or coded samples; block_codec.hpp). false: float32 splines, the paper's payloads.
   bool compact = true;
+  /// Searched blocks whose samples are much smoother along some axes get fewer control points
+  /// there (refineNcpPerAxis); false: the paper's one NCP for all axes.
+  bool perAxisNcp = true;
   /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
   /// (encodeVolume then throws afam::Cancelled; nothing is written).
   std::function<bool(double fraction)> progress;
@@ -75,6 +81,7 @@ struct LevelStats {
   uint64_t paperBytes = 0;     ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;
+  double sampleSeconds = 0;    ///< time spent sampling the volume (overlaps fitting after the first batch)
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
 };
 
@@ -109,10 +116,5 @@ struct EncodeStats {
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink);
 /// Encodes into an .afam file, written atomically (nothing is left on error or cancel).
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath);
-
-/// In-level search on one block's samples, exposed for tests and benchmarks. Returns NCP* and
-/// the fit at NCP* in `result`; `fits` counts the fits performed.
-int searchNcp(class BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
-              SearchMethod method, int window, struct FitResult& result, int64_t& fits);
 
 }  // namespace afam

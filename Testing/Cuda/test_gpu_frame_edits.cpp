@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Editing the transfer function, shading and sample distance with the GPU caster installed keeps
+// the RAM cache and the GPU model pool: after the first frame, every edit renders with no cache
+// miss and no upload, and each edited frame still equals the CPU's image of the same settings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "../Core/render_test_util.hpp"
+#include "afam/cuda/gpu_caster.hpp"
+#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/renderer.hpp"
+
+namespace afam {
+namespace {
+
+using afam_test::ramp;
+
+double maxDiff(const ImageRGBA& a, const ImageRGBA& b) {
+  double worst = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i) worst = std::max(worst, double(std::fabs(a.rgba[i] - b.rgba[i])));
+  return worst;
+}
+
+TEST(GpuFrameEdits, EditsKeepTheCacheAndTheGpuPool) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  auto file = afam_test::encodeMl(129, EncodingMode::Adaptive, 3, 8, 1e-3);
+  const double lo = file->header().valueMin, hi = file->header().valueMax;
+  RendererResources resources;
+  resources.cache = CacheBudget{};
+  FrameSettings s;
+  s.hasTransferFunction = true;
+  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
+  s.lod.bandWidth = 100;  // every block at the finest level
+  s.sampleDistance = 0.01f;
+  Renderer gpu(file, resources, s), cpu(file, resources, s);
+  GpuCaster caster = installGpuCaster(gpu, size_t(512) << 20, [](const std::string& m) {
+    std::printf("gpu: %s\n", m.c_str());
+  });
+  ASSERT_TRUE(caster);
+  const Camera c = Camera::lookAt({0.9, 0.8, 0.7}, {0, 0, 0}, {0, 0, 1}, 60, 160, 160);
+  FrameStats first, firstCpu;
+  gpu.renderFrame(c, first);
+  cpu.renderFrame(c, firstCpu);
+  const uint64_t uploads = caster.gpu->pool().stats().uploads;
+  std::printf("[gpu-edits] first frame: %lld models, %llu misses, %llu uploads\n", (long long)first.slots,
+              (unsigned long long)first.misses, (unsigned long long)uploads);
+  ASSERT_GE(first.slots, 100);
+  ASSERT_EQ(uploads, uint64_t(first.slots));
+
+  FrameSettings edited = s;
+  for (int step = 0; step < 7; ++step) {
+    if (step < 5) {  // opacity and colour points, the TF's visible range kept
+      edited.transferFunction.opacities.back().alpha = 0.5 + 0.1 * step;
+      edited.transferFunction.colors[0].g = 0.1 * step;
+    }
+    if (step == 5) edited.shading = !edited.shading;
+    if (step == 6) edited.sampleDistance = 0.007f;
+    FrameStats sg, sc;
+    const ImageRGBA ig = gpu.renderFrame(c, edited, sg), ic = cpu.renderFrame(c, edited, sc);
+    const double d = maxDiff(ig, ic);
+    std::printf("[gpu-edits] edit %d: hits %llu, misses %llu, uploads so far %llu, max |gpu - cpu| %.5f\n", step,
+                (unsigned long long)sg.hits, (unsigned long long)sg.misses,
+                (unsigned long long)caster.gpu->pool().stats().uploads, d);
+    EXPECT_EQ(sg.misses, 0u) << "edit " << step;
+    EXPECT_EQ(sg.hits, uint64_t(first.slots)) << "edit " << step;
+    EXPECT_EQ(caster.gpu->pool().stats().uploads, uploads) << "edit " << step;
+    EXPECT_LE(d, 2.0 / 255.0) << "edit " << step;
+  }
+}
+
+}  // namespace
+}  // namespace afam

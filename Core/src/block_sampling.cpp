@@ -99,34 +99,71 @@ AxisTaps axisTaps(const Partition& part, const BlockExtent& e, int level, int ax
   return t;
 }
 
-/// One output sample from a (filtered) plane: sum over the y and x taps.
-template <typename T>
-double sampleXY(const T* plane, int64_t X, const AxisTaps& tx, size_t i, const AxisTaps& ty, size_t j) {
-  double v = 0;
-  for (size_t ky = ty.first[j]; ky < ty.first[j + 1]; ++ky) {
-    const T* row = plane + ty.index[ky] * X;
-    double h = 0;
-    for (size_t kx = tx.first[i]; kx < tx.first[i + 1]; ++kx) h += tx.weight[kx] * double(row[tx.index[kx]]);
-    v += ty.weight[ky] * h;
-  }
-  return v;
-}
-
 struct BlockTaps {
   AxisTaps tx, ty;
   int nx = 0, ny = 0;
 };
 
-template <typename T>
-void fillPlaneSamples(const T* plane, int64_t X, const BlockTaps& bt, float* dst) {
+/// acc[j * nx + i] += w * (the x-then-y filtered plane at block sample (i, j)); rows is scratch.
+void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double w, std::vector<double>& rows,
+                      std::vector<double>& acc) {
+  const AxisTaps &tx = bt.tx, &ty = bt.ty;
+  const int64_t y0 = *std::min_element(ty.index.begin(), ty.index.end());
+  const int64_t y1 = *std::max_element(ty.index.begin(), ty.index.end());
+  rows.resize(size_t(y1 - y0 + 1) * size_t(bt.nx));
+  for (int64_t y = y0; y <= y1; ++y) {
+    const float* src = plane + y * X;
+    double* h = rows.data() + size_t(y - y0) * size_t(bt.nx);
+    for (int i = 0; i < bt.nx; ++i) {
+      double v = 0;
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) v += tx.weight[k] * double(src[tx.index[k]]);
+      h[i] = v;
+    }
+  }
   for (int j = 0; j < bt.ny; ++j) {
-    float* row = dst + size_t(j) * size_t(bt.nx);
-    if (bt.tx.unit && bt.ty.unit) {
-      const T* src = plane + bt.ty.index[size_t(j)] * X;
-      for (int i = 0; i < bt.nx; ++i) row[i] = static_cast<float>(src[bt.tx.index[size_t(i)]]);
+    double* dst = acc.data() + size_t(j) * size_t(bt.nx);
+    for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
+      const double wy = w * ty.weight[k];
+      const double* h = rows.data() + size_t(ty.index[k] - y0) * size_t(bt.nx);
+      for (int i = 0; i < bt.nx; ++i) dst[i] += wy * h[i];
+    }
+  }
+}
+
+/// The planes z-samples [k0, k1) need (ascending, distinct).
+std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
+  std::vector<int64_t> zs(tz.index.begin() + std::ptrdiff_t(tz.first[size_t(k0)]),
+                          tz.index.begin() + std::ptrdiff_t(tz.first[size_t(k1)]));
+  std::sort(zs.begin(), zs.end());
+  zs.erase(std::unique(zs.begin(), zs.end()), zs.end());
+  return zs;
+}
+
+/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane).
+void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+                    const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
+  const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
+  const bool unitXY = bt.tx.unit && bt.ty.unit;
+  std::vector<double> rows, acc;
+  auto planeOf = [&](size_t t) {
+    const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
+    return buf.data() + i * plane;
+  };
+  for (int k = k0; k < k1; ++k) {
+    float* dst = out + size_t(k) * nxy;
+    const size_t t0 = tz.first[size_t(k)], t1 = tz.first[size_t(k) + 1];
+    if (unitXY && t1 == t0 + 1 && tz.weight[t0] == 1.0) {  // grid samples: a copy
+      const float* p = planeOf(t0);
+      for (int j = 0; j < bt.ny; ++j) {
+        const float* src = p + bt.ty.index[size_t(j)] * X;
+        float* row = dst + size_t(j) * size_t(bt.nx);
+        for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
+      }
       continue;
     }
-    for (int i = 0; i < bt.nx; ++i) row[i] = static_cast<float>(sampleXY(plane, X, bt.tx, size_t(i), bt.ty, size_t(j)));
+    acc.assign(nxy, 0.0);
+    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, bt, tz.weight[t], rows, acc);
+    for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
   }
 }
 
@@ -134,25 +171,20 @@ void fillPlaneSamples(const T* plane, int64_t X, const BlockTaps& bt, float* dst
 
 PlaneCache::PlaneCache(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
 
-const float* PlaneCache::get(int64_t z) {
-  for (auto& s : slot_)
-    if (s.z == z) {
-      s.used = ++tick_;
-      return s.data.data();
-    }
-  Slot& s = slot_[0].used <= slot_[1].used ? slot_[0] : slot_[1];
-  s.data.resize(plane_);
-  src_.readSlab(z, 1, s.data.data());
-  bytesRead_ += plane_ * sizeof(float);
-  s.z = z;
-  s.used = ++tick_;
-  return s.data.data();
+void PlaneCache::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
+  buf.resize(zs.size() * plane_);
+  for (size_t i = 0; i < zs.size();) {
+    size_t j = i + 1;
+    while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
+    src_.readSlab(zs[i], int64_t(j - i), buf.data() + i * plane_);
+    bytesRead_ += (j - i) * plane_ * sizeof(float);
+    i = j;
+  }
 }
 
 void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const std::vector<Int3>& blocks,
-                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out) {
+                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop) {
   if (blocks.empty()) return;
-  const Index3 dims = part.dims();
   const int g = ghost ? 1 : 0;
   std::vector<BlockTaps> taps(blocks.size());
   const BlockExtent ez = part.extent(level, blocks[0]);
@@ -166,28 +198,23 @@ void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const 
     taps[b].ny = e.samples[1] + 2 * g;
     out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
   }
-  const int64_t X = dims[0];
-  const size_t plane = size_t(dims[0] * dims[1]);
-  std::vector<double> acc;  // the z-filtered plane when a z-sample has more than one tap
-  for (int k = 0; k < nz; ++k) {
-    const size_t k0 = tz.first[size_t(k)], k1 = tz.first[size_t(k) + 1];
-    const bool single = k1 == k0 + 1 && tz.weight[k0] == 1.0;
-    if (!single) {
-      acc.assign(plane, 0.0);
-      for (size_t t = k0; t < k1; ++t) {
-        const float* p = planes.get(tz.index[t]);
-        const double w = tz.weight[t];
-        for (size_t q = 0; q < plane; ++q) acc[q] += w * double(p[q]);
-      }
-    }
-    const float* p0 = single ? planes.get(tz.index[k0]) : nullptr;
-    for (size_t b = 0; b < blocks.size(); ++b) {
-      float* dst = out[b]->data() + size_t(k) * size_t(taps[b].nx) * size_t(taps[b].ny);
-      if (single)
-        fillPlaneSamples(p0, X, taps[b], dst);
-      else
-        fillPlaneSamples(acc.data(), X, taps[b], dst);
-    }
+  const int64_t X = part.dims()[0];
+  const size_t plane = planes.planeSize();
+  const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
+  std::vector<float> buf;
+  for (int k0 = 0; k0 < nz;) {
+    int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
+    while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
+    const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
+    planes.read(zs, buf);
+    auto fill = [&](int64_t b) {
+      fillBlockChunk(buf, zs, plane, X, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
+    };
+    if (loop)
+      loop(int64_t(blocks.size()), fill);
+    else
+      for (size_t b = 0; b < blocks.size(); ++b) fill(int64_t(b));
+    k0 = k1;
   }
 }
 

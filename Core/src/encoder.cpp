@@ -198,7 +198,11 @@ class LevelEncoder {
   LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound, int threads,
                EncodeProgress& progress, ModelSink& sink)
       : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink),
-        fitters_(size_t(threads)), pool_(threads), planes_(source, part.dims()) {}
+        fitters_(size_t(threads)), pool_(threads), samplePool_(threads), planes_(source, part.dims()) {
+    sampleLoop_ = [this](int64_t count, const std::function<void(int64_t)>& fn) {
+      samplePool_.run(count, [&fn](int, int64_t b) { fn(b); }, [] { return true; });
+    };
+  }
 
   /// Batches of block rows: the next batch is sampled (I/O and filtering, one thread) while the
   /// pool fits the current one, so reading the volume does not leave the fitting threads idle.
@@ -247,8 +251,8 @@ class LevelEncoder {
   }
 
   /// Rows of blocks from kz on, sampled, until the batch holds ~24 M samples (at least one row).
-  /// Runs beside the fitting pool: it touches only planes_, kz and its own tasks (no progress
-  /// callback, which the frame thread owns).
+  /// Runs beside the fitting pool: it touches only planes_, samplePool_, kz and its own tasks (no
+  /// progress callback, which the calling thread owns).
   std::vector<BlockTask> gatherRows(int l, int& kz, double& seconds) {
     const auto t0 = Clock::now();
     const size_t budgetFloats = size_t(24) << 20;
@@ -268,7 +272,7 @@ class LevelEncoder {
         t.search = searches(l, t.ijk);
         outs[r] = &t.samples;
       }
-      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs);
+      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
       ++kz;
     }
@@ -316,6 +320,8 @@ class LevelEncoder {
   ModelSink& sink_;
   std::vector<BlockFitter> fitters_;
   WorkerPool pool_;
+  WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
+  BlockLoop sampleLoop_;
   PlaneCache planes_;
   std::vector<uint8_t> complexPrev_, complexCur_;
 };

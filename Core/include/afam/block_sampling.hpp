@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -12,31 +13,34 @@
 
 namespace afam {
 
-/// Keeps the most recently used z-planes of a source (two slots).
+/// Reads listed z-planes of a source into a buffer, consecutive planes in one readSlab call.
 class PlaneCache {
  public:
   PlaneCache(VolumeSource& src, Index3 dims);
-  const float* get(int64_t z);
+  /// Planes zs (ascending, distinct) into buf, plane i at buf.data() + i * planeSize().
+  void read(const std::vector<int64_t>& zs, std::vector<float>& buf);
+  size_t planeSize() const { return plane_; }
   uint64_t bytesRead() const { return bytesRead_; }
 
  private:
-  struct Slot {
-    int64_t z = -1;
-    uint64_t used = 0;
-    std::vector<float> data;
-  };
   VolumeSource& src_;
   size_t plane_;
-  Slot slot_[2];
-  uint64_t tick_ = 0, bytesRead_ = 0;
+  uint64_t bytesRead_ = 0;
 };
 
-/// Fills the samples of every block in `blocks` (all in the same z-row of one level) by walking
-/// the z-samples in order; out[b] is resized to the block's (ghosted) sample count.
+/// Runs fn(block) for block in [0, count), on several threads when the caller provides them
+/// (the encoder's sampling pool), else in order on the calling thread.
+using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
+
+/// Fills the samples of every block in `blocks` (all in the same z-row of one level): the z-planes
+/// the row needs are read in chunks (at most ~256 MB, one readSlab per run of consecutive planes),
+/// and each block is filtered from a chunk separably (x, then y, then z; sums in double), blocks
+/// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).
 void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const std::vector<Int3>& blocks,
-                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out);
+                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out,
+                    const BlockLoop& loop = {});
 
 /// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
 /// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam predict T.dat --predictor none|linear|appa|forecache|lstm --out PRED.dat
-// Runs a next-pose predictor over a trajectory, writes the predicted next pose for every point of
-// view in the trajectory format, and prints mean_position_error=<x>.
+// Runs a predictor (makePrefetchPredictor, the renderer's) over a trajectory, writes the predicted
+// next pose for every point of view in the trajectory format, and prints mean_position_error=<x>.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,17 +11,37 @@
 
 #include "afam/afam_file.hpp"
 #include "afam/camera.hpp"
-#include "afam/lod.hpp"
-#include "afam/predictors/appa.hpp"
-#include "afam/predictors/forecache.hpp"
 #include "afam/predictors/lstm.hpp"
-#include "afam/predictors/pose_predictor.hpp"
 #include "afam/predictors/prefetch_predictors.hpp"
 #include "afam/transfer_function.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 
 using namespace afam;
+
+namespace {
+
+// The scene the data-aware predictors see: FILE, default LOD settings, the preset transfer function
+// over the file's value range.
+PredictorContext fileContext(const std::string& path) {
+  PredictorContext ctx;
+  ctx.file = AfamFile::open(path);
+  const VolumeHeader& h = ctx.file->header();
+  ctx.tfLo = h.valueMin;
+  ctx.tfHi = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
+  ctx.tfTable = TransferFunction::preset(ctx.tfLo, ctx.tfHi).table(1024, ctx.tfLo, ctx.tfHi);
+  return ctx;
+}
+
+void printAppaReport(const AppaBuildReport& rep) {
+  std::printf("appa_table=%s cells=%d block_refs=%llu bytes=%llu %s_s=%.3f%s%s\n", rep.path.c_str(),
+              rep.cells, static_cast<unsigned long long>(rep.entries),
+              static_cast<unsigned long long>(rep.bytes), rep.loadedFromCache ? "load" : "build",
+              rep.seconds,
+              rep.rebuiltBecause.empty() ? "" : " rebuilt_because=", rep.rebuiltBecause.c_str());
+}
+
+}  // namespace
 
 int runPredict(int argc, char** argv) {
   cli::Args args(argc, argv, {"predictor", "out", "file", "lstm-weights"}, {});
@@ -30,13 +50,15 @@ int runPredict(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "For every point of view i of the trajectory T.dat, feeds poses 0..i to the predictor and\n"
-        "writes its prediction of pose i+1 to PRED.dat (same format: N distances, N theta, N phi,\n"
-        "float32; entry i is the prediction made at view i). Prints mean_position_error=<x>: the mean\n"
-        "distance between predicted and actual next eye positions in the normalised frame over views\n"
-        "0..N-2, and mean_inference_us=<t>.\n\n"
-        "  --predictor P     none (stay), linear (last-pose extrapolation), appa (parent POV of the\n"
-        "                    6-degree / 0.1 table), forecache (Markov + signature, phase switched),\n"
+        "For every point of view i of the trajectory T.dat, gives the renderer's prefetch\n"
+        "predictor the cameras of poses 0..i (the last 16, as the renderer keeps them) and\n"
+        "writes its prediction of pose i+1 (pose i when it makes none) to PRED.dat (same\n"
+        "format: N distances, N theta, N phi, float32; entry i is the prediction made at view i).\n"
+        "Prints mean_position_error=<x>: the mean distance between predicted and actual next eye\n"
+        "positions in the normalised frame over views 0..N-2, and mean_inference_us=<t>.\n\n"
+        "  --predictor P     none (stay), linear (last-pose extrapolation), appa (parent POV\n"
+        "                    of the 6-degree / 0.1 table), forecache (Markov + signature,\n"
+        "                    phase switched),\n"
         "                    lstm (data/lstm_pose_v1.bin)\n"
         "  --file F.afam     appa: build or load F.afam.appa and print its size and build time;\n"
         "                    forecache: enables the signature model (block statistics of F)\n"
@@ -50,47 +72,24 @@ int runPredict(int argc, char** argv) {
   const std::string name = args.str("predictor");
   const std::vector<Pose> poses = loadTrajectory(args.positional()[0]);
 
-  std::unique_ptr<PosePredictor> predictor;
-  if (args.has("file") && (name == "appa" || name == "forecache")) {
-    PredictorContext ctx;
-    ctx.file = AfamFile::open(args.str("file"));
-    const VolumeHeader& h = ctx.file->header();
-    ctx.tfLo = h.valueMin;
-    ctx.tfHi = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
-    ctx.tfTable = TransferFunction::preset(ctx.tfLo, ctx.tfHi).table(1024, ctx.tfLo, ctx.tfHi);
-    if (name == "appa") {
-      AppaBuildReport rep;
-      ctx.appaReport = &rep;
-      auto p = makePrefetchPredictor("appa", ctx);
-      std::printf("appa_table=%s cells=%d block_refs=%llu bytes=%llu %s_s=%.3f%s%s\n", rep.path.c_str(),
-                  rep.cells, static_cast<unsigned long long>(rep.entries),
-                  static_cast<unsigned long long>(rep.bytes), rep.loadedFromCache ? "load" : "build",
-                  rep.seconds, rep.rebuiltBecause.empty() ? "" : " rebuilt_because=",
-                  rep.rebuiltBecause.c_str());
-      predictor = std::make_unique<AppaPosePredictor>(ctx.appaGrid);
-    } else {
-      const LodSelector selector(ctx.lod);
-      ForeCacheDataSource data;
-      data.visibleBlocks = makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
-      auto file = ctx.file;
-      data.signature = [file](int64_t e) { return entrySignature(*file, e); };
-      predictor = std::make_unique<ForeCachePosePredictor>(ForeCacheOptions{}, std::move(data));
-    }
-  } else {
-    PosePredictorOptions opt;
-    opt.lstmWeights = args.str("lstm-weights");
-    predictor = makePosePredictor(name, opt);
-  }
+  const bool usesFile = args.has("file") && (name == "appa" || name == "forecache");
+  PredictorContext ctx = usesFile ? fileContext(args.str("file")) : PredictorContext{};
+  ctx.lstmWeights = args.str("lstm-weights");
+  AppaBuildReport report;
+  if (name == "appa" && ctx.file) ctx.appaReport = &report;
+  const std::unique_ptr<Predictor> predictor = makePrefetchPredictor(name, ctx);
+  if (ctx.appaReport) printAppaReport(report);
 
   std::vector<Pose> pred(poses.size());
+  std::vector<Camera> history;
   double err = 0, us = 0;
   int phases[3] = {0, 0, 0};
+  const auto* foreCache = dynamic_cast<const ForeCachePredictor*>(predictor.get());
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const auto t0 = std::chrono::steady_clock::now();
-    predictor->observe(poses[i]);
-    pred[i] = predictor->predictNext();
+    pred[i] = predictNextPose(*predictor, history, poses[i]);
     us += std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-    if (auto* fc = dynamic_cast<ForeCachePosePredictor*>(predictor.get())) ++phases[int(fc->phase())];
+    if (foreCache) ++phases[int(foreCache->phase())];
     if (i + 1 < poses.size()) err += poseDistance(pred[i], poses[i + 1]);
   }
   writeTrajectory(args.str("out"), pred);

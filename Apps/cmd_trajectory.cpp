@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "afam/predictors/pose_predictor.hpp"
+#include "afam/camera.hpp"
 #include "afam/trajectory_gen.hpp"
 #include "cli.hpp"
 #include "commands.hpp"

@@ -8,12 +8,19 @@
 #include <fstream>
 #include <iterator>
 
+#include "afam/atomic_write.hpp"
 #include "afam/errors.hpp"
 
 namespace afam {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+/// The unit vector from the origin towards the eye of a pose (t, p: theta and phi in radians).
+Vec3 poseDirection(double t, double p) {
+  return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+}
 
 Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
 bool normalize(Vec3& a) {
@@ -25,12 +32,34 @@ bool normalize(Vec3& a) {
 
 }  // namespace
 
+Vec3 posePosition(const Pose& pose) {
+  const Vec3 dir = poseDirection(pose.thetaDeg * kPi / 180.0, pose.phiDeg * kPi / 180.0);
+  return {pose.distance * dir[0], pose.distance * dir[1], pose.distance * dir[2]};
+}
+
+Pose poseFromPosition(const Vec3& e) {
+  Pose p;
+  p.distance = std::sqrt(dot(e, e));
+  if (p.distance <= 0) return Pose{0, 0, 0};
+  p.thetaDeg = std::acos(std::fmax(-1.0, std::fmin(1.0, e[2] / p.distance))) / kDeg;
+  double phi = std::atan2(e[1], e[0]) / kDeg;
+  if (phi < 0) phi += 360.0;
+  if (phi >= 360.0) phi -= 360.0;
+  p.phiDeg = phi;
+  return p;
+}
+
+double poseDistance(const Pose& a, const Pose& b) {
+  const Vec3 d = sub(posePosition(a), posePosition(b));
+  return std::sqrt(dot(d, d));
+}
+
 Camera Camera::fromPose(const Pose& pose, int width, int height) {
   if (width < 1 || height < 1) throw InvalidArgument("camera: image size must be at least 1x1");
   const double t = pose.thetaDeg * kPi / 180.0, p = pose.phiDeg * kPi / 180.0;
   Camera c;
-  const Vec3 dir{std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
-  c.eye = {pose.distance * dir[0], pose.distance * dir[1], pose.distance * dir[2]};
+  const Vec3 dir = poseDirection(t, p);
+  c.eye = posePosition(pose);
   c.right = {std::cos(t) * std::cos(p), std::cos(t) * std::sin(p), -std::sin(t)};
   c.up = {-std::sin(p), std::cos(p), 0.0};
   c.forward = {-dir[0], -dir[1], -dir[2]};
@@ -165,6 +194,17 @@ std::vector<Pose> loadTrajectory(const std::string& path) {
     poses[i] = Pose{d, t, p};
   }
   return poses;
+}
+
+void writeTrajectory(const std::string& path, const std::vector<Pose>& poses) {
+  const std::size_t n = poses.size();
+  std::vector<float> buf(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    buf[i] = static_cast<float>(poses[i].distance);
+    buf[n + i] = static_cast<float>(poses[i].thetaDeg);
+    buf[2 * n + i] = static_cast<float>(poses[i].phiDeg);
+  }
+  writeFileAtomically(path, buf.data(), buf.size() * sizeof(float), "trajectory");
 }
 
 }  // namespace afam

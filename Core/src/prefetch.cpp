@@ -22,6 +22,14 @@ bool LinearPredictor::predict(const std::vector<Camera>& h, Camera& next) const 
   return true;
 }
 
+Pose predictNextPose(const Predictor& predictor, std::vector<Camera>& history, const Pose& pose,
+                     int width, int height) {
+  history.push_back(Camera::fromPose(pose, width, height));
+  if (history.size() > kPredictorHistory) history.erase(history.begin());
+  Camera next;
+  return predictor.predict(history, next) ? poseFromPosition(next.eye) : pose;
+}
+
 Prefetcher::Prefetcher() : thread_([this] { run(); }) {}
 
 Prefetcher::~Prefetcher() {

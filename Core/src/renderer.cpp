@@ -239,7 +239,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   prepare(camera, fr, st);
   fr.view.maxDistance = maxDistance;
   history_.push_back(camera);
-  if (history_.size() > 16) history_.erase(history_.begin());
+  if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
   // Prefetch the predicted next view while this one renders. The prediction itself runs in the
   // prefetch thread (off the frame's critical path); predictors that know the blocks directly
   // (APPA's table, ForeCache's signature ranking) hand them over without a view selection.

@@ -11,6 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "afam/hash.hpp"
 #include "cuda_check.hpp"
 #include "kernel_launch.hpp"
 
@@ -50,20 +51,14 @@ uint64_t GpuRenderer::slotFloats(const FrameSlot& slot) {
 }
 
 uint64_t GpuRenderer::defaultSlotKey(const FrameSlot& slot) {
-  auto mix = [](uint64_t h, uint64_t v) {
-    h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h ^= h >> 31;
-    h *= 0xbf58476d1ce4e5b9ull;
-    return h ^ (h >> 29);
-  };
-  uint64_t h = 0x243f6a8885a308d3ull;
-  h = mix(h, uint64_t(uint32_t(slot.kind)) | (uint64_t(uint32_t(slot.level)) << 32));
+  // The fields that tell two models apart, through the project's one hash (hash.hpp).
+  uint64_t h = fnv1a64(&slot.kind, sizeof slot.kind);
+  h = fnv1a64(&slot.level, sizeof slot.level, h);
   for (int a = 0; a < 3; ++a) {
-    uint32_t lo = 0, inv = 0;
-    std::memcpy(&lo, &slot.lo[a], 4);
-    std::memcpy(&inv, &slot.invExtent[a], 4);
-    h = mix(h, (uint64_t(lo) << 32) | inv);
-    h = mix(h, (uint64_t(uint32_t(slot.knots[a].ncp)) << 32) | uint32_t(slot.knots[a].degree));
+    h = fnv1a64(&slot.lo[a], sizeof slot.lo[a], h);
+    h = fnv1a64(&slot.invExtent[a], sizeof slot.invExtent[a], h);
+    h = fnv1a64(&slot.knots[a].ncp, sizeof slot.knots[a].ncp, h);
+    h = fnv1a64(&slot.knots[a].degree, sizeof slot.knots[a].degree, h);
   }
   return h;
 }

@@ -303,7 +303,7 @@ TEST(Encoder, DownsampledPayloadHasClampedGhostLayer) {
           }
           const double expected = pos[0] + 100 * pos[1] + 10000 * pos[2];  // linear: exact
           EXPECT_NEAR(p[size_t((z * e.ncp[1] + y) * e.ncp[0] + x)], expected, 1e-2)
-              << "level " << e.level << " block " << e.block[0] << "," << e.block[1] << "," << e.block[2];
+              << Partition::blockName(e.level, e.block);
         }
     // The min/max cover the block's own samples only.
     EXPECT_EQ(e.minValue, float(ext.lo[0] + 100 * ext.lo[1] + 10000 * ext.lo[2]));

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Prefetch predictors: LSTM forward pass against torch's output for the shipped weights,
-// the held-out path bar (LSTM below linear extrapolation on generated walks), APPA table against a
-// brute-force visibility computation, its cache file (round trip, stale and corrupt files rebuilt),
-// ForeCache's Markov chain on a known pattern and its phase switch.
+// Prefetch predictors, all built by makePrefetchPredictor and fed camera histories: linear
+// extrapolation, LSTM forward pass against torch's output for the shipped weights, the held-out
+// path bar (LSTM below linear extrapolation on generated walks), APPA table against a brute-force
+// visibility computation, its cache file (round trip, stale and corrupt files rebuilt), ForeCache's
+// Markov chain on a known pattern, its phase switch, and its history alignment.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -19,7 +20,6 @@
 #include "afam/predictors/appa.hpp"
 #include "afam/predictors/forecache.hpp"
 #include "afam/predictors/lstm.hpp"
-#include "afam/predictors/pose_predictor.hpp"
 #include "afam/predictors/prefetch_predictors.hpp"
 #include "afam/trajectory_gen.hpp"
 #include "afam/transfer_function.hpp"
@@ -43,14 +43,20 @@ void spit(const std::string& p, const std::vector<unsigned char>& b) {
   out.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
 }
 
-double meanError(PosePredictor& p, const std::vector<Pose>& poses) {
-  p.reset();
+// Mean distance between the predicted and the actual next eye over a trajectory, scored as
+// `afam predict` scores it.
+double meanError(const Predictor& p, const std::vector<Pose>& poses) {
+  std::vector<Camera> history;
   double e = 0;
-  for (std::size_t i = 0; i + 1 < poses.size(); ++i) {
-    p.observe(poses[i]);
-    e += poseDistance(p.predictNext(), poses[i + 1]);
-  }
+  for (std::size_t i = 0; i + 1 < poses.size(); ++i)
+    e += poseDistance(predictNextPose(p, history, poses[i]), poses[i + 1]);
   return e / double(poses.size() - 1);
+}
+
+std::vector<Camera> camerasOf(const std::vector<Pose>& poses) {
+  std::vector<Camera> c;
+  for (const Pose& p : poses) c.push_back(Camera::fromPose(p, 32, 32));
+  return c;
 }
 
 }  // namespace
@@ -63,6 +69,8 @@ TEST(Predictors, PosePositionRoundTripAndTrajectoryFile) {
   EXPECT_NEAR(q.distance, 1.3, 1e-12);
   EXPECT_NEAR(q.thetaDeg, 37.0, 1e-9);
   EXPECT_NEAR(q.phiDeg, 251.0, 1e-9);
+  const Vec3 eye = Camera::fromPose(p, 8, 8).eye;  // one formula: bit for bit the camera's eye
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(posePosition(p)[a], eye[a]) << "axis " << a;
   const std::string path = tmp("traj.dat");
   writeTrajectory(path, {p, Pose{1.0, 90.0, 0.0}});
   const auto back = loadTrajectory(path);
@@ -70,17 +78,41 @@ TEST(Predictors, PosePositionRoundTripAndTrajectoryFile) {
   EXPECT_NEAR(back[0].phiDeg, 251.0, 1e-4);
   EXPECT_NEAR(back[1].thetaDeg, 90.0, 1e-5);
   std::remove(path.c_str());
-  EXPECT_THROW(makePosePredictor("oracle"), InvalidArgument);
+  try {
+    writeTrajectory(tmp("no/such/folder/traj.dat"), {p});
+    ADD_FAILURE() << "writing into a missing folder did not throw";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("trajectory"), std::string::npos) << e.what();
+  }
 }
 
-TEST(Predictors, LinearExtrapolatesPositions) {
-  LinearPosePredictor lin;
-  lin.observe(poseFromPosition({1.0, 0.0, 0.0}));
-  lin.observe(poseFromPosition({1.0, 0.1, 0.0}));
-  const Vec3 n = posePosition(lin.predictNext());
-  EXPECT_NEAR(n[0], 1.0, 1e-9);
-  EXPECT_NEAR(n[1], 0.2, 1e-9);
-  EXPECT_NEAR(n[2], 0.0, 1e-9);
+TEST(Predictors, OneFactoryBuildsEveryName) {
+  for (const std::string& name : predictorNames())
+    EXPECT_EQ(std::string(makePrefetchPredictor(name)->name()), name);
+  EXPECT_THROW(makePrefetchPredictor("oracle"), InvalidArgument);
+  PredictorContext missingWeights;
+  missingWeights.lstmWeights = tmp("no_weights.bin");
+  EXPECT_THROW(makePrefetchPredictor("lstm", missingWeights), IoError);
+}
+
+TEST(Predictors, NoneStaysAndLinearExtrapolatesPositions) {
+  const auto none = makePrefetchPredictor("none"), linear = makePrefetchPredictor("linear");
+  std::vector<Camera> h;
+  const Pose a = poseFromPosition({1.0, 0.0, 0.0}), b = poseFromPosition({1.0, 0.1, 0.0});
+  EXPECT_EQ(predictNextPose(*linear, h, a).phiDeg, a.phiDeg);  // one pose: no prediction, stay
+  const Vec3 n = posePosition(predictNextPose(*linear, h, b));
+  EXPECT_NEAR(n[0], 1.0, 1e-12);
+  EXPECT_NEAR(n[1], 0.2, 1e-12);
+  EXPECT_NEAR(n[2], 0.0, 1e-12);
+  std::vector<Camera> h2;
+  predictNextPose(*none, h2, a);
+  const Pose stay = predictNextPose(*none, h2, b);
+  EXPECT_EQ(stay.distance, b.distance);
+  EXPECT_EQ(stay.phiDeg, b.phiDeg);
+  // The history stays bounded like the renderer's.
+  for (int i = 0; i < 40; ++i) predictNextPose(*none, h2, Pose{1.5, 60, double(i)});
+  EXPECT_EQ(h2.size(), kPredictorHistory);
+  EXPECT_NEAR(poseFromPosition(h2.back().eye).phiDeg, 39.0, 1e-9);
 }
 
 // ----------------------------------------------------------------------------------------- LSTM
@@ -125,14 +157,41 @@ TEST(Predictors, LstmBeatsLinearOnHeldOutPaths) {
   if (recorded && *recorded) paths.push_back(loadTrajectory(std::string(recorded) + "/user_2.dat"));
   else
     for (uint64_t seed : {101, 202, 303}) paths.push_back(explorationWalk(400, seed));
+  const auto lin = makePrefetchPredictor("linear"), lstm = makePrefetchPredictor("lstm");
   for (const auto& poses : paths) {
-    LinearPosePredictor lin;
-    LstmPosePredictor lstm(defaultLstmWeightsPath());
-    const double eLin = meanError(lin, poses), eLstm = meanError(lstm, poses);
+    const double eLin = meanError(*lin, poses), eLstm = meanError(*lstm, poses);
     RecordProperty("linear", std::to_string(eLin));
     RecordProperty("lstm", std::to_string(eLstm));
     EXPECT_LT(eLstm, eLin);
+    EXPECT_GT(eLstm, 0.1 * eLin);  // a real prediction, not a copy of the next pose
   }
+}
+
+// The LSTM camera predictor is lstmNextPosition of the last window + 1 eyes: older cameras do not
+// change it, and fewer than two make no prediction.
+TEST(Predictors, LstmPredictsFromTheLastWindowOfEyes) {
+  const LstmPredictor lstm(defaultLstmWeightsPath());
+  const std::size_t window = lstm.weights().window;
+  ASSERT_LT(window + 1, kPredictorHistory);
+  const std::vector<Pose> walk = explorationWalk(int(window) + 6, 17);
+  const std::vector<Camera> all = camerasOf(walk);
+  Camera next;
+  EXPECT_FALSE(lstm.predict({all.front()}, next));
+  ASSERT_TRUE(lstm.predict(all, next));
+  std::vector<Vec3> eyes;
+  for (std::size_t i = all.size() - window - 1; i < all.size(); ++i) eyes.push_back(all[i].eye);
+  const Vec3 expect = lstmNextPosition(lstm.weights(), eyes);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(next.eye[a], expect[a], 1e-12) << "axis " << a;
+  Camera fromWindow;
+  ASSERT_TRUE(
+      lstm.predict(std::vector<Camera>(all.end() - long(window) - 1, all.end()), fromWindow));
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(fromWindow.eye[a], next.eye[a]);
+  // The prediction is not the linear one (the head's correction is not zero).
+  const Vec3 b = all.back().eye, c = all[all.size() - 2].eye;
+  double d = 0;
+  for (int a = 0; a < 3; ++a) d += std::fabs(expect[a] - (2 * b[a] - c[a]));
+  EXPECT_GT(d, 1e-6);
+  EXPECT_THROW(lstmNextPosition(lstm.weights(), {b}), InvalidArgument);
 }
 
 // ----------------------------------------------------------------------------------------- APPA
@@ -160,6 +219,31 @@ TEST(Predictors, AppaGridQuantisesLikeTheAuthors) {
   // below dMin and beyond dMax clamp; phi wraps
   EXPECT_EQ(g.cellOf(Pose{0.5, 10, 370}), g.cellOf(Pose{1.0, 10, 10}));
   EXPECT_EQ(g.cellOf(Pose{2.5, 10, -350}), g.cellOf(Pose{1.95, 10, 10}));
+}
+
+// A pose on a cell boundary (theta 60, phi 30: multiples of 6 degrees) keeps its cell after the
+// round trip through a camera, which loses a few ulps; so does the predictor's parent POV.
+TEST(Predictors, AppaCellSurvivesTheCameraRoundTrip) {
+  const AppaGrid g;
+  for (const Pose& p : {Pose{1.5, 60, 30}, Pose{1.2, 90, 0}, Pose{1.3, 30, 354}}) {
+    const Pose back = poseFromPosition(Camera::fromPose(p, 8, 8).eye);
+    EXPECT_EQ(g.cellOf(back), g.cellOf(p)) << p.distance << " " << p.thetaDeg << " " << p.phiDeg;
+  }
+  const auto appa = makePrefetchPredictor("appa");  // no file: parent POV, no blocks
+  std::vector<Camera> h;
+  const Pose parent = predictNextPose(*appa, h, Pose{1.5, 60, 30});
+  EXPECT_NEAR(parent.distance, 1.55, 1e-9);
+  EXPECT_NEAR(parent.thetaDeg, 63.0, 1e-9);
+  EXPECT_NEAR(parent.phiDeg, 33.0, 1e-9);
+  std::vector<int64_t> entries;
+  EXPECT_FALSE(appa->predictEntries(h, entries));
+  // With a table the predictor hands over the blocks the table stores for the last pose's cell.
+  AppaGrid small;
+  small.dMax = 1.3;
+  const AppaPredictor withTable(AppaTable::build(small, fakeVisible));
+  const std::vector<Camera> one = camerasOf({Pose{1.17, 44, 100}});
+  ASSERT_TRUE(withTable.predictEntries(one, entries));
+  EXPECT_EQ(entries, fakeVisible(small.samplePose(small.cellOf(Pose{1.17, 44, 100}))));
 }
 
 TEST(Predictors, AppaTableRoundTripStaleAndCorrupt) {
@@ -279,7 +363,7 @@ TEST(Predictors, ForeCacheMarkovLearnsAKnownPattern) {
   }
   EXPECT_EQ(correct, total);
   // and the pose prediction lands on the next pose of the pattern
-  ForeCachePosePredictor fc;
+  ForeCacheModel fc;
   Pose p{1.3, 60, 10};
   double err = 0;
   int n = 0;
@@ -296,7 +380,7 @@ TEST(Predictors, ForeCacheMarkovLearnsAKnownPattern) {
 }
 
 TEST(Predictors, ForeCachePhaseSwitch) {
-  ForeCachePosePredictor fc;
+  ForeCacheModel fc;
   Pose p{1.2, 80, 0};
   // navigating: steady 4-degree steps in one direction
   for (int i = 0; i < 10; ++i) {
@@ -325,7 +409,7 @@ TEST(Predictors, ForeCacheSignatureModelPicksSimilarView) {
   ForeCacheDataSource data;
   data.visibleBlocks = [](const Pose& p) { return std::vector<int64_t>{int64_t(std::floor(p.phiDeg))}; };
   data.signature = [](int64_t b) { return BlockSignature{float(b) / 360.f, 0, 0, 0}; };
-  ForeCachePosePredictor fc({}, data);
+  ForeCacheModel fc({}, data);
   Pose p{1.2, 90, 100};
   for (int i = 0; i < 12; ++i) {  // dwell around phi = 100 with small theta wiggles
     fc.observe(p);
@@ -334,4 +418,37 @@ TEST(Predictors, ForeCacheSignatureModelPicksSimilarView) {
   ASSERT_EQ(fc.phase(), ForeCachePhase::Sensemaking);
   const Pose next = fc.predictNext();
   EXPECT_NEAR(next.phiDeg, 100.0, 1.0);  // stays on the dwelt data
+}
+
+// The forecache predictor fed the renderer's bounded, sliding camera history learns what the model
+// fed every pose learns; a history that does not continue the previous one starts it over.
+TEST(Predictors, ForeCachePredictorAlignsItsHistory) {
+  const CameraMove pattern[3] = {{2.0, 0, 0}, {2.0, 0, 0}, {0, 7.0, 0}};
+  std::vector<Pose> path = {Pose{1.3, 60, 10}};
+  for (int i = 0; i < 44; ++i)
+    path.push_back(ForeCacheMarkov::applyMove(path.back(), pattern[i % 3]));
+  const auto fc = makePrefetchPredictor("forecache");
+  ForeCacheModel model;
+  std::vector<Camera> h;
+  double err = 0, gap = 0;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const Pose got = predictNextPose(*fc, h, path[i]);
+    model.observe(poseFromPosition(Camera::fromPose(path[i], 8, 8).eye));
+    gap = std::max(gap, poseDistance(got, i ? model.predictNext() : path[0]));
+    if (i >= 30) err += poseDistance(got, path[i + 1]);
+  }
+  EXPECT_LT(gap, 1e-12);
+  EXPECT_LT(err / 14, 1e-6);
+  EXPECT_EQ(static_cast<const ForeCachePredictor&>(*fc).phase(), model.phase());
+  // A new trajectory: the chain starts over, so two poses in it predict a repeat of its one move
+  // (without the reset, the learnt pattern would predict another move).
+  std::vector<Camera> fresh = camerasOf({Pose{1.1, 100, 200}, Pose{1.1, 103, 200}});
+  Camera next;
+  ASSERT_TRUE(fc->predict(fresh, next));
+  const Pose p = poseFromPosition(next.eye);
+  EXPECT_NEAR(p.distance, 1.1, 1e-9);
+  EXPECT_NEAR(p.thetaDeg, 106.0, 1e-6);
+  EXPECT_NEAR(p.phiDeg, 200.0, 1e-6);
+  std::vector<int64_t> entries;
+  EXPECT_FALSE(fc->predictEntries(fresh, entries));  // no file: no blocks
 }

@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <numeric>
 
+#include "afam/camera.hpp"
 #include "afam/errors.hpp"
-#include "afam/predictors/pose_predictor.hpp"
 #include "afam/trajectory_gen.hpp"
 
 using namespace afam;

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Fuzz target: the LSTM weights loader (loadLstmWeights), then a forward pass over the file's own
-// test sequence and one prediction. Input: one control byte (odd: recompute the trailing FNV-1a
-// checksum after mutation, so mutations reach the parser behind it), then the file's bytes.
+// test sequence and one prediction from three cameras. Input: one control byte (odd: recompute the
+// trailing FNV-1a checksum after mutation, so mutations reach the parser behind it), then the
+// file's bytes.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
 #include "afam/errors.hpp"
+#include "afam/hash.hpp"
 #include "afam/predictors/lstm.hpp"
 #include "memory_file.hpp"
 
@@ -15,11 +17,7 @@ namespace {
 // FNV-1a over the body, stored little-endian in the last four bytes (scripts/train_lstm.py).
 void fixChecksum(std::vector<uint8_t>& b) {
   if (b.size() < 4) return;
-  uint32_t h = 0x811C9DC5u;
-  for (size_t i = 0; i < b.size() - 4; ++i) {
-    h ^= b[i];
-    h *= 0x01000193u;
-  }
+  const uint32_t h = afam::fnv1a32(b.data(), b.size() - 4);
   for (int i = 0; i < 4; ++i) b[b.size() - 4 + static_cast<size_t>(i)] = static_cast<uint8_t>(h >> (8 * i));
 }
 
@@ -34,9 +32,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     afam::LstmWeights w = afam::loadLstmWeights(path);
     if (w.testSteps > 0) (void)afam::lstmForward(w, w.testInput.data(), static_cast<int>(w.testSteps));
-    afam::LstmPosePredictor predictor(std::move(w));
-    for (int i = 0; i < 3; ++i) predictor.observe(afam::Pose{1.2, 0.1 * i, 0.3});
-    (void)predictor.predictNext();
+    const afam::LstmPredictor predictor(std::move(w));
+    std::vector<afam::Camera> history;
+    for (int i = 0; i < 3; ++i)
+      history.push_back(afam::Camera::fromPose(afam::Pose{1.2, 0.1 * i, 0.3}, 8, 8));
+    afam::Camera next;
+    (void)predictor.predict(history, next);
   } catch (const afam::Error&) {
   }
   return 0;

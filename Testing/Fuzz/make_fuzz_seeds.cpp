@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "afam/encoder.hpp"
+#include "afam/hash.hpp"
 #include "afam/marschner_lobb.hpp"
 
 namespace {
@@ -151,12 +152,7 @@ Bytes tinyLstm(uint32_t hidden, uint32_t steps) {
   for (size_t i = 0; i < floats; ++i) putF32(b, 0.01f * std::sin(float(i)));
   putU32(b, steps);
   for (size_t i = 0; i < steps * 6 + 3; ++i) putF32(b, 0.1f * float(i % 7));
-  uint32_t h = 0x811C9DC5u;
-  for (uint8_t c : b) {
-    h ^= c;
-    h *= 0x01000193u;
-  }
-  putU32(b, h);
+  putU32(b, afam::fnv1a32(b.data(), b.size()));
   return b;
 }
 

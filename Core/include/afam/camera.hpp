@@ -32,6 +32,13 @@ struct Pose {
   double distance = 1.5, thetaDeg = 0, phiDeg = 0;
 };
 
+/// Eye position of a pose in the normalised frame (the eye of Camera::fromPose).
+Vec3 posePosition(const Pose& pose);
+/// The pose whose eye is at `eye` (phi in [0, 360), theta in [0, 180]); eye = 0 gives distance 0.
+Pose poseFromPosition(const Vec3& eye);
+/// Euclidean distance between the eye positions of two poses.
+double poseDistance(const Pose& a, const Pose& b);
+
 /// Pinhole (or orthographic) camera with an explicit frame in the normalised frame: orthonormal
 /// for the trajectory and look-at cameras; after mapped(), the images of the world's unit vectors.
 struct Camera {
@@ -84,5 +91,9 @@ struct Camera {
 /// Reads a trajectory file. Throws IoError (cannot open/read) or FormatError (size not a multiple
 /// of 12 bytes, empty, non-finite value, distance <= 0), naming the file and the offending index.
 std::vector<Pose> loadTrajectory(const std::string& path);
+
+/// Writes poses in the trajectory format (3 N float32: distances, theta, phi) to a temporary file
+/// renamed into place. Throws IoError.
+void writeTrajectory(const std::string& path, const std::vector<Pose>& poses);
 
 }  // namespace afam

@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -25,8 +26,14 @@
 
 namespace afam {
 
-/// Predicts the camera of the next point of view from the history of cameras (oldest first).
-/// makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds every kind by name.
+/// Cameras of the latest points of view a predictor is given (the renderer's history, and
+/// `afam predict`'s): the LSTM needs its window plus one.
+constexpr std::size_t kPredictorHistory = 16;
+
+/// Predicts the camera of the next point of view from the history of cameras (oldest first): the
+/// one predictor interface. makePrefetchPredictor (predictors/prefetch_predictors.hpp) builds
+/// every kind by name. Stateful predictors learn from the cameras of a history they have not seen
+/// yet and start over when a history does not continue the previous one.
 class Predictor {
  public:
   virtual ~Predictor() = default;
@@ -58,6 +65,13 @@ class LinearPredictor : public Predictor {
   const char* name() const override { return "linear"; }
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
 };
+
+/// The user is now at `pose`: appends its trajectory camera (width x height) to `history`, keeps
+/// the last kPredictorHistory, and returns the pose of the predicted next camera, or `pose` itself
+/// when the predictor makes no prediction (the user is taken to stay). How `afam predict` and the
+/// tests score a predictor on a trajectory.
+Pose predictNextPose(const Predictor& predictor, std::vector<Camera>& history, const Pose& pose,
+                     int width = 256, int height = 256);
 
 struct PrefetchStats {
   uint64_t jobs = 0, blocksLoaded = 0, stoppedEarly = 0;

@@ -2,7 +2,7 @@
 // Generated camera paths in the trajectory format of camera.hpp (Pose: distance, theta, phi in
 // degrees; the volume spans [-1, 1]^3 and the camera looks at the origin). They stand in for
 // recorded human explorations wherever a path is needed: the demo, the tests, the benchmarks and
-// the training of the next-pose predictor. Written with writeTrajectory (pose_predictor.hpp).
+// the training of the next-pose predictor. Written with writeTrajectory (camera.hpp).
 //
 // Three kinds:
 //   - orbit: a circle at a fixed distance and polar angle, phi advancing evenly;

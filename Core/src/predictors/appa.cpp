@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "afam/afam_file.hpp"
+#include "afam/atomic_write.hpp"
 #include "afam/errors.hpp"
 #include "afam/lod.hpp"
 
@@ -45,6 +46,11 @@ struct In {
   }
 };
 
+// The cell of x along an axis of cells `step` wide: floor quantisation with a tolerance of 1e-9
+// cell, so that a value on a boundary stays in the cell above it after a round trip through a
+// camera (pose -> eye -> pose loses a few ulps).
+int floorCell(double x, double step) { return static_cast<int>(std::floor(x / step + 1e-9)); }
+
 }  // namespace
 
 int AppaGrid::distanceCells() const { return cellsOf(dMax - dMin, dStep); }
@@ -53,13 +59,11 @@ int AppaGrid::phiCells() const { return cellsOf(360.0, angleStep); }
 
 int AppaGrid::cellOf(const Pose& pose) const {
   const int nd = distanceCells(), nt = thetaCells(), np = phiCells();
-  int id = static_cast<int>(std::floor((pose.distance - dMin) / dStep + 1e-9));
-  id = std::clamp(id, 0, nd - 1);
-  int it = static_cast<int>(std::floor(pose.thetaDeg / angleStep));
-  it = std::clamp(it, 0, nt - 1);
+  const int id = std::clamp(floorCell(pose.distance - dMin, dStep), 0, nd - 1);
+  const int it = std::clamp(floorCell(pose.thetaDeg, angleStep), 0, nt - 1);
   double phi = std::fmod(pose.phiDeg, 360.0);
   if (phi < 0) phi += 360.0;
-  int ip = static_cast<int>(std::floor(phi / angleStep)) % np;
+  const int ip = floorCell(phi, angleStep) % np;
   return (id * nt + it) * np + ip;
 }
 
@@ -131,21 +135,7 @@ void AppaTable::save(const std::string& path) const {
   for (uint32_t o : offsets_) put(b, o);
   for (uint32_t e : entries_) put(b, e);
   put(b, fnv1a32(b.data(), b.size()));
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot open '" + tmp + "' for writing the APPA table");
-    out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw IoError("writing the APPA table '" + tmp + "' failed (disk full?)");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw IoError("cannot rename '" + tmp + "' to '" + path + "'");
-  }
+  writeFileAtomically(path, b.data(), b.size(), "APPA table");
 }
 
 AppaTable AppaTable::load(const std::string& path) {
@@ -278,11 +268,6 @@ AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file, cons
       if (s.second >= 0) out.push_back(s.second);
     return out;
   };
-}
-
-Pose AppaPosePredictor::predictNext() const {
-  if (history().empty()) return Pose{};
-  return grid_.samplePose(grid_.cellOf(history().back()));
 }
 
 }  // namespace afam

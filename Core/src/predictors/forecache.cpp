@@ -165,14 +165,14 @@ ForeCachePhase classifyPhase(const std::deque<CameraMove>& moves, double current
   return ForeCachePhase::Navigation;
 }
 
-// --------------------------------------------------------------------------- pose predictor
+// ------------------------------------------------------------------------------------- model
 
-ForeCachePosePredictor::ForeCachePosePredictor(const ForeCacheOptions& options,
-                                               ForeCacheDataSource data)
-    : HistoryPosePredictor(2), opt_(options), data_(std::move(data)), markov_(options) {}
+ForeCacheModel::ForeCacheModel(const ForeCacheOptions& options, ForeCacheDataSource data)
+    : opt_(options), data_(std::move(data)), markov_(options) {}
 
-void ForeCachePosePredictor::reset() {
-  HistoryPosePredictor::reset();
+void ForeCacheModel::reset() {
+  last_ = Pose{};
+  observed_ = 0;
   markov_.reset();
   moves_.clear();
   phase_ = ForeCachePhase::Navigation;
@@ -180,14 +180,15 @@ void ForeCachePosePredictor::reset() {
   dwell_ = {};
 }
 
-void ForeCachePosePredictor::observe(const Pose& pose) {
-  if (!history().empty()) {
-    const CameraMove m = ForeCacheMarkov::moveBetween(history().back(), pose);
+void ForeCacheModel::observe(const Pose& pose) {
+  if (observed_ > 0) {
+    const CameraMove m = ForeCacheMarkov::moveBetween(last_, pose);
     markov_.observeMove(m);
     moves_.push_back(m);
     while (static_cast<int>(moves_.size()) > std::max(opt_.phaseWindow, 1)) moves_.pop_front();
   }
-  HistoryPosePredictor::observe(pose);
+  last_ = pose;
+  ++observed_;
   phase_ = classifyPhase(moves_, pose.distance, opt_);
   if (data_.visibleBlocks && data_.signature) {
     const std::vector<int64_t> blocks = data_.visibleBlocks(pose);
@@ -208,7 +209,7 @@ void ForeCachePosePredictor::observe(const Pose& pose) {
   }
 }
 
-float ForeCachePosePredictor::signatureDistance(const std::vector<int64_t>& blocks) const {
+float ForeCacheModel::signatureDistance(const std::vector<int64_t>& blocks) const {
   if (blocks.empty()) return 1e30f;
   BlockSignature mean{};
   for (int64_t b : blocks) {
@@ -223,8 +224,8 @@ float ForeCachePosePredictor::signatureDistance(const std::vector<int64_t>& bloc
   return d;
 }
 
-Pose ForeCachePosePredictor::signaturePrediction() const {
-  const Pose& cur = history().back();
+Pose ForeCacheModel::signaturePrediction() const {
+  const Pose& cur = last_;
   const auto ranked = markov_.rankedSymbols();
   Pose best = ForeCacheMarkov::applyMove(cur, markov_.meanMove(ranked.front().first));
   if (!(data_.visibleBlocks && data_.signature && haveDwell_)) return best;
@@ -242,29 +243,27 @@ Pose ForeCachePosePredictor::signaturePrediction() const {
   return best;
 }
 
-Pose ForeCachePosePredictor::predictNext() const {
-  if (history().empty()) return Pose{};
-  if (history().size() < 2) return history().back();
+Pose ForeCacheModel::predictNext() const {
+  if (observed_ < 2) return last_;
   if (phase_ == ForeCachePhase::Sensemaking) return signaturePrediction();
-  return ForeCacheMarkov::applyMove(history().back(), markov_.meanMove(markov_.predictSymbol()));
+  return ForeCacheMarkov::applyMove(last_, markov_.meanMove(markov_.predictSymbol()));
 }
 
-std::vector<Pose> ForeCachePosePredictor::candidatePoses(int count) const {
+std::vector<Pose> ForeCacheModel::candidatePoses(int count) const {
   std::vector<Pose> out;
-  if (history().empty() || count <= 0) return out;
+  if (observed_ == 0 || count <= 0) return out;
   out.push_back(predictNext());
   const auto ranked = markov_.rankedSymbols();
   for (const auto& [s, prob] : ranked) {
     if (static_cast<int>(out.size()) >= count) break;
     (void)prob;
-    Pose p = ForeCacheMarkov::applyMove(history().back(), markov_.meanMove(s));
+    Pose p = ForeCacheMarkov::applyMove(last_, markov_.meanMove(s));
     if (poseDistance(p, out.front()) > 1e-6) out.push_back(p);
   }
   return out;
 }
 
-std::vector<int64_t> ForeCachePosePredictor::rankBySignature(
-    const std::vector<int64_t>& candidates) const {
+std::vector<int64_t> ForeCacheModel::rankBySignature(const std::vector<int64_t>& candidates) const {
   if (!(data_.signature && haveDwell_)) return {};
   std::vector<std::pair<float, int64_t>> scored;
   scored.reserve(candidates.size());

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/predictors/lstm.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -131,20 +132,14 @@ std::string defaultLstmWeightsPath() {
   return AFAM_DEFAULT_LSTM_WEIGHTS;
 }
 
-LstmPosePredictor::LstmPosePredictor(LstmWeights weights)
-    : HistoryPosePredictor(weights.window + 1), w_(std::move(weights)) {}
-
-Pose LstmPosePredictor::predictNext() const {
-  const auto& h = history();
-  if (h.empty()) return Pose{};
-  if (h.size() < 2) return h.back();
-  std::vector<Vec3> P;
-  P.reserve(h.size());
-  for (const Pose& p : h) P.push_back(posePosition(p));
+Vec3 lstmNextPosition(const LstmWeights& w, const std::vector<Vec3>& P) {
   const std::size_t n = P.size();
-  const std::size_t steps = std::min<std::size_t>(w_.window, n - 1);
+  if (n < 2)
+    throw InvalidArgument("lstm: a prediction needs at least two positions, got " +
+                          std::to_string(n));
+  const std::size_t steps = std::min<std::size_t>(w.window, n - 1);
   std::vector<float> feat(steps * 6);
-  const double inv = 1.0 / w_.deltaScale;
+  const double inv = 1.0 / w.deltaScale;
   for (std::size_t s = 0; s < steps; ++s) {
     const std::size_t t = n - steps + s;  // step t uses P[t] - P[t-1]
     for (int k = 0; k < 3; ++k) {
@@ -152,14 +147,26 @@ Pose LstmPosePredictor::predictNext() const {
       feat[s * 6 + 3 + k] = static_cast<float>(P[t][k]);
     }
   }
-  const std::vector<float> r = lstmForward(w_, feat.data(), int(steps));
+  const std::vector<float> r = lstmForward(w, feat.data(), int(steps));
   Vec3 next;
-  const bool residual = (w_.flags & LstmWeights::kFlagResidual) != 0;
+  const bool residual = (w.flags & LstmWeights::kFlagResidual) != 0;
   for (int k = 0; k < 3; ++k) {
     const double lin = residual ? P[n - 1][k] + (P[n - 1][k] - P[n - 2][k]) : P[n - 1][k];
-    next[k] = lin + w_.deltaScale * r[k];
+    next[k] = lin + w.deltaScale * r[k];
   }
-  return poseFromPosition(next);
+  return next;
+}
+
+bool LstmPredictor::predict(const std::vector<Camera>& history, Camera& next) const {
+  if (history.size() < 2) return false;
+  const std::size_t used = std::min<std::size_t>(history.size(), std::size_t(w_.window) + 1);
+  std::vector<Vec3> eyes;
+  eyes.reserve(used);
+  for (std::size_t i = history.size() - used; i < history.size(); ++i)
+    eyes.push_back(history[i].eye);
+  const Camera& last = history.back();
+  next = Camera::fromPose(poseFromPosition(lstmNextPosition(w_, eyes)), last.width, last.height);
+  return true;
 }
 
 }  // namespace afam

@@ -38,110 +38,126 @@ BlockSignature entrySignature(const AfamFile& file, int64_t entry) {
           float(std::log2(std::max(1.0, ncp)) / 15.0), float(e.rmse / range)};
 }
 
+namespace {
+std::unique_ptr<Predictor> makeAppa(const PredictorContext& ctx) {
+  if (!ctx.file) return std::make_unique<AppaPredictor>(ctx.appaGrid);
+  const LodSelector selector(ctx.lod);
+  const auto visible =
+      makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
+  const std::string path =
+      ctx.appaTablePath.empty() ? ctx.file->path() + ".appa" : ctx.appaTablePath;
+  AppaTable table = AppaTable::loadOrBuild(path, appaSourceKey(*ctx.file, appaContext(ctx)),
+                                           ctx.appaGrid, visible, ctx.appaReport, ctx.appaThreads);
+  return std::make_unique<AppaPredictor>(std::move(table));
+}
+}  // namespace
+
 std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx) {
   if (name == "none") return std::make_unique<NoPredictor>();
   if (name == "linear") return std::make_unique<LinearPredictor>();
-  if (name == "lstm") {
-    return std::make_unique<PosePredictorAdapter>(std::make_unique<LstmPosePredictor>(
-        ctx.lstmWeights.empty() ? defaultLstmWeightsPath() : ctx.lstmWeights));
-  }
-  if (name == "appa" || name == "forecache") {
-    if (!ctx.file) throw InvalidArgument("prefetch: predictor '" + name + "' needs the .afam file");
-    if (name == "forecache") return std::make_unique<ForeCachePredictor>(ctx);
-    const LodSelector selector(ctx.lod);
-    const auto visible = makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
-    const std::string path = ctx.appaTablePath.empty() ? ctx.file->path() + ".appa" : ctx.appaTablePath;
-    AppaTable table = AppaTable::loadOrBuild(path, appaSourceKey(*ctx.file, appaContext(ctx)), ctx.appaGrid,
-                                             visible, ctx.appaReport, ctx.appaThreads);
-    return std::make_unique<AppaPredictor>(std::move(table));
-  }
-  throw InvalidArgument("prefetch: unknown predictor '" + name +
+  if (name == "lstm")
+    return std::make_unique<LstmPredictor>(ctx.lstmWeights.empty() ? defaultLstmWeightsPath()
+                                                                   : ctx.lstmWeights);
+  if (name == "appa") return makeAppa(ctx);
+  if (name == "forecache") return std::make_unique<ForeCachePredictor>(ctx);
+  throw InvalidArgument("unknown predictor '" + name +
                         "' (expected none, linear, appa, forecache or lstm)");
-}
-
-void PosePredictorAdapter::update(const std::vector<Camera>& history) const {
-  // The renderer's history is bounded and a frame's job may be dropped before it runs (a very fast
-  // frame), so align the history with the cameras already seen and feed only the new ones.
-  const std::size_t n = history.size();
-  std::size_t fresh = n;
-  for (std::size_t m = 1; m <= n; ++m) {
-    const std::size_t keep = n - m;
-    if (keep > seen_.size()) continue;
-    bool same = true;
-    for (std::size_t i = 0; i < keep && same; ++i) same = history[i].eye == seen_[seen_.size() - keep + i];
-    if (same) {
-      fresh = m;
-      break;
-    }
-  }
-  if (fresh == n) pose_->reset();  // a new trajectory (or no overlap with what was seen)
-  for (std::size_t i = n - fresh; i < n; ++i) pose_->observe(poseOf(history[i]));
-  seen_.clear();
-  for (const Camera& c : history) seen_.push_back(c.eye);
-}
-
-bool PosePredictorAdapter::predict(const std::vector<Camera>& history, Camera& next) const {
-  if (history.empty()) return false;
-  std::lock_guard<std::mutex> g(mutex_);
-  update(history);
-  if (history.size() < 2) return false;
-  const Camera& last = history.back();
-  next = Camera::fromPose(pose_->predictNext(), last.width, last.height);
-  return true;
 }
 
 bool AppaPredictor::predict(const std::vector<Camera>& history, Camera& next) const {
   if (history.empty()) return false;
   const Camera& last = history.back();
-  const Pose p = table_.grid().samplePose(table_.grid().cellOf(poseOf(last)));
+  const Pose p = grid_.samplePose(grid_.cellOf(poseOf(last)));
   next = Camera::fromPose(p, last.width, last.height);
   return true;
 }
 
 bool AppaPredictor::predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const {
-  if (history.empty()) return false;
+  if (!hasTable_ || history.empty()) return false;
   auto [b, e] = table_.lookup(poseOf(history.back()));
   entries.assign(b, e);
   return true;
 }
 
-ForeCachePredictor::ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options)
-    : PosePredictorAdapter(nullptr) {
-  const LodSelector selector(ctx.lod);
-  visible_ = makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
+namespace {
+ForeCacheDataSource foreCacheData(const PredictorContext& ctx,
+                                  const AppaTable::VisibleFn& visible) {
   ForeCacheDataSource data;
-  data.visibleBlocks = visible_;
+  if (!ctx.file) return data;
+  data.visibleBlocks = visible;
   std::shared_ptr<const AfamFile> file = ctx.file;
   data.signature = [file](int64_t entry) { return entrySignature(*file, entry); };
-  pose_ = std::make_unique<ForeCachePosePredictor>(options, std::move(data));
-  name_ = "forecache";
+  return data;
 }
+
+AppaTable::VisibleFn foreCacheVisible(const PredictorContext& ctx) {
+  if (!ctx.file) return nullptr;
+  const LodSelector selector(ctx.lod);
+  return makeLodVisibleFn(ctx.file, selector, 256, 256, ctx.tfTable, ctx.tfLo, ctx.tfHi);
+}
+
+/// How many cameras at the end of `history` are new after `seen` (the eyes of the previous call's
+/// history): the fewest such that the rest continues `seen`; all of them when none does.
+std::size_t unseenCameras(const std::vector<Camera>& history, const std::vector<Vec3>& seen) {
+  const std::size_t n = history.size();
+  for (std::size_t m = 1; m <= n; ++m) {
+    const std::size_t keep = n - m;
+    if (keep > seen.size()) continue;
+    bool same = true;
+    for (std::size_t i = 0; i < keep && same; ++i)
+      same = history[i].eye == seen[seen.size() - keep + i];
+    if (same) return m;
+  }
+  return n;
+}
+}  // namespace
+
+ForeCachePredictor::ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options)
+    : visible_(foreCacheVisible(ctx)), model_(options, foreCacheData(ctx, visible_)) {}
 
 ForeCachePhase ForeCachePredictor::phase() const {
   std::lock_guard<std::mutex> g(mutex_);
-  return static_cast<const ForeCachePosePredictor&>(*pose_).phase();
+  return model_.phase();
+}
+
+void ForeCachePredictor::update(const std::vector<Camera>& history) const {
+  // The renderer's history is bounded and a frame's job may be dropped before it runs (a very fast
+  // frame), so align the history with the cameras already seen and feed only the new ones.
+  const std::size_t n = history.size(), fresh = unseenCameras(history, seen_);
+  if (fresh == n) model_.reset();  // a new trajectory (or no overlap with what was seen)
+  for (std::size_t i = n - fresh; i < n; ++i) model_.observe(poseOf(history[i]));
+  seen_.clear();
+  for (const Camera& c : history) seen_.push_back(c.eye);
+}
+
+bool ForeCachePredictor::predict(const std::vector<Camera>& history, Camera& next) const {
+  if (history.empty()) return false;
+  std::lock_guard<std::mutex> g(mutex_);
+  update(history);
+  if (history.size() < 2) return false;
+  const Camera& last = history.back();
+  next = Camera::fromPose(model_.predictNext(), last.width, last.height);
+  return true;
 }
 
 bool ForeCachePredictor::predictEntries(const std::vector<Camera>& history,
                                         std::vector<int64_t>& entries) const {
-  if (history.empty()) return false;
+  if (!visible_ || history.empty()) return false;
   std::lock_guard<std::mutex> g(mutex_);
   update(history);
   entries.clear();
   if (history.size() < 2) return true;  // learnt from it; nothing to predict yet
-  const auto& fc = static_cast<const ForeCachePosePredictor&>(*pose_);
-  const std::vector<Pose> cands = fc.candidatePoses(2);
+  const std::vector<Pose> cands = model_.candidatePoses(2);
   entries = visible_(cands.front());
-  if (fc.phase() == ForeCachePhase::Sensemaking && cands.size() > 1) {
+  std::unordered_set<int64_t> have(entries.begin(), entries.end());
+  if (model_.phase() == ForeCachePhase::Sensemaking && cands.size() > 1) {
     // SB: the blocks the other likely views would add, most similar to the dwell signature first.
-    std::unordered_set<int64_t> have(entries.begin(), entries.end());
     std::vector<int64_t> extra;
     for (int64_t e : visible_(cands[1]))
       if (!have.count(e)) extra.push_back(e);
-    for (int64_t e : fc.rankBySignature(extra)) entries.push_back(e);
+    for (int64_t e : model_.rankBySignature(extra)) entries.push_back(e);
   } else {
     // AB: the Markov chain's second most likely move next.
-    std::unordered_set<int64_t> have(entries.begin(), entries.end());
     for (std::size_t i = 1; i < cands.size(); ++i)
       for (int64_t e : visible_(cands[i]))
         if (have.insert(e).second) entries.push_back(e);

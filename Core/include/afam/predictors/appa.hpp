@@ -6,13 +6,15 @@
 //
 // Quantisation (the authors' settings): distance step 0.1 from dMin (poses nearer than dMin use the
 // first cell, farther than dMax the last), theta and phi steps of 6 degrees, by flooring as the
-// authors do. The blocks of a cell are those visible from the cell's sample pose (its centre by
-// default, which is closer on average to the poses that fall in the cell than the authors' lower
-// corner; `Corner` reproduces theirs), ordered nearest block centre first.
+// authors do (with a tolerance of 1e-9 cell: a pose on a boundary keeps its cell after the round
+// trip through a camera that the predictor's history makes). The blocks of a cell are those visible
+// from the cell's sample pose (its centre by default, which is closer on average to the poses that
+// fall in the cell than the authors' lower corner; `Corner` reproduces theirs), ordered nearest
+// block centre first.
 //
 // The table is cached beside the .afam file as FILE.afam.appa (layout below), keyed on the .afam
-// file (size, modification time, index checksums) and on a context string (LOD and culling settings,
-// transfer function, image size) so that a stale or corrupt table is rebuilt, never used.
+// file (size, modification time, index checksums) and on a context string (LOD and culling
+// settings, transfer function, image size) so that a stale or corrupt table is rebuilt, never used.
 //   char[8] "AFAPPA\0\0"; u32 version; u64 key; f64 dMin, dStep, angleStep; u32 sampling;
 //   u32 nd, nt, np; u32 offsets[nd*nt*np + 1]; u32 entries[offsets[last]];
 //   u32 FNV-1a checksum of every preceding byte.
@@ -24,8 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "afam/camera.hpp"
 #include "afam/hash.hpp"
-#include "afam/predictors/pose_predictor.hpp"
 
 namespace afam {
 
@@ -104,17 +106,5 @@ uint64_t appaSourceKey(const AfamFile& file, const std::string& context);
 AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file, const LodSelector& selector,
                                       int width, int height, std::vector<float> tfTable, double tfLo,
                                       double tfHi);
-
-/// "appa" as a pose predictor: the next point of view is the parent POV (the sample pose of the
-/// last pose's cell). Without a table this is all `afam predict` can show of APPA.
-class AppaPosePredictor : public HistoryPosePredictor {
- public:
-  explicit AppaPosePredictor(AppaGrid grid = {}) : HistoryPosePredictor(2), grid_(grid) {}
-  std::string name() const override { return "appa"; }
-  Pose predictNext() const override;
-
- private:
-  AppaGrid grid_;
-};
 
 }  // namespace afam

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/predictors/pose_predictor.hpp"
+#include "afam/camera.hpp"
 
 namespace afam {
 
@@ -91,17 +91,20 @@ struct ForeCacheDataSource {
   std::function<BlockSignature(int64_t)> signature;
 };
 
-/// "forecache" as a pose predictor: AB (Markov) in Foraging/Navigation, SB in Sensemaking: among
-/// the candidate next poses (one mean move of each learnt symbol), the one whose visible blocks'
-/// mean signature is closest to the dwell signature (recency-weighted mean over recent views).
-class ForeCachePosePredictor : public HistoryPosePredictor {
+/// ForeCache's model of the user over poses, the state behind the "forecache" predictor
+/// (ForeCachePredictor, prefetch_predictors.hpp): AB (Markov) in Foraging/Navigation, SB in
+/// Sensemaking: among the candidate next poses (one mean move of each learnt symbol), the one whose
+/// visible blocks' mean signature is closest to the dwell signature (recency-weighted mean over
+/// recent views).
+class ForeCacheModel {
  public:
-  explicit ForeCachePosePredictor(const ForeCacheOptions& options = {},
-                                  ForeCacheDataSource data = {});
-  std::string name() const override { return "forecache"; }
-  void reset() override;
-  void observe(const Pose& pose) override;
-  Pose predictNext() const override;
+  explicit ForeCacheModel(const ForeCacheOptions& options = {}, ForeCacheDataSource data = {});
+  /// Forget everything learnt (a new trajectory starts).
+  void reset();
+  /// The user is now at `pose` (called once per point of view, in order).
+  void observe(const Pose& pose);
+  /// The predicted next pose: the last pose until two were observed, a default Pose before any.
+  Pose predictNext() const;
   ForeCachePhase phase() const { return phase_; }
   const ForeCacheMarkov& markov() const { return markov_; }
   /// Poses to prefetch for, best first (Markov's top moves, or the SB choice first in Sensemaking).
@@ -116,6 +119,8 @@ class ForeCachePosePredictor : public HistoryPosePredictor {
 
   ForeCacheOptions opt_;
   ForeCacheDataSource data_;
+  Pose last_{};
+  uint64_t observed_ = 0;
   ForeCacheMarkov markov_;
   std::deque<CameraMove> moves_;
   ForeCachePhase phase_ = ForeCachePhase::Navigation;

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// A small LSTM that predicts the next camera pose from the last few, run live in plain C++.
+// A small LSTM that predicts the next eye position from the last few, run live in plain C++.
 // Trained offline by scripts/train_lstm.py (torch); the weights ship as data/lstm_pose_v1.bin.
 // The file layout, the features and the gate order are documented in that script and must stay in
 // step with it (the version field guards that; a test compares this forward pass with torch's).
@@ -9,7 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/predictors/pose_predictor.hpp"
+#include "afam/camera.hpp"
+#include "afam/prefetch.hpp"
 
 namespace afam {
 
@@ -40,15 +41,21 @@ std::vector<float> lstmForward(const LstmWeights& w, const float* sequence, int 
 /// data/lstm_pose_v1.bin (path fixed at configure time).
 std::string defaultLstmWeightsPath();
 
-/// "lstm": features per step [ (P_t - P_{t-1}) / deltaScale, P_t ] over the last `window` steps;
-/// prediction P_{t+1} = P_t + (P_t - P_{t-1}) + deltaScale * head.
-class LstmPosePredictor : public HistoryPosePredictor {
+/// The LSTM's next eye position after `positions` (oldest first, at least two; the last window + 1
+/// are used): features per step [ (P_t - P_{t-1}) / deltaScale, P_t ]; the prediction is
+/// P_{t+1} = P_t + (P_t - P_{t-1}) + deltaScale * head with the residual flag, P_t + deltaScale *
+/// head without it. Throws InvalidArgument for fewer than two positions.
+Vec3 lstmNextPosition(const LstmWeights& w, const std::vector<Vec3>& positions);
+
+/// "lstm": the trajectory camera (Camera::fromPose) at lstmNextPosition of the history's eyes.
+class LstmPredictor : public Predictor {
  public:
-  explicit LstmPosePredictor(LstmWeights weights);
-  explicit LstmPosePredictor(const std::string& weightsPath)
-      : LstmPosePredictor(loadLstmWeights(weightsPath)) {}
-  std::string name() const override { return "lstm"; }
-  Pose predictNext() const override;
+  explicit LstmPredictor(LstmWeights weights) : w_(std::move(weights)) {}
+  explicit LstmPredictor(const std::string& weightsPath)
+      : LstmPredictor(loadLstmWeights(weightsPath)) {}
+  const char* name() const override { return "lstm"; }
+  /// False for fewer than two cameras.
+  bool predict(const std::vector<Camera>& history, Camera& next) const override;
   const LstmWeights& weights() const { return w_; }
 
  private:

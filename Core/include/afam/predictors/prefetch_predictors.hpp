@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The renderer's predictors and their one factory: none and linear (prefetch.hpp) and the
-// data-aware appa, forecache and lstm, run live in the prefetch thread.
+// The one factory of the predictors (prefetch.hpp's Predictor): none and linear (prefetch.hpp),
+// lstm (lstm.hpp) and the data-aware appa and forecache, run live in the renderer's prefetch
+// thread and by `afam predict`.
 //
 // The renderer calls predict(history, next) (or predictEntries) once per frame in the prefetch
-// thread, with its bounded history of cameras; the stateful predictors here learn from the cameras
-// they have not seen yet and start over when the history does not continue the previous one.
-// Predictors that know the blocks to fetch without a visibility computation (APPA's table,
-// ForeCache's signature ranking) also override Predictor::predictEntries; the renderer's prefetch
-// job asks for the entries first and falls back to selecting the predicted camera's view.
+// thread, with its bounded history of cameras; ForeCache learns from the cameras it has not seen
+// yet and starts over when the history does not continue the previous one. Predictors that know
+// the blocks to fetch without a visibility computation (APPA's table, ForeCache's signature
+// ranking) also override Predictor::predictEntries; the renderer's prefetch job asks for the
+// entries first and falls back to selecting the predicted camera's view.
 #pragma once
 
 #include <memory>
@@ -18,7 +19,6 @@
 #include "afam/lod.hpp"
 #include "afam/predictors/appa.hpp"
 #include "afam/predictors/forecache.hpp"
-#include "afam/predictors/pose_predictor.hpp"
 #include "afam/prefetch.hpp"
 
 namespace afam {
@@ -36,52 +36,54 @@ struct PredictorContext {
   AppaBuildReport* appaReport = nullptr;  ///< filled when the APPA table is loaded or built
 };
 
-/// The one factory of the renderer's predictors: none | linear (camera only) | appa | forecache |
-/// lstm (these use ctx). Throws InvalidArgument for other names or when appa/forecache get no
-/// file, and whatever a loader throws (a missing or corrupt LSTM weights file, for example).
+/// The one factory of the predictors: none | linear | lstm (camera only) | appa | forecache (these
+/// use ctx.file when it is set: without a file appa predicts the parent POV but no blocks, and
+/// forecache runs without its signature model). Throws InvalidArgument for other names, and
+/// whatever a loader throws (a missing or corrupt LSTM weights file, for example).
 std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx = {});
 
 /// The names makePrefetchPredictor takes, in the order the command line lists them.
 const std::vector<std::string>& predictorNames();
 
-/// A PosePredictor behind the camera interface (lstm; forecache without data).
-class PosePredictorAdapter : public Predictor {
- public:
-  explicit PosePredictorAdapter(std::unique_ptr<PosePredictor> pose) : pose_(std::move(pose)) {}
-  const char* name() const override { return name_.c_str(); }
-  bool predict(const std::vector<Camera>& history, Camera& next) const override;
-
- protected:
-  /// Feeds the cameras of `history` not seen at the previous call (all of them, after a reset,
-  /// when the history does not continue the previous one). Caller holds mutex_.
-  void update(const std::vector<Camera>& history) const;
-  std::unique_ptr<PosePredictor> pose_;
-  std::string name_ = pose_ ? pose_->name() : std::string("?");
-  mutable std::mutex mutex_;
-  mutable std::vector<Vec3> seen_;
-};
-
+/// "appa": the next point of view is the parent POV (the sample pose of the last pose's cell); with
+/// a table, its blocks are the ones the table stores for that cell.
 class AppaPredictor : public Predictor {
  public:
-  AppaPredictor(AppaTable table) : table_(std::move(table)) {}
+  explicit AppaPredictor(AppaGrid grid) : grid_(grid) {}
+  explicit AppaPredictor(AppaTable table)
+      : grid_(table.grid()), table_(std::move(table)), hasTable_(true) {}
   const char* name() const override { return "appa"; }
   /// The parent POV's camera (what the table stores blocks for).
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
+  /// False without a table.
   bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;
   const AppaTable& table() const { return table_; }
 
  private:
+  AppaGrid grid_;
   AppaTable table_;
+  bool hasTable_ = false;
 };
 
-class ForeCachePredictor : public PosePredictorAdapter {
+/// "forecache": ForeCacheModel fed with the history's cameras; with a file, its signature model
+/// sees the blocks each pose selects, and predictEntries ranks them.
+class ForeCachePredictor : public Predictor {
  public:
-  ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options = {});
+  explicit ForeCachePredictor(const PredictorContext& ctx, const ForeCacheOptions& options = {});
+  const char* name() const override { return "forecache"; }
+  bool predict(const std::vector<Camera>& history, Camera& next) const override;
+  /// False without a file.
   bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;
   ForeCachePhase phase() const;
 
  private:
+  /// Feeds the model the cameras of `history` not seen at the previous call (all of them, after a
+  /// reset, when the history does not continue the previous one). Caller holds mutex_.
+  void update(const std::vector<Camera>& history) const;
   AppaTable::VisibleFn visible_;
+  mutable std::mutex mutex_;
+  mutable ForeCacheModel model_;
+  mutable std::vector<Vec3> seen_;
 };
 
 /// Signature of a file entry for ForeCache's SB model: mean value and value range (both relative

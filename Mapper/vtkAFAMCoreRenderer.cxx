@@ -99,12 +99,19 @@ void vtkAFAMCoreRenderer::Open(const std::string& path)
   {
     return;
   }
-  this->Impl->Renderer.reset();
-  this->Impl->File.reset();
-  this->OpenPath.clear();
+  this->Close();
   this->Impl->File = afam::AfamFile::open(path); // throws afam::Error naming the file
   this->Impl->Damage = std::make_shared<afam::DamageLog>();
   this->OpenPath = path;
+}
+
+void vtkAFAMCoreRenderer::Close()
+{
+  this->Impl->Gpu.reset();
+  this->Impl->Renderer.reset(); // its prefetch thread stops before the file goes
+  this->Impl->File.reset();
+  this->Impl->Damage.reset();
+  this->OpenPath.clear();
 }
 
 void vtkAFAMCoreRenderer::Volume(
@@ -151,7 +158,15 @@ void vtkAFAMCoreRenderer::Render(
   m.LastGood = settings;
   const int64_t uploadsBefore = m.GpuUploads();
   afam::FrameStats frame;
-  image = m.Renderer->renderFrame(request.Camera, settings, frame, request.MaxDistance);
+  try
+  {
+    image = m.Renderer->renderFrame(request.Camera, settings, frame, request.MaxDistance);
+  }
+  catch (const afam::FileChangedError&)
+  {
+    this->Close(); // its cache holds blocks of the old file
+    throw;
+  }
   stats.CachingSeconds = frame.cachingMs * 1e-3;
   stats.RenderSeconds = frame.renderMs * 1e-3;
   stats.CacheHits = static_cast<int64_t>(frame.hits);

@@ -64,12 +64,16 @@ public:
   ~vtkAFAMCoreRenderer();
   /// Opens (or keeps) the .afam file; throws afam::Error with a readable message.
   void Open(const std::string& path);
+  /// Forgets the open file, its renderer (cache, prefetch thread, GPU pool) and damage log.
+  void Close();
   const std::string& Path() const { return this->OpenPath; }
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
   /// True when this build has the CUDA renderer (afam_cuda linked in).
   static bool HasCuda();
-  /// Renders one frame (premultiplied RGBA, row 0 = top). Throws afam::Error.
+  /// Renders one frame (premultiplied RGBA, row 0 = top). Throws afam::Error; after an
+  /// afam::FileChangedError (the file changed on disk) the file is closed, and the next Open reads
+  /// it as it is now: no block of the old file is drawn again.
   void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
 
 private:

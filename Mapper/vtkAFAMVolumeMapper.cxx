@@ -5,6 +5,7 @@
 #include "vtkAFAMCoreRenderer.h"
 #include "vtkAFAMModelTree.h"
 
+#include "afam/file_identity.hpp"
 #include "afam/view_mapping.hpp"
 
 #include "vtkCamera.h"
@@ -85,9 +86,16 @@ bool vtkAFAMVolumeMapper::EnsureOpen()
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro(<< e.what());
+    // Each frame tries again (the file may be repaired), but says what is wrong once until that
+    // changes, not once per frame.
+    if (this->LastOpenError != e.what())
+    {
+      vtkErrorMacro(<< e.what());
+    }
+    this->LastOpenError = e.what();
     return false;
   }
+  this->LastOpenError.clear();
   return true;
 }
 
@@ -150,6 +158,47 @@ struct vtkAFAMVolumeMapper::Frame
   vtkAFAMFrameRequest Request;
 };
 
+bool vtkAFAMVolumeMapper::RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAFAMFrameStats& stats)
+{
+  try
+  {
+    this->Core->Render(frame.Request, image, stats);
+    return true;
+  }
+  catch (const afam::FileChangedError& changed)
+  {
+    // Another process rewrote, truncated or replaced the file. Core closed it (nothing of the old
+    // file is drawn again); this frame opens it as it is now, with one message either way.
+    try
+    {
+      this->Core->Open(this->ResolveFileName());
+      this->LastOpenError.clear();
+    }
+    catch (const std::exception& e)
+    {
+      vtkErrorMacro(<< changed.what() << "; opening it again failed: " << e.what());
+      this->LastOpenError = e.what(); // not repeated by the next frames' EnsureOpen
+      return false;
+    }
+    vtkWarningMacro(<< changed.what() << "; opened again, its new contents are drawn");
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return false;
+  }
+  try
+  {
+    this->Core->Render(frame.Request, image, stats);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return false;
+  }
+  return true;
+}
+
 void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 {
   const auto start = std::chrono::steady_clock::now();
@@ -162,13 +211,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   this->ReadDepthLimits(ren, frame);
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
-  try
+  if (!this->RenderCore(frame, image, stats))
   {
-    this->Core->Render(frame.Request, image, stats);
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro(<< e.what());
     return;
   }
   if (image.width != frame.CastWidth || image.height != frame.CastHeight)

@@ -218,10 +218,14 @@ protected:
 
   /// The file to use now: FileName, else the input's field data. Empty when none.
   std::string ResolveFileName();
-  /// Opens the file in Core when it changed; false (and an error) when it cannot.
+  /// Opens the file in Core when it changed; false (and an error, once per distinct error) when
+  /// it cannot.
   bool EnsureOpen();
-  /// The steps of Render, in order. Each false means nothing is drawn (and an error was given).
+  /// Core's frame; a file changed on disk is opened again and drawn anew in the same frame. False
+  /// (and an error) when nothing can be drawn.
   struct Frame;
+  bool RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
+  /// The steps of Render, in order. Each false means nothing is drawn (and an error was given).
   bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
@@ -256,6 +260,7 @@ protected:
   vtkTypeInt64 LastDepthLimitedPixels = 0;
   std::string LastDeviceMessage;
   std::string LastSettingWarning;
+  std::string LastOpenError; ///< reported once, until the error changes or the file opens
 
   std::unique_ptr<vtkAFAMCoreRenderer> Core;
 

@@ -23,6 +23,7 @@
 #include <array>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 vtkStandardNewMacro(vtkAFAMReader);
 
@@ -168,10 +169,13 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
         const std::string& name = file->header().scalarName;
         values->SetName(name.empty() ? "scalars" : name.c_str());
         values->SetNumberOfTuples(image->GetNumberOfPoints());
+        std::vector<std::string> damaged;
         afam::decodeLevelBox(*file, this->DecodeLevel, { ext[0], ext[2], ext[4] },
           { ext[1], ext[3], ext[5] }, values->GetPointer(0),
-          [this, treeShare](double f) { this->UpdateProgress(treeShare + (1 - treeShare) * f); });
+          [this, treeShare](double f) { this->UpdateProgress(treeShare + (1 - treeShare) * f); },
+          &damaged);
         image->GetPointData()->SetScalars(values);
+        this->ReportDamagedBlocks(damaged, file->path());
       }
     }
   }
@@ -186,6 +190,30 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
     return 0;
   }
   return 1;
+}
+
+void vtkAFAMReader::ReportDamagedBlocks(
+  const std::vector<std::string>& damaged, const std::string& path)
+{
+  if (damaged.empty())
+  {
+    return;
+  }
+  // One warning per decode, however many blocks: the first few in full.
+  const size_t shown = std::min<size_t>(damaged.size(), 4);
+  std::string text = "Decoded level " + std::to_string(this->DecodeLevel) + ": " +
+    std::to_string(damaged.size()) + " damaged micro-model(s), their samples taken from the " +
+    "nearest intact level (NaN where none is intact; `afam verify " + path +
+    "` lists every damaged micro-model):";
+  for (size_t i = 0; i < shown; ++i)
+  {
+    text += "\n" + damaged[i];
+  }
+  if (damaged.size() > shown)
+  {
+    text += "\n... and " + std::to_string(damaged.size() - shown) + " more";
+  }
+  vtkWarningMacro(<< text);
 }
 
 void vtkAFAMReader::PrintSelf(ostream& os, vtkIndent indent)

@@ -15,7 +15,10 @@
  * volume's grid) with one float point array named like the encoded scalars, so that ordinary
  * filters (Slice, Contour, Plot Over Line) work on an .afam file. It reads and evaluates only the
  * micro-models of the requested update extent (sub-extents: each MPI rank decodes its own slab).
- * With DecodeLevel = -1 (default) port 1 is an empty image and no payload is read.
+ * With DecodeLevel = -1 (default) port 1 is an empty image and no payload is read. A damaged
+ * micro-model does not fail the decode: its samples come from the nearest intact coarser model
+ * (else its intact children; NaN where neither exists), as the renderer draws it, with one warning
+ * per decode naming the damaged blocks.
  *
  * MPI pieces of port 0: piece p of n keeps the micro-models whose coarsest-level ancestor lies in
  * its contiguous range of coarsest blocks (z-major slabs, spatially coherent).
@@ -29,6 +32,7 @@
 #include "vtkMultiBlockDataSetAlgorithm.h"
 
 #include <string> // for std::string
+#include <vector> // for std::vector
 
 class VTKAFAM_EXPORT vtkAFAMReader : public vtkMultiBlockDataSetAlgorithm
 {
@@ -62,6 +66,8 @@ protected:
   int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int FillOutputPortInformation(int port, vtkInformation* info) override;
+  /// One warning for the damaged blocks of a decode (none when `damaged` is empty).
+  void ReportDamagedBlocks(const std::vector<std::string>& damaged, const std::string& path);
 
   char* FileName = nullptr;
   int DecodeLevel = -1;

@@ -358,6 +358,7 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   if (::fstat(f->fd_, &st) != 0) throw IoError(path + ": cannot stat: " + sysError());
   if (!S_ISREG(st.st_mode)) throw IoError(path + ": not a regular file");
   f->fileSize_ = static_cast<uint64_t>(st.st_size);
+  f->identity_ = identityOfDescriptor(f->fd_);
   const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
 
   if (f->fileSize_ < sizeof(FileHeaderV1)) {
@@ -497,7 +498,31 @@ int64_t AfamFile::entryIndex(int level, Int3 ijk) const {
   return levelStart_[static_cast<size_t>(level)] + partition_.linearIndex(level, ijk);
 }
 
+void AfamFile::throwIfChanged(const FileIdentity& now) const {
+  const std::string change = describeChange(identity_, now);
+  if (!change.empty())
+    throw FileChangedError(path_ + ": the file changed since it was opened (" + change +
+                           "); nothing more is read from it until it is opened again");
+}
+
+void AfamFile::checkUnchanged() const {
+  throwIfChanged(identityOfDescriptor(fd_));
+  throwIfChanged(identityOfPath(path_));
+}
+
 void AfamFile::readPayload(int64_t entry, void* out) const {
+  // The descriptor is checked after the read, whatever its outcome: bytes read while (or after)
+  // another process rewrote the file are neither returned nor recorded as damage.
+  try {
+    readVerifiedPayload(entry, out);
+  } catch (const FormatError&) {
+    throwIfChanged(identityOfDescriptor(fd_));
+    throw;
+  }
+  throwIfChanged(identityOfDescriptor(fd_));
+}
+
+void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];

@@ -149,10 +149,10 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   return placed;
 }
 
-int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
-  const Partition& p = file_->partition();
-  const bool raw = file_->header().mode == EncodingMode::Downsampled;
-  const ModelEntry& e = file_->entries()[size_t(model.entry)];
+FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset) {
+  const Partition& p = file.partition();
+  const bool raw = file.header().mode == EncodingMode::Downsampled;
+  const ModelEntry& e = file.entries()[size_t(model.entry)];
   FrameSlot s;
   s.kind = raw ? kSlotRaw : kSlotSpline;
   s.level = model.level;
@@ -169,7 +169,11 @@ int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t off
     s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
   }
   s.offset = offset;
-  fr.slots.push_back(s);
+  return s;
+}
+
+int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
+  fr.slots.push_back(modelSlot(*file_, model, offset));
   fr.entries.push_back(model.entry);
   return int32_t(fr.slots.size() - 1);
 }
@@ -190,6 +194,9 @@ void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr
 
 void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
   const auto t0 = Clock::now();
+  // A file changed on disk ends this renderer's frames (FileChangedError): its cache holds blocks
+  // of the old file, which must not be drawn beside blocks of the new one.
+  file_->checkUnchanged();
   const CacheStats before = cache_->stats();
   const Selection sel = select(camera);
   st.culled = sel.counts;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "afam/decode.hpp"
 #include "afam/errors.hpp"
 #include "afam/raycast.hpp"
 #include "afam/renderer.hpp"
@@ -233,4 +234,46 @@ TEST(Damage, OneCoarseModelStandsInForSeveralDamagedSiblingsOnce) {
   EXPECT_EQ(st.damageReports.size(), 0u);
   EXPECT_EQ(st.damagedBlocks, 2);
   EXPECT_EQ(again.cache().stats().blocksRead, 63u);
+}
+
+TEST(Damage, DecodedLevelTakesDamagedBlocksFromTheNearestIntactLevel) {
+  const Damaged d = makeDamaged();
+  const LevelGrid g2 = levelGrid(d.intact->partition(), 2), g1 = levelGrid(d.intact->partition(), 1);
+  const Index3 n = g2.dims, n1 = g1.dims;
+  const auto all = [](const Index3& dims) { return Index3{dims[0] - 1, dims[1] - 1, dims[2] - 1}; };
+  std::vector<float> intact(size_t(n[0] * n[1] * n[2])), damaged(intact.size()), coarse(size_t(n1[0] * n1[1] * n1[2]));
+  decodeLevelBox(*d.intact, 2, {0, 0, 0}, all(n), intact.data());
+  decodeLevelBox(*d.intact, 1, {0, 0, 0}, all(n1), coarse.data());
+  // Strict callers (`afam decode`) still stop at the first damaged block.
+  EXPECT_THROW(decodeLevelBox(*d.damaged, 2, {0, 0, 0}, all(n), damaged.data()), FormatError);
+  std::vector<std::string> reports;
+  decodeLevelBox(*d.damaged, 2, {0, 0, 0}, all(n), damaged.data(), {}, &reports);
+  ASSERT_EQ(reports.size(), 2u);  // e2a and e2b, each named
+  EXPECT_NE(reports[0].find("level 2 block (1, 1, 0)"), std::string::npos) << reports[0];
+  EXPECT_NE(reports[1].find("level 2 block (2, 2, 2)"), std::string::npos) << reports[1];
+  // 65^3 with 4 finest blocks: block i of level 2 owns samples [16 i, 16 i + 16) per axis.
+  const auto owner = [](int64_t s) { return int(std::min<int64_t>(s / 16, 3)); };
+  int64_t nan = 0, fromParent = 0, elsewhereDiffers = 0;
+  double worstParent = 0;
+  for (int64_t z = 0; z < n[2]; ++z)
+    for (int64_t y = 0; y < n[1]; ++y)
+      for (int64_t x = 0; x < n[0]; ++x) {
+        const size_t i = size_t((z * n[1] + y) * n[0] + x);
+        const Int3 b{owner(x), owner(y), owner(z)};
+        if (b == Int3{2, 2, 2}) {  // every ancestor damaged, no finer level: no data
+          nan += std::isnan(damaged[i]) ? 1 : 0;
+        } else if (b == Int3{1, 1, 0}) {  // from its intact parent, level 1 block (0, 0, 0)
+          if (x % 2 == 0 && y % 2 == 0 && z % 2 == 0) {  // where a level-1 sample sits
+            const size_t c = size_t(((z / 2) * n1[1] + y / 2) * n1[0] + x / 2);
+            worstParent = std::max(worstParent, double(std::fabs(damaged[i] - coarse[c])));
+            ++fromParent;
+          }
+        } else {
+          elsewhereDiffers += damaged[i] == intact[i] ? 0 : 1;
+        }
+      }
+  EXPECT_EQ(nan, 16 * 16 * 16);
+  EXPECT_EQ(fromParent, 8 * 8 * 8);
+  EXPECT_LT(worstParent, 1e-4);  // the parent's own samples, up to evaluation order
+  EXPECT_EQ(elsewhereDiffers, 0);
 }

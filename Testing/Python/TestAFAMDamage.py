@@ -12,22 +12,10 @@ sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
 import afam_test_util as u  # noqa: E402
 
 from paraview.simple import CreateView, OpenDataFile, Render, SaveScreenshot, Show  # noqa: E402
-from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow  # noqa: E402
 
 u.load_plugin(globals())
 out = u.out_dir()
-good = os.path.join(out, "wavelet.afam")
-u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, good)
-data = bytearray(open(good, "rb").read())
-entries = 4 ** 3 + 2 ** 3 + 1
-payload_start = (1024 + 40 * entries + 63) // 64 * 64  # docs/FORMAT.md: header, index, payloads
-bad = os.path.join(out, "damaged.afam")
-for fraction in (0.015, 0.10, 0.45, 0.75):
-    at = max(int(fraction * len(data)), payload_start)
-    for k in range(8):
-        data[at + k] ^= 0xFF
-with open(bad, "wb") as f:
-    f.write(bytes(data))
+good, bad = u.damaged_wavelet(globals(), 3, (0.015, 0.10, 0.45, 0.75))
 
 
 def render_six(path, tag):
@@ -48,14 +36,7 @@ def render_six(path, tag):
 
 
 intact = render_six(good, "intact")
-console = vtkOutputWindow.GetInstance()  # pvpython's print goes there too: captured only meanwhile
-messages = vtkStringOutputWindow()
-vtkOutputWindow.SetInstance(messages)
-try:
-    damaged = render_six(bad, "damaged")
-finally:
-    vtkOutputWindow.SetInstance(console)
-text = messages.GetOutput()
+damaged, text = u.captured_messages(lambda: render_six(bad, "damaged"))
 reports = sum(1 for m in text.split("Warning: In ")[1:] if "payload checksum mismatch" in m)
 blocks = re.findall(r"payload checksum mismatch at (level \d+ block \([0-9, ]+\))", text)
 print("foreground: damaged %d of intact %d (%.1f%%); %d damage messages over 6 frames naming %s"

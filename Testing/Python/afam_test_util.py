@@ -53,6 +53,44 @@ def encode_wavelet(ns, extent, levels, blocks, bound, path):
     return wavelet, encoder
 
 
+def damaged_copy(good, bad, entries, fractions):
+    """A copy of the .afam file `good` at `bad` with 8 bytes inverted at each fraction of its
+    length, moved past the header and the index (`entries` entries) when the spot falls there."""
+    data = bytearray(open(good, "rb").read())
+    payload_start = (1024 + 40 * entries + 63) // 64 * 64  # docs/FORMAT.md: header, index, payloads
+    for fraction in fractions:
+        at = max(int(fraction * len(data)), payload_start)
+        for k in range(8):
+            data[at + k] ^= 0xFF
+    with open(bad, "wb") as f:
+        f.write(bytes(data))
+
+
+def damaged_wavelet(ns, levels, fractions):
+    """A Wavelet over [-20, 20]^3 encoded with `levels` levels of 4 finest blocks per axis and a
+    0.5% bound (encode_wavelet), saved as intact.afam in out_dir(), and damaged.afam, its copy
+    damaged at `fractions` of its length (damaged_copy). Returns both paths."""
+    good = os.path.join(out_dir(), "intact.afam")
+    bad = os.path.join(out_dir(), "damaged.afam")
+    encode_wavelet(ns, [-20, 20, -20, 20, -20, 20], levels, 4, 0.005, good)
+    damaged_copy(good, bad, sum(max(1, 4 >> k) ** 3 for k in range(levels)), fractions)
+    return good, bad
+
+
+def captured_messages(action):
+    """(action()'s result, the text of the VTK messages it gave). pvpython's print goes to the
+    output window too, so it is captured only meanwhile."""
+    from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow
+    console = vtkOutputWindow.GetInstance()
+    messages = vtkStringOutputWindow()
+    vtkOutputWindow.SetInstance(messages)
+    try:
+        result = action()
+    finally:
+        vtkOutputWindow.SetInstance(console)
+    return result, messages.GetOutput()
+
+
 def setup_view(view, size=(301, 300)):
     """The fixed view every image test uses (Wavelet extent [-20, 20]^3, centred on the origin).
     paraview.simple's first Render would reset the camera to the data's bounds, which hides where

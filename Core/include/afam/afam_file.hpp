@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/file_identity.hpp"
 #include "afam/partition.hpp"
 
 namespace afam {
@@ -122,20 +123,29 @@ class AfamFile {  // read-only; opening reads only header and index
   /// First entry of a level (entries of a level are contiguous, x fastest).
   int64_t levelStart(int level) const { return levelStart_.at(static_cast<size_t>(level)); }
   /// One pread of entry.size bytes into out, CRC verified (FormatError names file, level, block).
-  /// Thread-safe.
+  /// Thread-safe. Throws FileChangedError instead when the open file's size or modification time
+  /// is no longer what it was at open (another process truncated or rewrote it): its bytes may
+  /// then belong to another file, and are neither returned nor taken for damage.
   void readPayload(int64_t entry, void* out) const;
   /// Reads and returns the payload as floats.
   std::vector<float> readPayload(int64_t entry) const;
+  /// Throws FileChangedError (naming the path and what changed) when the file is no longer the
+  /// one opened: rewritten or truncated in place, replaced by another file (rename) or removed.
+  /// One fstat and one stat; renderers call it once per frame, before reading.
+  void checkUnchanged() const;
   int nativeHandle() const { return fd_; }  ///< POSIX fd, for posix_fadvise in benchmarks
   uint64_t fileSize() const { return fileSize_; }
   uint64_t payloadOffset() const { return payloadOffset_; }
 
  private:
   AfamFile() = default;
+  void readVerifiedPayload(int64_t entry, void* out) const;  ///< readPayload without the change check
+  void throwIfChanged(const FileIdentity& now) const;        ///< FileChangedError unless now == identity_
   std::string path_;
   int fd_ = -1;
   uint32_t version_ = 0;
   uint64_t fileSize_ = 0, payloadOffset_ = 0;
+  FileIdentity identity_;  ///< at open
   VolumeHeader header_;
   Partition partition_;
   std::vector<ModelEntry> entries_;

@@ -80,6 +80,10 @@ struct PreparedFrame {
   void bind();                   ///< points view at the vectors above
 };
 
+/// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
+/// coordinates), its floats at `offset` of the pool.
+FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset);
+
 class Renderer {
  public:
   /// damage: the file's damage log from an earlier Renderer of the same file (null: a new one),
@@ -112,7 +116,9 @@ class Renderer {
   /// A FrameView with camera, geometry, TF and shading set, and no models (cellSlot all -1).
   void prepareEmpty(const Camera& camera, PreparedFrame& frame) const;
   /// The caching step: selection, cache loads (a damaged model replaced as damage.hpp says),
-  /// FrameView + pool. Fills stats' caching and damage fields.
+  /// FrameView + pool. Fills stats' caching and damage fields. Throws FileChangedError when the
+  /// file changed on disk since it was opened (checked first, and by every read): the renderer
+  /// is then done, and a new one on the file opened again draws its new contents.
   void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
   /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
   /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.

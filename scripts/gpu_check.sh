@@ -40,7 +40,7 @@ fi
 # --- GPU tests.
 "$tests" --gtest_color=no >"$logs/tests.log" 2>&1
 test_rc=$?
-grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
+grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
 status "GPU tests" "$(grep -E '^\[  PASSED  \]' "$logs/tests.log" | head -1) $(grep -E '^\[  FAILED  \] [0-9]' "$logs/tests.log" | head -1) $(grep -E '^\[  SKIPPED \] [0-9]' "$logs/tests.log" | head -1)"
 worst=$(grep -E '^\[gpu-vs-cpu\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
 status "GPU vs CPU worst diff" "${worst:-?}/255 over $(grep -c '^\[gpu-vs-cpu\]' "$logs/tests.log") images (bar <= 2/255, exact kernels)"

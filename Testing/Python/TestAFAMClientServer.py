@@ -1,0 +1,108 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""pvpython client, pvserver with AFAM_SERVER_RANKS ranks (started here on the loopback interface and
+a free port, stopped by its process id). The "Adaptive-FAM Volume" representation of a small file
+must give the image builtin mode gives, under the default remote-render threshold (where ParaView
+would render on the client, which cannot draw the volume) and with the threshold at 0, in the view
+and in a SaveScreenshot larger than the view: every pixel within 8/255 for the volume alone; with an
+opaque sphere inside it (depth compositing) the VTK tests' comparison at threshold 0, and at most
+0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
+A file missing on the server gives a clear error on the client."""
+import os
+import sys
+
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
+import afam_server  # noqa: E402
+import afam_test_util as u  # noqa: E402
+
+from paraview import servermanager  # noqa: E402
+from paraview.simple import (Connect, CreateView, Disconnect, GetSettingsProxy, LoadPlugin,  # noqa: E402
+                             OpenDataFile, Render, SaveScreenshot, Show, Sphere)
+
+ranks = int(u.env("AFAM_SERVER_RANKS"))
+pvserver = u.env("AFAM_PVSERVER")
+out = u.out_dir()
+plugin = u.env("AFAM_PLUGIN")
+SIZE = [301, 300]
+SHOT = [420, 380]  # a screenshot larger than the view: tiles rendered on the server
+
+
+def scene(path, name, threshold=None, ball=False):
+    """Render the file (and a sphere) with the test camera; write <name>.png (view size) and
+    <name>_shot.png (SHOT). Returns both paths."""
+    if threshold is not None:
+        GetSettingsProxy("RenderViewSettings").RemoteRenderThreshold = threshold
+    view = CreateView("RenderView")
+    u.setup_view(view, SIZE)
+    model = OpenDataFile(path)
+    display = Show(model, view)
+    display.Representation = "Adaptive-FAM Volume"
+    u.apply_transfer_function(display)
+    if ball:
+        sphere = Sphere(Center=[6.0, 4.0, 8.0], Radius=9.0, ThetaResolution=48, PhiResolution=48)
+        Show(sphere, view).DiffuseColor = [0.9, 0.8, 0.2]
+    Render(view)
+    png, shot = os.path.join(out, name + ".png"), os.path.join(out, name + "_shot.png")
+    SaveScreenshot(png, view, ImageResolution=SIZE)
+    SaveScreenshot(shot, view, ImageResolution=SHOT)
+    return png, shot
+
+
+def same_image(png, reference, tolerance, fraction_allowed):
+    """The comparison of the VTK tests (vtkTesting, threshold 0), then at most fraction_allowed of
+    the pixels off by more than tolerance/255 in some channel."""
+    from vtkmodules.vtkTestingRendering import vtkTesting
+    t = vtkTesting()
+    for arg in ("-T", out, "-V", reference):
+        t.AddArgument(arg)
+    if t.RegressionTest(png, 0.0) != vtkTesting.PASSED:
+        u.fail("%s differs from %s (vtkTesting, threshold 0; see %s)" % (png, reference, out))
+    fraction, worst = u.differing_fraction(png, reference, tolerance)
+    print("%s: %.3f %% of pixels differ from builtin by more than %d/255, largest %d/255"
+          % (os.path.basename(png), 100 * fraction, tolerance, worst), flush=True)
+    if fraction > fraction_allowed:
+        u.fail("%s differs from %s in %.3f %% of its pixels (largest %d/255)"
+               % (png, reference, 100 * fraction, worst))
+
+
+# 1. The reference: builtin mode, same script, same file.
+LoadPlugin(plugin, remote=False, ns=globals())
+path = os.path.join(out, "wavelet_cs.afam")
+u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, path)
+BARS = {False: (8, 0.0), True: (24, 0.005)}  # tolerance, fraction allowed; see the docstring
+builtin = {ball: scene(path, "builtin_ball%d" % ball, ball=ball) for ball in (False, True)}
+if u.non_blank(builtin[False][0]) < 2000:
+    u.fail("the builtin image shows almost nothing")
+Disconnect()
+
+# 2. The same under pvserver.
+with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
+                          mpirun=os.environ.get("AFAM_MPIRUN", "")) as server:
+    print("pvserver with %d rank(s) on 127.0.0.1:%d (pid %d)" % (ranks, server.port, server.process.pid),
+          flush=True)
+    if Connect("127.0.0.1", server.port, timeout=30) is None:
+        u.fail("could not connect to pvserver on port %d:\n%s" % (server.port, server.log()))
+    LoadPlugin(plugin, remote=True, ns=globals())
+    LoadPlugin(plugin, remote=False, ns=globals())
+    remote_ranks = servermanager.ActiveConnection.GetNumberOfDataPartitions()
+    if remote_ranks != ranks:
+        u.fail("the server has %d ranks, expected %d" % (remote_ranks, ranks))
+    for threshold, name in ((None, "default"), (0.0, "threshold0")):
+        for ball in (False, True):
+            images = scene(path, "server%d_%s_ball%d" % (ranks, name, ball), threshold, ball)
+            for png, reference in zip(images, builtin[ball]):
+                same_image(png, reference, *BARS[ball])
+
+    # 3. A file the server does not have: the client hears why.
+    missing = os.path.join(out, "no_such_file.afam")
+    try:
+        reader = OpenDataFile(missing)
+        if reader is not None:
+            u.fail("OpenDataFile returned a reader for a file missing on the server")
+        print("missing file: OpenDataFile returned None", flush=True)
+    except RuntimeError as e:
+        message = str(e)
+        print("missing file: %s" % message.strip(), flush=True)
+        if "no_such_file.afam" not in message:
+            u.fail("the error for a missing file does not name it: %s" % message)
+    Disconnect()
+print("AFAM client-server: %d rank(s), images equal to builtin" % ranks)

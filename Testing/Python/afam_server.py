@@ -59,6 +59,7 @@ class PVServer:
         self.command = server_command(pvserver, ranks, self.port, mpirun)
         self.start_timeout = start_timeout
         self.process = None
+        self.ranks_started = []  # pvserver ranks under mpirun, known once it accepts connections
 
     def __enter__(self):
         self.start()
@@ -79,6 +80,7 @@ class PVServer:
         deadline = time.time() + self.start_timeout
         while time.time() < deadline:
             if "Accepting connection" in self.log():
+                self.ranks_started = descendants(self.process.pid)
                 return
             if self.process.poll() is not None:
                 raise RuntimeError("pvserver (%s) exited with %d before accepting connections:\n%s"
@@ -98,10 +100,11 @@ class PVServer:
                 pass
 
     def stop(self, grace=10.0):
-        """SIGTERM the launcher, then SIGKILL whatever of it and its ranks is left after `grace` s."""
+        """SIGTERM the launcher, then SIGKILL whatever of it and its ranks (those found now and at
+        start, in case the launcher is gone already) is left after `grace` s."""
         if self.process is None:
             return
-        children = descendants(self.process.pid)
+        children = set(descendants(self.process.pid)) | set(self.ranks_started)
         if self.process.poll() is None:
             self.process.send_signal(signal.SIGTERM)
             try:

@@ -35,15 +35,18 @@ def check_plugin(local, remote, where):
 
 
 def connect(host, port, plugin=None, server_plugin=None, ns=None, timeout=30):
-    """Connect, load `plugin` on the client and `server_plugin` (default: the same path) on the
-    server when given (a server started with PV_PLUGIN_PATH has it already), then check both."""
+    """Connect, load `plugin` on the client and `server_plugin` on the server (default: the same
+    path; "" loads nothing there, for a server started with PV_PLUGIN_PATH naming the plugin's
+    folder), then check both."""
     from paraview import servermanager
     from paraview.simple import Connect, LoadPlugin
     connection = Connect(host, port, timeout=timeout)
     if connection is None:
         raise RuntimeError("could not connect to pvserver at %s:%d" % (host, port))
-    if server_plugin or plugin:
-        LoadPlugin(server_plugin or plugin, remote=True, ns=ns)
+    if server_plugin is None:
+        server_plugin = plugin
+    if server_plugin:
+        LoadPlugin(server_plugin, remote=True, ns=ns)
     if plugin:
         LoadPlugin(plugin, remote=False, ns=ns)
     manager = servermanager.vtkSMProxyManager.GetProxyManager().GetPluginManager()

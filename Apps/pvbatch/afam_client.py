@@ -54,3 +54,18 @@ def connect(host, port, plugin=None, server_plugin=None, ns=None, timeout=30):
                  plugin_versions(manager.GetRemoteInformation(connection.Session)),
                  "%s:%d" % (host, port))
     return connection
+
+
+STATISTICS = ("NumberOfRanks", "RanksDrawingBlocks", "TotalBytesRead", "MaxBytesRead",
+              "TotalVisibleBlocks", "MaxTotalTime")
+
+
+def frame_statistics(display):
+    """The last frame of an "Adaptive-FAM Volume" display over all server ranks (a dict of
+    STATISTICS). Call it after Render() and before any other render; the display's own AFAMLast...
+    properties, read from a client, are those of the client's copy, which does not render."""
+    from paraview import servermanager
+    statistics = servermanager.misc.AFAMFrameStatistics(Representation=display)
+    statistics.SMProxy.InvokeCommand("Gather")
+    statistics.SMProxy.UpdatePropertyInformation()
+    return {name: statistics.GetPropertyValue(name) for name in STATISTICS}

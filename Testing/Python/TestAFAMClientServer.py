@@ -6,7 +6,9 @@ would render on the client, which cannot draw the volume) and with the threshold
 and in a SaveScreenshot larger than the view: every pixel within 8/255 for the volume alone. With an
 opaque sphere inside it (depth compositing, default threshold): the VTK tests' comparison at
 threshold 0, and at most 0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
-A file missing on the server gives a clear error on the client."""
+The frame statistics summed over the server ranks (afam_client.frame_statistics) show the bytes
+builtin mode reads for the same cold view (bar: within 1.1x). A file missing on the server gives a
+clear error on the client."""
 import os
 import sys
 
@@ -39,10 +41,12 @@ def scene(path, name, threshold=None, ball=False):
     display = Show(model, view)
     display.Representation = "Adaptive-FAM Volume"
     u.apply_transfer_function(display)
+    display.AFAMPrefetcher = "None"  # bytes read for this view only
     if ball:
         sphere = Sphere(Center=[6.0, 4.0, 8.0], Radius=9.0, ThetaResolution=48, PhiResolution=48)
         Show(sphere, view).DiffuseColor = [0.9, 0.8, 0.2]
     Render(view)
+    statistics[name] = afam_client.frame_statistics(display)  # the first, cold frame
     images = [(os.path.join(out, name + ".png"), SIZE)]
     if not ball:
         images.append((os.path.join(out, name + "_shot.png"), SHOT))
@@ -72,6 +76,7 @@ def same_image(png, reference, tolerance, fraction_allowed):
 LoadPlugin(plugin, remote=False, ns=globals())
 path = os.path.join(out, "wavelet_cs.afam")
 u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, path)
+statistics = {}
 BARS = {False: (8, 0.0), True: (24, 0.005)}  # tolerance, fraction allowed; see the docstring
 builtin = {ball: scene(path, "builtin_ball%d" % ball, ball=ball) for ball in (False, True)}
 if u.non_blank(builtin[False][0]) < 2000:
@@ -93,6 +98,17 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
         images = scene(path, "server%d_%s_ball%d" % (ranks, name, ball), threshold, ball)
         for png, reference in zip(images, builtin[ball]):
             same_image(png, reference, *BARS[ball])
+
+    # Frame statistics over the server ranks: the bytes one builtin process reads for the same
+    # cold view, within 1.1x, and every rank took part.
+    got, want = statistics["server%d_default_ball0" % ranks], statistics["builtin_ball0"]
+    print("frame statistics: builtin %s; server %s" % (want, got), flush=True)
+    if got["NumberOfRanks"] != ranks or got["TotalBytesRead"] <= 0:
+        u.fail("frame statistics over %d ranks: %s" % (ranks, got))
+    if not want["TotalBytesRead"] <= got["TotalBytesRead"] <= 1.1 * want["TotalBytesRead"]:
+        u.fail("the server ranks read %d bytes, builtin %d" % (got["TotalBytesRead"], want["TotalBytesRead"]))
+    if got["TotalVisibleBlocks"] != want["TotalVisibleBlocks"]:
+        u.fail("the server ranks drew %d blocks, builtin %d" % (got["TotalVisibleBlocks"], want["TotalVisibleBlocks"]))
 
     # 3. A file the server does not have: the client hears why.
     missing = os.path.join(out, "no_such_file.afam")

@@ -15,70 +15,32 @@ import sys
 sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
 sys.path.insert(0, os.path.join(os.environ.get("AFAM_TEST_SCRIPTS", ""), "..", "..", "Apps", "pvbatch"))
 import afam_client  # noqa: E402
+import afam_scene  # noqa: E402
 import afam_server  # noqa: E402
 import afam_test_util as u  # noqa: E402
 
 from paraview import servermanager  # noqa: E402
-from paraview.simple import (CreateView, Disconnect, GetSettingsProxy, LoadPlugin,  # noqa: E402
-                             OpenDataFile, Render, SaveScreenshot, Show, Sphere)
+from paraview.simple import CreateView, Disconnect, GetSettingsProxy, LoadPlugin, OpenDataFile  # noqa: E402
 
 ranks = int(u.env("AFAM_SERVER_RANKS"))
 pvserver = u.env("AFAM_PVSERVER")
 out = u.out_dir()
 plugin = u.env("AFAM_PLUGIN")
-SIZE = [301, 300]
-SHOT = [420, 380]  # a screenshot larger than the view: tiles rendered on the server
+statistics = {}
 
 
-def scene(path, name, threshold=None, ball=False):
-    """Render the file (and a sphere) with the test camera; write <name>.png (view size) and, for
-    the volume alone, <name>_shot.png (SHOT). Returns the paths."""
+def render(name, threshold=None, ball=False):
     if threshold is not None:
         GetSettingsProxy("RenderViewSettings").RemoteRenderThreshold = threshold
-    view = CreateView("RenderView")
-    u.setup_view(view, SIZE)
-    model = OpenDataFile(path)
-    display = Show(model, view)
-    display.Representation = "Adaptive-FAM Volume"
-    u.apply_transfer_function(display)
-    display.AFAMPrefetcher = "None"  # bytes read for this view only
-    if ball:
-        sphere = Sphere(Center=[6.0, 4.0, 8.0], Radius=9.0, ThetaResolution=48, PhiResolution=48)
-        Show(sphere, view).DiffuseColor = [0.9, 0.8, 0.2]
-    Render(view)
-    statistics[name] = afam_client.frame_statistics(display)  # the first, cold frame
-    images = [(os.path.join(out, name + ".png"), SIZE)]
-    if not ball:
-        images.append((os.path.join(out, name + "_shot.png"), SHOT))
-    for png, size in images:
-        SaveScreenshot(png, view, ImageResolution=size)
-    return [png for png, _ in images]
-
-
-def same_image(png, reference, tolerance, fraction_allowed):
-    """The comparison of the VTK tests (vtkTesting, threshold 0), then at most fraction_allowed of
-    the pixels off by more than tolerance/255 in some channel."""
-    from vtkmodules.vtkTestingRendering import vtkTesting
-    t = vtkTesting()
-    for arg in ("-T", out, "-V", reference):
-        t.AddArgument(arg)
-    if t.RegressionTest(png, 0.0) != vtkTesting.PASSED:
-        u.fail("%s differs from %s (vtkTesting, threshold 0; see %s)" % (png, reference, out))
-    fraction, worst = u.differing_fraction(png, reference, tolerance)
-    print("%s: %.3f %% of pixels differ from builtin by more than %d/255, largest %d/255"
-          % (os.path.basename(png), 100 * fraction, tolerance, worst), flush=True)
-    if fraction > fraction_allowed:
-        u.fail("%s differs from %s in %.3f %% of its pixels (largest %d/255)"
-               % (png, reference, 100 * fraction, worst))
+    return afam_scene.scene(path, out, name, CreateView("RenderView"), ball, statistics)
 
 
 # 1. The reference: builtin mode, same script, same file.
 LoadPlugin(plugin, remote=False, ns=globals())
 path = os.path.join(out, "wavelet_cs.afam")
 u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, path)
-statistics = {}
 BARS = {False: (8, 0.0), True: (24, 0.005)}  # tolerance, fraction allowed; see the docstring
-builtin = {ball: scene(path, "builtin_ball%d" % ball, ball=ball) for ball in (False, True)}
+builtin = {ball: render("builtin_ball%d" % ball, ball=ball) for ball in (False, True)}
 if u.non_blank(builtin[False][0]) < 2000:
     u.fail("the builtin image shows almost nothing")
 Disconnect()
@@ -95,9 +57,9 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
     # the sphere once, at the default threshold (the volume alone is the sharper comparison)
     for threshold, name, ball in ((None, "default", False), (None, "default", True),
                                   (0.0, "threshold0", False)):
-        images = scene(path, "server%d_%s_ball%d" % (ranks, name, ball), threshold, ball)
+        images = render("server%d_%s_ball%d" % (ranks, name, ball), threshold, ball)
         for png, reference in zip(images, builtin[ball]):
-            same_image(png, reference, *BARS[ball])
+            afam_scene.same_image(png, reference, out, *BARS[ball])
 
     # Frame statistics over the server ranks: the bytes one builtin process reads for the same
     # cold view, within 1.1x, and every rank took part.

@@ -50,14 +50,16 @@ def descendants(pid):
 
 
 class PVServer:
-    """`with PVServer(pvserver, ranks, log) as server:` starts the server and stops it on exit."""
+    """`with PVServer(pvserver, ranks, log) as server:` starts the server and stops it on exit;
+    `env` adds variables to the server's environment (PV_PLUGIN_PATH, say)."""
 
-    def __init__(self, pvserver, ranks, log_path, mpirun="", start_timeout=60.0):
+    def __init__(self, pvserver, ranks, log_path, mpirun="", start_timeout=60.0, env=None):
         self.port = free_port()
         self.ranks = ranks
         self.log_path = log_path
         self.command = server_command(pvserver, ranks, self.port, mpirun)
         self.start_timeout = start_timeout
+        self.env = dict(launcher_environment(), **(env or {}))
         self.process = None
         self.ranks_started = []  # pvserver ranks under mpirun, known once it accepts connections
 
@@ -76,7 +78,7 @@ class PVServer:
     def start(self):
         with open(self.log_path, "w") as log:
             self.process = subprocess.Popen(self.command, stdout=log, stderr=subprocess.STDOUT,
-                                            stdin=subprocess.DEVNULL, env=launcher_environment())
+                                            stdin=subprocess.DEVNULL, env=self.env)
         deadline = time.time() + self.start_timeout
         while time.time() < deadline:
             if "Accepting connection" in self.log():

@@ -36,12 +36,14 @@ void vtkAFAMFrameStatistics::Gather()
 {
   vtkTypeInt64 sums[3] = { 0, 0, 1 }; // bytes read, visible blocks, ranks
   double maxima[2] = { 0, 0 };        // bytes read, mapper time
+  double scale = 1;                   // image scale of the last frame where blocks were drawn
   if (auto* volume = findVolumeRepresentation(this->Representation))
   {
     sums[0] = volume->GetLastBytesRead();
     sums[1] = volume->GetLastVisibleBlocks();
     maxima[0] = static_cast<double>(sums[0]);
     maxima[1] = volume->GetLastTotalTime();
+    scale = sums[1] > 0 ? volume->GetLastImageScale() : 1.0;
   }
   vtkTypeInt64 drawing = sums[1] > 0 ? 1 : 0;
   auto* controller = vtkMultiProcessController::GetGlobalController();
@@ -52,6 +54,8 @@ void vtkAFAMFrameStatistics::Gather()
     controller->AllReduce(local, total, 4, vtkCommunicator::SUM_OP);
     const double localMax[2] = { maxima[0], maxima[1] };
     controller->AllReduce(localMax, maxima, 2, vtkCommunicator::MAX_OP);
+    const double localScale = scale;
+    controller->AllReduce(&localScale, &scale, 1, vtkCommunicator::MIN_OP);
     sums[0] = total[0];
     sums[1] = total[1];
     sums[2] = total[2];
@@ -63,6 +67,7 @@ void vtkAFAMFrameStatistics::Gather()
   this->RanksDrawingBlocks = static_cast<int>(drawing);
   this->MaxBytesRead = static_cast<vtkTypeInt64>(maxima[0]);
   this->MaxTotalTime = maxima[1];
+  this->MinImageScale = scale;
 }
 
 void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
@@ -75,4 +80,5 @@ void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaxBytesRead: " << this->MaxBytesRead << "\n";
   os << indent << "TotalVisibleBlocks: " << this->TotalVisibleBlocks << "\n";
   os << indent << "MaxTotalTime: " << this->MaxTotalTime << "\n";
+  os << indent << "MinImageScale: " << this->MinImageScale << "\n";
 }

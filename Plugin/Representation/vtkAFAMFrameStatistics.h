@@ -42,6 +42,9 @@ public:
   vtkGetMacro(MaxBytesRead, vtkTypeInt64);
   vtkGetMacro(TotalVisibleBlocks, vtkTypeInt64);
   vtkGetMacro(MaxTotalTime, double);
+  /// Smallest image scale among the ranks that drew blocks (below 1 in interactive frames that
+  /// the mapper shrank to meet the frame budget).
+  vtkGetMacro(MinImageScale, double);
   ///@}
 
 protected:
@@ -55,6 +58,7 @@ protected:
   vtkTypeInt64 MaxBytesRead = 0;
   vtkTypeInt64 TotalVisibleBlocks = 0;
   double MaxTotalTime = 0;
+  double MinImageScale = 1;
 
 private:
   vtkAFAMFrameStatistics(const vtkAFAMFrameStatistics&) = delete;

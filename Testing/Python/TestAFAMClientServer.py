@@ -7,8 +7,8 @@ and in a SaveScreenshot larger than the view: every pixel within 8/255 for the v
 opaque sphere inside it (depth compositing, default threshold): the VTK tests' comparison at
 threshold 0, and at most 0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
 The frame statistics summed over the server ranks (afam_client.frame_statistics) show the bytes
-builtin mode reads for the same cold view (bar: within 1.1x). A file missing on the server gives a
-clear error on the client."""
+builtin mode reads for the same cold view (bar: within 1.1x); an interactive frame is drawn smaller on
+the server and a still one whole. A file missing on the server gives a clear error on the client."""
 import os
 import sys
 
@@ -20,7 +20,7 @@ import afam_server  # noqa: E402
 import afam_test_util as u  # noqa: E402
 
 from paraview import servermanager  # noqa: E402
-from paraview.simple import CreateView, Disconnect, GetSettingsProxy, LoadPlugin, OpenDataFile  # noqa: E402
+from paraview.simple import CreateView, Disconnect, GetSettingsProxy, LoadPlugin, OpenDataFile, Show  # noqa: E402
 
 ranks = int(u.env("AFAM_SERVER_RANKS"))
 pvserver = u.env("AFAM_PVSERVER")
@@ -71,6 +71,26 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
         u.fail("the server ranks read %d bytes, builtin %d" % (got["TotalBytesRead"], want["TotalBytesRead"]))
     if got["TotalVisibleBlocks"] != want["TotalVisibleBlocks"]:
         u.fail("the server ranks drew %d blocks, builtin %d" % (got["TotalVisibleBlocks"], want["TotalVisibleBlocks"]))
+
+    # Interaction: on the server an interactive frame shrinks the image to meet the frame budget
+    # and a still frame draws it whole (CPU ray caster; at 1000 x 1000 a full frame is over budget).
+    view = CreateView("RenderView")
+    u.setup_view(view, [1000, 1000])
+    display = Show(OpenDataFile(path), view)
+    display.Representation = "Adaptive-FAM Volume"
+    u.apply_transfer_function(display)
+    display.AFAMRenderDevice = "CPU"
+    view.StillRender()  # the mapper learns the cost of a pixel
+    view.CameraPosition = [60.0, 50.0, 86.0]
+    view.InteractiveRender()
+    interactive = afam_client.frame_statistics(display)
+    view.StillRender()
+    still = afam_client.frame_statistics(display)
+    print("image scale on the server: interactive %.3f (%.3f s), still %.3f (%.3f s)"
+          % (interactive["MinImageScale"], interactive["MaxTotalTime"], still["MinImageScale"],
+             still["MaxTotalTime"]), flush=True)
+    if not interactive["MinImageScale"] < 1.0 or still["MinImageScale"] != 1.0:
+        u.fail("interaction scaling on the server: interactive %s, still %s" % (interactive, still))
 
     # 3. A file the server does not have: the client hears why.
     missing = os.path.join(out, "no_such_file.afam")

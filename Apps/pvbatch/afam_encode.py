@@ -102,6 +102,11 @@ def pick_array(source, wanted):
 
 def main():
     a = parse_args()
+    from paraview import servermanager
+    ranks = servermanager.vtkProcessModule.GetProcessModule().GetNumberOfLocalPartitions()
+    if ranks > 1:  # each rank would hold a piece of the volume, and the writer takes one process
+        fail("encoding runs on one process (%d MPI ranks here): run pvbatch without mpirun; the "
+             "encoder's threads use every core (--threads)" % ranks)
     if not os.path.exists(a.input):
         fail("%s: no such file" % a.input)
     from paraview.simple import LoadPlugin, OpenDataFile, SaveData

@@ -98,6 +98,16 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(
   {
     // Only the outline travels through the delivery path; the mapper reads the file itself.
     vtkPVView::SetPiece(inInfo, this, this->OutlineSource->GetOutputDataObject(0));
+    // The volume can only be drawn where the .afam file is: on the server. ParaView offers two
+    // ways to get a client-server view right. (1) Deliver the data to the client: below the
+    // remote-render threshold the client renders locally from what the delivery path brought,
+    // so the client would have to receive the micro-models (the whole point of the format is
+    // that they stay on disk near the data and stream per view) or open the server's file
+    // itself (which it may not see). (2) Declare that this representation needs distributed
+    // rendering: the view then renders on the server ranks and ships the composited image,
+    // whatever the threshold, as ParaView's own image volume representation does. We take
+    // (2). Builtin mode and one-process pvbatch ignore the request, so they are unchanged.
+    vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
     outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
     if (vtkMath::AreBoundsInitialized(this->DataBounds))
     {
@@ -116,6 +126,11 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(
       vtkPVRenderView::SetOrderedCompositingConfiguration(
         inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, slab);
     }
+  }
+  else if (request_type == vtkPVView::REQUEST_UPDATE_LOD())
+  {
+    // Interaction (the LOD pass) must render on the server too, for the same reason.
+    vtkPVRenderView::SetRequiresDistributedRenderingLOD(inInfo, this, true);
   }
   else if (request_type == vtkPVView::REQUEST_RENDER())
   {
@@ -177,6 +192,7 @@ double vtkAFAMVolumeRepresentation::GetLastRenderTime() { return this->Mapper->G
 double vtkAFAMVolumeRepresentation::GetLastTotalTime() { return this->Mapper->GetLastTotalTime(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheHits() { return this->Mapper->GetLastCacheHits(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheMisses() { return this->Mapper->GetLastCacheMisses(); }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBytesRead() { return this->Mapper->GetLastBytesRead(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks() { return this->Mapper->GetLastCulledBlocks(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastVisibleBlocks() { return this->Mapper->GetLastVisibleBlocks(); }
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames() { return this->Mapper->GetNumberOfFrames(); }

@@ -12,7 +12,9 @@
  * inherited from vtkVolumeRepresentation, exactly as for ParaView's own "Volume".
  *
  * Under MPI only rank 0 renders the volume (the other ranks contribute empty images to the
- * ordered compositing), so the image equals the one-rank image.
+ * ordered compositing), so the image equals the one-rank image. Connected to pvserver, the view
+ * always renders on the server (the representation requires distributed rendering), whatever
+ * the remote-render threshold, since only the server can read the file.
  */
 #ifndef vtkAFAMVolumeRepresentation_h
 #define vtkAFAMVolumeRepresentation_h
@@ -72,6 +74,7 @@ public:
   double GetLastTotalTime();
   vtkTypeInt64 GetLastCacheHits();
   vtkTypeInt64 GetLastCacheMisses();
+  vtkTypeInt64 GetLastBytesRead();
   vtkTypeInt64 GetLastCulledBlocks();
   vtkTypeInt64 GetLastVisibleBlocks();
   vtkTypeInt64 GetNumberOfFrames();

@@ -2,8 +2,8 @@
 # Apps/pvbatch/afam_encode.py: a MetaImage and a gzip NRRD copy of a corpus volume, read by
 # ParaView's own readers and encoded by the plugin, give the same micro-models as `afam encode`
 # with the same options (`afam info` equal but for the file and scalar names, which come from the
-# reader); a file ParaView cannot read fails with status 1 and no output.
-# Run by ctest with -DAFAM= -DPLUGIN= -DPVBATCH= -DXVFB= -DTIMEOUT= -DSCRIPT= -DVOLUMES= -DWORK=
+# reader); a file ParaView cannot read fails with status 1 and no output, and so does a run under mpirun.
+# Run by ctest with -DAFAM= -DPLUGIN= -DPVBATCH= -DXVFB= -DTIMEOUT= -DSCRIPT= -DVOLUMES= -DWORK= [-DMPIRUN=]
 file(REMOVE_RECURSE "${WORK}")
 file(MAKE_DIRECTORY "${WORK}")
 set(bucky "${VOLUMES}/bucky_32x32x32_uint8.raw")
@@ -48,5 +48,15 @@ file(WRITE "${WORK}/notes.txt" "not a volume\n")
 pvencode(rc out notes.txt bad.afam ${opts})
 if (NOT rc EQUAL 1 OR NOT out MATCHES "afam_encode.py: error: .*notes.txt" OR EXISTS "${WORK}/bad.afam")
   message(FATAL_ERROR "afam_encode.py on a text file: expected status 1, one error line, no output (${rc}):\n${out}")
+endif ()
+# Under mpirun (2 ranks): a clear refusal and no file, rather than a half-volume or a missing writer.
+if (MPIRUN)
+  execute_process(COMMAND ${TIMEOUT} 120 ${XVFB} -a -s "-screen 0 640x480x24 -noreset" ${MPIRUN}
+                  --allow-run-as-root --oversubscribe -np 2 ${PVBATCH} ${SCRIPT} --plugin ${PLUGIN}
+                  bucky.mha mpi.afam ${opts} WORKING_DIRECTORY "${WORK}" RESULT_VARIABLE rc
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if (rc EQUAL 0 OR NOT "${out}${err}" MATCHES "encoding runs on one process \\(2 MPI ranks" OR EXISTS "${WORK}/mpi.afam")
+    message(FATAL_ERROR "afam_encode.py under mpirun: expected the one-process message, no output (${rc}):\n${out}${err}")
+  endif ()
 endif ()
 message(STATUS "afam_encode.py: MetaImage and gzip NRRD give afam encode's models")

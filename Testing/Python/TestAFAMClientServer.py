@@ -1,0 +1,108 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""pvpython client, pvserver with AFAM_SERVER_RANKS ranks (started here on the loopback interface and
+a free port, stopped by its process id). The "Adaptive-FAM Volume" representation of a small file
+must give the image builtin mode gives, under the default remote-render threshold (where ParaView
+would render on the client, which cannot draw the volume) and with the threshold at 0, in the view
+and in a SaveScreenshot larger than the view: every pixel within 8/255 for the volume alone. With an
+opaque sphere inside it (depth compositing, default threshold): the VTK tests' comparison at
+threshold 0, and at most 0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
+The frame statistics summed over the server ranks (afam_client.frame_statistics) show the bytes
+builtin mode reads for the same cold view (bar: within 1.1x); an interactive frame is drawn smaller on
+the server and a still one whole. A file missing on the server gives a clear error on the client."""
+import os
+import sys
+
+sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
+sys.path.insert(0, os.path.join(os.environ.get("AFAM_TEST_SCRIPTS", ""), "..", "..", "Apps", "pvbatch"))
+import afam_client  # noqa: E402
+import afam_scene  # noqa: E402
+import afam_server  # noqa: E402
+import afam_test_util as u  # noqa: E402
+
+from paraview import servermanager  # noqa: E402
+from paraview.simple import CreateView, Disconnect, GetSettingsProxy, LoadPlugin, OpenDataFile, Show  # noqa: E402
+
+ranks = int(u.env("AFAM_SERVER_RANKS"))
+pvserver = u.env("AFAM_PVSERVER")
+out = u.out_dir()
+plugin = u.env("AFAM_PLUGIN")
+statistics = {}
+
+
+def render(name, threshold=None, ball=False):
+    if threshold is not None:
+        GetSettingsProxy("RenderViewSettings").RemoteRenderThreshold = threshold
+    return afam_scene.scene(path, out, name, CreateView("RenderView"), ball, statistics)
+
+
+# 1. The reference: builtin mode, same script, same file.
+LoadPlugin(plugin, remote=False, ns=globals())
+path = os.path.join(out, "wavelet_cs.afam")
+u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, path)
+BARS = {False: (8, 0.0), True: (24, 0.005)}  # tolerance, fraction allowed; see the docstring
+builtin = {ball: render("builtin_ball%d" % ball, ball=ball) for ball in (False, True)}
+if u.non_blank(builtin[False][0]) < 2000:
+    u.fail("the builtin image shows almost nothing")
+Disconnect()
+
+# 2. The same under pvserver.
+with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
+                          mpirun=os.environ.get("AFAM_MPIRUN", "")) as server:
+    print("pvserver with %d rank(s) on 127.0.0.1:%d (pid %d)" % (ranks, server.port, server.process.pid),
+          flush=True)
+    afam_client.connect("127.0.0.1", server.port, plugin, ns=globals())
+    remote_ranks = servermanager.ActiveConnection.GetNumberOfDataPartitions()
+    if remote_ranks != ranks:
+        u.fail("the server has %d ranks, expected %d" % (remote_ranks, ranks))
+    # the sphere once, at the default threshold (the volume alone is the sharper comparison)
+    for threshold, name, ball in ((None, "default", False), (None, "default", True),
+                                  (0.0, "threshold0", False)):
+        images = render("server%d_%s_ball%d" % (ranks, name, ball), threshold, ball)
+        for png, reference in zip(images, builtin[ball]):
+            afam_scene.same_image(png, reference, out, *BARS[ball])
+
+    # Frame statistics over the server ranks: the bytes one builtin process reads for the same
+    # cold view, within 1.1x, and every rank took part.
+    got, want = statistics["server%d_default_ball0" % ranks], statistics["builtin_ball0"]
+    print("frame statistics: builtin %s; server %s" % (want, got), flush=True)
+    if got["NumberOfRanks"] != ranks or got["TotalBytesRead"] <= 0:
+        u.fail("frame statistics over %d ranks: %s" % (ranks, got))
+    if not want["TotalBytesRead"] <= got["TotalBytesRead"] <= 1.1 * want["TotalBytesRead"]:
+        u.fail("the server ranks read %d bytes, builtin %d" % (got["TotalBytesRead"], want["TotalBytesRead"]))
+    if got["TotalVisibleBlocks"] != want["TotalVisibleBlocks"]:
+        u.fail("the server ranks drew %d blocks, builtin %d" % (got["TotalVisibleBlocks"], want["TotalVisibleBlocks"]))
+
+    # Interaction: on the server an interactive frame shrinks the image to meet the frame budget
+    # and a still frame draws it whole (CPU ray caster; at 1000 x 1000 a full frame is over budget).
+    view = CreateView("RenderView")
+    u.setup_view(view, [1000, 1000])
+    display = Show(OpenDataFile(path), view)
+    display.Representation = "Adaptive-FAM Volume"
+    u.apply_transfer_function(display)
+    display.AFAMRenderDevice = "CPU"
+    view.StillRender()  # the mapper learns the cost of a pixel
+    view.CameraPosition = [60.0, 50.0, 86.0]
+    view.InteractiveRender()
+    interactive = afam_client.frame_statistics(display)
+    view.StillRender()
+    still = afam_client.frame_statistics(display)
+    print("image scale on the server: interactive %.3f (%.3f s), still %.3f (%.3f s)"
+          % (interactive["MinImageScale"], interactive["MaxTotalTime"], still["MinImageScale"],
+             still["MaxTotalTime"]), flush=True)
+    if not interactive["MinImageScale"] < 1.0 or still["MinImageScale"] != 1.0:
+        u.fail("interaction scaling on the server: interactive %s, still %s" % (interactive, still))
+
+    # 3. A file the server does not have: the client hears why.
+    missing = os.path.join(out, "no_such_file.afam")
+    try:
+        reader = OpenDataFile(missing)
+        if reader is not None:
+            u.fail("OpenDataFile returned a reader for a file missing on the server")
+        print("missing file: OpenDataFile returned None", flush=True)
+    except RuntimeError as e:
+        message = str(e)
+        print("missing file: %s" % message.strip(), flush=True)
+        if "no_such_file.afam" not in message:
+            u.fail("the error for a missing file does not name it: %s" % message)
+    Disconnect()
+print("AFAM client-server: %d rank(s), images equal to builtin" % ranks)

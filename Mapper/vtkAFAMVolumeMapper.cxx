@@ -159,7 +159,9 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   this->ReadFrameSettings(vol->GetProperty(), frame);
+  const auto depthStart = std::chrono::steady_clock::now();
   this->ReadDepthLimits(ren, frame);
+  const auto depthEnd = std::chrono::steady_clock::now();
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
   try
@@ -177,10 +179,13 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
                   << frame.CastWidth << "x" << frame.CastHeight << " request");
     return;
   }
+  const auto drawStart = std::chrono::steady_clock::now();
   this->DrawImage(vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow()), image);
+  const auto end = std::chrono::steady_clock::now();
   this->RecordStatistics(frame, stats);
-  this->LastTotalTime =
-    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  this->LastDepthReadTime = std::chrono::duration<double>(depthEnd - depthStart).count();
+  this->LastDrawTime = std::chrono::duration<double>(end - drawStart).count();
+  this->LastTotalTime = std::chrono::duration<double>(end - start).count();
 }
 
 bool vtkAFAMVolumeMapper::PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame)
@@ -474,6 +479,8 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
   os << indent << "LastRenderTime: " << this->LastRenderTime << "\n";
   os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";
+  os << indent << "LastDepthReadTime: " << this->LastDepthReadTime << "\n";
+  os << indent << "LastDrawTime: " << this->LastDrawTime << "\n";
   os << indent << "LastCacheHits: " << this->LastCacheHits << "\n";
   os << indent << "LastCacheMisses: " << this->LastCacheMisses << "\n";
   os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";

@@ -177,6 +177,11 @@ public:
   vtkGetMacro(LastCachingTime, double);
   vtkGetMacro(LastRenderTime, double);
   vtkGetMacro(LastTotalTime, double);
+  /// The last frame's host round trips through OpenGL, in seconds: reading the depth buffer for
+  /// depth compositing (0 when off), and flipping the cast image and drawing it into the viewport.
+  /// LastTotalTime holds them, LastRenderTime and LastCachingTime do not.
+  vtkGetMacro(LastDepthReadTime, double);
+  vtkGetMacro(LastDrawTime, double);
   vtkGetMacro(LastCacheHits, vtkTypeInt64);
   vtkGetMacro(LastCacheMisses, vtkTypeInt64);
   vtkGetMacro(LastCulledBlocks, vtkTypeInt64);
@@ -247,6 +252,7 @@ protected:
   double SecondsPerPixel = 0; ///< running estimate of a frame's time per cast pixel
 
   double LastCachingTime = 0, LastRenderTime = 0, LastTotalTime = 0;
+  double LastDepthReadTime = 0, LastDrawTime = 0;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
   vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0;

@@ -68,7 +68,7 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   {
     return EXIT_FAILURE;
   }
-  mapper->SetRenderDevice(vtkAFAMVolumeMapper::DEVICE_CPU);
+  afam_vtk_test::UseTestDevice(mapper);
   vtkNew<vtkVolume> volume;
   volume->SetMapper(mapper);
   volume->SetProperty(afam_vtk_test::VolumeProperty());
@@ -156,6 +156,8 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   check(movedMiddle.sum > 0.01 * movedBack.sum && movedMiddle.sum < 0.5 * movedBack.sum,
     "moved volume, plane through its middle: only its front part shows");
 
+  check(afam_vtk_test::GpuMatchesCpu(window, mapper, "DepthCompositing, last view"),
+    "GPU frame equals the CPU frame");
   const int result = vtkRegressionTestImageThreshold(window, 15);
   if (result == vtkRegressionTester::DO_INTERACTOR)
   {

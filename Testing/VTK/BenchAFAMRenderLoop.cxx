@@ -40,6 +40,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -227,6 +228,16 @@ int main(int argc, char* argv[])
       csv << i << ',' << f.RenderCall << ',' << f.Mapper << ',' << f.Kernel << ',' << f.Caching
           << ',' << f.DepthRead << ',' << f.Draw << ',' << f.Gpu << ',' << f.Visible << ','
           << f.Misses << '\n';
+    }
+  }
+  // Which OpenGL the window got (Mesa's llvmpipe or the GPU's own driver).
+  std::istringstream capabilities(window->ReportCapabilities() ? window->ReportCapabilities() : "");
+  for (std::string line; std::getline(capabilities, line);)
+  {
+    if (line.find("renderer string") != std::string::npos ||
+      line.find("version string") != std::string::npos)
+    {
+      std::cout << "gl: " << line << "\n";
     }
   }
   if (frames.empty() || mapper->GetNumberOfFrames() < static_cast<vtkTypeInt64>(frames.size()))

@@ -19,6 +19,8 @@
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLState.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkProp.h"
+#include "vtkPropCollection.h"
 #include "vtkRenderer.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -160,8 +162,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
   this->ReadFrameSettings(vol->GetProperty(), frame);
   const auto depthStart = std::chrono::steady_clock::now();
-  this->ReadDepthLimits(ren, frame);
-  const auto depthEnd = std::chrono::steady_clock::now();
+  const bool depthRead = this->ReadDepthLimits(ren, frame);
+  const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
   try
@@ -324,13 +326,34 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   request.Threads = this->NumberOfThreads;
 }
 
-void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
+namespace
+{
+// Whether anything in `ren` but volumes may have written depth: a visible prop that is no volume
+// and does not say it lacks opaque geometry (vtkProp's default says it has some). Without one the
+// z-buffer holds the far plane only, and reading it back would limit no ray.
+bool MayHaveOpaqueGeometry(vtkRenderer* ren)
+{
+  vtkPropCollection* props = ren->GetViewProps();
+  vtkCollectionSimpleIterator it;
+  props->InitTraversal(it);
+  while (vtkProp* prop = props->GetNextProp(it))
+  {
+    if (prop->GetVisibility() && !vtkVolume::SafeDownCast(prop) && prop->HasOpaqueGeometry())
+    {
+      return true;
+    }
+  }
+  return false;
+}
+}
+
+bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
 {
   // Opaque geometry drawn so far stops the rays (see the class documentation).
   this->LastDepthLimitedPixels = 0;
-  if (!this->DepthCompositing)
+  if (!this->DepthCompositing || !MayHaveOpaqueGeometry(ren))
   {
-    return;
+    return false;
   }
   int x0 = 0, y0 = 0, w = 0, h = 0;
   ren->GetTiledSizeAndOrigin(&w, &h, &x0, &y0);
@@ -339,7 +362,7 @@ void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     VTK_OK)
   {
     vtkWarningMacro(<< "cannot read the z-buffer; the volume is blended over opaque geometry");
-    return;
+    return true;
   }
   vtkNew<vtkMatrix4x4> inverse;
   vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
@@ -354,6 +377,7 @@ void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     frame.Request.MaxDistance = frame.Limits.data();
     this->LastDepthLimitedPixels = limited;
   }
+  return true;
 }
 
 void vtkAFAMVolumeMapper::DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image)

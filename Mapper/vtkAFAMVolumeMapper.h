@@ -178,7 +178,9 @@ public:
   vtkGetMacro(LastRenderTime, double);
   vtkGetMacro(LastTotalTime, double);
   /// The last frame's host round trips through OpenGL, in seconds: reading the depth buffer for
-  /// depth compositing (0 when off), and flipping the cast image and drawing it into the viewport.
+  /// depth compositing (0 when off, or when the renderer holds nothing visible but volumes, so
+  /// that no opaque geometry can have written depth), and flipping the cast image and drawing it
+  /// into the viewport.
   /// LastTotalTime holds them, LastRenderTime and LastCachingTime do not.
   vtkGetMacro(LastDepthReadTime, double);
   vtkGetMacro(LastDrawTime, double);
@@ -230,8 +232,9 @@ protected:
   bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
-  /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far).
-  void ReadDepthLimits(vtkRenderer* ren, Frame& frame);
+  /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);
+  /// false when it was not read (depth compositing off, or nothing but volumes to draw depth).
+  bool ReadDepthLimits(vtkRenderer* ren, Frame& frame);
   void DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image);
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 

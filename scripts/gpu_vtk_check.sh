@@ -120,9 +120,9 @@ image_test() {  # image_test NAME DEVICE ARGS...
   local name="$1" device="$2"; shift 2
   local log="$work/images/${name}_$device.log"
   if [ "$device" = gpu ]; then
-    AFAM_TEST_DEVICE=gpu timeout 300 "$@" >"$log" 2>&1
+    AFAM_TEST_DEVICE=gpu timeout 120 "$@" >"$log" 2>&1
   else
-    timeout 300 "$@" >"$log" 2>&1
+    timeout 120 "$@" >"$log" 2>&1
   fi
   local rc=$?
   local worst

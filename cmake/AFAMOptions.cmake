@@ -10,9 +10,9 @@ else ()
 endif ()
 option(AFAM_ENABLE_CUDA "Build the CUDA decode-and-raycast kernels" ${_afam_cuda_default})
 
-# An explicit AFAM_ENABLE_PARAVIEW=OFF does not even look for ParaView, so that nothing of it is
-# imported into a plain-VTK build.
-if (NOT DEFINED AFAM_ENABLE_PARAVIEW OR AFAM_ENABLE_PARAVIEW)
+# AFAM_ENABLE_PARAVIEW=OFF, or AFAM_ENABLE_VTK=ON with ParaView left unset, does not even look for
+# ParaView, so that nothing of it is imported into a plain-VTK build.
+if (AFAM_ENABLE_PARAVIEW OR (NOT DEFINED AFAM_ENABLE_PARAVIEW AND NOT AFAM_ENABLE_VTK))
   find_package(ParaView 5.11 QUIET)
 endif ()
 if (ParaView_FOUND)

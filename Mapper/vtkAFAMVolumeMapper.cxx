@@ -455,6 +455,9 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   }
   this->LastUsedGpu = stats.UsedGpu;
   this->LastGpuModelsUploaded = stats.GpuModelsUploaded;
+  this->LastGpuUploadTime = stats.GpuUploadSeconds;
+  this->LastGpuKernelTime = stats.GpuKernelSeconds;
+  this->LastGpuDownloadTime = stats.GpuDownloadSeconds;
   this->LastUsedBlendMode = frame.Request.Settings.blendMode;
   this->NumberOfRendererBuilds += stats.RendererBuilt ? 1 : 0;
   ++this->NumberOfFrames;
@@ -505,6 +508,9 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";
   os << indent << "LastDepthReadTime: " << this->LastDepthReadTime << "\n";
   os << indent << "LastDrawTime: " << this->LastDrawTime << "\n";
+  os << indent << "LastGpuUploadTime: " << this->LastGpuUploadTime << "\n";
+  os << indent << "LastGpuKernelTime: " << this->LastGpuKernelTime << "\n";
+  os << indent << "LastGpuDownloadTime: " << this->LastGpuDownloadTime << "\n";
   os << indent << "LastCacheHits: " << this->LastCacheHits << "\n";
   os << indent << "LastCacheMisses: " << this->LastCacheMisses << "\n";
   os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";

@@ -184,6 +184,12 @@ public:
   /// LastTotalTime holds them, LastRenderTime and LastCachingTime do not.
   vtkGetMacro(LastDepthReadTime, double);
   vtkGetMacro(LastDrawTime, double);
+  /// The GPU's own times for the last frame (CUDA events), in seconds: uploading the models not
+  /// yet resident, ray casting, and copying the image back to the host (part of LastRenderTime);
+  /// -1 when the frame was cast on the CPU.
+  vtkGetMacro(LastGpuUploadTime, double);
+  vtkGetMacro(LastGpuKernelTime, double);
+  vtkGetMacro(LastGpuDownloadTime, double);
   vtkGetMacro(LastCacheHits, vtkTypeInt64);
   vtkGetMacro(LastCacheMisses, vtkTypeInt64);
   vtkGetMacro(LastCulledBlocks, vtkTypeInt64);
@@ -256,6 +262,7 @@ protected:
 
   double LastCachingTime = 0, LastRenderTime = 0, LastTotalTime = 0;
   double LastDepthReadTime = 0, LastDrawTime = 0;
+  double LastGpuUploadTime = -1, LastGpuKernelTime = -1, LastGpuDownloadTime = -1;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
   vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0;

@@ -170,8 +170,8 @@ fi
 value() { sed -n "s/.*$1=\([^ ]*\).*/\1/p" <<<"$2" | tail -1; }
 table="$work/table.md"
 {
-  echo "| size | regime | VTK Render() ms | mapper ms | cast ms | caching ms | copies ms (depth + draw) | fps | first frame ms | afam replay ms | VTK / replay | bar |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| size | regime | VTK Render() ms | mapper ms | cast ms (host) | GPU kernel ms | caching ms | copies ms (download + depth + draw) | fps | first frame ms | afam replay ms | VTK / replay | bar |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } >"$table"
 for size in ${AFAM_VTK_SIZES:-512 1024}; do
   for regime in warm cold; do
@@ -194,7 +194,7 @@ for size in ${AFAM_VTK_SIZES:-512 1024}; do
     if [ $regime = cold ]; then bar="<= 1.3x: $(awk -v x="$ratio" 'BEGIN { print (x != "?" && x <= 1.3) ? "met" : "NOT met" }')"
     elif [ "$size" = 1024 ]; then bar="<= 1.2x and >= 30 fps: $(awk -v x="$ratio" -v f="$(value fps "$v")" 'BEGIN { print (x != "?" && x <= 1.2 && f >= 30) ? "met" : "NOT met" }')"
     fi
-    echo "| ${size}^2 | $regime | ${vc:-?} | $(value median_mapper_ms "$v") | $(value median_kernel_ms "$v") | $(value median_caching_ms "$v") | $(value median_copies_ms "$v") ($(value median_depth_read_ms "$v") + $(value median_draw_ms "$v")) | $(value fps "$v") | $(value first_frame_ms "$h") | ${r:-?} | $ratio | $bar |" >>"$table"
+    echo "| ${size}^2 | $regime | ${vc:-?} | $(value median_mapper_ms "$v") | $(value median_kernel_ms "$v") | $(value median_gpu_kernel_ms "$v") | $(value median_caching_ms "$v") | $(value median_copies_ms "$v") ($(value median_gpu_download_ms "$v") + $(value median_depth_read_ms "$v") + $(value median_draw_ms "$v")) | $(value fps "$v") | $(value first_frame_ms "$h") | ${r:-?} | $ratio | $bar |" >>"$table"
   done
 done
 grep -hE "^gl: OpenGL (renderer|version)" "$work"/vtk_*.log | sort -u

@@ -10,8 +10,10 @@
 // normalised frame, shading on: `afam replay`'s defaults. A square window of --size pixels.
 // --cold evicts the file from the OS page cache before every frame (`afam replay --cold`).
 // Per frame: the whole window->Render() (with glFinish), the mapper's own time, its ray casting
-// ("kernel": upload, cast and image readback on the GPU), caching, and the OpenGL round trips
-// (depth read, image flip and draw). Medians last, in one line of name=value pairs.
+// ("kernel": upload, cast and image readback on the GPU, as the host sees it), caching, the
+// OpenGL round trips (depth read, image flip and draw), and the GPU's own upload, kernel and
+// download times (CUDA events; -1 on the CPU). "copies" = download + depth read + flip and draw.
+// Medians last, in one line of name=value pairs.
 // --require-gpu: exit status 1 unless every frame was cast on the GPU.
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
@@ -135,9 +137,16 @@ void SetPresetTransferFunction(vtkVolumeProperty* property, double lo, double hi
   property->ShadeOn();
 }
 
+// Seconds to milliseconds, keeping -1 (not cast on the GPU) as -1.
+double Milliseconds(double seconds)
+{
+  return seconds < 0 ? -1.0 : 1e3 * seconds;
+}
+
 struct FrameTimes
 {
   double RenderCall, Mapper, Kernel, Caching, DepthRead, Draw;
+  double GpuUpload, GpuKernel, GpuDownload; // CUDA events; -1 on the CPU
   bool Gpu;
   long long Visible, Misses;
 };
@@ -200,8 +209,8 @@ int main(int argc, char* argv[])
   if (!o.Csv.empty())
   {
     csv.open(o.Csv);
-    csv << "pov,render_call_ms,mapper_ms,kernel_ms,caching_ms,depth_read_ms,draw_ms,gpu,visible,"
-           "misses\n";
+    csv << "pov,render_call_ms,mapper_ms,kernel_ms,caching_ms,depth_read_ms,draw_ms,"
+           "gpu_upload_ms,gpu_kernel_ms,gpu_download_ms,gpu,visible,misses\n";
   }
   std::vector<FrameTimes> frames;
   for (size_t i = 0; i < poses.size(); ++i)
@@ -219,15 +228,17 @@ int main(int argc, char* argv[])
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     frames.push_back({ call, 1e3 * mapper->GetLastTotalTime(), 1e3 * mapper->GetLastRenderTime(),
       1e3 * mapper->GetLastCachingTime(), 1e3 * mapper->GetLastDepthReadTime(),
-      1e3 * mapper->GetLastDrawTime(), mapper->GetLastUsedGpu(),
+      1e3 * mapper->GetLastDrawTime(), Milliseconds(mapper->GetLastGpuUploadTime()),
+      Milliseconds(mapper->GetLastGpuKernelTime()), Milliseconds(mapper->GetLastGpuDownloadTime()),
+      mapper->GetLastUsedGpu(),
       static_cast<long long>(mapper->GetLastVisibleBlocks()),
       static_cast<long long>(mapper->GetLastCacheMisses()) });
     const FrameTimes& f = frames.back();
     if (csv.is_open())
     {
       csv << i << ',' << f.RenderCall << ',' << f.Mapper << ',' << f.Kernel << ',' << f.Caching
-          << ',' << f.DepthRead << ',' << f.Draw << ',' << f.Gpu << ',' << f.Visible << ','
-          << f.Misses << '\n';
+          << ',' << f.DepthRead << ',' << f.Draw << ',' << f.GpuUpload << ',' << f.GpuKernel
+          << ',' << f.GpuDownload << ',' << f.Gpu << ',' << f.Visible << ',' << f.Misses << '\n';
     }
   }
   // Which OpenGL the window got (Mesa's llvmpipe or the GPU's own driver).
@@ -263,7 +274,11 @@ int main(int argc, char* argv[])
     series["mapper"].push_back(f.Mapper);
     series["kernel"].push_back(f.Kernel);
     series["caching"].push_back(f.Caching);
-    series["copies"].push_back(f.DepthRead + f.Draw);
+    // The image's and depth's host round trip: copy back from the GPU, flip and draw, depth read.
+    series["copies"].push_back(std::max(0.0, f.GpuDownload) + f.DepthRead + f.Draw);
+    series["gpu_upload"].push_back(f.GpuUpload);
+    series["gpu_kernel"].push_back(f.GpuKernel);
+    series["gpu_download"].push_back(f.GpuDownload);
     series["depth_read"].push_back(f.DepthRead);
     series["draw"].push_back(f.Draw);
   }
@@ -274,9 +289,11 @@ int main(int argc, char* argv[])
     frames[0].RenderCall, mapper->GetLastDeviceMessage());
   std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
               "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "
-              "median_draw_ms=%.3f fps=%.1f\n",
+              "median_draw_ms=%.3f median_gpu_upload_ms=%.3f median_gpu_kernel_ms=%.3f "
+              "median_gpu_download_ms=%.3f fps=%.1f\n",
     renderCall, Median(series["mapper"]), Median(series["kernel"]), Median(series["caching"]),
     Median(series["copies"]), Median(series["depth_read"]), Median(series["draw"]),
+    Median(series["gpu_upload"]), Median(series["gpu_kernel"]), Median(series["gpu_download"]),
     renderCall > 0 ? 1e3 / renderCall : 0.0);
   if (o.RequireGpu && onGpu != frames.size())
   {

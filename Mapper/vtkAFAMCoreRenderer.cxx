@@ -42,6 +42,22 @@ struct vtkAFAMCoreRenderer::Internals
 #endif
   }
 
+  // The CUDA events' times of the frame just cast, when it was cast on the GPU.
+  void GpuTimes(vtkAFAMFrameStats& stats) const
+  {
+#if defined(AFAM_HAVE_CUDA)
+    if (this->Gpu && this->Gpu->lastTimes().totalMs > 0)
+    {
+      const afam::GpuFrameTimes& t = this->Gpu->lastTimes();
+      stats.GpuUploadSeconds = t.uploadMs * 1e-3;
+      stats.GpuKernelSeconds = t.kernelMs * 1e-3;
+      stats.GpuDownloadSeconds = t.downloadMs * 1e-3;
+    }
+#else
+    (void)stats;
+#endif
+  }
+
   void InstallGpu(double budgetMB)
   {
     this->Gpu.reset();
@@ -179,6 +195,7 @@ void vtkAFAMCoreRenderer::Render(
   stats.DamageReports = std::move(frame.damageReports);
   stats.UsedGpu = m.Gpu != nullptr;
   stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
+  m.GpuTimes(stats);
   stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)
   if (wantGpu && !m.Gpu)
   {

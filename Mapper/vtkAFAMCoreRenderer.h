@@ -45,6 +45,9 @@ struct vtkAFAMFrameStats
   bool RendererBuilt = false;
   /// Models this frame copied to the GPU's pool (0 when every one was resident); -1 on the CPU.
   int64_t GpuModelsUploaded = -1;
+  /// The GPU's own times for the frame (CUDA events), in seconds: model upload, ray casting, and
+  /// the image's copy back to the host; -1 when the frame was not cast on the GPU.
+  double GpuUploadSeconds = -1, GpuKernelSeconds = -1, GpuDownloadSeconds = -1;
   /// Why the GPU is not (or not always) used, in words, from the frame that found out (e.g. "no
   /// usable GPU: CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)"); empty
   /// otherwise. Only set when the GPU was asked for (Device 0 or 2).

@@ -20,6 +20,8 @@
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLState.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkProp.h"
+#include "vtkPropCollection.h"
 #include "vtkRenderer.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -208,7 +210,9 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   this->ReadFrameSettings(vol->GetProperty(), frame);
-  this->ReadDepthLimits(ren, frame);
+  const auto depthStart = std::chrono::steady_clock::now();
+  const bool depthRead = this->ReadDepthLimits(ren, frame);
+  const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
   if (!this->RenderCore(frame, image, stats))
@@ -221,10 +225,13 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
                   << frame.CastWidth << "x" << frame.CastHeight << " request");
     return;
   }
+  const auto drawStart = std::chrono::steady_clock::now();
   this->DrawImage(vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow()), image);
+  const auto end = std::chrono::steady_clock::now();
   this->RecordStatistics(frame, stats);
-  this->LastTotalTime =
-    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  this->LastDepthReadTime = std::chrono::duration<double>(depthEnd - depthStart).count();
+  this->LastDrawTime = std::chrono::duration<double>(end - drawStart).count();
+  this->LastTotalTime = std::chrono::duration<double>(end - start).count();
 }
 
 bool vtkAFAMVolumeMapper::PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame)
@@ -363,13 +370,34 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   request.Threads = this->NumberOfThreads;
 }
 
-void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
+namespace
+{
+// Whether anything in `ren` but volumes may have written depth: a visible prop that is no volume
+// and does not say it lacks opaque geometry (vtkProp's default says it has some). Without one the
+// z-buffer holds the far plane only, and reading it back would limit no ray.
+bool MayHaveOpaqueGeometry(vtkRenderer* ren)
+{
+  vtkPropCollection* props = ren->GetViewProps();
+  vtkCollectionSimpleIterator it;
+  props->InitTraversal(it);
+  while (vtkProp* prop = props->GetNextProp(it))
+  {
+    if (prop->GetVisibility() && !vtkVolume::SafeDownCast(prop) && prop->HasOpaqueGeometry())
+    {
+      return true;
+    }
+  }
+  return false;
+}
+}
+
+bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
 {
   // Opaque geometry drawn so far stops the rays (see the class documentation).
   this->LastDepthLimitedPixels = 0;
-  if (!this->DepthCompositing)
+  if (!this->DepthCompositing || !MayHaveOpaqueGeometry(ren))
   {
-    return;
+    return false;
   }
   int x0 = 0, y0 = 0, w = 0, h = 0;
   ren->GetTiledSizeAndOrigin(&w, &h, &x0, &y0);
@@ -378,7 +406,7 @@ void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     VTK_OK)
   {
     vtkWarningMacro(<< "cannot read the z-buffer; the volume is blended over opaque geometry");
-    return;
+    return true;
   }
   vtkNew<vtkMatrix4x4> inverse;
   vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
@@ -393,6 +421,7 @@ void vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     frame.Request.MaxDistance = frame.Limits.data();
     this->LastDepthLimitedPixels = limited;
   }
+  return true;
 }
 
 void vtkAFAMVolumeMapper::DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image)
@@ -470,6 +499,9 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   }
   this->LastUsedGpu = stats.UsedGpu;
   this->LastGpuModelsUploaded = stats.GpuModelsUploaded;
+  this->LastGpuUploadTime = stats.GpuUploadSeconds;
+  this->LastGpuKernelTime = stats.GpuKernelSeconds;
+  this->LastGpuDownloadTime = stats.GpuDownloadSeconds;
   this->LastUsedBlendMode = frame.Request.Settings.blendMode;
   this->NumberOfRendererBuilds += stats.RendererBuilt ? 1 : 0;
   ++this->NumberOfFrames;
@@ -518,6 +550,11 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
   os << indent << "LastRenderTime: " << this->LastRenderTime << "\n";
   os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";
+  os << indent << "LastDepthReadTime: " << this->LastDepthReadTime << "\n";
+  os << indent << "LastDrawTime: " << this->LastDrawTime << "\n";
+  os << indent << "LastGpuUploadTime: " << this->LastGpuUploadTime << "\n";
+  os << indent << "LastGpuKernelTime: " << this->LastGpuKernelTime << "\n";
+  os << indent << "LastGpuDownloadTime: " << this->LastGpuDownloadTime << "\n";
   os << indent << "LastCacheHits: " << this->LastCacheHits << "\n";
   os << indent << "LastCacheMisses: " << this->LastCacheMisses << "\n";
   os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";

@@ -177,6 +177,19 @@ public:
   vtkGetMacro(LastCachingTime, double);
   vtkGetMacro(LastRenderTime, double);
   vtkGetMacro(LastTotalTime, double);
+  /// The last frame's host round trips through OpenGL, in seconds: reading the depth buffer for
+  /// depth compositing (0 when off, or when the renderer holds nothing visible but volumes, so
+  /// that no opaque geometry can have written depth), and flipping the cast image and drawing it
+  /// into the viewport.
+  /// LastTotalTime holds them, LastRenderTime and LastCachingTime do not.
+  vtkGetMacro(LastDepthReadTime, double);
+  vtkGetMacro(LastDrawTime, double);
+  /// The GPU's own times for the last frame (CUDA events), in seconds: uploading the models not
+  /// yet resident, ray casting, and copying the image back to the host (part of LastRenderTime);
+  /// -1 when the frame was cast on the CPU.
+  vtkGetMacro(LastGpuUploadTime, double);
+  vtkGetMacro(LastGpuKernelTime, double);
+  vtkGetMacro(LastGpuDownloadTime, double);
   vtkGetMacro(LastCacheHits, vtkTypeInt64);
   vtkGetMacro(LastCacheMisses, vtkTypeInt64);
   vtkGetMacro(LastCulledBlocks, vtkTypeInt64);
@@ -229,8 +242,9 @@ protected:
   bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
-  /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far).
-  void ReadDepthLimits(vtkRenderer* ren, Frame& frame);
+  /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);
+  /// false when it was not read (depth compositing off, or nothing but volumes to draw depth).
+  bool ReadDepthLimits(vtkRenderer* ren, Frame& frame);
   void DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image);
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
@@ -251,6 +265,8 @@ protected:
   double SecondsPerPixel = 0; ///< running estimate of a frame's time per cast pixel
 
   double LastCachingTime = 0, LastRenderTime = 0, LastTotalTime = 0;
+  double LastDepthReadTime = 0, LastDrawTime = 0;
+  double LastGpuUploadTime = -1, LastGpuKernelTime = -1, LastGpuDownloadTime = -1;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
   vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0;

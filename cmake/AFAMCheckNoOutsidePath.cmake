@@ -16,7 +16,7 @@ set(_patterns "${_up}[/\\\\]+shared" "\"${_up}\"[ \t]*,[ \t]*\"shared\"" "'${_up
 # Files of the kinds that build, test or run something, under ROOT (not Testing/Data, not docs).
 function(afam_checked_files root out)
   set(_globs "")
-  foreach (_dir Apps Core CudaKernels Filters Mapper Plugin Readers Testing cmake scripts .ci)
+  foreach (_dir Apps Core CudaKernels Examples Filters Mapper Plugin Readers Testing cmake scripts .ci)
     foreach (_ext h hpp hxx cpp cxx cu cuh inl py sh cmake txt xml in json yml yaml)
       list(APPEND _globs "${root}/${_dir}/*.${_ext}")
     endforeach ()

@@ -318,6 +318,7 @@ const GpuModelPool& GpuRenderer::pool() const { return impl_->pool; }
 void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
                          GpuFrameTimes* times) {
   Impl& m = *impl_;
+  lastTimes_ = GpuFrameTimes{};
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);
   if (pixels > 0) m.reserveImage(pixels);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
@@ -340,13 +341,12 @@ void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float*
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[3], m.stream));
   AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[3]));
   std::memcpy(rgba, m.hostImage, pixels * sizeof(float4));
-  if (times) {
-    t.uploadMs = elapsed(m.events[0], m.events[1]);
-    t.kernelMs = elapsed(m.events[1], m.events[2]);
-    t.downloadMs = elapsed(m.events[2], m.events[3]);
-    t.totalMs = elapsed(m.events[0], m.events[3]);
-    *times = t;
-  }
+  t.uploadMs = elapsed(m.events[0], m.events[1]);
+  t.kernelMs = elapsed(m.events[1], m.events[2]);
+  t.downloadMs = elapsed(m.events[2], m.events[3]);
+  t.totalMs = elapsed(m.events[0], m.events[3]);
+  lastTimes_ = t;
+  if (times) *times = t;
 }
 
 GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* slotKeys,

@@ -167,6 +167,55 @@ inline std::vector<unsigned char> ReadPixels(vtkRenderWindow* window)
   return p ? std::vector<unsigned char>(p, p + scalars->GetNumberOfValues())
            : std::vector<unsigned char>();
 }
+/// The device the image tests cast on: AFAM_TEST_DEVICE=gpu (the GPU machine,
+/// scripts/gpu_vtk_check.sh) asks for the CUDA renderer, and GpuMatchesCpu then fails where it
+/// was not used; unset or anything else (CI): the CPU.
+inline bool TestOnGpu()
+{
+  const char* device = std::getenv("AFAM_TEST_DEVICE");
+  return device && std::string(device) == "gpu";
+}
+
+inline void UseTestDevice(vtkAFAMVolumeMapper* mapper)
+{
+  mapper->SetRenderDevice(
+    TestOnGpu() ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
+}
+
+/// With AFAM_TEST_DEVICE=gpu: renders a still frame, which `mapper` must have cast on the GPU,
+/// then the same frame cast on the CPU; the two must agree within 2/255 on every channel of every
+/// pixel. Prints "[vtk gpu-vs-cpu] <what>: ..."; leaves the mapper on the GPU and the GPU frame
+/// drawn. Without it: true, nothing done.
+inline bool GpuMatchesCpu(vtkRenderWindow* window, vtkAFAMVolumeMapper* mapper, const std::string& what)
+{
+  if (!TestOnGpu())
+  {
+    return true;
+  }
+  window->Render();
+  const bool usedGpu = mapper->GetLastUsedGpu();
+  const std::vector<unsigned char> gpu = ReadPixels(window);
+  mapper->SetRenderDeviceToCPU();
+  window->Render();
+  const std::vector<unsigned char> cpu = ReadPixels(window);
+  mapper->SetRenderDeviceToGPU();
+  window->Render();
+  int worst = 0;
+  size_t differing = 0;
+  for (size_t i = 0; i < gpu.size() && i < cpu.size(); ++i)
+  {
+    const int d = std::abs(int(gpu[i]) - int(cpu[i]));
+    worst = std::max(worst, d);
+    differing += d > 0 ? 1 : 0;
+  }
+  const bool ok = usedGpu && gpu.size() == cpu.size() && !gpu.empty() && worst <= 2;
+  std::cout << "[vtk gpu-vs-cpu] " << what << ": cast on the GPU " << usedGpu << ", max |diff| "
+            << worst << "/255, " << differing << " channel values differ (bar 2/255"
+            << (usedGpu ? "" : "; FAILED: the GPU was not used: ") << mapper->GetLastDeviceMessage()
+            << ")" << (ok ? "" : " FAILED") << "\n";
+  return ok;
+}
+
 /// vtkTesting's comparison (threshold, neighbourhood averaging) passes smooth volume images drawn
 /// a few pixels off or stretched. This one is strict: the fraction of pixels whose largest channel
 /// differs from the baseline (the -V argument) by more than `channelTolerance` must stay under
@@ -246,7 +295,8 @@ inline bool PixelsMatchBaseline(vtkRenderWindow* window, int argc, char* argv[],
   return true;
 }
 
-/// The scene most tests draw: the Marschner-Lobb mapper cast on the CPU, VolumeProperty(), the
+/// The scene most tests draw: the Marschner-Lobb mapper cast on the test device (UseTestDevice),
+/// VolumeProperty(), the
 /// volume in a renderer (background 0.1, 0.1, 0.15) of the tests' window. Ready once Build()
 /// returned true (false: encoding failed).
 struct Scene
@@ -266,7 +316,7 @@ struct Scene
     {
       return false;
     }
-    this->Mapper->SetRenderDeviceToCPU();
+    UseTestDevice(this->Mapper);
     this->Property = VolumeProperty();
     this->Volume = MakeVolume(this->Mapper, this->Property);
     this->Renderer->SetBackground(0.1, 0.1, 0.15);

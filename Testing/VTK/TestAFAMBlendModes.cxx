@@ -59,7 +59,7 @@ int main(int, char*[])
   {
     return EXIT_FAILURE;
   }
-  mapper->SetRenderDevice(vtkAFAMVolumeMapper::DEVICE_CPU);
+  afam_vtk_test::UseTestDevice(mapper);
   mapper->SetSampleDistance(0.01);
   std::vector<std::string> warnings;
   auto watch = afam_vtk_test::CollectWarnings(mapper, warnings);
@@ -96,6 +96,10 @@ int main(int, char*[])
     volume->VisibilityOn();
     referenceVolume->VisibilityOff();
     window->Render();
+    if (!afam_vtk_test::GpuMatchesCpu(window, mapper, std::string("BlendModes, ") + names[mode]))
+    {
+      ++failures;
+    }
     const std::vector<unsigned char> a = afam_vtk_test::ReadPixels(window);
     volume->VisibilityOff();
     referenceVolume->VisibilityOn();

@@ -68,7 +68,7 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   {
     return EXIT_FAILURE;
   }
-  mapper->SetRenderDevice(vtkAFAMVolumeMapper::DEVICE_CPU);
+  afam_vtk_test::UseTestDevice(mapper);
   vtkNew<vtkVolume> volume;
   volume->SetMapper(mapper);
   volume->SetProperty(afam_vtk_test::VolumeProperty());
@@ -156,6 +156,20 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   check(movedMiddle.sum > 0.01 * movedBack.sum && movedMiddle.sum < 0.5 * movedBack.sum,
     "moved volume, plane through its middle: only its front part shows");
 
+  // Nothing visible but the volume: no opaque geometry can have written depth, so none is read.
+  planeActor->VisibilityOff();
+  window->Render();
+  const double aloneRead = mapper->GetLastDepthReadTime();
+  const vtkTypeInt64 aloneLimited = mapper->GetLastDepthLimitedPixels();
+  planeActor->VisibilityOn();
+  window->Render();
+  std::cout << "depth read: " << 1e3 * aloneRead << " ms with the volume alone, "
+            << 1e3 * mapper->GetLastDepthReadTime() << " ms with the plane\n";
+  check(aloneRead == 0 && aloneLimited == 0, "the volume alone: the depth buffer is not read");
+  check(mapper->GetLastDepthReadTime() > 0 && mapper->GetLastDepthLimitedPixels() == pixels,
+    "with the plane visible again: the depth buffer is read");
+  check(afam_vtk_test::GpuMatchesCpu(window, mapper, "DepthCompositing, last view"),
+    "GPU frame equals the CPU frame");
   const int result = vtkRegressionTestImageThreshold(window, 15);
   if (result == vtkRegressionTester::DO_INTERACTOR)
   {

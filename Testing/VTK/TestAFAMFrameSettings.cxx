@@ -155,6 +155,8 @@ int main(int, char*[])
     "a new cache budget builds a new renderer: " +
       std::to_string(mapper->GetNumberOfRendererBuilds()) + " builds, " +
       std::to_string(mapper->GetLastCacheMisses()) + " misses");
+  Check(afam_vtk_test::GpuMatchesCpu(window, mapper, "FrameSettings, after the edits"),
+    "GPU frame equals the CPU frame");
   std::cout << failures << " failure(s)\n";
   return failures == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }

@@ -32,7 +32,7 @@ int main(int, char*[])
   vtkNew<vtkAFAMVolumeMapper> alone;
   alone->SetFileName(file.c_str());
   alone->SetLodPolicyToScreenSpace();
-  alone->SetRenderDeviceToCPU();
+  afam_vtk_test::UseTestDevice(alone);
   scene.Volume->SetMapper(alone);
   window->Render();
   const std::vector<unsigned char> got = afam_vtk_test::ReadPixels(window);
@@ -46,7 +46,8 @@ int main(int, char*[])
   std::cout << "FileName only (" << file << "): " << alone->GetNumberOfFrames() << " frame(s), "
             << foreground << " foreground pixels, " << differing
             << " pixels differ from the connected mapper's image\n";
-  const bool ok = alone->GetNumberOfFrames() >= 1 && foreground > 1000 && differing == 0;
+  const bool ok = alone->GetNumberOfFrames() >= 1 && foreground > 1000 && differing == 0 &&
+    afam_vtk_test::GpuMatchesCpu(window, alone, "MapperFileName, FileName only");
   std::cout << (ok ? "ok" : "FAILED") << "\n";
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;
 }

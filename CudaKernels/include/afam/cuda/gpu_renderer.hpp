@@ -83,6 +83,8 @@ class GpuRenderer {
   void setMinBlocksPerSm(int blocks) { minBlocks_ = blocks; }
   /// "full<shaded,p=2>: 40 registers, 0 bytes local" for the kernel the last frame used.
   std::string lastKernelInfo() const { return kernelInfo_; }
+  /// The last render()'s times (all zero when it did not finish, e.g. a pool too small).
+  const GpuFrameTimes& lastTimes() const { return lastTimes_; }
 
   GpuModelPool& pool();
   const GpuModelPool& pool() const;
@@ -101,6 +103,7 @@ class GpuRenderer {
   int minBlocks_ = 1;
   bool dsTextures_ = false;
   std::string kernelInfo_;
+  GpuFrameTimes lastTimes_;
 };
 
 }  // namespace afam

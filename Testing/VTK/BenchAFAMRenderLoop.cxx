@@ -1,0 +1,305 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+// Frame times of vtkAFAMVolumeMapper inside a real VTK render loop, on the views `afam replay`
+// renders, so that the two can be set side by side on the same file, views and image size.
+//   BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N] [--frames K]
+//     [--device cpu|gpu] [--require-gpu] [--cold] [--cache-mb MB] [--csv OUT.csv]
+// Each point of view becomes the VTK camera that casts the same rays as Core's Camera::fromPose
+// (exact for cubic volumes); the transfer function is Core's preset over the file's value range,
+// the LOD the paper's distance bands, sample distance 0.005 and opacity unit 0.01 in the
+// normalised frame, shading on: `afam replay`'s defaults. A square window of --size pixels.
+// --cold evicts the file from the OS page cache before every frame (`afam replay --cold`).
+// Per frame: the whole window->Render() (with glFinish), the mapper's own time, its ray casting
+// ("kernel": upload, cast and image readback on the GPU, as the host sees it), caching, the
+// OpenGL round trips (depth read, image flip and draw), and the GPU's own upload, kernel and
+// download times (CUDA events; -1 on the CPU). "copies" = download + depth read + flip and draw.
+// Medians last, in one line of name=value pairs.
+// --require-gpu: exit status 1 unless every frame was cast on the GPU.
+#include "vtkAFAMReader.h"
+#include "vtkAFAMVolumeMapper.h"
+
+#include "afam/afam_file.hpp"
+#include "afam/camera.hpp"
+#include "afam/trajectory_gen.hpp"
+#include "afam/transfer_function.hpp"
+
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkNew.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+
+#include <fcntl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace
+{
+struct Options
+{
+  std::string File, Trajectory, Csv;
+  int Orbit = 0, Size = 512, Frames = 0;
+  bool Gpu = false, RequireGpu = false, Cold = false;
+  double CacheMB = 512;
+};
+
+bool Parse(int argc, char* argv[], Options& o)
+{
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string a = argv[i];
+    const bool hasValue = i + 1 < argc;
+    if (a == "--trajectory" && hasValue) o.Trajectory = argv[++i];
+    else if (a == "--orbit" && hasValue) o.Orbit = std::atoi(argv[++i]);
+    else if (a == "--size" && hasValue) o.Size = std::atoi(argv[++i]);
+    else if (a == "--frames" && hasValue) o.Frames = std::atoi(argv[++i]);
+    else if (a == "--device" && hasValue) o.Gpu = std::string(argv[++i]) == "gpu";
+    else if (a == "--cache-mb" && hasValue) o.CacheMB = std::atof(argv[++i]);
+    else if (a == "--csv" && hasValue) o.Csv = argv[++i];
+    else if (a == "--require-gpu") o.RequireGpu = true;
+    else if (a == "--cold") o.Cold = true;
+    else if (a[0] != '-' && o.File.empty()) o.File = a;
+    else
+    {
+      std::cerr << "BenchAFAMRenderLoop: unknown or incomplete argument '" << a << "'\n";
+      return false;
+    }
+  }
+  if (o.File.empty() || (o.Trajectory.empty() == (o.Orbit < 1)) || o.Size < 16 || o.Size > 8192)
+  {
+    std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
+                 "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--cold] "
+                 "[--cache-mb MB] [--csv OUT.csv]\n";
+    return false;
+  }
+  return true;
+}
+
+double Median(std::vector<double> v)
+{
+  if (v.empty())
+  {
+    return 0;
+  }
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// The VTK camera that casts Core's rays for `pose`: the normalised frame [-1, 1]^3 is the data box
+// (centre `c`, half extents `h`), so the eye maps by c + h * eye and the view angle is Core's.
+void PlaceCamera(vtkCamera* camera, const afam::Pose& pose, const double c[3], const double h[3], int size)
+{
+  const afam::Camera core = afam::Camera::fromPose(pose, size, size);
+  double eye[3], focal[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    eye[a] = c[a] + h[a] * core.eye[a];
+    focal[a] = c[a] + h[a] * (core.eye[a] + core.forward[a]);
+  }
+  camera->SetPosition(eye);
+  camera->SetFocalPoint(focal);
+  camera->SetViewUp(core.up[0], core.up[1], core.up[2]);
+  camera->SetViewAngle(2.0 * std::atan(core.tanHalfY) * 180.0 / 3.14159265358979323846);
+}
+
+// Core's preset transfer function over [lo, hi] as VTK functions; the opacity unit distance in
+// world units (`unit` = world length of one normalised unit).
+void SetPresetTransferFunction(vtkVolumeProperty* property, double lo, double hi, double unit)
+{
+  const afam::TransferFunction tf = afam::TransferFunction::preset(lo, hi);
+  vtkNew<vtkColorTransferFunction> color;
+  for (const auto& p : tf.colors)
+  {
+    color->AddRGBPoint(p.value, p.r, p.g, p.b);
+  }
+  vtkNew<vtkPiecewiseFunction> opacity;
+  for (const auto& p : tf.opacities)
+  {
+    opacity->AddPoint(p.value, p.alpha);
+  }
+  property->SetColor(color);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(tf.referenceDistance * unit);
+  property->ShadeOn();
+}
+
+// Seconds to milliseconds, keeping -1 (not cast on the GPU) as -1.
+double Milliseconds(double seconds)
+{
+  return seconds < 0 ? -1.0 : 1e3 * seconds;
+}
+
+struct FrameTimes
+{
+  double RenderCall, Mapper, Kernel, Caching, DepthRead, Draw;
+  double GpuUpload, GpuKernel, GpuDownload; // CUDA events; -1 on the CPU
+  bool Gpu;
+  long long Visible, Misses;
+};
+}
+
+int main(int argc, char* argv[])
+{
+  Options o;
+  if (!Parse(argc, argv, o))
+  {
+    return 2;
+  }
+  std::vector<afam::Pose> poses;
+  std::shared_ptr<const afam::AfamFile> file;
+  try
+  {
+    poses = o.Trajectory.empty() ? afam::orbitTrajectory(o.Orbit, 1.5, 60.0, 0.0, 1.0)
+                                 : afam::loadTrajectory(o.Trajectory);
+    file = afam::AfamFile::open(o.File);
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "BenchAFAMRenderLoop: " << e.what() << "\n";
+    return 2;
+  }
+  if (o.Frames > 0 && static_cast<size_t>(o.Frames) < poses.size())
+  {
+    poses.resize(static_cast<size_t>(o.Frames));
+  }
+
+  vtkNew<vtkAFAMReader> reader;
+  reader->SetFileName(o.File.c_str());
+  vtkNew<vtkAFAMVolumeMapper> mapper;
+  mapper->SetInputConnection(reader->GetOutputPort());
+  mapper->SetLodPolicyToDistanceBands();
+  mapper->SetCacheBudgetMB(o.CacheMB);
+  mapper->SetRenderDevice(o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
+  const double* b = mapper->GetBounds();
+  const double c[3] = { 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]) };
+  const double h[3] = { 0.5 * (b[1] - b[0]), 0.5 * (b[3] - b[2]), 0.5 * (b[5] - b[4]) };
+  const double unit = std::cbrt(h[0] * h[1] * h[2]);
+  if (!(unit > 0))
+  {
+    std::cerr << "BenchAFAMRenderLoop: " << o.File << " has an empty volume box\n";
+    return 2;
+  }
+  mapper->SetSampleDistance(0.005 * unit);
+  vtkNew<vtkVolume> volume;
+  volume->SetMapper(mapper);
+  SetPresetTransferFunction(volume->GetProperty(), file->header().valueMin,
+    file->header().valueMax, unit);
+  vtkNew<vtkRenderer> renderer;
+  renderer->AddVolume(volume);
+  vtkNew<vtkRenderWindow> window;
+  window->SetSize(o.Size, o.Size);
+  window->SetMultiSamples(0);
+  window->AddRenderer(renderer);
+
+  std::ofstream csv;
+  if (!o.Csv.empty())
+  {
+    csv.open(o.Csv);
+    csv << "pov,render_call_ms,mapper_ms,kernel_ms,caching_ms,depth_read_ms,draw_ms,"
+           "gpu_upload_ms,gpu_kernel_ms,gpu_download_ms,gpu,visible,misses\n";
+  }
+  std::vector<FrameTimes> frames;
+  for (size_t i = 0; i < poses.size(); ++i)
+  {
+    PlaceCamera(renderer->GetActiveCamera(), poses[i], c, h, o.Size);
+    renderer->ResetCameraClippingRange();
+    if (o.Cold)
+    {
+      (void)::posix_fadvise(file->nativeHandle(), 0, 0, POSIX_FADV_DONTNEED);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    window->Render();
+    window->WaitForCompletion();
+    const double call =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    frames.push_back({ call, 1e3 * mapper->GetLastTotalTime(), 1e3 * mapper->GetLastRenderTime(),
+      1e3 * mapper->GetLastCachingTime(), 1e3 * mapper->GetLastDepthReadTime(),
+      1e3 * mapper->GetLastDrawTime(), Milliseconds(mapper->GetLastGpuUploadTime()),
+      Milliseconds(mapper->GetLastGpuKernelTime()), Milliseconds(mapper->GetLastGpuDownloadTime()),
+      mapper->GetLastUsedGpu(),
+      static_cast<long long>(mapper->GetLastVisibleBlocks()),
+      static_cast<long long>(mapper->GetLastCacheMisses()) });
+    const FrameTimes& f = frames.back();
+    if (csv.is_open())
+    {
+      csv << i << ',' << f.RenderCall << ',' << f.Mapper << ',' << f.Kernel << ',' << f.Caching
+          << ',' << f.DepthRead << ',' << f.Draw << ',' << f.GpuUpload << ',' << f.GpuKernel
+          << ',' << f.GpuDownload << ',' << f.Gpu << ',' << f.Visible << ',' << f.Misses << '\n';
+    }
+  }
+  // Which OpenGL the window got (Mesa's llvmpipe or the GPU's own driver).
+  std::istringstream capabilities(window->ReportCapabilities() ? window->ReportCapabilities() : "");
+  for (std::string line; std::getline(capabilities, line);)
+  {
+    if (line.find("renderer string") != std::string::npos ||
+      line.find("version string") != std::string::npos)
+    {
+      std::cout << "gl: " << line << "\n";
+    }
+  }
+  if (frames.empty() || mapper->GetNumberOfFrames() < static_cast<vtkTypeInt64>(frames.size()))
+  {
+    std::cerr << "BenchAFAMRenderLoop: the mapper drew " << mapper->GetNumberOfFrames() << " of "
+              << frames.size() << " frames\n";
+    return 1;
+  }
+
+  // Medians over every frame but the first (context, pool and cache set-up), which is reported
+  // on its own.
+  std::map<std::string, std::vector<double>> series;
+  size_t onGpu = 0;
+  for (size_t i = 0; i < frames.size(); ++i)
+  {
+    const FrameTimes& f = frames[i];
+    onGpu += f.Gpu ? 1 : 0;
+    if (i == 0 && frames.size() > 1)
+    {
+      continue;
+    }
+    series["render_call"].push_back(f.RenderCall);
+    series["mapper"].push_back(f.Mapper);
+    series["kernel"].push_back(f.Kernel);
+    series["caching"].push_back(f.Caching);
+    // The image's and depth's host round trip: copy back from the GPU, flip and draw, depth read.
+    series["copies"].push_back(std::max(0.0, f.GpuDownload) + f.DepthRead + f.Draw);
+    series["gpu_upload"].push_back(f.GpuUpload);
+    series["gpu_kernel"].push_back(f.GpuKernel);
+    series["gpu_download"].push_back(f.GpuDownload);
+    series["depth_read"].push_back(f.DepthRead);
+    series["draw"].push_back(f.Draw);
+  }
+  const double renderCall = Median(series["render_call"]);
+  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d gpu_frames=%zu "
+              "first_frame_ms=%.3f message='%s'\n",
+    o.File.c_str(), frames.size(), o.Size, o.Size, o.Gpu ? "gpu" : "cpu", o.Cold ? 1 : 0, onGpu,
+    frames[0].RenderCall, mapper->GetLastDeviceMessage());
+  std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
+              "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "
+              "median_draw_ms=%.3f median_gpu_upload_ms=%.3f median_gpu_kernel_ms=%.3f "
+              "median_gpu_download_ms=%.3f fps=%.1f\n",
+    renderCall, Median(series["mapper"]), Median(series["kernel"]), Median(series["caching"]),
+    Median(series["copies"]), Median(series["depth_read"]), Median(series["draw"]),
+    Median(series["gpu_upload"]), Median(series["gpu_kernel"]), Median(series["gpu_download"]),
+    renderCall > 0 ? 1e3 / renderCall : 0.0);
+  if (o.RequireGpu && onGpu != frames.size())
+  {
+    std::cerr << "BenchAFAMRenderLoop: --require-gpu and only " << onGpu << " of " << frames.size()
+              << " frames were cast on the GPU: " << mapper->GetLastDeviceMessage() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -122,14 +122,14 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
 }
 
 /// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
-/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails.
+/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails. The
+/// largest is tried first (a block that passes there costs one evaluation); the last call that
+/// returned true is the answer's.
 template <typename Passes>
 int largestPassingStep(Passes&& passes) {
   const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
-  if (!passes(kStepFactors[n - 1])) return -1;
-  int fail = -1, pass = n - 1;  // kStepFactors[fail] fails (-1: beyond the ladder), [pass] passes
   if (passes(kStepFactors[0])) return 0;
-  fail = 0;
+  int fail = 0, pass = n;  // kStepFactors[fail] fails; [pass] passes (n: none known to)
   while (pass - fail > 1) {
     const int mid = (pass + fail) / 2;
     if (passes(kStepFactors[mid]))
@@ -137,7 +137,7 @@ int largestPassingStep(Passes&& passes) {
     else
       fail = mid;
   }
-  return pass;
+  return pass < n ? pass : -1;
 }
 
 /// A candidate stored form of the block.
@@ -172,19 +172,27 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   if (!(budget > 0)) return false;
   FitResult q = fr;
   bool lattice = true;
+  std::vector<float> passed;  // the quantized control points of the last passing step, and their error
+  ErrorStats passedError;
   auto passes = [&](double k) {
     if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
       lattice = false;
       return false;
     }
-    return fitter.error(s.data(), n, q).rmse <= bound;
+    const ErrorStats es = fitter.error(s.data(), n, q);
+    if (!(es.rmse <= bound)) return false;
+    passed = q.control;
+    passedError = es;
+    return true;
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
   const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
   std::vector<uint8_t> bytes;
   if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, fitter.error(s.data(), n, q), std::move(bytes)};
+  // The coder reconstructs what the ladder measured; measured again only if it does not.
+  const ErrorStats es = q.control == passed ? passedError : fitter.error(s.data(), n, q);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
   return out.error.rmse <= bound;
 }
 

@@ -204,27 +204,40 @@ class LevelEncoder {
     };
   }
 
-  /// Batches of block rows: the next batch is sampled (I/O and filtering, one thread) while the
-  /// pool fits the current one, so reading the volume does not leave the fitting threads idle.
-  LevelStats encodeLevel(int l) {
+  /// Rows of blocks of one level, sampled.
+  struct Batch {
+    std::vector<BlockTask> tasks;
+    int endKz = 0;         ///< the first row not in this batch
+    double seconds = 0;    ///< spent sampling it
+  };
+
+  /// Batches of block rows: the next batch is sampled (I/O and filtering, on the sampling pool)
+  /// while the fitting pool fits the current one, so reading the volume does not leave the fitting
+  /// threads idle; during the level's last batch the next level's first batch is sampled, handed
+  /// back in `pending` (empty: level l samples its first batch itself).
+  LevelStats encodeLevel(int l, std::future<Batch>& pending) {
     const auto tl = Clock::now();
     LevelStats ls;
     ls.blocks = part_.blockCount(l);
     complexCur_.assign(size_t(ls.blocks), 0);
     double levelDone = 0;
     const int rows = part_.blocksPerAxis(l)[2];
-    int kz = 0;
-    std::vector<BlockTask> tasks = gatherRows(l, kz, ls.sampleSeconds);
-    while (!tasks.empty()) {
-      std::future<std::vector<BlockTask>> next;
-      if (kz < rows) next = std::async(std::launch::async, [&] { return gatherRows(l, kz, ls.sampleSeconds); });
+    Batch cur = pending.valid() ? pending.get() : gatherRows(l, 0);
+    for (;;) {
+      ls.sampleSeconds += cur.seconds;
+      const bool more = cur.endKz < rows;
+      std::future<Batch> next;
+      if (more || l + 1 < part_.levels()) {
+        const int nl = more ? l : l + 1, kz = more ? cur.endKz : 0;
+        next = std::async(std::launch::async, [this, nl, kz] { return gatherRows(nl, kz); });
+      }
       try {
-        fitBatch(l, tasks, levelDone);
+        fitBatch(l, cur.tasks, levelDone);
       } catch (...) {
         if (next.valid()) next.wait();  // the sampling thread uses members: let it finish first
         throw;
       }
-      for (BlockTask& t : tasks) {
+      for (BlockTask& t : cur.tasks) {
         sink_.add(t.entry, t.stored.data());
         complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
         countBlock(t, ds(), ls);
@@ -234,7 +247,11 @@ class LevelEncoder {
         if (next.valid()) next.wait();
         throw cancelled();
       }
-      tasks = next.valid() ? next.get() : std::vector<BlockTask>{};
+      if (!more) {
+        pending = std::move(next);
+        break;
+      }
+      cur = next.get();
     }
     complexPrev_.swap(complexCur_);
     ls.seconds = secondsSince(tl);
@@ -244,20 +261,23 @@ class LevelEncoder {
  private:
   bool ds() const { return opt_.mode == EncodingMode::Downsampled; }
 
+  /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
+  /// blocks are all known (a batch may be sampled before that).
   bool searches(int l, const Int3& ijk) const {
     if (ds() || opt_.mode == EncodingMode::Fixed) return false;
     if (opt_.mode == EncodingMode::InLevel || l == 0) return true;
     return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
   }
 
-  /// Rows of blocks from kz on, sampled, until the batch holds ~24 M samples (at least one row).
-  /// Runs beside the fitting pool: it touches only planes_, samplePool_, kz and its own tasks (no
-  /// progress callback, which the calling thread owns).
-  std::vector<BlockTask> gatherRows(int l, int& kz, double& seconds) {
+  /// Rows of blocks of level l from row kz on, sampled, until the batch holds ~24 M samples (at
+  /// least one row). Runs beside the fitting pool: it touches only planes_, samplePool_ and its own
+  /// batch (no progress callback, which the calling thread owns).
+  Batch gatherRows(int l, int kz) {
     const auto t0 = Clock::now();
     const size_t budgetFloats = size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
-    std::vector<BlockTask> tasks;
+    Batch batch;
+    std::vector<BlockTask>& tasks = batch.tasks;
     size_t floats = 0;
     while (kz < nb[2] && (tasks.empty() || floats < budgetFloats)) {
       std::vector<Int3> row;
@@ -267,21 +287,21 @@ class LevelEncoder {
       tasks.resize(first + row.size());
       std::vector<std::vector<float>*> outs(row.size());
       for (size_t r = 0; r < row.size(); ++r) {
-        BlockTask& t = tasks[first + r];
-        t.ijk = row[r];
-        t.search = searches(l, t.ijk);
-        outs[r] = &t.samples;
+        tasks[first + r].ijk = row[r];
+        outs[r] = &tasks[first + r].samples;
       }
       sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
       ++kz;
     }
-    seconds += secondsSince(t0);
-    return tasks;
+    batch.endKz = kz;
+    batch.seconds = secondsSince(t0);
+    return batch;
   }
 
   void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
     const FitContext ctx{opt_, bound_, l, source_.name()};
+    for (BlockTask& t : tasks) t.search = searches(l, t.ijk);
     std::mutex doneMutex;
     bool cancelRequested = false;
     double batchDone = 0;
@@ -357,8 +377,9 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
 
   const auto tFit0 = Clock::now();
   LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink);
+  std::future<LevelEncoder::Batch> pending;  // a level's first batch, sampled during the previous level
   for (int l = 0; l < part.levels(); ++l) {
-    stats.levels.push_back(levels.encodeLevel(l));
+    stats.levels.push_back(levels.encodeLevel(l, pending));
     progress.finishLevel(l);
     addLevel(stats.levels.back(), stats);
   }

@@ -116,7 +116,7 @@ off_t killWhenTemporaryReaches(Child& c, const std::string& out, off_t bytes, co
 }  // namespace
 
 TEST(Fault, Kill9DuringEncodeLeavesTheOldFileAndTheNextEncodeRemovesTheLeftovers) {
-  const std::string raw = writeMlRaw(96, "ml");  // an encode long enough to be caught part-way
+  const std::string raw = writeMlRaw(128, "ml");  // an encode long enough to be caught part-way
   const std::string out = afam_test::scratchPath("model.afam");
   const std::string log = afam_test::scratchPath("encode.log");
   // The file an encode of `raw` makes, and its size: the kill moments are fractions of it.
@@ -162,7 +162,7 @@ TEST(Fault, Kill9DuringEncodeLeavesTheOldFileAndTheNextEncodeRemovesTheLeftovers
 TEST(Fault, FullDiskDuringEncodeIsAClearErrorAndLeavesNoPartialFile) {
   // RLIMIT_FSIZE makes every write past 96 KiB fail with EFBIG ("File too large"), as a full disk
   // makes them fail with ENOSPC: the same error path in the writer, without root or a tmpfs.
-  const std::string raw = writeMlRaw(96, "ml");  // an encode long enough to be caught part-way
+  const std::string raw = writeMlRaw(128, "ml");  // an encode long enough to be caught part-way
   const std::string out = afam_test::scratchPath("full.afam");
   const std::string log = afam_test::scratchPath("full.log");
   for (const bool withOldFile : {false, true}) {

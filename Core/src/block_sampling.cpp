@@ -102,14 +102,14 @@ AxisTaps axisTaps(const Partition& part, const BlockExtent& e, int level, int ax
 struct BlockTaps {
   AxisTaps tx, ty;
   int nx = 0, ny = 0;
+  int64_t y0 = 0, y1 = 0;  ///< the rows of a plane the y taps read
 };
 
 /// acc[j * nx + i] += w * (the x-then-y filtered plane at block sample (i, j)); rows is scratch.
 void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double w, std::vector<double>& rows,
                       std::vector<double>& acc) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
-  const int64_t y0 = *std::min_element(ty.index.begin(), ty.index.end());
-  const int64_t y1 = *std::max_element(ty.index.begin(), ty.index.end());
+  const int64_t y0 = bt.y0, y1 = bt.y1;
   rows.resize(size_t(y1 - y0 + 1) * size_t(bt.nx));
   for (int64_t y = y0; y <= y1; ++y) {
     const float* src = plane + y * X;
@@ -169,9 +169,9 @@ void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& z
 
 }  // namespace
 
-PlaneCache::PlaneCache(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
+PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
 
-void PlaneCache::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
+void PlaneReader::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
   buf.resize(zs.size() * plane_);
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
@@ -182,7 +182,7 @@ void PlaneCache::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
   }
 }
 
-void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const std::vector<Int3>& blocks,
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
                     bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop) {
   if (blocks.empty()) return;
   const int g = ghost ? 1 : 0;
@@ -196,6 +196,9 @@ void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const 
     taps[b].ty = axisTaps(part, e, level, 1, ghost, sampling);
     taps[b].nx = e.samples[0] + 2 * g;
     taps[b].ny = e.samples[1] + 2 * g;
+    const auto ys = std::minmax_element(taps[b].ty.index.begin(), taps[b].ty.index.end());
+    taps[b].y0 = *ys.first;
+    taps[b].y1 = *ys.second;
     out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
   }
   const int64_t X = part.dims()[0];
@@ -221,7 +224,7 @@ void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const 
 std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk, bool ghost,
                                 LevelSampling sampling) {
   ArraySource src(volume, part.dims());
-  PlaneCache planes(src, part.dims());
+  PlaneReader planes(src, part.dims());
   std::vector<float> out;
   std::vector<std::vector<float>*> outs{&out};
   sampleBlockRow(part, planes, level, {ijk}, ghost, sampling, outs);
@@ -231,7 +234,7 @@ std::vector<float> extractBlock(const Partition& part, const float* volume, int 
 struct BlockRowReader::Impl {
   Impl(VolumeSource& s, const Partition& p) : part(p), planes(s, p.dims()) {}
   const Partition& part;
-  PlaneCache planes;
+  PlaneReader planes;
 };
 
 BlockRowReader::BlockRowReader(VolumeSource& source, const Partition& partition)

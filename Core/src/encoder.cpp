@@ -342,7 +342,7 @@ class LevelEncoder {
   WorkerPool pool_;
   WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
   BlockLoop sampleLoop_;
-  PlaneCache planes_;
+  PlaneReader planes_;
   std::vector<uint8_t> complexPrev_, complexCur_;
 };
 

@@ -14,9 +14,9 @@
 namespace afam {
 
 /// Reads listed z-planes of a source into a buffer, consecutive planes in one readSlab call.
-class PlaneCache {
+class PlaneReader {
  public:
-  PlaneCache(VolumeSource& src, Index3 dims);
+  PlaneReader(VolumeSource& src, Index3 dims);
   /// Planes zs (ascending, distinct) into buf, plane i at buf.data() + i * planeSize().
   void read(const std::vector<int64_t>& zs, std::vector<float>& buf);
   size_t planeSize() const { return plane_; }
@@ -38,7 +38,7 @@ using BlockLoop = std::function<void(int64_t count, const std::function<void(int
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).
-void sampleBlockRow(const Partition& part, PlaneCache& planes, int level, const std::vector<Int3>& blocks,
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
                     bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out,
                     const BlockLoop& loop = {});
 
@@ -49,7 +49,7 @@ std::vector<float> extractBlock(const Partition& part, const float* volume, int 
                                 bool ghost = false, LevelSampling sampling = LevelSampling::Point);
 
 /// Streams the micro-block samples of one z-row of blocks of a level from a source, reading only
-/// the planes needed (two cached). Used by the encoder, `afam verify --against` and tests.
+/// the planes needed (in chunks, see sampleBlockRow). Used by the encoder, `afam verify --against` and tests.
 class BlockRowReader {
  public:
   BlockRowReader(VolumeSource& source, const Partition& partition);

@@ -25,13 +25,24 @@ struct vtkAFAMCoreRenderer::Internals
   // unusable) why, so it is not probed again.
 #if defined(AFAM_HAVE_CUDA)
   std::shared_ptr<afam::GpuRenderer> Gpu;
+  std::shared_ptr<afam::GpuImageTarget> Target; // the caster's: where GPU frames leave the image
 #else
   std::shared_ptr<void> Gpu;
 #endif
+  float* DeviceImage = nullptr; // SetDeviceImage, handed to every new caster
+  size_t DeviceImageFloats = 0;
   std::string GpuUnusable;
   // The open file's damaged blocks, kept across renderer rebuilds: each is reported once per file.
   std::shared_ptr<afam::DamageLog> Damage;
   std::vector<std::string> Messages; // filled by the GPU caster, drained into each frame's stats
+
+  void DropGpu()
+  {
+    this->Gpu.reset();
+#if defined(AFAM_HAVE_CUDA)
+    this->Target.reset();
+#endif
+  }
 
   int64_t GpuUploads() const
   {
@@ -60,7 +71,7 @@ struct vtkAFAMCoreRenderer::Internals
 
   void InstallGpu(double budgetMB)
   {
-    this->Gpu.reset();
+    this->DropGpu();
 #if defined(AFAM_HAVE_CUDA)
     if (!this->GpuUnusable.empty())
     {
@@ -74,6 +85,9 @@ struct vtkAFAMCoreRenderer::Internals
     if (gpu)
     {
       this->Gpu = gpu.gpu;
+      this->Target = gpu.target;
+      this->Target->deviceRgba = this->DeviceImage;
+      this->Target->capacityFloats = this->DeviceImageFloats;
       return;
     }
     for (const std::string& m : this->Messages)
@@ -123,7 +137,7 @@ void vtkAFAMCoreRenderer::Open(const std::string& path)
 
 void vtkAFAMCoreRenderer::Close()
 {
-  this->Impl->Gpu.reset();
+  this->Impl->DropGpu();
   this->Impl->Renderer.reset(); // its prefetch thread stops before the file goes
   this->Impl->File.reset();
   this->Impl->Damage.reset();
@@ -160,7 +174,7 @@ void vtkAFAMCoreRenderer::Render(
   stats.RendererBuilt = false;
   if (!m.Renderer || !SameResources(resources, m.Resources) || wantGpu != m.GpuWanted)
   {
-    m.Gpu.reset();
+    m.DropGpu();
     m.Renderer.reset(); // the old cache and prefetch thread go before the new ones come
     m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);
     m.Resources = resources;
@@ -201,6 +215,34 @@ void vtkAFAMCoreRenderer::Render(
   {
     stats.DeviceMessages.push_back(m.GpuUnusable); // every CPU frame says why
   }
+}
+
+bool vtkAFAMCoreRenderer::GpuInUse() const
+{
+  return this->Impl->Gpu != nullptr;
+}
+
+void vtkAFAMCoreRenderer::SetDeviceImage(float* deviceRgba, size_t floats)
+{
+  Internals& m = *this->Impl;
+  m.DeviceImage = deviceRgba;
+  m.DeviceImageFloats = deviceRgba ? floats : 0;
+#if defined(AFAM_HAVE_CUDA)
+  if (m.Target)
+  {
+    m.Target->deviceRgba = m.DeviceImage;
+    m.Target->capacityFloats = m.DeviceImageFloats;
+  }
+#endif
+}
+
+bool vtkAFAMCoreRenderer::ImageOnDevice() const
+{
+#if defined(AFAM_HAVE_CUDA)
+  return this->Impl->Gpu && this->Impl->Target && this->Impl->Target->lastOnDevice;
+#else
+  return false;
+#endif
 }
 
 bool vtkAFAMCoreRenderer::HasCuda()

@@ -12,6 +12,7 @@
 #include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -78,6 +79,17 @@ public:
   /// afam::FileChangedError (the file changed on disk) the file is closed, and the next Open reads
   /// it as it is now: no block of the old file is drawn again.
   void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
+
+  /// True when frames are being cast on the GPU (a CUDA build, a usable GPU, the GPU asked for).
+  bool GpuInUse() const;
+  /// Where frames cast on the GPU leave their image: `deviceRgba` (device memory of `floats`
+  /// floats, premultiplied RGBA, row 0 = top; e.g. an OpenGL buffer mapped into CUDA) instead of
+  /// the host; nullptr: the host (default). Kept until changed; the caller keeps it valid during
+  /// Render.
+  void SetDeviceImage(float* deviceRgba, size_t floats);
+  /// True when the last Render left its image at the device image: its ImageRGBA then holds the
+  /// size only (rgba empty).
+  bool ImageOnDevice() const;
 
 private:
   struct Internals;

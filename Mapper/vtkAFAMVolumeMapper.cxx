@@ -3,6 +3,7 @@
 #include "vtkAFAMVolumeMapper.h"
 
 #include "vtkAFAMCoreRenderer.h"
+#include "vtkAFAMImageDraw.h"
 #include "vtkAFAMModelTree.h"
 
 #include "afam/file_identity.hpp"
@@ -38,6 +39,7 @@ vtkStandardNewMacro(vtkAFAMVolumeMapper);
 
 vtkAFAMVolumeMapper::vtkAFAMVolumeMapper()
   : Core(new vtkAFAMCoreRenderer)
+  , Draw(new vtkAFAMImageDraw)
 {
   // vtkVolume skips a mapper that has no input data object, so a mapper given only FileName
   // would never be asked to render: an empty multiblock stands in until an input is connected.
@@ -115,6 +117,11 @@ void vtkAFAMVolumeMapper::SetRenderDevice(int device)
 bool vtkAFAMVolumeMapper::HasCudaRenderer()
 {
   return vtkAFAMCoreRenderer::HasCuda();
+}
+
+void vtkAFAMVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
+{
+  this->Draw->ReleaseGraphicsResources(window);
 }
 
 double* vtkAFAMVolumeMapper::GetBounds()
@@ -213,21 +220,43 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   const auto depthStart = std::chrono::steady_clock::now();
   const bool depthRead = this->ReadDepthLimits(ren, frame);
   const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
+  auto* renWin = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
+  // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one.
+  size_t deviceFloats = 0;
+  float* deviceImage = this->GpuImageInterop && this->Core->GpuInUse()
+    ? this->Draw->MapDeviceImage(renWin, frame.CastWidth, frame.CastHeight, deviceFloats)
+    : nullptr;
+  this->Core->SetDeviceImage(deviceImage, deviceFloats);
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
-  if (!this->RenderCore(frame, image, stats))
+  const bool cast = this->RenderCore(frame, image, stats);
+  this->LastImageOnDevice = cast && this->Core->ImageOnDevice();
+  if (!this->LastImageOnDevice)
+  {
+    this->Draw->UnmapDeviceImage();
+  }
+  if (!cast)
   {
     return;
   }
-  if (image.width != frame.CastWidth || image.height != frame.CastHeight)
+  if (image.width != frame.CastWidth || image.height != frame.CastHeight ||
+    (!this->LastImageOnDevice && image.rgba.size() != 4 * static_cast<size_t>(image.width) * image.height))
   {
     vtkErrorMacro(<< "Core returned a " << image.width << "x" << image.height << " image for a "
                   << frame.CastWidth << "x" << frame.CastHeight << " request");
     return;
   }
   const auto drawStart = std::chrono::steady_clock::now();
-  this->DrawImage(vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow()), image);
+  if (this->LastImageOnDevice)
+  {
+    this->Draw->DrawDeviceImage(renWin, image.width, image.height);
+  }
+  else
+  {
+    this->Draw->DrawHostImage(renWin, image.width, image.height, image.rgba.data());
+  }
   const auto end = std::chrono::steady_clock::now();
+  this->LastInteropProblem = this->Draw->Problem();
   this->RecordStatistics(frame, stats);
   this->LastDepthReadTime = std::chrono::duration<double>(depthEnd - depthStart).count();
   this->LastDrawTime = std::chrono::duration<double>(end - drawStart).count();
@@ -424,29 +453,6 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
   return true;
 }
 
-void vtkAFAMVolumeMapper::DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image)
-{
-  // Core's row 0 is the top; OpenGL's is the bottom.
-  std::vector<float> flipped(image.rgba.size());
-  const size_t row = static_cast<size_t>(image.width) * 4;
-  for (int y = 0; y < image.height; ++y)
-  {
-    std::copy_n(&image.rgba[static_cast<size_t>(image.height - 1 - y) * row], row,
-      &flipped[static_cast<size_t>(y) * row]);
-  }
-  // Blend the premultiplied image over the viewport's content.
-  vtkOpenGLState* state = renWin->GetState();
-  vtkOpenGLState::ScopedglEnableDisable blendSaver(state, GL_BLEND);
-  vtkOpenGLState::ScopedglEnableDisable depthSaver(state, GL_DEPTH_TEST);
-  vtkOpenGLState::ScopedglBlendFuncSeparate blendFuncSaver(state);
-  vtkOpenGLState::ScopedglDepthMask depthMaskSaver(state);
-  state->vtkglEnable(GL_BLEND);
-  state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-  state->vtkglDisable(GL_DEPTH_TEST);
-  state->vtkglDepthMask(GL_FALSE);
-  renWin->DrawPixels(image.width, image.height, 4, VTK_FLOAT, flipped.data()); // to the viewport
-}
-
 namespace
 {
 std::string JoinSentences(const std::vector<std::string>& sentences)
@@ -552,6 +558,9 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastTotalTime: " << this->LastTotalTime << "\n";
   os << indent << "LastDepthReadTime: " << this->LastDepthReadTime << "\n";
   os << indent << "LastDrawTime: " << this->LastDrawTime << "\n";
+  os << indent << "GpuImageInterop: " << this->GpuImageInterop << "\n";
+  os << indent << "LastImageOnDevice: " << this->LastImageOnDevice << "\n";
+  os << indent << "LastInteropProblem: " << this->LastInteropProblem << "\n";
   os << indent << "LastGpuUploadTime: " << this->LastGpuUploadTime << "\n";
   os << indent << "LastGpuKernelTime: " << this->LastGpuKernelTime << "\n";
   os << indent << "LastGpuDownloadTime: " << this->LastGpuDownloadTime << "\n";

@@ -49,6 +49,7 @@
 #include <vector> // for std::vector
 
 class vtkAFAMCoreRenderer;
+class vtkAFAMImageDraw;
 class vtkOpenGLRenderWindow;
 class vtkVolumeProperty;
 struct vtkAFAMFrameStats;
@@ -179,11 +180,26 @@ public:
   vtkGetMacro(LastTotalTime, double);
   /// The last frame's host round trips through OpenGL, in seconds: reading the depth buffer for
   /// depth compositing (0 when off, or when the renderer holds nothing visible but volumes, so
-  /// that no opaque geometry can have written depth), and flipping the cast image and drawing it
-  /// into the viewport.
+  /// that no opaque geometry can have written depth), and drawing the cast image into the viewport
+  /// (its copy into a texture, from the host or from the GPU's buffer, and a quad).
   /// LastTotalTime holds them, LastRenderTime and LastCachingTime do not.
   vtkGetMacro(LastDepthReadTime, double);
   vtkGetMacro(LastDrawTime, double);
+  ///@{
+  /// Frames cast on the GPU reach the window through CUDA-OpenGL interop where the OpenGL allows
+  /// it (default on); off: they come back to the host and are uploaded (the fallback path, kept
+  /// for comparison and for drivers that misbehave).
+  vtkSetMacro(GpuImageInterop, bool);
+  vtkGetMacro(GpuImageInterop, bool);
+  vtkBooleanMacro(GpuImageInterop, bool);
+  ///@}
+  /// True when the last frame's image went from the GPU to the window without the host: CUDA
+  /// cast it into an OpenGL pixel buffer (CUDA-OpenGL interop), drawn from there (no download, no
+  /// upload; LastGpuDownloadTime 0). False for CPU frames, and where OpenGL cannot share buffers
+  /// with CUDA (e.g. Mesa): GetLastInteropProblem says why, found once, not tried again until the
+  /// window's graphics resources are released.
+  vtkGetMacro(LastImageOnDevice, bool);
+  const char* GetLastInteropProblem() { return this->LastInteropProblem.c_str(); }
   /// The GPU's own times for the last frame (CUDA events), in seconds: uploading the models not
   /// yet resident, ray casting, and copying the image back to the host (part of LastRenderTime);
   /// -1 when the frame was cast on the CPU.
@@ -222,7 +238,7 @@ public:
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
   double* GetBounds() override;
   using vtkVolumeMapper::GetBounds;
-  void ReleaseGraphicsResources(vtkWindow*) override {}
+  void ReleaseGraphicsResources(vtkWindow* window) override;
 
 protected:
   vtkAFAMVolumeMapper();
@@ -245,7 +261,6 @@ protected:
   /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);
   /// false when it was not read (depth compositing off, or nothing but volumes to draw depth).
   bool ReadDepthLimits(vtkRenderer* ren, Frame& frame);
-  void DrawImage(vtkOpenGLRenderWindow* renWin, const afam::ImageRGBA& image);
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;
@@ -279,6 +294,10 @@ protected:
   std::string LastOpenError; ///< reported once, until the error changes or the file opens
 
   std::unique_ptr<vtkAFAMCoreRenderer> Core;
+  std::unique_ptr<vtkAFAMImageDraw> Draw;
+  bool GpuImageInterop = true;
+  bool LastImageOnDevice = false;
+  std::string LastInteropProblem;
 
 private:
   vtkAFAMVolumeMapper(const vtkAFAMVolumeMapper&) = delete;

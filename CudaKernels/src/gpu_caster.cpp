@@ -37,15 +37,30 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
   }
   const int threads = renderer.resources().threads;
   auto warned = std::make_shared<bool>(false);
-  renderer.setRayCaster([gpu, threads, warned, report](const PreparedFrame& frame, ImageRGBA& image) {
-    image.resize(frame.view.camera.width, frame.view.camera.height);
+  std::shared_ptr<GpuImageTarget> target = result.target;
+  renderer.setRayCaster([gpu, threads, warned, report, target](const PreparedFrame& frame,
+                                                               ImageRGBA& image) {
+    const int w = frame.view.camera.width, h = frame.view.camera.height;
+    const size_t floats = size_t(w) * size_t(h) * 4;
     std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
+    const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
+    const bool onDevice = target->deviceRgba && floats <= target->capacityFloats;
+    target->lastOnDevice = false;
     try {
-      gpu->render(frame.view, keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr,
-                  image.rgba.data());
+      if (onDevice) {
+        gpu->renderToDevice(frame.view, slotKeys, target->deviceRgba);
+        image.width = w;
+        image.height = h;
+        image.rgba.clear();
+        target->lastOnDevice = true;
+      } else {
+        image.resize(w, h);
+        gpu->render(frame.view, slotKeys, image.rgba.data());
+      }
     } catch (const GpuOutOfMemory& e) {
       if (!*warned) report(std::string(e.what()) + "; this frame on the CPU");
       *warned = true;
+      image.resize(w, h);
       renderCpu(frame.view, image, threads);
     }
   });

@@ -317,30 +317,41 @@ const GpuModelPool& GpuRenderer::pool() const { return impl_->pool; }
 
 void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
                          GpuFrameTimes* times) {
+  cast(view, slotKeys, nullptr, rgba, times);
+}
+
+void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys,
+                                 float* deviceRgba, GpuFrameTimes* times) {
+  if (!deviceRgba) throw InvalidArgument("renderToDevice: no device image");
+  cast(view, slotKeys, deviceRgba, nullptr, times);
+}
+
+void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget,
+                       float* hostRgba, GpuFrameTimes* times) {
   Impl& m = *impl_;
   lastTimes_ = GpuFrameTimes{};
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);
-  if (pixels > 0) m.reserveImage(pixels);
+  if (pixels > 0 && !deviceTarget) m.reserveImage(pixels);
+  float* target = deviceTarget ? deviceTarget : reinterpret_cast<float*>(m.deviceImage);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
   GpuFrameTimes t;
   const FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[1], m.stream));
-  if (poison_)
-    AFAM_CUDA_CHECK(cudaMemsetAsync(m.deviceImage, 0xFF, pixels * sizeof(float4), m.stream));
+  if (poison_) AFAM_CUDA_CHECK(cudaMemsetAsync(target, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
   if (dsTextures_ && view.blendMode == kBlendComposite)  // the texture kernel composites only
-    kernelInfo_ = kernels_texture::launchDsTexture(
-        view.shading != 0, d, m.textureHandles(view, slotKeys),
-        reinterpret_cast<float*>(m.deviceImage), nullptr, m.stream, true);
+    kernelInfo_ = kernels_texture::launchDsTexture(view.shading != 0, d,
+                                                   m.textureHandles(view, slotKeys), target,
+                                                   nullptr, m.stream, true);
   else
-    kernelInfo_ = launchFull(mode_, view.shading != 0, p, d,
-                             reinterpret_cast<float*>(m.deviceImage), m.stream, true, minBlocks_);
+    kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, target, m.stream, true, minBlocks_);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[2], m.stream));
-  AFAM_CUDA_CHECK(cudaMemcpyAsync(m.hostImage, m.deviceImage, pixels * sizeof(float4),
-                                  cudaMemcpyDeviceToHost, m.stream));
+  if (hostRgba)  // else the image stays where the caller's device pointer says
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(m.hostImage, m.deviceImage, pixels * sizeof(float4),
+                                    cudaMemcpyDeviceToHost, m.stream));
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[3], m.stream));
   AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[3]));
-  std::memcpy(rgba, m.hostImage, pixels * sizeof(float4));
+  if (hostRgba) std::memcpy(hostRgba, m.hostImage, pixels * sizeof(float4));
   t.uploadMs = elapsed(m.events[0], m.events[1]);
   t.kernelMs = elapsed(m.events[1], m.events[2]);
   t.downloadMs = elapsed(m.events[2], m.events[3]);

@@ -2,6 +2,9 @@
 // Editing the transfer function, shading and sample distance with the GPU caster installed keeps
 // the RAM cache and the GPU model pool: after the first frame, every edit renders with no cache
 // miss and no upload, and each edited frame still equals the CPU's image of the same settings.
+// A frame the caster leaves in device memory (GpuImageTarget, as the VTK mapper's OpenGL buffer)
+// holds the same image as one copied back to the host.
+#include <cuda_runtime_api.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -70,6 +73,54 @@ TEST(GpuFrameEdits, EditsKeepTheCacheAndTheGpuPool) {
     EXPECT_EQ(caster.gpu->pool().stats().uploads, uploads) << "edit " << step;
     EXPECT_LE(d, 2.0 / 255.0) << "edit " << step;
   }
+}
+
+TEST(GpuFrameEdits, ImageLeftOnTheDeviceEqualsTheHostImage) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 2, 4, 1e-3);
+  const double lo = file->header().valueMin, hi = file->header().valueMax;
+  FrameSettings s;
+  s.hasTransferFunction = true;
+  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
+  s.sampleDistance = 0.01f;
+  Renderer renderer(file, RendererResources{}, s);
+  GpuCaster caster = installGpuCaster(renderer, size_t(64) << 20, [](const std::string&) {});
+  ASSERT_TRUE(caster);
+  const Camera c = Camera::lookAt({0.9, 0.8, 0.7}, {0, 0, 0}, {0, 0, 1}, 60, 120, 90);
+  FrameStats st;
+  const ImageRGBA host = renderer.renderFrame(c, st);
+  ASSERT_FALSE(caster.target->lastOnDevice);
+
+  const size_t floats = size_t(120) * 90 * 4;
+  float* device = nullptr;
+  ASSERT_EQ(cudaMalloc(reinterpret_cast<void**>(&device), floats * sizeof(float)), cudaSuccess);
+  caster.target->deviceRgba = device;
+  caster.target->capacityFloats = floats;
+  const ImageRGBA kept = renderer.renderFrame(c, st);
+  EXPECT_TRUE(caster.target->lastOnDevice);
+  EXPECT_EQ(kept.width, 120);
+  EXPECT_EQ(kept.height, 90);
+  EXPECT_TRUE(kept.rgba.empty());
+  EXPECT_EQ(caster.gpu->lastTimes().downloadMs, 0.0);
+  std::vector<float> back(floats);
+  ASSERT_EQ(cudaMemcpy(back.data(), device, floats * sizeof(float), cudaMemcpyDeviceToHost), cudaSuccess);
+  size_t differing = 0, opaque = 0;
+  for (size_t i = 0; i < floats; ++i) {
+    differing += back[i] != host.rgba[i] ? 1 : 0;
+    opaque += (i % 4 == 3 && host.rgba[i] > 0.01f) ? 1 : 0;
+  }
+  std::printf("[gpu-target] 120x90 frame on the device: %zu of %zu floats differ from the host image, %zu pixels drawn\n",
+              differing, floats, opaque);
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(opaque, 1000u);
+
+  // A buffer too small for the frame: the image comes to the host instead.
+  caster.target->capacityFloats = floats / 2;
+  const ImageRGBA fallback = renderer.renderFrame(c, st);
+  EXPECT_FALSE(caster.target->lastOnDevice);
+  EXPECT_EQ(fallback.rgba, host.rgba);
+  ASSERT_EQ(cudaFree(device), cudaSuccess);
 }
 
 }  // namespace

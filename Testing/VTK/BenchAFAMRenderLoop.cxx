@@ -3,7 +3,8 @@
 // Frame times of vtkAFAMVolumeMapper inside a real VTK render loop, on the views `afam replay`
 // renders, so that the two can be set side by side on the same file, views and image size.
 //   BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N] [--frames K]
-//     [--device cpu|gpu] [--require-gpu] [--cold] [--cache-mb MB] [--csv OUT.csv]
+//     [--device cpu|gpu] [--require-gpu] [--require-interop] [--host-draw] [--offscreen] [--cold]
+//     [--cache-mb MB] [--csv OUT.csv]
 // Each point of view becomes the VTK camera that casts the same rays as Core's Camera::fromPose
 // (exact for cubic volumes); the transfer function is Core's preset over the file's value range,
 // the LOD the paper's distance bands, sample distance 0.005 and opacity unit 0.01 in the
@@ -11,10 +12,14 @@
 // --cold evicts the file from the OS page cache before every frame (`afam replay --cold`).
 // Per frame: the whole window->Render() (with glFinish), the mapper's own time, its ray casting
 // ("kernel": upload, cast and image readback on the GPU, as the host sees it), caching, the
-// OpenGL round trips (depth read, image flip and draw), and the GPU's own upload, kernel and
-// download times (CUDA events; -1 on the CPU). "copies" = download + depth read + flip and draw.
+// OpenGL round trips (depth read, the image's draw), and the GPU's own upload, kernel and
+// download times (CUDA events; -1 on the CPU). "copies" = download + depth read + draw.
 // Medians last, in one line of name=value pairs.
 // --require-gpu: exit status 1 unless every frame was cast on the GPU.
+// --require-interop: exit status 1 unless every frame after the first went from the GPU to the
+// window through CUDA-OpenGL interop. --host-draw: the mapper's GpuImageInterop off (the image
+// comes back to the host and is uploaded). --offscreen: the window renders off screen (no swap to
+// the X server).
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
 
@@ -52,7 +57,8 @@ struct Options
 {
   std::string File, Trajectory, Csv;
   int Orbit = 0, Size = 512, Frames = 0;
-  bool Gpu = false, RequireGpu = false, Cold = false;
+  bool Gpu = false, RequireGpu = false, RequireInterop = false, HostDraw = false, Offscreen = false;
+  bool Cold = false;
   double CacheMB = 512;
 };
 
@@ -70,6 +76,9 @@ bool Parse(int argc, char* argv[], Options& o)
     else if (a == "--cache-mb" && hasValue) o.CacheMB = std::atof(argv[++i]);
     else if (a == "--csv" && hasValue) o.Csv = argv[++i];
     else if (a == "--require-gpu") o.RequireGpu = true;
+    else if (a == "--require-interop") o.RequireInterop = true;
+    else if (a == "--host-draw") o.HostDraw = true;
+    else if (a == "--offscreen") o.Offscreen = true;
     else if (a == "--cold") o.Cold = true;
     else if (a[0] != '-' && o.File.empty()) o.File = a;
     else
@@ -81,7 +90,8 @@ bool Parse(int argc, char* argv[], Options& o)
   if (o.File.empty() || (o.Trajectory.empty() == (o.Orbit < 1)) || o.Size < 16 || o.Size > 8192)
   {
     std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
-                 "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--cold] "
+                 "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--require-interop] "
+                 "[--host-draw] [--offscreen] [--cold] "
                  "[--cache-mb MB] [--csv OUT.csv]\n";
     return false;
   }
@@ -147,7 +157,7 @@ struct FrameTimes
 {
   double RenderCall, Mapper, Kernel, Caching, DepthRead, Draw;
   double GpuUpload, GpuKernel, GpuDownload; // CUDA events; -1 on the CPU
-  bool Gpu;
+  bool Gpu, Interop;
   long long Visible, Misses;
 };
 }
@@ -184,6 +194,7 @@ int main(int argc, char* argv[])
   mapper->SetLodPolicyToDistanceBands();
   mapper->SetCacheBudgetMB(o.CacheMB);
   mapper->SetRenderDevice(o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
+  mapper->SetGpuImageInterop(!o.HostDraw);
   const double* b = mapper->GetBounds();
   const double c[3] = { 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]) };
   const double h[3] = { 0.5 * (b[1] - b[0]), 0.5 * (b[3] - b[2]), 0.5 * (b[5] - b[4]) };
@@ -203,6 +214,7 @@ int main(int argc, char* argv[])
   vtkNew<vtkRenderWindow> window;
   window->SetSize(o.Size, o.Size);
   window->SetMultiSamples(0);
+  window->SetOffScreenRendering(o.Offscreen ? 1 : 0);
   window->AddRenderer(renderer);
 
   std::ofstream csv;
@@ -210,7 +222,7 @@ int main(int argc, char* argv[])
   {
     csv.open(o.Csv);
     csv << "pov,render_call_ms,mapper_ms,kernel_ms,caching_ms,depth_read_ms,draw_ms,"
-           "gpu_upload_ms,gpu_kernel_ms,gpu_download_ms,gpu,visible,misses\n";
+           "gpu_upload_ms,gpu_kernel_ms,gpu_download_ms,gpu,interop,visible,misses\n";
   }
   std::vector<FrameTimes> frames;
   for (size_t i = 0; i < poses.size(); ++i)
@@ -230,7 +242,7 @@ int main(int argc, char* argv[])
       1e3 * mapper->GetLastCachingTime(), 1e3 * mapper->GetLastDepthReadTime(),
       1e3 * mapper->GetLastDrawTime(), Milliseconds(mapper->GetLastGpuUploadTime()),
       Milliseconds(mapper->GetLastGpuKernelTime()), Milliseconds(mapper->GetLastGpuDownloadTime()),
-      mapper->GetLastUsedGpu(),
+      mapper->GetLastUsedGpu(), mapper->GetLastImageOnDevice(),
       static_cast<long long>(mapper->GetLastVisibleBlocks()),
       static_cast<long long>(mapper->GetLastCacheMisses()) });
     const FrameTimes& f = frames.back();
@@ -238,7 +250,7 @@ int main(int argc, char* argv[])
     {
       csv << i << ',' << f.RenderCall << ',' << f.Mapper << ',' << f.Kernel << ',' << f.Caching
           << ',' << f.DepthRead << ',' << f.Draw << ',' << f.GpuUpload << ',' << f.GpuKernel
-          << ',' << f.GpuDownload << ',' << f.Gpu << ',' << f.Visible << ',' << f.Misses << '\n';
+          << ',' << f.GpuDownload << ',' << f.Gpu << ',' << f.Interop << ',' << f.Visible << ',' << f.Misses << '\n';
     }
   }
   // Which OpenGL the window got (Mesa's llvmpipe or the GPU's own driver).
@@ -261,11 +273,12 @@ int main(int argc, char* argv[])
   // Medians over every frame but the first (context, pool and cache set-up), which is reported
   // on its own.
   std::map<std::string, std::vector<double>> series;
-  size_t onGpu = 0;
+  size_t onGpu = 0, interop = 0;
   for (size_t i = 0; i < frames.size(); ++i)
   {
     const FrameTimes& f = frames[i];
     onGpu += f.Gpu ? 1 : 0;
+    interop += f.Interop ? 1 : 0;
     if (i == 0 && frames.size() > 1)
     {
       continue;
@@ -274,7 +287,7 @@ int main(int argc, char* argv[])
     series["mapper"].push_back(f.Mapper);
     series["kernel"].push_back(f.Kernel);
     series["caching"].push_back(f.Caching);
-    // The image's and depth's host round trip: copy back from the GPU, flip and draw, depth read.
+    // The image's and depth's trips: copy back from the GPU (0 with interop), draw, depth read.
     series["copies"].push_back(std::max(0.0, f.GpuDownload) + f.DepthRead + f.Draw);
     series["gpu_upload"].push_back(f.GpuUpload);
     series["gpu_kernel"].push_back(f.GpuKernel);
@@ -283,10 +296,11 @@ int main(int argc, char* argv[])
     series["draw"].push_back(f.Draw);
   }
   const double renderCall = Median(series["render_call"]);
-  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d gpu_frames=%zu "
-              "first_frame_ms=%.3f message='%s'\n",
-    o.File.c_str(), frames.size(), o.Size, o.Size, o.Gpu ? "gpu" : "cpu", o.Cold ? 1 : 0, onGpu,
-    frames[0].RenderCall, mapper->GetLastDeviceMessage());
+  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d offscreen=%d "
+              "gpu_frames=%zu interop_frames=%zu first_frame_ms=%.3f message='%s' interop='%s'\n",
+    o.File.c_str(), frames.size(), o.Size, o.Size, o.Gpu ? "gpu" : "cpu", o.Cold ? 1 : 0,
+    o.Offscreen ? 1 : 0, onGpu, interop, frames[0].RenderCall, mapper->GetLastDeviceMessage(),
+    mapper->GetLastInteropProblem());
   std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
               "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "
               "median_draw_ms=%.3f median_gpu_upload_ms=%.3f median_gpu_kernel_ms=%.3f "
@@ -299,6 +313,14 @@ int main(int argc, char* argv[])
   {
     std::cerr << "BenchAFAMRenderLoop: --require-gpu and only " << onGpu << " of " << frames.size()
               << " frames were cast on the GPU: " << mapper->GetLastDeviceMessage() << "\n";
+    return 1;
+  }
+  // The first frame builds the renderer (and draws through the host); every later one must not.
+  if (o.RequireInterop && (frames.size() < 2 || interop + 1 < frames.size()))
+  {
+    std::cerr << "BenchAFAMRenderLoop: --require-interop and only " << interop << " of "
+              << frames.size() << " frames went through CUDA-OpenGL interop: "
+              << mapper->GetLastInteropProblem() << "\n";
     return 1;
   }
   return 0;

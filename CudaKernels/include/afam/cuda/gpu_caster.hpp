@@ -16,10 +16,21 @@ namespace afam {
 
 class GpuRenderer;
 
+/// Where the caster leaves a frame's image. By default in the frame's ImageRGBA on the host. A
+/// front end that can draw from device memory (the VTK mapper: an OpenGL buffer mapped into CUDA)
+/// sets deviceRgba before a frame; a frame cast on the GPU then stays there, and its ImageRGBA
+/// holds the size only (rgba empty). A frame cast on the CPU (pool too small) fills the ImageRGBA.
+struct GpuImageTarget {
+  float* deviceRgba = nullptr;  ///< device memory for the next frames; null: the host
+  size_t capacityFloats = 0;    ///< floats at deviceRgba (a larger frame goes to the host)
+  bool lastOnDevice = false;    ///< set by every frame: its image is at deviceRgba
+};
+
 /// What installGpuCaster did.
 struct GpuCaster {
   std::shared_ptr<GpuRenderer> gpu;  ///< keep alive while the Renderer is used; null: CPU
   std::string description;           ///< "NVIDIA H200 (sm_90, ...)" when installed
+  std::shared_ptr<GpuImageTarget> target = std::make_shared<GpuImageTarget>();
   explicit operator bool() const { return gpu != nullptr; }
 };
 

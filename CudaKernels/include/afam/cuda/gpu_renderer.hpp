@@ -62,6 +62,11 @@ class GpuRenderer {
   /// extent and size). Throws GpuOutOfMemory when the frame's models exceed the pool budget.
   void render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
               GpuFrameTimes* times = nullptr);
+  /// As render(), but the image is cast into `deviceRgba` (device memory of width*height*4
+  /// floats, e.g. an OpenGL buffer mapped into CUDA) and left there: nothing comes back to the
+  /// host (downloadMs 0). The caller keeps `deviceRgba` valid until the call returns.
+  void renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
+                      GpuFrameTimes* times = nullptr);
 
   /// Benchmark helper: uploads the frame, then launches `kind` `repetitions` times (after one
   /// warm-up) and returns each launch's time.
@@ -95,6 +100,10 @@ class GpuRenderer {
   static uint64_t slotFloats(const FrameSlot& slot);
 
  private:
+  /// Casts into deviceTarget (or the renderer's own device image when null), then copies the
+  /// image to hostRgba when given.
+  void cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget, float* hostRgba,
+            GpuFrameTimes* times);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;

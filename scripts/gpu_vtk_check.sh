@@ -176,15 +176,17 @@ table="$work/table.md"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } >"$table"
 # Regimes: warm and cold through CUDA-OpenGL interop (required with NVIDIA's OpenGL), then warm
-# with the image through the host (the fallback, for comparison), and warm off screen (no swap to
-# the X server).
+# with the image through the host (the fallback, for comparison), warm off screen (no swap to
+# the X server), and warm with an opaque plane through the volume (the depth buffer read each frame;
+# the replay beside it has no plane).
 interop=(); [ "${AFAM_VTK_GLX:-nvidia}" = nvidia ] && interop=(--require-interop)
 for size in ${AFAM_VTK_SIZES:-512 1024}; do
-  for regime in warm cold host offscreen; do
+  for regime in warm cold host offscreen plane; do
     cold=(); [ $regime = cold ] && cold=(--cold)
     how=("${interop[@]}"); path="interop"
     [ $regime = host ] && { how=(--host-draw); path="host (download, upload)"; }
     [ $regime = offscreen ] && { how+=(--offscreen); path="interop, off screen"; }
+    [ $regime = plane ] && { how+=(--plane); path="interop, opaque plane (depth read)"; }
     tag="${size}_$regime"
     "$bin/BenchAFAMRenderLoop" "$file" --trajectory "$traj" --size "$size" --device gpu --require-gpu \
       "${how[@]}" --cache-mb "$cache_mb" "${cold[@]}" "${frames[@]}" --csv "$work/vtk_$tag.csv" >"$work/vtk_$tag.log" 2>&1
@@ -203,7 +205,7 @@ for size in ${AFAM_VTK_SIZES:-512 1024}; do
     if [ $regime = cold ]; then bar="<= 1.3x: $(awk -v x="$ratio" 'BEGIN { print (x != "?" && x <= 1.3) ? "met" : "NOT met" }')"
     elif [ "$size" = 1024 ] && [ $regime = warm ]; then bar="<= 1.2x and >= 30 fps: $(awk -v x="$ratio" -v f="$(value fps "$v")" 'BEGIN { print (x != "?" && x <= 1.2 && f >= 30) ? "met" : "NOT met" }')"
     fi
-    [ $regime = host ] || [ $regime = offscreen ] && regime="warm"
+    [ $regime = cold ] || regime="warm"
     path="$path, $(value interop_frames "$h")/$(value povs "$h") frames"
     echo "| ${size}^2 | $regime | $path | ${vc:-?} | $(value median_mapper_ms "$v") | $(value median_kernel_ms "$v") | $(value median_gpu_kernel_ms "$v") | $(value median_caching_ms "$v") | $(value median_copies_ms "$v") ($(value median_gpu_download_ms "$v") + $(value median_depth_read_ms "$v") + $(value median_draw_ms "$v")) | $(value fps "$v") | $(value first_frame_ms "$h") | ${r:-?} | $ratio | $bar |" >>"$table"
   done

@@ -4,7 +4,7 @@
 // renders, so that the two can be set side by side on the same file, views and image size.
 //   BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N] [--frames K]
 //     [--device cpu|gpu] [--require-gpu] [--require-interop] [--host-draw] [--offscreen] [--cold]
-//     [--cache-mb MB] [--csv OUT.csv]
+//     [--plane] [--cache-mb MB] [--csv OUT.csv]
 // Each point of view becomes the VTK camera that casts the same rays as Core's Camera::fromPose
 // (exact for cubic volumes); the transfer function is Core's preset over the file's value range,
 // the LOD the paper's distance bands, sample distance 0.005 and opacity unit 0.01 in the
@@ -19,7 +19,8 @@
 // --require-interop: exit status 1 unless every frame after the first went from the GPU to the
 // window through CUDA-OpenGL interop. --host-draw: the mapper's GpuImageInterop off (the image
 // comes back to the host and is uploaded). --offscreen: the window renders off screen (no swap to
-// the X server).
+// the X server). --plane: an opaque plane through the volume's centre (normal z), so that every
+// frame reads the depth buffer for depth compositing.
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
 
@@ -28,10 +29,13 @@
 #include "afam/trajectory_gen.hpp"
 #include "afam/transfer_function.hpp"
 
+#include "vtkActor.h"
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkNew.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkPlaneSource.h"
+#include "vtkPolyDataMapper.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkVolume.h"
@@ -58,7 +62,7 @@ struct Options
   std::string File, Trajectory, Csv;
   int Orbit = 0, Size = 512, Frames = 0;
   bool Gpu = false, RequireGpu = false, RequireInterop = false, HostDraw = false, Offscreen = false;
-  bool Cold = false;
+  bool Cold = false, Plane = false;
   double CacheMB = 512;
 };
 
@@ -79,6 +83,7 @@ bool Parse(int argc, char* argv[], Options& o)
     else if (a == "--require-interop") o.RequireInterop = true;
     else if (a == "--host-draw") o.HostDraw = true;
     else if (a == "--offscreen") o.Offscreen = true;
+    else if (a == "--plane") o.Plane = true;
     else if (a == "--cold") o.Cold = true;
     else if (a[0] != '-' && o.File.empty()) o.File = a;
     else
@@ -91,7 +96,7 @@ bool Parse(int argc, char* argv[], Options& o)
   {
     std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
                  "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--require-interop] "
-                 "[--host-draw] [--offscreen] [--cold] "
+                 "[--host-draw] [--offscreen] [--cold] [--plane] "
                  "[--cache-mb MB] [--csv OUT.csv]\n";
     return false;
   }
@@ -211,6 +216,18 @@ int main(int argc, char* argv[])
     file->header().valueMax, unit);
   vtkNew<vtkRenderer> renderer;
   renderer->AddVolume(volume);
+  vtkNew<vtkPlaneSource> plane;
+  plane->SetOrigin(b[0], b[2], c[2]);
+  plane->SetPoint1(b[1], b[2], c[2]);
+  plane->SetPoint2(b[0], b[3], c[2]);
+  vtkNew<vtkPolyDataMapper> planeMapper;
+  planeMapper->SetInputConnection(plane->GetOutputPort());
+  vtkNew<vtkActor> planeActor;
+  planeActor->SetMapper(planeMapper);
+  if (o.Plane)
+  {
+    renderer->AddActor(planeActor);
+  }
   vtkNew<vtkRenderWindow> window;
   window->SetSize(o.Size, o.Size);
   window->SetMultiSamples(0);
@@ -296,10 +313,10 @@ int main(int argc, char* argv[])
     series["draw"].push_back(f.Draw);
   }
   const double renderCall = Median(series["render_call"]);
-  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d offscreen=%d "
+  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d offscreen=%d plane=%d "
               "gpu_frames=%zu interop_frames=%zu first_frame_ms=%.3f message='%s' interop='%s'\n",
     o.File.c_str(), frames.size(), o.Size, o.Size, o.Gpu ? "gpu" : "cpu", o.Cold ? 1 : 0,
-    o.Offscreen ? 1 : 0, onGpu, interop, frames[0].RenderCall, mapper->GetLastDeviceMessage(),
+    o.Offscreen ? 1 : 0, o.Plane ? 1 : 0, onGpu, interop, frames[0].RenderCall, mapper->GetLastDeviceMessage(),
     mapper->GetLastInteropProblem());
   std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
               "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "

@@ -29,8 +29,23 @@ struct vtkAFAMCoreRenderer::Internals
 #else
   std::shared_ptr<void> Gpu;
 #endif
-  float* DeviceImage = nullptr; // SetDeviceImage, handed to every new caster
+  float* DeviceImage = nullptr; // SetDeviceImage and SetDeviceDepth, handed to every new caster
   size_t DeviceImageFloats = 0;
+  const float* DeviceDepth = nullptr;
+  afam::DepthToRay DepthToRay;
+
+  void PassTargets()
+  {
+#if defined(AFAM_HAVE_CUDA)
+    if (this->Target)
+    {
+      this->Target->deviceRgba = this->DeviceImage;
+      this->Target->capacityFloats = this->DeviceImageFloats;
+      this->Target->depth.depth = this->DeviceDepth;
+      this->Target->depth.toRay = this->DepthToRay;
+    }
+#endif
+  }
   std::string GpuUnusable;
   // The open file's damaged blocks, kept across renderer rebuilds: each is reported once per file.
   std::shared_ptr<afam::DamageLog> Damage;
@@ -86,8 +101,7 @@ struct vtkAFAMCoreRenderer::Internals
     {
       this->Gpu = gpu.gpu;
       this->Target = gpu.target;
-      this->Target->deviceRgba = this->DeviceImage;
-      this->Target->capacityFloats = this->DeviceImageFloats;
+      this->PassTargets();
       return;
     }
     for (const std::string& m : this->Messages)
@@ -227,12 +241,23 @@ void vtkAFAMCoreRenderer::SetDeviceImage(float* deviceRgba, size_t floats)
   Internals& m = *this->Impl;
   m.DeviceImage = deviceRgba;
   m.DeviceImageFloats = deviceRgba ? floats : 0;
+  m.PassTargets();
+}
+
+void vtkAFAMCoreRenderer::SetDeviceDepth(const float* depth, const afam::DepthToRay& toRay)
+{
+  Internals& m = *this->Impl;
+  m.DeviceDepth = depth;
+  m.DepthToRay = toRay;
+  m.PassTargets();
+}
+
+int64_t vtkAFAMCoreRenderer::DeviceDepthLimited() const
+{
 #if defined(AFAM_HAVE_CUDA)
-  if (m.Target)
-  {
-    m.Target->deviceRgba = m.DeviceImage;
-    m.Target->capacityFloats = m.DeviceImageFloats;
-  }
+  return this->Impl->Gpu && this->Impl->Target ? this->Impl->Target->lastDepthLimited : -1;
+#else
+  return -1;
 #endif
 }
 

@@ -9,6 +9,7 @@
 #define vtkAFAMCoreRenderer_h
 
 #include "afam/camera.hpp"
+#include "afam/depth_limits.hpp"
 #include "afam/frame_settings.hpp"
 #include "afam/image.hpp"
 
@@ -90,6 +91,12 @@ public:
   /// True when the last Render left its image at the device image: its ImageRGBA then holds the
   /// size only (rgba empty).
   bool ImageOnDevice() const;
+  /// A depth buffer in device memory (`depth`: toRay.tileWidth * toRay.tileHeight floats, row 0 at
+  /// the bottom; nullptr: none) whose opaque geometry stops the rays of frames cast on the GPU,
+  /// the limits computed there (in place of the request's MaxDistance). Kept until changed.
+  void SetDeviceDepth(const float* depth, const afam::DepthToRay& toRay);
+  /// Pixels the device depth limited in the last frame; -1 when it had none.
+  int64_t DeviceDepthLimited() const;
 
 private:
   struct Internals;

@@ -10,6 +10,8 @@
 #ifndef vtkAFAMImageDraw_h
 #define vtkAFAMImageDraw_h
 
+#include "vtkAFAMCudaGLBuffer.h"
+
 #include <cstddef>
 #include <string>
 
@@ -38,7 +40,7 @@ public:
   void DrawHostImage(vtkOpenGLRenderWindow* window, int width, int height, const float* rgba);
 
   /// Why interop is unavailable; empty while it is (or while it has not been tried).
-  const std::string& Problem() const { return this->InteropProblem; }
+  const std::string& Problem() const { return this->ImageBuffer.Problem(); }
   /// Frees the texture, the pixel buffer and its CUDA registration (the window's context goes).
   void ReleaseGraphicsResources(vtkWindow* window);
 
@@ -47,16 +49,9 @@ private:
   void PrepareTexture(vtkOpenGLRenderWindow* window, int width, int height);
   /// Draws the texture, rows flipped, blended (premultiplied alpha) over the viewport.
   void DrawTexture(vtkOpenGLRenderWindow* window);
-  bool EnsurePixelBuffer(size_t floats);
-  void FreePixelBuffer();
-  void Fail(const std::string& problem);
 
   vtkTextureObject* Texture = nullptr;
-  unsigned int PixelBuffer = 0; // OpenGL name of the pixel buffer (0: none)
-  size_t PixelBufferFloats = 0;
-  void* Resource = nullptr; // cudaGraphicsResource* of the pixel buffer
-  bool Mapped = false;
-  std::string InteropProblem;
+  vtkAFAMCudaGLBuffer ImageBuffer{ vtkAFAMCudaGLBuffer::CUDA_WRITES };
 };
 
 #endif

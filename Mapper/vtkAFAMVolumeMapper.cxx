@@ -3,6 +3,7 @@
 #include "vtkAFAMVolumeMapper.h"
 
 #include "vtkAFAMCoreRenderer.h"
+#include "vtkAFAMCudaGLBuffer.h"
 #include "vtkAFAMImageDraw.h"
 #include "vtkAFAMModelTree.h"
 
@@ -40,6 +41,7 @@ vtkStandardNewMacro(vtkAFAMVolumeMapper);
 vtkAFAMVolumeMapper::vtkAFAMVolumeMapper()
   : Core(new vtkAFAMCoreRenderer)
   , Draw(new vtkAFAMImageDraw)
+  , DepthBuffer(new vtkAFAMCudaGLBuffer(vtkAFAMCudaGLBuffer::CUDA_READS))
 {
   // vtkVolume skips a mapper that has no input data object, so a mapper given only FileName
   // would never be asked to render: an empty multiblock stands in until an input is connected.
@@ -122,6 +124,7 @@ bool vtkAFAMVolumeMapper::HasCudaRenderer()
 void vtkAFAMVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   this->Draw->ReleaseGraphicsResources(window);
+  this->DepthBuffer->Free();
 }
 
 double* vtkAFAMVolumeMapper::GetBounds()
@@ -164,6 +167,7 @@ struct vtkAFAMVolumeMapper::Frame
   double Scale = 1;
   afam::FrameMap Map;
   std::vector<float> Limits;
+  bool DepthOnGpu = false; // the depth buffer may go to CUDA (the image does)
   vtkAFAMFrameRequest Request;
 };
 
@@ -217,19 +221,27 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   this->ReadFrameSettings(vol->GetProperty(), frame);
-  const auto depthStart = std::chrono::steady_clock::now();
-  const bool depthRead = this->ReadDepthLimits(ren, frame);
-  const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
   auto* renWin = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
-  // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one.
+  // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one, and
+  // then take the depth buffer the same way (ReadDepthLimits).
   size_t deviceFloats = 0;
   float* deviceImage = this->GpuImageInterop && this->Core->GpuInUse()
     ? this->Draw->MapDeviceImage(renWin, frame.CastWidth, frame.CastHeight, deviceFloats)
     : nullptr;
   this->Core->SetDeviceImage(deviceImage, deviceFloats);
+  frame.DepthOnGpu = deviceImage != nullptr;
+  this->Core->SetDeviceDepth(nullptr, afam::DepthToRay{});
+  const auto depthStart = std::chrono::steady_clock::now();
+  const bool depthRead = this->ReadDepthLimits(ren, frame);
+  const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
   const bool cast = this->RenderCore(frame, image, stats);
+  this->DepthBuffer->Unmap();
+  if (frame.DepthOnGpu && this->Core->DeviceDepthLimited() >= 0)
+  {
+    this->LastDepthLimitedPixels = this->Core->DeviceDepthLimited();
+  }
   this->LastImageOnDevice = cast && this->Core->ImageOnDevice();
   if (!this->LastImageOnDevice)
   {
@@ -430,6 +442,16 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
   }
   int x0 = 0, y0 = 0, w = 0, h = 0;
   ren->GetTiledSizeAndOrigin(&w, &h, &x0, &y0);
+  vtkNew<vtkMatrix4x4> inverse;
+  vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
+                         ren->GetTiledAspectRatio(), -1, 1),
+    inverse);
+  std::array<double, 16> ndcToWorld;
+  std::copy_n(inverse->GetData(), 16, ndcToWorld.begin());
+  if (frame.DepthOnGpu && this->ReadDepthOnGpu(ren, x0, y0, w, h, ndcToWorld, frame))
+  {
+    return true;
+  }
   std::vector<float> depth(static_cast<size_t>(w) * static_cast<size_t>(h));
   if (ren->GetRenderWindow()->GetZbufferData(x0, y0, x0 + w - 1, y0 + h - 1, depth.data()) !=
     VTK_OK)
@@ -437,18 +459,45 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     vtkWarningMacro(<< "cannot read the z-buffer; the volume is blended over opaque geometry");
     return true;
   }
-  vtkNew<vtkMatrix4x4> inverse;
-  vtkMatrix4x4::Invert(ren->GetActiveCamera()->GetCompositeProjectionTransformMatrix(
-                         ren->GetTiledAspectRatio(), -1, 1),
-    inverse);
-  std::array<double, 16> ndcToWorld;
-  std::copy_n(inverse->GetData(), 16, ndcToWorld.begin());
   const int64_t limited = afam::rayLengthsFromDepth(
     depth.data(), w, h, ndcToWorld, frame.Map, frame.Request.Camera, frame.Limits);
   if (limited > 0)
   {
     frame.Request.MaxDistance = frame.Limits.data();
     this->LastDepthLimitedPixels = limited;
+  }
+  return true;
+}
+
+bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w, int h,
+  const std::array<double, 16>& ndcToWorld, Frame& frame)
+{
+  // The z-buffer is packed into a buffer that CUDA then reads: glReadPixels with a pixel-pack
+  // buffer bound writes into it (VTK's GetZbufferData binds the right framebuffer and resolves
+  // multisampling; its pointer is then an offset into the buffer).
+  if (!this->DepthBuffer->Reserve(static_cast<size_t>(w) * static_cast<size_t>(h) * sizeof(float)))
+  {
+    return false;
+  }
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, this->DepthBuffer->Name());
+  const int read = ren->GetRenderWindow()->GetZbufferData(
+    x0, y0, x0 + w - 1, y0 + h - 1, static_cast<float*>(nullptr));
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  const float* depth = read == VTK_OK ? static_cast<const float*>(this->DepthBuffer->Map()) : nullptr;
+  if (!depth)
+  {
+    return false;
+  }
+  try
+  {
+    this->Core->SetDeviceDepth(
+      depth, afam::depthToRay(w, h, ndcToWorld, frame.Map, frame.Request.Camera));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    this->DepthBuffer->Unmap();
+    return false;
   }
   return true;
 }

@@ -44,11 +44,13 @@
 #include "vtkAFAMModule.h" // for export macro
 #include "vtkVolumeMapper.h"
 
+#include <array>  // for std::array
 #include <memory> // for std::unique_ptr
 #include <string> // for std::string
 #include <vector> // for std::vector
 
 class vtkAFAMCoreRenderer;
+class vtkAFAMCudaGLBuffer;
 class vtkAFAMImageDraw;
 class vtkOpenGLRenderWindow;
 class vtkVolumeProperty;
@@ -261,6 +263,11 @@ protected:
   /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);
   /// false when it was not read (depth compositing off, or nothing but volumes to draw depth).
   bool ReadDepthLimits(vtkRenderer* ren, Frame& frame);
+  /// The GPU's way (CUDA-OpenGL interop, frames whose image goes to CUDA's buffer): the z-buffer
+  /// copied on the GPU into a buffer CUDA reads, limits computed there. False: not possible here
+  /// (the host path follows).
+  bool ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w, int h,
+    const std::array<double, 16>& ndcToWorld, Frame& frame);
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;
@@ -295,6 +302,7 @@ protected:
 
   std::unique_ptr<vtkAFAMCoreRenderer> Core;
   std::unique_ptr<vtkAFAMImageDraw> Draw;
+  std::unique_ptr<vtkAFAMCudaGLBuffer> DepthBuffer; // the z-buffer on its way to CUDA
   bool GpuImageInterop = true;
   bool LastImageOnDevice = false;
   std::string LastInteropProblem;

@@ -22,6 +22,7 @@ set(_afam_private
   Readers/vtkAFAMModelTree
   Mapper/vtkAFAMCoreRenderer
   Mapper/vtkAFAMImageDraw
+  Mapper/vtkAFAMCudaGLBuffer
   )
 set(_afam_private_headers)
 foreach (_helper IN LISTS _afam_private)
@@ -44,8 +45,8 @@ vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)
 # The CUDA renderer only when the project builds it (AFAM_ENABLE_CUDA): afam_cuda is static, PIC,
 # links cudart statically and brings AFAM_HAVE_CUDA=1 (its PUBLIC definition) to the module's
 # sources. The module includes its plain C++ headers (afam/cuda/gpu_caster.hpp); of CUDA's own,
-# only the runtime and OpenGL-interop headers, in Mapper/vtkAFAMImageDraw.cxx (through cudart's
-# include directories).
+# only the runtime and OpenGL-interop headers, in Mapper/vtkAFAMCudaGLBuffer.cxx (through
+# cudart's include directories).
 if (TARGET afam_cuda)
   vtk_module_link(AFAM::vtkAFAM PRIVATE afam_cuda)
 endif ()

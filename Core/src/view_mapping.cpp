@@ -56,52 +56,48 @@ Camera cameraFromFrustum(const ViewFrustum& f, const FrameMap& map, int width, i
   return c;
 }
 
-namespace {
-
-/// The nearest depth among the tile pixels that image pixel (x, y) covers (y = 0: bottom row).
-float nearestDepth(const float* depth, int tileWidth, int tileHeight, int width, int height, int x,
-                   int y) {
-  const int y0 = y * tileHeight / height, y1 = std::max(y0 + 1, (y + 1) * tileHeight / height);
-  const int x0 = x * tileWidth / width, x1 = std::max(x0 + 1, (x + 1) * tileWidth / width);
-  float z = 1.0f;
-  for (int yt = y0; yt < y1; ++yt)
-    for (int xt = x0; xt < x1; ++xt)
-      z = std::min(z, depth[size_t(yt) * size_t(tileWidth) + size_t(xt)]);
-  return z;
-}
-
-}  // namespace
-
-int64_t rayLengthsFromDepth(const float* depth, int tileWidth, int tileHeight,
-                            const std::array<double, 16>& m, const FrameMap& map,
-                            const Camera& camera, std::vector<float>& limits) {
+DepthToRay depthToRay(int tileWidth, int tileHeight, const std::array<double, 16>& m,
+                      const FrameMap& map, const Camera& camera) {
   if (tileWidth < 1 || tileHeight < 1 || camera.width < 1 || camera.height < 1 ||
       camera.width > tileWidth || camera.height > tileHeight)
     throw InvalidArgument(
         "depth limits: the image must be at least 1x1 and no larger than the tile");
-  const int w = camera.width, h = camera.height;
+  DepthToRay t;
+  // The frame map is affine: [L o; 0 1] times the projective NDC -> world matrix.
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 3; ++r)
+      t.m[4 * r + c] = map.linear[size_t(3 * r)] * m[size_t(c)] +
+                       map.linear[size_t(3 * r + 1)] * m[size_t(4 + c)] +
+                       map.linear[size_t(3 * r + 2)] * m[size_t(8 + c)] +
+                       map.offset[size_t(r)] * m[size_t(12 + c)];
+    t.m[12 + c] = m[size_t(12 + c)];
+  }
   const Vec3 n = cross(camera.right, camera.up);  // the image plane's normal
-  const double dn = dot(camera.forward, n) / std::sqrt(dot(camera.forward, camera.forward));
+  for (int a = 0; a < 3; ++a) {
+    t.eye[a] = camera.eye[size_t(a)];
+    t.normal[a] = n[size_t(a)];
+  }
+  t.forwardDotNormal = dot(camera.forward, n) / std::sqrt(dot(camera.forward, camera.forward));
+  t.parallel = camera.parallel ? 1 : 0;
+  t.tileWidth = tileWidth;
+  t.tileHeight = tileHeight;
+  t.width = camera.width;
+  t.height = camera.height;
+  return t;
+}
+
+int64_t rayLengthsFromDepth(const float* depth, int tileWidth, int tileHeight,
+                            const std::array<double, 16>& m, const FrameMap& map,
+                            const Camera& camera, std::vector<float>& limits) {
+  const DepthToRay t = depthToRay(tileWidth, tileHeight, m, map, camera);
+  const int w = t.width, h = t.height;
   limits.assign(size_t(w) * size_t(h), std::numeric_limits<float>::infinity());
   int64_t limited = 0;
   for (int y = 0; y < h; ++y) {  // y = 0: bottom row
-    const double ny = 2.0 * (y + 0.5) / h - 1.0;
     float* row = &limits[size_t(h - 1 - y) * size_t(w)];  // row 0 = top
     for (int x = 0; x < w; ++x) {
-      const float z = nearestDepth(depth, tileWidth, tileHeight, w, h, x, y);
-      if (!(z < 1.0f)) continue;  // the far plane: nothing opaque here
-      const double ndc[4] = {2.0 * (x + 0.5) / w - 1.0, ny, 2.0 * z - 1.0, 1.0};
-      double p[4];
-      for (int r = 0; r < 4; ++r)
-        p[r] = m[size_t(4 * r)] * ndc[0] + m[size_t(4 * r + 1)] * ndc[1] +
-               m[size_t(4 * r + 2)] * ndc[2] + m[size_t(4 * r + 3)];
-      if (!(std::abs(p[3]) > 0)) continue;
-      const Vec3 q = map.apply({p[0] / p[3], p[1] / p[3], p[2] / p[3]});
-      const Vec3 d{q[0] - camera.eye[0], q[1] - camera.eye[1], q[2] - camera.eye[2]};
-      // Perspective: the distance from the eye. Parallel: (p - eye).n / (forward.n) with n the
-      // image plane's normal (every ray starts on the eye plane).
-      row[x] = float(camera.parallel ? dot(d, n) / dn : std::sqrt(dot(d, d)));
-      ++limited;
+      row[x] = rayLimitFromDepth(t, depth, x, y);
+      limited += std::isinf(row[x]) ? 0 : 1;
     }
   }
   return limited;

@@ -45,23 +45,35 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
     std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
     const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
     const bool onDevice = target->deviceRgba && floats <= target->capacityFloats;
+    const DeviceDepth* depth = target->depth.depth ? &target->depth : nullptr;
     target->lastOnDevice = false;
+    target->lastDepthLimited = -1;
+    FrameView view = frame.view;
+    std::vector<float> hostLimits;
+    auto limitsOnHost = [&] {  // a frame whose image goes through the host
+      if (!depth) return;
+      target->lastDepthLimited = gpu->depthLimitsToHost(*depth, hostLimits);
+      view.maxDistance = hostLimits.data();
+    };
     try {
       if (onDevice) {
-        gpu->renderToDevice(frame.view, slotKeys, target->deviceRgba);
+        gpu->renderToDevice(view, slotKeys, target->deviceRgba, nullptr, depth);
+        target->lastDepthLimited = gpu->lastTimes().depthLimitedPixels;
         image.width = w;
         image.height = h;
         image.rgba.clear();
         target->lastOnDevice = true;
       } else {
+        limitsOnHost();
         image.resize(w, h);
-        gpu->render(frame.view, slotKeys, image.rgba.data());
+        gpu->render(view, slotKeys, image.rgba.data());
       }
     } catch (const GpuOutOfMemory& e) {
       if (!*warned) report(std::string(e.what()) + "; this frame on the CPU");
       *warned = true;
+      if (hostLimits.empty()) limitsOnHost();
       image.resize(w, h);
-      renderCpu(frame.view, image, threads);
+      renderCpu(view, image, threads);
     }
   });
   result.gpu = gpu;

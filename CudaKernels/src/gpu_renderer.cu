@@ -75,6 +75,8 @@ struct GpuRenderer::Impl {
   float4* hostImage = nullptr;
   size_t imageCapacity = 0;  // pixels
   unsigned long long* deviceCounter = nullptr;
+  float* deviceLimits = nullptr;  // ray length limits from a device depth buffer
+  size_t limitsCapacity = 0;      // pixels
   cudaEvent_t events[4] = {nullptr, nullptr, nullptr, nullptr};
   // DS baseline through 3D textures: one CUDA array + texture object per raw model, kept across
   // frames (no budget: a benchmark baseline), and this frame's handles in slot order.
@@ -108,6 +110,9 @@ struct GpuRenderer::Impl {
     if (deviceImage) (void)cudaFree(deviceImage);
     if (hostImage) (void)cudaFreeHost(hostImage);
     if (deviceCounter) (void)cudaFree(deviceCounter);
+    if (deviceLimits) (void)cudaFree(deviceLimits);
+    deviceLimits = nullptr;
+    limitsCapacity = 0;
     for (auto& t : textures) {
       if (t.second.object) (void)cudaDestroyTextureObject(t.second.object);
       if (t.second.array) (void)cudaFreeArray(t.second.array);
@@ -145,6 +150,29 @@ struct GpuRenderer::Impl {
     AFAM_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&deviceImage), pixels * sizeof(float4)));
     AFAM_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&hostImage), pixels * sizeof(float4)));
     imageCapacity = pixels;
+  }
+
+  /// Ray length limits of `pixels` pixels from depth.depth into deviceLimits (row 0 = top), their
+  /// count into deviceCounter, on the stream.
+  void depthLimits(const DeviceDepth& depth, size_t pixels) {
+    if (pixels > limitsCapacity) {
+      AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
+      if (deviceLimits) AFAM_CUDA_CHECK(cudaFree(deviceLimits));
+      deviceLimits = nullptr;
+      limitsCapacity = 0;
+      AFAM_CUDA_CHECK(cudaMalloc(reinterpret_cast<void**>(&deviceLimits), pixels * sizeof(float)));
+      limitsCapacity = pixels;
+    }
+    AFAM_CUDA_CHECK(cudaMemsetAsync(deviceCounter, 0, 8, stream));
+    kernels_depth::launchDepthLimits(depth.toRay, depth.depth, deviceLimits, deviceCounter, stream);
+    AFAM_CUDA_CHECK(cudaGetLastError());
+  }
+
+  int64_t limitedCount() {
+    unsigned long long count = 0;
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(&count, deviceCounter, 8, cudaMemcpyDeviceToHost, stream));
+    AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
+    return int64_t(count);
   }
 
   /// Texture handles of this frame's raw slots on the device (creating missing textures; the
@@ -317,17 +345,41 @@ const GpuModelPool& GpuRenderer::pool() const { return impl_->pool; }
 
 void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
                          GpuFrameTimes* times) {
-  cast(view, slotKeys, nullptr, rgba, times);
+  cast(view, slotKeys, nullptr, rgba, times, nullptr);
 }
 
 void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys,
-                                 float* deviceRgba, GpuFrameTimes* times) {
+                                 float* deviceRgba, GpuFrameTimes* times,
+                                 const DeviceDepth* depth) {
   if (!deviceRgba) throw InvalidArgument("renderToDevice: no device image");
-  cast(view, slotKeys, deviceRgba, nullptr, times);
+  cast(view, slotKeys, deviceRgba, nullptr, times, depth && depth->depth ? depth : nullptr);
+}
+
+namespace {
+void checkDepthSize(const DeviceDepth& depth, int width, int height) {
+  const DepthToRay& t = depth.toRay;
+  if (t.width != width || t.height != height || t.tileWidth < t.width || t.tileHeight < t.height)
+    throw InvalidArgument("GpuRenderer: depth limits for a " + std::to_string(t.width) + " x " +
+                          std::to_string(t.height) + " image from a " +
+                          std::to_string(t.tileWidth) + " x " + std::to_string(t.tileHeight) +
+                          " tile, for a " + std::to_string(width) + " x " +
+                          std::to_string(height) + " frame");
+}
+}  // namespace
+
+int64_t GpuRenderer::depthLimitsToHost(const DeviceDepth& depth, std::vector<float>& limits) {
+  Impl& m = *impl_;
+  checkDepthSize(depth, depth.toRay.width, depth.toRay.height);
+  const size_t pixels = size_t(depth.toRay.width) * size_t(depth.toRay.height);
+  m.depthLimits(depth, pixels);
+  limits.resize(pixels);
+  AFAM_CUDA_CHECK(cudaMemcpyAsync(limits.data(), m.deviceLimits, pixels * sizeof(float),
+                                  cudaMemcpyDeviceToHost, m.stream));
+  return m.limitedCount();
 }
 
 void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget,
-                       float* hostRgba, GpuFrameTimes* times) {
+                       float* hostRgba, GpuFrameTimes* times, const DeviceDepth* depth) {
   Impl& m = *impl_;
   lastTimes_ = GpuFrameTimes{};
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);
@@ -335,7 +387,12 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   float* target = deviceTarget ? deviceTarget : reinterpret_cast<float*>(m.deviceImage);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
   GpuFrameTimes t;
-  const FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded);
+  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded);
+  if (depth) {  // the limits come from the device depth, not from view.maxDistance
+    checkDepthSize(*depth, view.camera.width, view.camera.height);
+    m.depthLimits(*depth, pixels);
+    d.maxDistance = m.deviceLimits;
+  }
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[1], m.stream));
   if (poison_) AFAM_CUDA_CHECK(cudaMemsetAsync(target, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
@@ -352,6 +409,7 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[3], m.stream));
   AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[3]));
   if (hostRgba) std::memcpy(hostRgba, m.hostImage, pixels * sizeof(float4));
+  t.depthLimitedPixels = depth ? m.limitedCount() : -1;
   t.uploadMs = elapsed(m.events[0], m.events[1]);
   t.kernelMs = elapsed(m.events[1], m.events[2]);
   t.downloadMs = elapsed(m.events[2], m.events[3]);

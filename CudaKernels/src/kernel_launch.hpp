@@ -10,6 +10,7 @@
 
 #include <string>
 
+#include "afam/depth_limits.hpp"
 #include "afam/raycast.hpp"
 
 #define AFAM_DECLARE_KERNEL_SET(NS)                                                            \
@@ -37,3 +38,10 @@ namespace afam::kernels_texture {
 std::string launchDsTexture(bool shaded, const FrameView& d, const unsigned long long* textures,
                             float* image, unsigned long long* total, cudaStream_t s, bool describe);
 }  // namespace afam::kernels_texture
+
+namespace afam::kernels_depth {
+/// limits[width * height] (row 0 = top) from the tile's depth (row 0 = bottom) by
+/// rayLimitFromDepth; adds the number of limited pixels to *limited.
+void launchDepthLimits(const DepthToRay& t, const float* depth, float* limits,
+                       unsigned long long* limited, cudaStream_t s);
+}  // namespace afam::kernels_depth

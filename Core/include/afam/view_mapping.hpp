@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "afam/camera.hpp"
+#include "afam/depth_limits.hpp"
 
 namespace afam {
 
@@ -43,6 +44,11 @@ FrameMap frameMapFromWorld(const std::array<double, 16>& worldToData, const Vec3
 /// `map` (Camera::mapped). Rays start at the near clipping plane, and never closer to the eye than
 /// 1e-4 in the frame. Throws InvalidArgument as Camera::lookAt, parallelLookAt and mapped do.
 Camera cameraFromFrustum(const ViewFrustum& frustum, const FrameMap& map, int width, int height);
+
+/// The per-frame constants of rayLengthsFromDepth (for the GPU's copy of the same math, see
+/// depth_limits.hpp). Throws InvalidArgument as rayLengthsFromDepth does.
+DepthToRay depthToRay(int tileWidth, int tileHeight, const std::array<double, 16>& ndcToWorld,
+                      const FrameMap& map, const Camera& camera);
 
 /// Ray lengths that stop each pixel's ray at the opaque geometry of a depth buffer.
 /// depth: window depths in [0, 1] of a tileWidth x tileHeight tile, row 0 at the bottom (OpenGL's

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "afam/cuda/gpu_renderer.hpp"
 #include "afam/renderer.hpp"
 
 namespace afam {
@@ -24,6 +25,11 @@ struct GpuImageTarget {
   float* deviceRgba = nullptr;  ///< device memory for the next frames; null: the host
   size_t capacityFloats = 0;    ///< floats at deviceRgba (a larger frame goes to the host)
   bool lastOnDevice = false;    ///< set by every frame: its image is at deviceRgba
+  /// Optional depth buffer in device memory for the next frames (depth.depth null: none): the
+  /// rays stop at its opaque geometry, limits computed on the GPU (also for a frame that ends up
+  /// on the CPU), in place of the frame's own maxDistance.
+  DeviceDepth depth;
+  int64_t lastDepthLimited = -1;  ///< pixels the depth limited in the last frame; -1: no depth
 };
 
 /// What installGpuCaster did.

@@ -15,6 +15,7 @@
 
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/gpu_model_pool.hpp"
+#include "afam/depth_limits.hpp"
 #include "afam/raycast.hpp"
 
 namespace afam {
@@ -27,6 +28,14 @@ struct GpuFrameTimes {
   double totalMs = 0;
   uint64_t modelsUploaded = 0;
   uint64_t bytesUploaded = 0;
+  int64_t depthLimitedPixels = -1;  ///< pixels a DeviceDepth limited; -1: none given
+};
+
+/// A depth buffer already in device memory (e.g. OpenGL's, copied into a pixel buffer mapped into
+/// CUDA) and how its depths become ray lengths (depthToRay in view_mapping.hpp).
+struct DeviceDepth {
+  const float* depth = nullptr;  ///< toRay.tileWidth * toRay.tileHeight floats, row 0 at the bottom
+  DepthToRay toRay;
 };
 
 enum class GpuKernelKind {
@@ -65,8 +74,13 @@ class GpuRenderer {
   /// As render(), but the image is cast into `deviceRgba` (device memory of width*height*4
   /// floats, e.g. an OpenGL buffer mapped into CUDA) and left there: nothing comes back to the
   /// host (downloadMs 0). The caller keeps `deviceRgba` valid until the call returns.
+  /// `depth` (optional): per-pixel ray limits computed on the GPU from a device depth buffer
+  /// (rayLimitFromDepth, the CPU's math), used in place of view.maxDistance.
   void renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
-                      GpuFrameTimes* times = nullptr);
+                      GpuFrameTimes* times = nullptr, const DeviceDepth* depth = nullptr);
+  /// The same limits brought to the host (width * height floats, row 0 = top; a frame cast on the
+  /// CPU after all). Returns the number of limited pixels.
+  int64_t depthLimitsToHost(const DeviceDepth& depth, std::vector<float>& limits);
 
   /// Benchmark helper: uploads the frame, then launches `kind` `repetitions` times (after one
   /// warm-up) and returns each launch's time.
@@ -103,7 +117,7 @@ class GpuRenderer {
   /// Casts into deviceTarget (or the renderer's own device image when null), then copies the
   /// image to hostRgba when given.
   void cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget, float* hostRgba,
-            GpuFrameTimes* times);
+            GpuFrameTimes* times, const DeviceDepth* depth);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;

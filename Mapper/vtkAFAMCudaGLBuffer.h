@@ -1,0 +1,50 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+// Private helper of vtkAFAMVolumeMapper (not wrapped, not installed): one OpenGL buffer object
+// registered with CUDA (CUDA-OpenGL interop), mapped into CUDA's address space while a frame uses
+// it. Either CUDA writes it and OpenGL reads it (the cast image, unpacked into a texture), or
+// OpenGL writes it and CUDA reads it (the depth buffer, packed by glReadPixels). In builds without
+// CUDA every call fails with a reason. The OpenGL context must be current for every call but Unmap.
+#ifndef vtkAFAMCudaGLBuffer_h
+#define vtkAFAMCudaGLBuffer_h
+
+#include <cstddef>
+#include <string>
+
+class vtkAFAMCudaGLBuffer
+{
+public:
+  enum Direction
+  {
+    CUDA_WRITES, ///< written by CUDA, read by OpenGL
+    CUDA_READS   ///< written by OpenGL, read by CUDA
+  };
+  explicit vtkAFAMCudaGLBuffer(Direction direction);
+  /// Unregisters from CUDA; the OpenGL name goes with the context (Free while it is current).
+  ~vtkAFAMCudaGLBuffer();
+  vtkAFAMCudaGLBuffer(const vtkAFAMCudaGLBuffer&) = delete;
+  vtkAFAMCudaGLBuffer& operator=(const vtkAFAMCudaGLBuffer&) = delete;
+
+  /// At least `bytes` bytes, registered with CUDA (kept when already large enough). False when
+  /// that fails: Problem() says why, and it stays failed until Free().
+  bool Reserve(size_t bytes);
+  /// The buffer in CUDA's address space (nullptr and a Problem() when mapping fails).
+  void* Map();
+  /// Gives it back to OpenGL (no-op when not mapped).
+  void Unmap();
+  /// Unregisters and deletes the buffer, and forgets a Problem (a new context may do better).
+  void Free();
+  unsigned int Name() const { return this->Buffer; }
+  const std::string& Problem() const { return this->Failure; }
+
+private:
+  void Fail(const std::string& why);
+  Direction Dir;
+  unsigned int Buffer = 0; // OpenGL name (0: none)
+  size_t Bytes = 0;
+  void* Resource = nullptr; // cudaGraphicsResource*
+  bool Mapped = false;
+  std::string Failure;
+};
+
+#endif

@@ -105,6 +105,15 @@ void* vtkAFAMCudaGLBuffer::Map()
     return nullptr;
   }
   this->Mapped = true;
+  // Mapping orders OpenGL's earlier work before later CUDA work in the legacy default stream only;
+  // the renderer casts on a stream of its own (non-blocking), so wait for it here: OpenGL's
+  // writes (the packed z-buffer) and reads (last frame's texture copy) are then done.
+  e = cudaStreamSynchronize(nullptr);
+  if (e != cudaSuccess)
+  {
+    this->Fail(CudaProblem("waiting for OpenGL's use of a mapped buffer", e));
+    return nullptr;
+  }
   void* pointer = nullptr;
   size_t bytes = 0;
   e = cudaGraphicsResourceGetMappedPointer(&pointer, &bytes, resource);

@@ -412,7 +412,7 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   t.depthLimitedPixels = depth ? m.limitedCount() : -1;
   t.uploadMs = elapsed(m.events[0], m.events[1]);
   t.kernelMs = elapsed(m.events[1], m.events[2]);
-  t.downloadMs = elapsed(m.events[2], m.events[3]);
+  t.downloadMs = hostRgba ? elapsed(m.events[2], m.events[3]) : 0.0;
   t.totalMs = elapsed(m.events[0], m.events[3]);
   lastTimes_ = t;
   if (times) *times = t;

@@ -172,13 +172,34 @@ void vtkAFAMCoreRenderer::Volume(
   range[1] = h.valueMax;
 }
 
-void vtkAFAMCoreRenderer::Render(
-  const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats)
+namespace
+{
+afam::RendererResources ResourcesFor(const vtkAFAMFrameRequest& request)
 {
   afam::RendererResources resources;
   resources.threads = request.Threads;
   resources.cache = afam::CacheBudget{ static_cast<uint64_t>(request.CacheBudgetMB * 1e6), 0 };
   resources.prefetch = request.Prefetcher == 1 ? "linear" : "none";
+  return resources;
+}
+}
+
+bool vtkAFAMCoreRenderer::NeedsBuild(const vtkAFAMFrameRequest& request) const
+{
+  const Internals& m = *this->Impl;
+  return !m.Renderer || !SameResources(ResourcesFor(request), m.Resources) ||
+    (request.Device != 1) != m.GpuWanted;
+}
+
+bool vtkAFAMCoreRenderer::WillCastOnGpu(const vtkAFAMFrameRequest& request) const
+{
+  return this->Impl->Gpu && !this->NeedsBuild(request);
+}
+
+void vtkAFAMCoreRenderer::Render(
+  const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats)
+{
+  const afam::RendererResources resources = ResourcesFor(request);
   const bool wantGpu = request.Device != 1;
 
   Internals& m = *this->Impl;
@@ -186,7 +207,7 @@ void vtkAFAMCoreRenderer::Render(
   const afam::FrameSettings settings =
     afam::acceptFrameSettings(request.Settings, m.LastGood, stats.SettingWarnings);
   stats.RendererBuilt = false;
-  if (!m.Renderer || !SameResources(resources, m.Resources) || wantGpu != m.GpuWanted)
+  if (this->NeedsBuild(request))
   {
     m.DropGpu();
     m.Renderer.reset(); // the old cache and prefetch thread go before the new ones come
@@ -229,11 +250,6 @@ void vtkAFAMCoreRenderer::Render(
   {
     stats.DeviceMessages.push_back(m.GpuUnusable); // every CPU frame says why
   }
-}
-
-bool vtkAFAMCoreRenderer::GpuInUse() const
-{
-  return this->Impl->Gpu != nullptr;
 }
 
 void vtkAFAMCoreRenderer::SetDeviceImage(float* deviceRgba, size_t floats)

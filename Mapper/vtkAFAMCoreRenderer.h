@@ -81,8 +81,10 @@ public:
   /// it as it is now: no block of the old file is drawn again.
   void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
 
-  /// True when frames are being cast on the GPU (a CUDA build, a usable GPU, the GPU asked for).
-  bool GpuInUse() const;
+  /// True when Render(request) will cast on the GPU: the current renderer has it (a CUDA build, a
+  /// usable GPU, the GPU asked for) and the request keeps that renderer. A frame that builds a
+  /// new renderer (the first, or after a change of device, cache, prefetcher or threads) says no.
+  bool WillCastOnGpu(const vtkAFAMFrameRequest& request) const;
   /// Where frames cast on the GPU leave their image: `deviceRgba` (device memory of `floats`
   /// floats, premultiplied RGBA, row 0 = top; e.g. an OpenGL buffer mapped into CUDA) instead of
   /// the host; nullptr: the host (default). Kept until changed; the caller keeps it valid during
@@ -99,6 +101,8 @@ public:
   int64_t DeviceDepthLimited() const;
 
 private:
+  /// True when Render(request) builds a new renderer (new cache, prefetch thread, GPU pool).
+  bool NeedsBuild(const vtkAFAMFrameRequest& request) const;
   struct Internals;
   std::unique_ptr<Internals> Impl;
   std::string OpenPath;

@@ -225,7 +225,7 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one, and
   // then take the depth buffer the same way (ReadDepthLimits).
   size_t deviceFloats = 0;
-  float* deviceImage = this->GpuImageInterop && this->Core->GpuInUse()
+  float* deviceImage = this->GpuImageInterop && this->Core->WillCastOnGpu(frame.Request)
     ? this->Draw->MapDeviceImage(renWin, frame.CastWidth, frame.CastHeight, deviceFloats)
     : nullptr;
   this->Core->SetDeviceImage(deviceImage, deviceFloats);

@@ -252,6 +252,15 @@ void vtkAFAMCoreRenderer::Render(
   }
 }
 
+void* vtkAFAMCoreRenderer::GpuStream() const
+{
+#if defined(AFAM_HAVE_CUDA)
+  return this->Impl->Gpu ? this->Impl->Gpu->pool().stream() : nullptr;
+#else
+  return nullptr;
+#endif
+}
+
 void vtkAFAMCoreRenderer::SetDeviceImage(float* deviceRgba, size_t floats)
 {
   Internals& m = *this->Impl;

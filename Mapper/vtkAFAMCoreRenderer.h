@@ -85,6 +85,9 @@ public:
   /// usable GPU, the GPU asked for) and the request keeps that renderer. A frame that builds a
   /// new renderer (the first, or after a change of device, cache, prefetcher or threads) says no.
   bool WillCastOnGpu(const vtkAFAMFrameRequest& request) const;
+  /// The cudaStream_t the GPU renderer casts on (nullptr without one): where buffers shared with
+  /// OpenGL are mapped, so that CUDA's and OpenGL's uses of them are ordered without host waits.
+  void* GpuStream() const;
   /// Where frames cast on the GPU leave their image: `deviceRgba` (device memory of `floats`
   /// floats, premultiplied RGBA, row 0 = top; e.g. an OpenGL buffer mapped into CUDA) instead of
   /// the host; nullptr: the host (default). Kept until changed; the caller keeps it valid during

@@ -90,7 +90,7 @@ bool vtkAFAMCudaGLBuffer::Reserve(size_t bytes)
 #endif
 }
 
-void* vtkAFAMCudaGLBuffer::Map()
+void* vtkAFAMCudaGLBuffer::Map(void* stream)
 {
 #if defined(AFAM_HAVE_CUDA)
   if (!this->Resource)
@@ -98,22 +98,14 @@ void* vtkAFAMCudaGLBuffer::Map()
     return nullptr;
   }
   auto* resource = static_cast<cudaGraphicsResource*>(this->Resource);
-  cudaError_t e = cudaGraphicsMapResources(1, &resource, nullptr);
+  cudaError_t e = cudaGraphicsMapResources(1, &resource, static_cast<cudaStream_t>(stream));
   if (e != cudaSuccess)
   {
     this->Fail(CudaProblem("mapping an OpenGL buffer into CUDA", e));
     return nullptr;
   }
   this->Mapped = true;
-  // Mapping orders OpenGL's earlier work before later CUDA work in the legacy default stream only;
-  // the renderer casts on a stream of its own (non-blocking), so wait for it here: OpenGL's
-  // writes (the packed z-buffer) and reads (last frame's texture copy) are then done.
-  e = cudaStreamSynchronize(nullptr);
-  if (e != cudaSuccess)
-  {
-    this->Fail(CudaProblem("waiting for OpenGL's use of a mapped buffer", e));
-    return nullptr;
-  }
+  this->Stream = stream;
   void* pointer = nullptr;
   size_t bytes = 0;
   e = cudaGraphicsResourceGetMappedPointer(&pointer, &bytes, resource);
@@ -125,6 +117,7 @@ void* vtkAFAMCudaGLBuffer::Map()
   }
   return pointer;
 #else
+  (void)stream;
   return nullptr;
 #endif
 }
@@ -135,7 +128,7 @@ void vtkAFAMCudaGLBuffer::Unmap()
   if (this->Mapped)
   {
     auto* resource = static_cast<cudaGraphicsResource*>(this->Resource);
-    (void)cudaGraphicsUnmapResources(1, &resource, nullptr);
+    (void)cudaGraphicsUnmapResources(1, &resource, static_cast<cudaStream_t>(this->Stream));
     this->Mapped = false;
   }
 #endif

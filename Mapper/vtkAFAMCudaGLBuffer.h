@@ -28,9 +28,11 @@ public:
   /// At least `bytes` bytes, registered with CUDA (kept when already large enough). False when
   /// that fails: Problem() says why, and it stays failed until Free().
   bool Reserve(size_t bytes);
-  /// The buffer in CUDA's address space (nullptr and a Problem() when mapping fails).
-  void* Map();
-  /// Gives it back to OpenGL (no-op when not mapped).
+  /// The buffer in CUDA's address space (nullptr and a Problem() when mapping fails). `stream`
+  /// (a cudaStream_t) is where CUDA uses it: OpenGL's earlier work on the buffer is ordered before
+  /// that stream's later work, without the host waiting.
+  void* Map(void* stream);
+  /// Gives it back to OpenGL (no-op when not mapped): CUDA's earlier work on the stream comes first.
   void Unmap();
   /// Unregisters and deletes the buffer, and forgets a Problem (a new context may do better).
   void Free();
@@ -43,6 +45,7 @@ private:
   unsigned int Buffer = 0; // OpenGL name (0: none)
   size_t Bytes = 0;
   void* Resource = nullptr; // cudaGraphicsResource*
+  void* Stream = nullptr;   // cudaStream_t of the mapping
   bool Mapped = false;
   std::string Failure;
 };

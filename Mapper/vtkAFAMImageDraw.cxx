@@ -17,10 +17,8 @@ vtkAFAMImageDraw::~vtkAFAMImageDraw()
   }
 }
 
-float* vtkAFAMImageDraw::MapDeviceImage(
-  vtkOpenGLRenderWindow* window, int width, int height, size_t& floats)
+float* vtkAFAMImageDraw::MapDeviceImage(int width, int height, void* stream, size_t& floats)
 {
-  (void)window; // the context is current: the renderer is drawing into it
   floats = 0;
   if (width < 1 || height < 1)
   {
@@ -31,7 +29,7 @@ float* vtkAFAMImageDraw::MapDeviceImage(
   {
     return nullptr;
   }
-  auto* pointer = static_cast<float*>(this->ImageBuffer.Map());
+  auto* pointer = static_cast<float*>(this->ImageBuffer.Map(stream));
   floats = pointer ? wanted : 0;
   return pointer;
 }

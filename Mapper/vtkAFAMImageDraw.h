@@ -31,7 +31,8 @@ public:
   /// `floats` its capacity. nullptr when interop is unavailable (a build without CUDA, an OpenGL
   /// that is not on the CUDA device, e.g. Mesa): Problem() says why, and it is not tried again
   /// until ReleaseGraphicsResources.
-  float* MapDeviceImage(vtkOpenGLRenderWindow* window, int width, int height, size_t& floats);
+  /// `stream`: the cudaStream_t the GPU renderer casts on.
+  float* MapDeviceImage(int width, int height, void* stream, size_t& floats);
   /// Gives the mapped buffer back to OpenGL without drawing it (nothing was cast into it).
   void UnmapDeviceImage();
   /// Draws the image CUDA left in the mapped buffer (unmapping it first).

@@ -226,7 +226,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // then take the depth buffer the same way (ReadDepthLimits).
   size_t deviceFloats = 0;
   float* deviceImage = this->GpuImageInterop && this->Core->WillCastOnGpu(frame.Request)
-    ? this->Draw->MapDeviceImage(renWin, frame.CastWidth, frame.CastHeight, deviceFloats)
+    ? this->Draw->MapDeviceImage(
+        frame.CastWidth, frame.CastHeight, this->Core->GpuStream(), deviceFloats)
     : nullptr;
   this->Core->SetDeviceImage(deviceImage, deviceFloats);
   frame.DepthOnGpu = deviceImage != nullptr;
@@ -483,7 +484,7 @@ bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w
   const int read = ren->GetRenderWindow()->GetZbufferData(
     x0, y0, x0 + w - 1, y0 + h - 1, static_cast<float*>(nullptr));
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-  const float* depth = read == VTK_OK ? static_cast<const float*>(this->DepthBuffer->Map()) : nullptr;
+  const float* depth = read == VTK_OK ? static_cast<const float*>(this->DepthBuffer->Map(this->Core->GpuStream())) : nullptr;
   if (!depth)
   {
     return false;

@@ -26,6 +26,7 @@ struct vtkAFAMCoreRenderer::Internals
 #if defined(AFAM_HAVE_CUDA)
   std::shared_ptr<afam::GpuRenderer> Gpu;
   std::shared_ptr<afam::GpuImageTarget> Target; // the caster's: where GPU frames leave the image
+  std::shared_ptr<bool> Failed;                  // the caster's: the GPU failed in a frame
 #else
   std::shared_ptr<void> Gpu;
 #endif
@@ -56,6 +57,7 @@ struct vtkAFAMCoreRenderer::Internals
     this->Gpu.reset();
 #if defined(AFAM_HAVE_CUDA)
     this->Target.reset();
+    this->Failed.reset();
 #endif
   }
 
@@ -84,6 +86,20 @@ struct vtkAFAMCoreRenderer::Internals
 #endif
   }
 
+  // After a frame: a GPU that failed (not for memory) is given up for the file's life; the
+  // caster already draws on the CPU, and no later renderer probes it again.
+  void GiveUpFailedGpu()
+  {
+#if defined(AFAM_HAVE_CUDA)
+    if (this->Gpu && this->Failed && *this->Failed)
+    {
+      this->GpuUnusable = "the GPU failed during a frame";
+      this->Gpu.reset();
+      this->Target.reset();
+    }
+#endif
+  }
+
   void InstallGpu(double budgetMB)
   {
     this->DropGpu();
@@ -101,6 +117,7 @@ struct vtkAFAMCoreRenderer::Internals
     {
       this->Gpu = gpu.gpu;
       this->Target = gpu.target;
+      this->Failed = gpu.failed;
       this->PassTargets();
       return;
     }
@@ -242,6 +259,7 @@ void vtkAFAMCoreRenderer::Render(
   stats.DamagedBlocks = frame.damagedBlocks;
   stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
   stats.DamageReports = std::move(frame.damageReports);
+  m.GiveUpFailedGpu();
   stats.UsedGpu = m.Gpu != nullptr;
   stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
   m.GpuTimes(stats);

@@ -38,8 +38,9 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
   const int threads = renderer.resources().threads;
   auto warned = std::make_shared<bool>(false);
   std::shared_ptr<GpuImageTarget> target = result.target;
-  renderer.setRayCaster([gpu, threads, warned, report, target](const PreparedFrame& frame,
-                                                               ImageRGBA& image) {
+  std::shared_ptr<bool> failed = result.failed;
+  renderer.setRayCaster([gpu, threads, warned, report, target, failed](const PreparedFrame& frame,
+                                                                       ImageRGBA& image) {
     const int w = frame.view.camera.width, h = frame.view.camera.height;
     const size_t floats = size_t(w) * size_t(h) * 4;
     std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
@@ -51,10 +52,15 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
     FrameView view = frame.view;
     std::vector<float> hostLimits;
     auto limitsOnHost = [&] {  // a frame whose image goes through the host
-      if (!depth) return;
+      if (!depth || *failed) return;  // a failed GPU: this one frame ignores the device depth
       target->lastDepthLimited = gpu->depthLimitsToHost(*depth, hostLimits);
       view.maxDistance = hostLimits.data();
     };
+    if (*failed) {  // known to fail: not tried again
+      image.resize(w, h);
+      renderCpu(view, image, threads);
+      return;
+    }
     try {
       if (onDevice) {
         gpu->renderToDevice(view, slotKeys, target->deviceRgba, nullptr, depth);
@@ -72,6 +78,12 @@ GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
       if (!*warned) report(std::string(e.what()) + "; this frame on the CPU");
       *warned = true;
       if (hostLimits.empty()) limitsOnHost();
+      image.resize(w, h);
+      renderCpu(view, image, threads);
+    } catch (const GpuError& e) {
+      *failed = true;
+      report(std::string("the GPU failed (") + e.what() + "); this frame and the next ones on the CPU");
+      target->lastOnDevice = false;
       image.resize(w, h);
       renderCpu(view, image, threads);
     }

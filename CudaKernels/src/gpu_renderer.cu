@@ -380,6 +380,9 @@ int64_t GpuRenderer::depthLimitsToHost(const DeviceDepth& depth, std::vector<flo
 
 void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget,
                        float* hostRgba, GpuFrameTimes* times, const DeviceDepth* depth) {
+  if (simulateFailure_)
+    throw GpuError("CUDA error cudaErrorContextIsDestroyed (709): simulated loss of the context",
+                   __FILE__, __LINE__, "cudaErrorContextIsDestroyed", 709);
   Impl& m = *impl_;
   lastTimes_ = GpuFrameTimes{};
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);

@@ -123,5 +123,36 @@ TEST(GpuFrameEdits, ImageLeftOnTheDeviceEqualsTheHostImage) {
   ASSERT_EQ(cudaFree(device), cudaSuccess);
 }
 
+TEST(GpuFrameEdits, AFailingGpuHandsThisAndLaterFramesToTheCpuOnce) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 2, 4, 1e-3);
+  const double lo = file->header().valueMin, hi = file->header().valueMax;
+  FrameSettings s;
+  s.hasTransferFunction = true;
+  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
+  s.sampleDistance = 0.01f;
+  Renderer gpu(file, RendererResources{}, s), cpu(file, RendererResources{}, s);
+  std::vector<std::string> reports;
+  GpuCaster caster = installGpuCaster(gpu, size_t(64) << 20, [&](const std::string& m) { reports.push_back(m); });
+  ASSERT_TRUE(caster);
+  const Camera c = Camera::lookAt({0.9, 0.8, 0.7}, {0, 0, 0}, {0, 0, 1}, 60, 100, 80);
+  FrameStats st;
+  const ImageRGBA reference = cpu.renderFrame(c, st);
+  (void)gpu.renderFrame(c, st);
+  EXPECT_FALSE(*caster.failed);
+  const uint64_t casts = caster.gpu->pool().stats().uploads;
+  caster.gpu->setSimulatedFailure(true);
+  const ImageRGBA first = gpu.renderFrame(c, st), second = gpu.renderFrame(c, st);
+  std::printf("[gpu-failure] %zu report(s): %s\n", reports.size(), reports.empty() ? "" : reports[0].c_str());
+  EXPECT_TRUE(*caster.failed);
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_NE(reports[0].find("the GPU failed"), std::string::npos);
+  EXPECT_NE(reports[0].find("cudaErrorContextIsDestroyed"), std::string::npos);
+  EXPECT_EQ(first.rgba, reference.rgba);   // the failing frame is drawn, by the CPU
+  EXPECT_EQ(second.rgba, reference.rgba);  // and the next, without trying the GPU
+  EXPECT_EQ(caster.gpu->pool().stats().uploads, casts);
+}
+
 }  // namespace
 }  // namespace afam

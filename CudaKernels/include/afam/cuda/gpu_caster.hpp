@@ -37,6 +37,9 @@ struct GpuCaster {
   std::shared_ptr<GpuRenderer> gpu;  ///< keep alive while the Renderer is used; null: CPU
   std::string description;           ///< "NVIDIA H200 (sm_90, ...)" when installed
   std::shared_ptr<GpuImageTarget> target = std::make_shared<GpuImageTarget>();
+  /// Set when a frame's CUDA work failed for another reason than memory (e.g. a lost context): that
+  /// frame and every later one are cast on the CPU (reported once), the GPU is not tried again.
+  std::shared_ptr<bool> failed = std::make_shared<bool>(false);
   explicit operator bool() const { return gpu != nullptr; }
 };
 
@@ -45,7 +48,8 @@ struct GpuCaster {
 /// Every reason to use the CPU goes to `report` in words, e.g. "no usable GPU: CUDA driver is
 /// missing or too old (cudaErrorInsufficientDriver, 35)"; when it returns an empty GpuCaster the
 /// renderer is untouched (CPU). A frame whose models exceed the pool is cast on the CPU (reported
-/// once). Never throws for a missing or full GPU.
+/// once); a frame whose CUDA work fails otherwise is cast on the CPU, and so are all later frames
+/// (GpuCaster::failed, reported once). Never throws for a missing, full or failing GPU.
 GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
                            const std::function<void(const std::string&)>& report);
 

@@ -89,6 +89,8 @@ class GpuRenderer {
 
   /// Fill the device image with NaN before each render so an unwritten pixel shows (tests).
   void setPoisonOutput(bool on) { poison_ = on; }
+  /// Tests: every later render fails with a GpuError, as it would once the CUDA context is lost.
+  void setSimulatedFailure(bool on) { simulateFailure_ = on; }
   /// Use kernels specialised on the frame's degree when all spline slots share one (default on).
   void setDegreeSpecialisation(bool on) { specialise_ = on; }
   /// Floating-point contract of the kernels used from the next call on.
@@ -121,6 +123,7 @@ class GpuRenderer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;
+  bool simulateFailure_ = false;
   bool specialise_ = true;
   GpuFloatMode mode_ = GpuFloatMode::Exact;
   int minBlocks_ = 1;

@@ -184,66 +184,17 @@ void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, 
   }
 }
 
-// ---- Line kernels along x (contiguous lines, one at a time), specialised on the degree ----
-
-template <int P>
-void fitLine(const AxisSystem& s, const double* __restrict in, double* __restrict b) {
-  constexpr int W = P + 1;
-  const int m = s.ncp, n = s.n;
-  const double* __restrict weight = s.weight.data();
-  const int* __restrict first = s.first.data();
-  const double* __restrict lower = s.lower.data();
-  const double* __restrict invDiag = s.invDiag.data();
-  for (int j = 0; j < m; ++j) b[j] = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double v = in[i];
-    double* bi = b + first[i];
-    const double* wi = weight + size_t(i) * W;
-    for (int r = 0; r < W; ++r) bi[r] += wi[r] * v;
-  }
-  // Forward: rows j < P have fewer sub-diagonal entries.
-  for (int j = 0; j < m; ++j) {
-    double sum = b[j];
-    const double* lj = lower + size_t(j) * W;  // lj[k - j + P] = L[j][k]
-    const int k0 = j - P < 0 ? 0 : j - P;
-    for (int k = k0; k < j; ++k) sum -= lj[k - j + P] * b[k];
-    b[j] = sum * invDiag[j];
-  }
-  for (int j = m - 1; j >= 0; --j) {
-    double sum = b[j];
-    const int k1 = j + P > m - 1 ? m - 1 : j + P;
-    for (int k = j + 1; k <= k1; ++k) sum -= lower[size_t(k) * W + size_t(j - k + P)] * b[k];
-    b[j] = sum * invDiag[j];
-  }
-}
-
-template <int P>
-void evaluateLine(const AxisSystem& s, const float* __restrict c, double* __restrict out) {
-  constexpr int W = P + 1;
-  const double* __restrict weight = s.weight.data();
-  const int* __restrict first = s.first.data();
-  for (int i = 0; i < s.n; ++i) {
-    const double* wi = weight + size_t(i) * W;
-    const float* ci = c + first[i];
-    double v = 0.0;
-    for (int r = 0; r < W; ++r) v += wi[r] * double(ci[r]);
-    out[i] = v;
-  }
-}
-
-using FitLineFn = void (*)(const AxisSystem&, const double*, double*);
-using EvaluateLineFn = void (*)(const AxisSystem&, const float*, double*);
-
-FitLineFn fitLineFor(int p) {
-  static constexpr FitLineFn table[kMaxOrder] = {fitLine<0>, fitLine<1>, fitLine<2>,
-                                                 fitLine<3>, fitLine<4>, fitLine<5>};
-  return table[p];
-}
-EvaluateLineFn evaluateLineFor(int p) {
-  static constexpr EvaluateLineFn table[kMaxOrder] = {evaluateLine<0>, evaluateLine<1>,
-                                                      evaluateLine<2>, evaluateLine<3>,
-                                                      evaluateLine<4>, evaluateLine<5>};
-  return table[p];
+/// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along x
+/// become the vectors of the row kernels.
+template <typename In, typename Out>
+void transpose(const In* __restrict src, size_t rows, size_t cols, Out* __restrict dst) {
+  constexpr size_t kTile = 16;
+  for (size_t r0 = 0; r0 < rows; r0 += kTile)
+    for (size_t c0 = 0; c0 < cols; c0 += kTile) {
+      const size_t r1 = std::min(rows, r0 + kTile), c1 = std::min(cols, c0 + kTile);
+      for (size_t r = r0; r < r1; ++r)
+        for (size_t c = c0; c < c1; ++c) dst[c * rows + r] = Out(src[r * cols + c]);
+    }
 }
 
 /// Throws NumericError naming the first non-finite sample. The scan is branch-free (vectorised);
@@ -294,7 +245,7 @@ void validateSamples(const std::array<int, 3>& n) {
 
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  std::vector<double> bufZ, bufY, line, bufX, bufEY, plane;
+  std::vector<double> bufZ, bufY, bufT, bufC, bufX, bufEY, plane;
 
   /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
   /// between them: clearing inside axis() destroyed the system the caller's earlier reference
@@ -374,22 +325,23 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
     applyTransposeRows(ay, im.bufZ.data() + k * plane, nx, dst, nx, nx);
     solveRows(ay, dst, nx, nx);
   }
-  // Pass x: one contiguous line at a time.
+  // Pass x: the x-lines transposed (line index fastest), so that they are the vectors.
   out.ncp = ncp;
   out.degree = p;
   out.control.resize(mx * my * mz);
-  im.line.resize(mx);
-  const FitLineFn fitX = fitLineFor(p[0]);
-  float* control = out.control.data();
-  int overflow = 0;
-  for (size_t l = 0; l < my * mz; ++l) {
-    fitX(ax, im.bufY.data() + l * nx, im.line.data());
-    float* dst = control + l * mx;
-    for (size_t j = 0; j < mx; ++j) {
-      dst[j] = float(im.line[j]);
-      overflow |= !(std::fabs(dst[j]) <= FLT_MAX);
-    }
+  const size_t lines = my * mz;
+  im.bufT.resize(nx * lines);
+  transpose(im.bufY.data(), lines, nx, im.bufT.data());
+  im.bufC.resize(mx * lines);
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk) {
+    const size_t len = std::min(kChunk, lines - c0);
+    applyTransposeRows(ax, im.bufT.data() + c0, lines, im.bufC.data() + c0, lines, len);
+    solveRows(ax, im.bufC.data() + c0, lines, len);
   }
+  float* control = out.control.data();
+  transpose(im.bufC.data(), mx, lines, control);
+  int overflow = 0;
+  for (size_t i = 0; i < mx * lines; ++i) overflow |= !(std::fabs(control[i]) <= FLT_MAX);
   if (overflow) {
     std::ostringstream msg;
     msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
@@ -426,11 +378,14 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
   const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
   const size_t planeSize = nx * ny;
 
-  // x: control lines -> sample lines.
-  bufX.resize(nx * my * mz);
-  const EvaluateLineFn evalX = evaluateLineFor(model.degree[0]);
-  for (size_t l = 0; l < my * mz; ++l)
-    evalX(ax, model.control.data() + l * mx, bufX.data() + l * nx);
+  // x: control lines -> sample lines, transposed (line index fastest) so that lines are the vectors.
+  const size_t lines = my * mz;
+  bufT.resize(mx * lines);
+  transpose(model.control.data(), lines, mx, bufT.data());
+  bufC.resize(nx * lines);
+  evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
+  bufX.resize(nx * lines);
+  transpose(bufC.data(), nx, lines, bufX.data());
   // y: per z-slab, x-rows.
   bufEY.resize(planeSize * mz);
   for (size_t k = 0; k < mz; ++k)

@@ -156,6 +156,18 @@ void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
   }
 }
 
+/// Sum of squares of n values, in four lanes (vectorised).
+template <typename T>
+double sumSquares(const T* v, size_t n) {
+  double lane[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int l = 0; l < 4; ++l) lane[l] += double(v[i + size_t(l)]) * double(v[i + size_t(l)]);
+  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  for (; i < n; ++i) sum += double(v[i]) * double(v[i]);
+  return sum;
+}
+
 /// out rows [0, n) = A * in rows [0, m): the model on the sample parameters of this axis.
 template <typename In, typename Out>
 void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, size_t outStride,
@@ -243,9 +255,30 @@ void validateSamples(const std::array<int, 3>& n) {
 
 }  // namespace
 
+RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count) {
+  // Rounding: the sums (of count terms) and the solve, taken generously; the float32 control
+  // points move the model by at most half an ulp of the largest one (the basis weights of a sample
+  // are a convex combination); the measurement itself rounds each model value.
+  const double eps = std::numeric_limits<double>::epsilon();
+  const double sums = 4 * double(count) * eps;
+  const double slack = (sums + 1e-11) * (sumOfSquares + energy);
+  const double residual = sumOfSquares - energy;  // |d - A c*|^2: the exact least-squares residual
+  const double n = double(std::max<size_t>(count, 1));
+  const double rounding = largestControl * (std::ldexp(1.0, -24) + 1e-11) + FLT_TRUE_MIN;
+  const double measuring = 16 * eps * largestControl;
+  RmseRange r;
+  r.lo = std::max(0.0, std::sqrt(std::max(0.0, residual - slack) / n) * (1 - sums) - measuring);
+  r.hi = (std::sqrt(std::max(0.0, residual + slack) / n) + rounding) * (1 + sums) + measuring;
+  return r;
+}
+
+double sumOfSquares(const float* samples, std::array<int, 3> n) {
+  return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+}
+
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  std::vector<double> bufZ, bufY, bufT, bufC, bufX, bufEY, plane;
+  std::vector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
 
   /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
   /// between them: clearing inside axis() destroyed the system the caller's earlier reference
@@ -270,6 +303,20 @@ struct BlockFitter::Impl {
     return *found;
   }
 
+  /// The three axis systems of a fit, factored, after the checks on its arguments.
+  struct Axes {
+    const AxisSystem *x, *y, *z;
+  };
+  Axes prepareFit(const float* samples, const std::array<int, 3>& n, const std::array<int, 3>& ncp,
+                  int degree);
+
+  /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
+  /// (x fastest) and its float32 control points in `out`; returns max |control point|.
+  double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out);
+
+  /// c^T b = c^T (A^T A) c of the last solve().
+  double energy(const std::array<int, 3>& ncp) const;
+
   /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
   void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
                 ErrorStats* stats, float* gridOut);
@@ -287,8 +334,8 @@ FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::arra
   return out;
 }
 
-void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
-                          int degree, bool computeError, FitResult& out) {
+BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, const std::array<int, 3>& n,
+                                                       const std::array<int, 3>& ncp, int degree) {
   validateSamples(n);
   if (degree < 1 || degree > kMaxDegree) {
     std::ostringstream msg;
@@ -300,56 +347,109 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
   validate(n, ncp, p);
   if (!samples) throw InvalidArgument("afam fit: null sample pointer");
   checkFinite(samples, n);
+  trimCache();
+  Axes axes{};
+  axes.x = &axis(n[0], ncp[0], p[0], true);
+  axes.y = &axis(n[1], ncp[1], p[1], true);
+  axes.z = &axis(n[2], ncp[2], p[2], true);
+  return axes;
+}
 
-  Impl& im = *impl_;
-  im.trimCache();
-  const AxisSystem& ax = im.axis(n[0], ncp[0], p[0], true);
-  const AxisSystem& ay = im.axis(n[1], ncp[1], p[1], true);
-  const AxisSystem& az = im.axis(n[2], ncp[2], p[2], true);
+double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::array<int, 3>& n,
+                                FitResult& out) {
+  const AxisSystem &ax = *a.x, &ay = *a.y, &az = *a.z;
   const size_t nx = size_t(n[0]), ny = size_t(n[1]);
-  const size_t mx = size_t(ncp[0]), my = size_t(ncp[1]), mz = size_t(ncp[2]);
-  const size_t plane = nx * ny;
+  const size_t mx = size_t(ax.ncp), my = size_t(ay.ncp), mz = size_t(az.ncp);
+  const size_t planeSize = nx * ny, lines = my * mz, slab = mx * my;
+  constexpr size_t kChunk = 256;  // columns per chunk, so that a chunk's rows stay in cache
 
-  // Pass z: whole xy-planes are the vectors; chunked so that a chunk's rows stay in cache.
-  im.bufZ.resize(plane * mz);
-  constexpr size_t kChunk = 256;
-  for (size_t c0 = 0; c0 < plane; c0 += kChunk) {
-    const size_t len = std::min(kChunk, plane - c0);
-    applyTransposeRows(az, samples + c0, plane, im.bufZ.data() + c0, plane, len);
-    solveRows(az, im.bufZ.data() + c0, plane, len);
-  }
-  // Pass y: per z-slab, x-rows are the vectors.
-  im.bufY.resize(nx * my * mz);
-  for (size_t k = 0; k < mz; ++k) {
-    double* dst = im.bufY.data() + k * nx * my;
-    applyTransposeRows(ay, im.bufZ.data() + k * plane, nx, dst, nx, nx);
-    solveRows(ay, dst, nx, nx);
-  }
-  // Pass x: the x-lines transposed (line index fastest), so that they are the vectors.
-  out.ncp = ncp;
-  out.degree = p;
-  out.control.resize(mx * my * mz);
-  const size_t lines = my * mz;
-  im.bufT.resize(nx * lines);
-  transpose(im.bufY.data(), lines, nx, im.bufT.data());
-  im.bufC.resize(mx * lines);
-  for (size_t c0 = 0; c0 < lines; c0 += kChunk) {
-    const size_t len = std::min(kChunk, lines - c0);
-    applyTransposeRows(ax, im.bufT.data() + c0, lines, im.bufC.data() + c0, lines, len);
-    solveRows(ax, im.bufC.data() + c0, lines, len);
-  }
+  // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
+  // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
+  bufZ.resize(planeSize * mz);
+  for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
+    applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
+                       std::min(kChunk, planeSize - c0));
+  bufY.resize(nx * lines);
+  for (size_t k = 0; k < mz; ++k)
+    applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
+  bufT.resize(nx * lines);
+  transpose(bufY.data(), lines, nx, bufT.data());
+  bufB.resize(mx * lines);
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines, std::min(kChunk, lines - c0));
+
+  // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
+  // then z and y on the control-point layout (x fastest) in bufC.
+  bufT.assign(bufB.begin(), bufB.end());
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
+  bufC.resize(mx * lines);
+  transpose(bufT.data(), mx, lines, bufC.data());
+  for (size_t c0 = 0; c0 < slab; c0 += kChunk)
+    solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
+  for (size_t k = 0; k < mz; ++k) solveRows(ay, bufC.data() + k * slab, mx, mx);
+
+  out.ncp = {ax.ncp, ay.ncp, az.ncp};
+  out.degree = {ax.p, ay.p, az.p};
+  out.control.resize(mx * lines);
   float* control = out.control.data();
-  transpose(im.bufC.data(), mx, lines, control);
-  int overflow = 0;
-  for (size_t i = 0; i < mx * lines; ++i) overflow |= !(std::fabs(control[i]) <= FLT_MAX);
-  if (overflow) {
+  float largest = 0;
+  for (size_t i = 0; i < mx * lines; ++i) {
+    control[i] = float(bufC[i]);
+    largest = std::max(largest, std::fabs(control[i]));
+  }
+  if (!(largest <= FLT_MAX)) {
     std::ostringstream msg;
     msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
         << " block overflows float32 (samples too close to FLT_MAX)";
     throw NumericError(msg.str());
   }
   out.error = ErrorStats{};
-  if (computeError) im.evaluate(out, n, samples, &out.error, nullptr);
+  out.errorMeasured = false;
+  return double(largest);
+}
+
+double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
+  const size_t mx = size_t(ncp[0]), lines = size_t(ncp[1]) * size_t(ncp[2]);
+  double lane[4] = {0, 0, 0, 0};
+  for (size_t j = 0; j < mx; ++j) {
+    const double* __restrict b = bufB.data() + j * lines;
+    for (size_t l = 0; l < lines; ++l) lane[l % 4] += b[l] * bufC[l * mx + j];
+  }
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
+
+void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                          int degree, bool computeError, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree);
+  im.solve(axes, samples, n, out);
+  if (computeError) measure(samples, n, out);
+}
+
+bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+                            double bound, double sumOfSquares, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree);
+  const double largest = im.solve(axes, samples, n, out);
+  const RmseRange range =
+      rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  if (range.lo > bound) {
+    out.error.rmse = range.lo;
+    return false;
+  }
+  if (range.hi <= bound) {
+    out.error.rmse = range.hi;
+    return true;
+  }
+  measure(samples, n, out);
+  return out.error.rmse <= bound;
+}
+
+void BlockFitter::measure(const float* samples, std::array<int, 3> n, FitResult& model) {
+  if (model.errorMeasured) return;
+  model.error = error(samples, n, model);
+  model.errorMeasured = true;
 }
 
 void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3>& n,

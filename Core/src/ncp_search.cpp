@@ -22,11 +22,11 @@ int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, dou
   int bestK = std::numeric_limits<int>::max();
   bool haveTop = false;
   std::vector<signed char> state(size_t(hi) + 1, -1);  // -1 unknown, 0 fails, 1 passes
+  const double squares = sumOfSquares(samples, n);
   auto pass = [&](int k) -> bool {
     if (state[size_t(k)] >= 0) return state[size_t(k)] == 1;
-    fitter.fitInto(samples, n, clampNcp(k, n, degs), degree, true, tmp);
+    const bool ok = fitter.fitWithin(samples, n, clampNcp(k, n, degs), degree, bound, squares, tmp);
     ++fits;
-    const bool ok = tmp.error.rmse <= bound;
     state[size_t(k)] = ok ? 1 : 0;
     if (ok && k < bestK) {
       bestK = k;
@@ -38,13 +38,16 @@ int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, dou
     return ok;
   };
   auto finish = [&]() {
+    int k = bestK;
     if (bestK <= hi) {
       result = std::move(best);
-      return bestK;
+    } else {
+      if (!haveTop) pass(hi);
+      result = std::move(top);
+      k = hi;
     }
-    if (!haveTop) pass(hi);
-    result = std::move(top);
-    return hi;
+    fitter.measure(samples, n, result);
+    return k;
   };
   if (method == SearchMethod::Exhaustive || hi - lo < 2) {
     for (int k = lo; k <= hi; ++k) pass(k);
@@ -103,17 +106,19 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
   std::sort(order.begin(), order.end(), [&](int a, int b) { return rough[size_t(a)] < rough[size_t(b)]; });
   FitResult trial;
   bool reduced = false;
+  double squares = -1;  // computed for the first axis tried
   for (int a : order) {
     if (rough[size_t(a)] * kAnisotropy > roughest) continue;
+    if (squares < 0) squares = sumOfSquares(samples, n);
     const int lo = effectiveDegree(degree, n[size_t(a)]) + 1;
     int fail = lo - 1, pass = result.ncp[size_t(a)];  // NCP `pass` meets the bound on this axis
     while (pass - fail > 1) {
       const int mid = fail == lo - 1 ? lo : fail + (pass - fail) / 2;  // try p+1 first: layers need no more
       Int3 ncp = result.ncp;
       ncp[size_t(a)] = mid;
-      fitter.fitInto(samples, n, ncp, degree, true, trial);
+      const bool ok = fitter.fitWithin(samples, n, ncp, degree, bound, squares, trial);
       ++fits;
-      if (trial.error.rmse <= bound) {
+      if (ok) {
         pass = mid;
         std::swap(result, trial);
         reduced = true;
@@ -122,6 +127,7 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
       }
     }
   }
+  fitter.measure(samples, n, result);
   return reduced;
 }
 

@@ -27,6 +27,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
@@ -54,6 +55,9 @@ struct FitResult {
   std::array<int, 3> ncp{}, degree{};
   std::vector<float> control;
   ErrorStats error;
+  /// false: `error` was not measured on the samples (BlockFitter::fitWithin decided the bound
+  /// without it; only error.rmse is set, to a bound on the RMSE: see there); measure() fills it.
+  bool errorMeasured = true;
 
   /// Non-owning view for evaluateModel (valid while `control` is not reallocated).
   ModelView view() const {
@@ -89,6 +93,19 @@ class BlockFitter {
   void fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
                bool computeError, FitResult& out);
 
+  /// fitInto, then whether the model's RMSE on the samples is <= `bound`, the same answer as
+  /// measuring it, mostly without measuring: the fit's exact least-squares residual
+  /// (sumOfSquares - c^T A^T A c) bounds the model's RMSE from below and, with the float32 rounding
+  /// of the control points, from above (rmseRange); only when the bound lies between the two is the
+  /// error measured. Otherwise out.errorMeasured is false and out.error.rmse holds the decisive
+  /// end of the range (> bound: false, <= bound: true); measure() then gives the full statistics.
+  /// `sumOfSquares` is afam::sumOfSquares(samples, n). Throws as fitInto.
+  bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
+                 double sumOfSquares, FitResult& out);
+
+  /// Measures the model's error on the samples unless model.errorMeasured.
+  void measure(const float* samples, std::array<int, 3> n, FitResult& model);
+
   /// Error of an existing model against the samples, via separable evaluation on the sample grid
   /// (O(n^3 (p+1)), never point by point). Throws InvalidArgument if the model does not fit n.
   ErrorStats error(const float* samples, std::array<int, 3> n, const FitResult& model);
@@ -100,6 +117,19 @@ class BlockFitter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Sum of the squared samples of an n0 x n1 x n2 block, in double.
+double sumOfSquares(const float* samples, std::array<int, 3> n);
+
+/// Range of the RMSE, as BlockFitter::error would measure it, of a fitted model on `count`
+/// samples, from the least-squares identity |d - A c*|^2 = |d|^2 - c*^T A^T A c* (c* the exact
+/// solution, which no other coefficients beat): sumOfSquares = |d|^2, energy = c^T A^T A c of the
+/// computed solution, largestControl = max |control point| (its float32 rounding moves the model
+/// by at most half an ulp of it). Rounding of the sums and of the measurement is allowed for.
+struct RmseRange {
+  double lo = 0, hi = 0;
+};
+RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count);
 
 /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
 /// Convenience wrapper over a thread-local BlockFitter.

@@ -5,8 +5,9 @@
 // (u = 0 for a one-sample axis). On each axis the collocation matrix A (n x ncp, p+1 non-zeros per
 // row, knots implied by afam::Knots) gives a banded normal matrix A^T A of half-bandwidth p. It is
 // built and Cholesky-factored ONCE per (n, ncp, p) in double precision and cached in the fitter.
-// The fit applies A^T and the banded solve along z (whole xy-planes as vectors), then y (x-rows as
-// vectors), then x (one line at a time). Because the tensor least-squares problem
+// The fit applies A^T along z (whole xy-planes as vectors), then y (x-rows as vectors), then x (the
+// x-lines transposed, so that they are the vectors too), and then the banded solves, one axis at a
+// time on the ncp0 x ncp1 x ncp2 coefficients. Because the tensor least-squares problem
 // (Az (x) Ay (x) Ax) c = d has the normal matrix (Nz (x) Ny (x) Nx), this separable result equals
 // the full tensor least-squares solution (tested against a dense solve).
 //

@@ -140,14 +140,14 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
 }
 
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane).
-void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
                     const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
   auto planeOf = [&](size_t t) {
     const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
-    return buf.data() + i * plane;
+    return buf + i * plane;
   };
   for (int k = k0; k < k1; ++k) {
     float* dst = out + size_t(k) * nxy;
@@ -171,15 +171,17 @@ void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& z
 
 PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
 
-void PlaneReader::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
-  buf.resize(zs.size() * plane_);
+const float* PlaneReader::read(const std::vector<int64_t>& zs) {
+  if (buf_.size() < zs.size() * plane_) buf_.resize(zs.size() * plane_);
+  float* buf = buf_.data();
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
     while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
-    src_.readSlab(zs[i], int64_t(j - i), buf.data() + i * plane_);
+    src_.readSlab(zs[i], int64_t(j - i), buf + i * plane_);
     bytesRead_ += (j - i) * plane_ * sizeof(float);
     i = j;
   }
+  return buf;
 }
 
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
@@ -204,12 +206,11 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
   const int64_t X = part.dims()[0];
   const size_t plane = planes.planeSize();
   const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
-  std::vector<float> buf;
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    planes.read(zs, buf);
+    const float* buf = planes.read(zs);
     auto fill = [&](int64_t b) {
       fillBlockChunk(buf, zs, plane, X, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
     };

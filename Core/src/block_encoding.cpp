@@ -172,17 +172,14 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   if (!(budget > 0)) return false;
   FitResult q = fr;
   bool lattice = true;
-  std::vector<float> passed;  // the quantized control points of the last passing step, and their error
-  ErrorStats passedError;
+  FitResult passed;  // the last passing step's model (its error measured only near the bound)
   auto passes = [&](double k) {
     if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
       lattice = false;
       return false;
     }
-    const ErrorStats es = fitter.error(s.data(), n, q);
-    if (!(es.rmse <= bound)) return false;
-    passed = q.control;
-    passedError = es;
+    if (!fitter.changeWithin(s.data(), n, fr, q, bound)) return false;
+    passed = q;
     return true;
   };
   const int best = largestPassingStep(passes);
@@ -190,9 +187,13 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
   std::vector<uint8_t> bytes;
   if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
-  // The coder reconstructs what the ladder measured; measured again only if it does not.
-  const ErrorStats es = q.control == passed ? passedError : fitter.error(s.data(), n, q);
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
+  // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
+  if (q.control == passed.control)
+    q = std::move(passed);
+  else
+    q.errorMeasured = false;
+  fitter.measure(s.data(), n, q);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
   return out.error.rmse <= bound;
 }
 

@@ -156,6 +156,21 @@ void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
   }
 }
 
+/// In place: rows [0, m) <- L^T rows, so that the squared norm of the result is x^T (A^T A) x.
+void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+  const int m = s.ncp, p = s.p;
+  for (int j = 0; j < m; ++j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    const double d = s.L(j, j);
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+    for (int k = j + 1; k <= std::min(m - 1, j + p); ++k) {
+      const double l = s.L(k, j);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] += l * xk[c];
+    }
+  }
+}
+
 /// Sum of squares of n values, in four lanes (vectorised).
 template <typename T>
 double sumSquares(const T* v, size_t n) {
@@ -255,21 +270,55 @@ void validateSamples(const std::array<int, 3>& n) {
 
 }  // namespace
 
-RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count) {
-  // Rounding: the sums (of count terms) and the solve, taken generously; the float32 control
-  // points move the model by at most half an ulp of the largest one (the basis weights of a sample
-  // are a convex combination); the measurement itself rounds each model value.
+namespace {
+
+/// The rounding that rmseRange and changedRmseRange allow for, on `count` samples of a model whose
+/// largest |control point| is `largestControl`.
+struct Rounding {
+  double sums = 0;       ///< relative: sums of `count` terms and the solve, taken generously
+  double controls = 0;   ///< absolute: the float32 rounding of the control points moves the model
+                         ///< by at most half an ulp of the largest (a sample's basis weights are convex)
+  double measuring = 0;  ///< absolute: the rounding of each model value when the error is measured
+};
+
+Rounding roundingOf(double largestControl, size_t count) {
   const double eps = std::numeric_limits<double>::epsilon();
-  const double sums = 4 * double(count) * eps;
-  const double slack = (sums + 1e-11) * (sumOfSquares + energy);
-  const double residual = sumOfSquares - energy;  // |d - A c*|^2: the exact least-squares residual
-  const double n = double(std::max<size_t>(count, 1));
-  const double rounding = largestControl * (std::ldexp(1.0, -24) + 1e-11) + FLT_TRUE_MIN;
-  const double measuring = 16 * eps * largestControl;
-  RmseRange r;
-  r.lo = std::max(0.0, std::sqrt(std::max(0.0, residual - slack) / n) * (1 - sums) - measuring);
-  r.hi = (std::sqrt(std::max(0.0, residual + slack) / n) + rounding) * (1 + sums) + measuring;
+  Rounding r;
+  r.sums = 4 * double(count) * eps + 1e-11;
+  r.controls = largestControl * (std::ldexp(1.0, -24) + 1e-11) + FLT_TRUE_MIN;
+  r.measuring = 16 * eps * largestControl;
   return r;
+}
+
+/// The measured RMSE's range for a true mean squared error in [lo, hi].
+RmseRange measuredRange(double lo, double hi, const Rounding& r) {
+  RmseRange out;
+  out.lo = std::max(0.0, std::sqrt(std::max(0.0, lo)) * (1 - r.sums) - r.measuring);
+  out.hi = std::sqrt(std::max(0.0, hi)) * (1 + r.sums) + r.measuring;
+  return out;
+}
+
+}  // namespace
+
+RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count) {
+  const Rounding r = roundingOf(largestControl, count);
+  const double n = double(std::max<size_t>(count, 1));
+  const double slack = r.sums * (sumOfSquares + energy);
+  const double residual = sumOfSquares - energy;  // |d - A c*|^2: the exact least-squares residual
+  const double hi = std::sqrt(std::max(0.0, residual + slack) / n) + r.controls;
+  return measuredRange((residual - slack) / n, hi * hi, r);
+}
+
+RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl, size_t count) {
+  const Rounding r = roundingOf(largestControl, count);
+  const double n = double(std::max<size_t>(count, 1));
+  const double fLo = std::max(0.0, fittedRmse * (1 - r.sums) - r.measuring);
+  const double fHi = fittedRmse * (1 + r.sums) + r.measuring;
+  const double qLo = changeEnergy * (1 - r.sums) / n, qHi = changeEnergy * (1 + r.sums) / n;
+  // |d - A q|^2 = |d - A c|^2 + |A (c - q)|^2 + 2 <A (c* - c), A (c - q)>: the exact residual
+  // d - A c* is orthogonal to every A x, and |A (c* - c)| / sqrt(n) <= the float32 rounding.
+  const double cross = 2 * r.controls * std::sqrt(qHi);
+  return measuredRange(fLo * fLo + qLo - cross, fHi * fHi + qHi + cross, r);
 }
 
 double sumOfSquares(const float* samples, std::array<int, 3> n) {
@@ -316,6 +365,9 @@ struct BlockFitter::Impl {
 
   /// c^T b = c^T (A^T A) c of the last solve().
   double energy(const std::array<int, 3>& ncp) const;
+
+  /// e^T (A^T A) e for e = the difference of two models' control points (same shape).
+  double changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b);
 
   /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
   void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
@@ -419,6 +471,23 @@ double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
   return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
 
+double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b) {
+  trimCache();
+  const AxisSystem& ax = axis(n[0], a.ncp[0], a.degree[0], true);
+  const AxisSystem& ay = axis(n[1], a.ncp[1], a.degree[1], true);
+  const AxisSystem& az = axis(n[2], a.ncp[2], a.degree[2], true);
+  const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
+  const size_t slab = mx * my, lines = my * mz;
+  bufC.resize(mx * lines);
+  for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
+  multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
+  for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
+  bufT.resize(mx * lines);
+  transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
+  multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
+  return sumSquares(bufT.data(), mx * lines);
+}
+
 void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
                           int degree, bool computeError, FitResult& out) {
   Impl& im = *impl_;
@@ -444,6 +513,32 @@ bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::arr
   }
   measure(samples, n, out);
   return out.error.rmse <= bound;
+}
+
+bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
+                               FitResult& changed, double bound) {
+  if (!fitted.errorMeasured || changed.ncp != fitted.ncp || changed.degree != fitted.degree ||
+      changed.control.size() != fitted.control.size())
+    throw InvalidArgument("afam changeWithin: needs a measured fit and a model of the same shape");
+  validateSamples(n);
+  validate(n, fitted.ncp, fitted.degree);
+  float largest = 0;
+  for (size_t i = 0; i < fitted.control.size(); ++i)
+    largest = std::max({largest, std::fabs(fitted.control[i]), std::fabs(changed.control[i])});
+  const RmseRange range = changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
+                                           size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  changed.errorMeasured = false;
+  changed.error = ErrorStats{};
+  if (range.lo > bound) {
+    changed.error.rmse = range.lo;
+    return false;
+  }
+  if (range.hi <= bound) {
+    changed.error.rmse = range.hi;
+    return true;
+  }
+  measure(samples, n, changed);
+  return changed.error.rmse <= bound;
 }
 
 void BlockFitter::measure(const float* samples, std::array<int, 3> n, FitResult& model) {

@@ -96,3 +96,32 @@ TEST(FitWithin, RangeBracketsTheResidual) {
   // A residual below the rounding slack: the lower end is 0, never negative or NaN.
   EXPECT_EQ(rmseRange(1.0, 1.0, 1.0, 8).lo, 0.0);
 }
+
+TEST(FitWithin, ChangedControlPointsAgreeWithTheMeasuredError) {
+  BlockFitter fitter;
+  int decided = 0, calls = 0;
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    const FitResult fr = fitter.fit(c.samples.data(), c.n, clampNcp(9, c.n, {2, 2, 2}), 2);
+    for (double step : {1e-6, 1e-5, 1e-4, 1e-3, 1e-2}) {
+      FitResult q = fr;
+      for (float& v : q.control) v = float(std::round(double(v) / step) * step);
+      const double rmse = fitter.error(c.samples.data(), c.n, q).rmse;
+      for (double factor : {0.5, 0.99, 1.0, 1.01, 2.0}) {
+        const double bound = factor == 1.0 ? rmse : rmse * factor;
+        FitResult changed = q;
+        const bool ok = fitter.changeWithin(c.samples.data(), c.n, fr, changed, bound);
+        ++calls;
+        EXPECT_EQ(ok, rmse <= bound) << "step " << step << " factor " << factor;
+        if (!changed.errorMeasured) ++decided;
+        fitter.measure(c.samples.data(), c.n, changed);
+        EXPECT_EQ(changed.error.rmse, rmse);
+      }
+    }
+  }
+  std::printf("decided without measuring: %d of %d\n", decided, calls);
+  EXPECT_GE(decided, calls * 3 / 5);
+  FitResult other = fitter.fit(cases()[0].samples.data(), {17, 17, 17}, {5, 5, 5}, 2);
+  const FitResult fr = fitter.fit(cases()[0].samples.data(), {17, 17, 17}, {6, 6, 6}, 2);
+  EXPECT_THROW(fitter.changeWithin(cases()[0].samples.data(), {17, 17, 17}, fr, other, 1.0), InvalidArgument);
+}

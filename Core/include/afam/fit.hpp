@@ -104,6 +104,14 @@ class BlockFitter {
   bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
                  double sumOfSquares, FitResult& out);
 
+  /// Whether `changed`, the model `fitted` (a least-squares fit of these samples, its error
+  /// measured) with other control points (quantized, say), meets `bound`: the same answer as
+  /// measuring it, mostly without measuring, from fitted's RMSE and the energy of the change
+  /// (changedRmseRange). changed.errorMeasured and changed.error as in fitWithin. Throws
+  /// InvalidArgument when the shapes differ or fitted's error was not measured.
+  bool changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted, FitResult& changed,
+                    double bound);
+
   /// Measures the model's error on the samples unless model.errorMeasured.
   void measure(const float* samples, std::array<int, 3> n, FitResult& model);
 
@@ -131,6 +139,12 @@ struct RmseRange {
   double lo = 0, hi = 0;
 };
 RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count);
+
+/// Range of the measured RMSE of a least-squares fit's control points c changed to q, from the fit's
+/// measured RMSE and changeEnergy = (c - q)^T A^T A (c - q): |d - A q|^2 = |d - A c|^2 +
+/// |A (c - q)|^2 up to a cross term that only the float32 rounding of c makes non-zero.
+/// largestControl = max |control point| of both.
+RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl, size_t count);
 
 /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
 /// Convenience wrapper over a thread-local BlockFitter.

@@ -496,6 +496,16 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
   if (computeError) measure(samples, n, out);
 }
 
+bool BlockFitter::decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n,
+                         FitResult& model) {
+  if (range.lo > bound || range.hi <= bound) {
+    model.error.rmse = range.lo > bound ? range.lo : range.hi;
+    return range.hi <= bound;
+  }
+  measure(samples, n, model);
+  return model.error.rmse <= bound;
+}
+
 bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
                             double bound, double sumOfSquares, FitResult& out) {
   Impl& im = *impl_;
@@ -503,16 +513,7 @@ bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::arr
   const double largest = im.solve(axes, samples, n, out);
   const RmseRange range =
       rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
-  if (range.lo > bound) {
-    out.error.rmse = range.lo;
-    return false;
-  }
-  if (range.hi <= bound) {
-    out.error.rmse = range.hi;
-    return true;
-  }
-  measure(samples, n, out);
-  return out.error.rmse <= bound;
+  return decide(range, bound, samples, n, out);
 }
 
 bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
@@ -529,16 +530,7 @@ bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const
                                            size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
   changed.errorMeasured = false;
   changed.error = ErrorStats{};
-  if (range.lo > bound) {
-    changed.error.rmse = range.lo;
-    return false;
-  }
-  if (range.hi <= bound) {
-    changed.error.rmse = range.hi;
-    return true;
-  }
-  measure(samples, n, changed);
-  return changed.error.rmse <= bound;
+  return decide(range, bound, samples, n, changed);
 }
 
 void BlockFitter::measure(const float* samples, std::array<int, 3> n, FitResult& model) {

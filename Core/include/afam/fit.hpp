@@ -69,6 +69,11 @@ struct FitResult {
   }
 };
 
+/// A range [lo, hi] of RMSE values (see rmseRange).
+struct RmseRange {
+  double lo = 0, hi = 0;
+};
+
 /// Reusable fitter; NOT thread-safe: one per thread. Caches per-axis factorisations keyed by
 /// (n, ncp, p) and keeps its work buffers between calls, so a fit allocates nothing but its result.
 class BlockFitter {
@@ -123,6 +128,10 @@ class BlockFitter {
   void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
  private:
+  /// The answer of fitWithin and changeWithin: the decisive end of the range (model unmeasured),
+  /// else the measured error.
+  bool decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n, FitResult& model);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -135,9 +144,6 @@ double sumOfSquares(const float* samples, std::array<int, 3> n);
 /// solution, which no other coefficients beat): sumOfSquares = |d|^2, energy = c^T A^T A c of the
 /// computed solution, largestControl = max |control point| (its float32 rounding moves the model
 /// by at most half an ulp of it). Rounding of the sums and of the measurement is allowed for.
-struct RmseRange {
-  double lo = 0, hi = 0;
-};
 RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count);
 
 /// Range of the measured RMSE of a least-squares fit's control points c changed to q, from the fit's

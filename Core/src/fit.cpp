@@ -171,6 +171,11 @@ void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride, 
   }
 }
 
+/// Makes v hold at least n values, growing only: a buffer reused across shapes is not filled again.
+void grow(std::vector<double>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
 /// Sum of squares of n values, in four lanes (vectorised).
 template <typename T>
 double sumSquares(const T* v, size_t n) {
@@ -417,25 +422,26 @@ double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::
 
   // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
   // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
-  bufZ.resize(planeSize * mz);
+  grow(bufZ, planeSize * mz);
   for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
     applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
                        std::min(kChunk, planeSize - c0));
-  bufY.resize(nx * lines);
+  grow(bufY, nx * lines);
   for (size_t k = 0; k < mz; ++k)
     applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
-  bufT.resize(nx * lines);
+  grow(bufT, nx * lines);
   transpose(bufY.data(), lines, nx, bufT.data());
-  bufB.resize(mx * lines);
+  grow(bufB, mx * lines);
   for (size_t c0 = 0; c0 < lines; c0 += kChunk)
     applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines, std::min(kChunk, lines - c0));
 
   // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
   // then z and y on the control-point layout (x fastest) in bufC.
-  bufT.assign(bufB.begin(), bufB.end());
+  grow(bufT, mx * lines);
+  std::copy_n(bufB.data(), mx * lines, bufT.data());
   for (size_t c0 = 0; c0 < lines; c0 += kChunk)
     solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
-  bufC.resize(mx * lines);
+  grow(bufC, mx * lines);
   transpose(bufT.data(), mx, lines, bufC.data());
   for (size_t c0 = 0; c0 < slab; c0 += kChunk)
     solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
@@ -478,11 +484,11 @@ double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitRes
   const AxisSystem& az = axis(n[2], a.ncp[2], a.degree[2], true);
   const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
   const size_t slab = mx * my, lines = my * mz;
-  bufC.resize(mx * lines);
+  grow(bufC, mx * lines);
   for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
   multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
   for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
-  bufT.resize(mx * lines);
+  grow(bufT, mx * lines);
   transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
   multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
   return sumSquares(bufT.data(), mx * lines);
@@ -567,25 +573,25 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
 
   // x: control lines -> sample lines, transposed (line index fastest) so that lines are the vectors.
   const size_t lines = my * mz;
-  bufT.resize(mx * lines);
+  grow(bufT, mx * lines);
   transpose(model.control.data(), lines, mx, bufT.data());
-  bufC.resize(nx * lines);
+  grow(bufC, nx * lines);
   evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
-  bufX.resize(nx * lines);
+  grow(bufX, nx * lines);
   transpose(bufC.data(), nx, lines, bufX.data());
   // y: per z-slab, x-rows.
-  bufEY.resize(planeSize * mz);
+  grow(bufEY, planeSize * mz);
   for (size_t k = 0; k < mz; ++k)
     evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx,
                  nullptr);
   // z: whole planes; either written out or reduced against the samples plane by plane.
   if (gridOut) {
-    plane.resize(planeSize);
+    grow(plane, planeSize);
     evaluateRows(az, bufEY.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
     return;
   }
   const int w = az.p + 1;
-  plane.resize(planeSize);
+  grow(plane, planeSize);
   constexpr int kLanes = 4;
   double sumSq[kLanes] = {0, 0, 0, 0};
   double maxErr[kLanes] = {0, 0, 0, 0};

@@ -361,8 +361,9 @@ struct BlockFitter::Impl {
   struct Axes {
     const AxisSystem *x, *y, *z;
   };
+  /// `checkSamples` false: the caller knows the samples are finite (their sum of squares is).
   Axes prepareFit(const float* samples, const std::array<int, 3>& n, const std::array<int, 3>& ncp,
-                  int degree);
+                  int degree, bool checkSamples = true);
 
   /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
   /// (x fastest) and its float32 control points in `out`; returns max |control point|.
@@ -392,7 +393,8 @@ FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::arra
 }
 
 BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, const std::array<int, 3>& n,
-                                                       const std::array<int, 3>& ncp, int degree) {
+                                                       const std::array<int, 3>& ncp, int degree,
+                                                       bool checkSamples) {
   validateSamples(n);
   if (degree < 1 || degree > kMaxDegree) {
     std::ostringstream msg;
@@ -403,7 +405,7 @@ BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, cons
   for (int a = 0; a < 3; ++a) p[a] = effectiveDegree(degree, n[a]);
   validate(n, ncp, p);
   if (!samples) throw InvalidArgument("afam fit: null sample pointer");
-  checkFinite(samples, n);
+  if (checkSamples) checkFinite(samples, n);
   trimCache();
   Axes axes{};
   axes.x = &axis(n[0], ncp[0], p[0], true);
@@ -515,7 +517,7 @@ bool BlockFitter::decide(const RmseRange& range, double bound, const float* samp
 bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
                             double bound, double sumOfSquares, FitResult& out) {
   Impl& im = *impl_;
-  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree);
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree, !std::isfinite(sumOfSquares));
   const double largest = im.solve(axes, samples, n, out);
   const RmseRange range =
       rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));

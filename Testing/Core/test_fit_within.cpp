@@ -125,3 +125,13 @@ TEST(FitWithin, ChangedControlPointsAgreeWithTheMeasuredError) {
   const FitResult fr = fitter.fit(cases()[0].samples.data(), {17, 17, 17}, {6, 6, 6}, 2);
   EXPECT_THROW(fitter.changeWithin(cases()[0].samples.data(), {17, 17, 17}, fr, other, 1.0), InvalidArgument);
 }
+
+TEST(FitWithin, NonFiniteSamplesAreRefusedLikeFitInto) {
+  std::vector<float> v = cases()[0].samples;
+  v[100] = std::nanf("");
+  BlockFitter fitter;
+  FitResult out;
+  const double squares = sumOfSquares(v.data(), {17, 17, 17});
+  EXPECT_FALSE(std::isfinite(squares));
+  EXPECT_THROW(fitter.fitWithin(v.data(), {17, 17, 17}, {9, 9, 9}, 2, 1e-3, squares, out), NumericError);
+}

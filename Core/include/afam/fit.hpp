@@ -105,7 +105,8 @@ class BlockFitter {
   /// of the control points, from above (rmseRange); only when the bound lies between the two is the
   /// error measured. Otherwise out.errorMeasured is false and out.error.rmse holds the decisive
   /// end of the range (> bound: false, <= bound: true); measure() then gives the full statistics.
-  /// `sumOfSquares` is afam::sumOfSquares(samples, n). Throws as fitInto.
+  /// `sumOfSquares` is afam::sumOfSquares(samples, n): finite, it also vouches that the samples
+  /// are (they are not scanned again). Throws as fitInto.
   bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
                  double sumOfSquares, FitResult& out);
 

@@ -43,11 +43,37 @@ struct AxisSystem {
   std::vector<double> weight;   ///< (p+1) basis values per sample
   std::vector<double> lower;    ///< L[j][k] at lower[j*(p+1) + k - j + p], k in [j-p, j]
   std::vector<double> invDiag;  ///< 1 / L[j][j]
+  /// Column view of the collocation: control point j is supported by samples rowFirst[j] ..
+  /// rowLast[j], their weights at columnWeight[columnOffset[j] ...] in sample order.
+  std::vector<int> rowFirst, rowLast;
+  std::vector<size_t> columnOffset;
+  std::vector<double> columnWeight;
 
   double L(int j, int k) const { return lower[size_t(j) * size_t(p + 1) + size_t(k - j + p)]; }
 };
 
 double parameterOf(int i, int n) { return n > 1 ? double(i) / double(n - 1) : 0.0; }
+
+/// The column view of the collocation (first[i] is non-decreasing, so a column's samples are
+/// consecutive).
+void buildColumns(AxisSystem& s) {
+  const int w = s.p + 1;
+  s.rowFirst.assign(size_t(s.ncp), s.n);
+  s.rowLast.assign(size_t(s.ncp), -1);
+  for (int i = 0; i < s.n; ++i)
+    for (int r = 0; r < w; ++r) {
+      const size_t j = size_t(s.first[size_t(i)] + r);
+      s.rowFirst[j] = std::min(s.rowFirst[j], i);
+      s.rowLast[j] = std::max(s.rowLast[j], i);
+    }
+  s.columnOffset.assign(size_t(s.ncp), 0);
+  s.columnWeight.clear();
+  for (int j = 0; j < s.ncp; ++j) {
+    s.columnOffset[size_t(j)] = s.columnWeight.size();
+    for (int i = s.rowFirst[size_t(j)]; i <= s.rowLast[size_t(j)]; ++i)
+      s.columnWeight.push_back(s.weight[size_t(i) * size_t(w) + size_t(j - s.first[size_t(i)])]);
+  }
+}
 
 void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
   s.n = n;
@@ -72,6 +98,7 @@ void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
     s.first[size_t(i)] = span - p;
     for (int r = 0; r < w; ++r) s.weight[size_t(i) * size_t(w) + size_t(r)] = N[r];
   }
+  buildColumns(s);
 }
 
 void factorNormal(AxisSystem& s) {
@@ -117,16 +144,27 @@ void factorNormal(AxisSystem& s) {
 template <typename In>
 void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, double* out,
                         size_t outStride, size_t len) {
-  const int w = s.p + 1;
-  for (int j = 0; j < s.ncp; ++j) std::fill_n(out + size_t(j) * outStride, len, 0.0);
-  for (int i = 0; i < s.n; ++i) {
-    const In* __restrict src = in + size_t(i) * inStride;
-    const double* wi = &s.weight[size_t(i) * size_t(w)];
-    const int f = s.first[size_t(i)];
-    for (int r = 0; r < w; ++r) {
-      const double a = wi[r];
-      double* __restrict dst = out + size_t(f + r) * outStride;
-      for (size_t c = 0; c < len; ++c) dst[c] += a * double(src[c]);
+  // Column by column, in blocks of kBlock values summed in registers over the column's samples
+  // (in sample order, from 0): each output is written once.
+  constexpr size_t kBlock = 8;
+  for (int j = 0; j < s.ncp; ++j) {
+    const int i0 = s.rowFirst[size_t(j)], i1 = s.rowLast[size_t(j)];
+    const double* wj = s.columnWeight.data() + s.columnOffset[size_t(j)];
+    double* __restrict dst = out + size_t(j) * outStride;
+    size_t c0 = 0;
+    for (; c0 + kBlock <= len; c0 += kBlock) {
+      double acc[kBlock] = {};
+      for (int i = i0; i <= i1; ++i) {
+        const In* __restrict src = in + size_t(i) * inStride + c0;
+        const double a = wj[i - i0];
+        for (size_t t = 0; t < kBlock; ++t) acc[t] += a * double(src[t]);
+      }
+      for (size_t t = 0; t < kBlock; ++t) dst[c0 + t] = acc[t];
+    }
+    for (; c0 < len; ++c0) {
+      double acc = 0;
+      for (int i = i0; i <= i1; ++i) acc += wj[i - i0] * double(in[size_t(i) * inStride + c0]);
+      dst[c0] = acc;
     }
   }
 }

@@ -36,7 +36,7 @@ using BlockLoop = std::function<void(int64_t count, const std::function<void(int
 
 /// Fills the samples of every block in `blocks` (all in the same z-row of one level): the z-planes
 /// the row needs are read in chunks (at most ~256 MB, one readSlab per run of consecutive planes),
-/// and each block is filtered from a chunk separably (x, then y, then z; sums in double), blocks
+/// and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).

@@ -30,18 +30,20 @@ std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
   return out;
 }
 
-/// Error of model values (on the block's sample grid) against the samples; min/max of the model.
-ErrorStats compare(const float* model, const std::vector<float>& s) {
+/// Error of model values (on the block's sample grid; model(i) gives value i) against the samples;
+/// min/max of the model.
+template <typename Model>
+ErrorStats compare(const Model& model, const std::vector<float>& s) {
   ErrorStats es;
   es.minValue = std::numeric_limits<double>::infinity();
   es.maxValue = -es.minValue;
   double sum = 0;
   for (size_t i = 0; i < s.size(); ++i) {
-    const double d = double(model[i]) - double(s[i]);
+    const double d = double(model(i)) - double(s[i]);
     sum += d * d;
     es.maxError = std::max(es.maxError, std::fabs(d));
-    es.minValue = std::min(es.minValue, double(model[i]));
-    es.maxValue = std::max(es.maxValue, double(model[i]));
+    es.minValue = std::min(es.minValue, double(model(i)));
+    es.maxValue = std::max(es.maxValue, double(model(i)));
   }
   es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
   return es;
@@ -152,8 +154,7 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree,
   double mean = 0;
   for (float v : s) mean += double(v);
   const float c = float(mean / double(s.size()));
-  const std::vector<float> model(s.size(), c);
-  const ErrorStats es = compare(model.data(), s);
+  const ErrorStats es = compare([c](size_t) { return c; }, s);
   if (!(es.rmse <= bound)) return false;
   out.kind = BlockKind::Constant;
   for (int a = 0; a < 3; ++a) {
@@ -209,7 +210,7 @@ bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, 
       lattice = false;
       return false;
     }
-    return compare(recon.data(), s).rmse <= bound;
+    return compare([&recon](size_t i) { return recon[i]; }, s).rmse <= bound;
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;

@@ -105,7 +105,10 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
                       FitResult& result, int64_t& fits) {
   const std::array<double, 3> rough = axisRoughness(samples, n);
   const double roughest = *std::max_element(rough.begin(), rough.end());
-  if (!(roughest > 0)) return false;
+  if (!(roughest > 0)) {
+    fitter.measure(samples, n, result);
+    return false;
+  }
   std::array<int, 3> order{0, 1, 2};
   std::sort(order.begin(), order.end(), [&](int a, int b) { return rough[size_t(a)] < rough[size_t(b)]; });
   FitResult trial;

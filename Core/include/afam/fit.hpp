@@ -34,6 +34,7 @@
 
 #include "afam/errors.hpp"
 #include "afam/evaluate.hpp"
+#include "afam/rmse_range.hpp"
 #include "afam/types.hpp"
 
 namespace afam {
@@ -67,11 +68,6 @@ struct FitResult {
     v.control = control.data();
     return v;
   }
-};
-
-/// A range [lo, hi] of RMSE values (see rmseRange).
-struct RmseRange {
-  double lo = 0, hi = 0;
 };
 
 /// Reusable fitter; NOT thread-safe: one per thread. Caches per-axis factorisations keyed by
@@ -139,19 +135,6 @@ class BlockFitter {
 
 /// Sum of the squared samples of an n0 x n1 x n2 block, in double.
 double sumOfSquares(const float* samples, std::array<int, 3> n);
-
-/// Range of the RMSE, as BlockFitter::error would measure it, of a fitted model on `count`
-/// samples, from the least-squares identity |d - A c*|^2 = |d|^2 - c*^T A^T A c* (c* the exact
-/// solution, which no other coefficients beat): sumOfSquares = |d|^2, energy = c^T A^T A c of the
-/// computed solution, largestControl = max |control point| (its float32 rounding moves the model
-/// by at most half an ulp of it). Rounding of the sums and of the measurement is allowed for.
-RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count);
-
-/// Range of the measured RMSE of a least-squares fit's control points c changed to q, from the fit's
-/// measured RMSE and changeEnergy = (c - q)^T A^T A (c - q): |d - A q|^2 = |d - A c|^2 +
-/// |A (c - q)|^2 up to a cross term that only the float32 rounding of c makes non-zero.
-/// largestControl = max |control point| of both.
-RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl, size_t count);
 
 /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
 /// Convenience wrapper over a thread-local BlockFitter.

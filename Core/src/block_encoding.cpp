@@ -30,18 +30,20 @@ std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
   return out;
 }
 
-/// Error of model values (on the block's sample grid) against the samples; min/max of the model.
-ErrorStats compare(const float* model, const std::vector<float>& s) {
+/// Error of model values (on the block's sample grid; model(i) gives value i) against the samples;
+/// min/max of the model.
+template <typename Model>
+ErrorStats compare(const Model& model, const std::vector<float>& s) {
   ErrorStats es;
   es.minValue = std::numeric_limits<double>::infinity();
   es.maxValue = -es.minValue;
   double sum = 0;
   for (size_t i = 0; i < s.size(); ++i) {
-    const double d = double(model[i]) - double(s[i]);
+    const double d = double(model(i)) - double(s[i]);
     sum += d * d;
     es.maxError = std::max(es.maxError, std::fabs(d));
-    es.minValue = std::min(es.minValue, double(model[i]));
-    es.maxValue = std::max(es.maxValue, double(model[i]));
+    es.minValue = std::min(es.minValue, double(model(i)));
+    es.maxValue = std::max(es.maxValue, double(model(i)));
   }
   es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
   return es;
@@ -152,8 +154,7 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree,
   double mean = 0;
   for (float v : s) mean += double(v);
   const float c = float(mean / double(s.size()));
-  const std::vector<float> model(s.size(), c);
-  const ErrorStats es = compare(model.data(), s);
+  const ErrorStats es = compare([c](size_t) { return c; }, s);
   if (!(es.rmse <= bound)) return false;
   out.kind = BlockKind::Constant;
   for (int a = 0; a < 3; ++a) {
@@ -172,17 +173,14 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   if (!(budget > 0)) return false;
   FitResult q = fr;
   bool lattice = true;
-  std::vector<float> passed;  // the quantized control points of the last passing step, and their error
-  ErrorStats passedError;
+  FitResult passed;  // the last passing step's model (its error measured only near the bound)
   auto passes = [&](double k) {
     if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
       lattice = false;
       return false;
     }
-    const ErrorStats es = fitter.error(s.data(), n, q);
-    if (!(es.rmse <= bound)) return false;
-    passed = q.control;
-    passedError = es;
+    if (!fitter.changeWithin(s.data(), n, fr, q, bound)) return false;
+    passed = q;
     return true;
   };
   const int best = largestPassingStep(passes);
@@ -190,9 +188,13 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
   std::vector<uint8_t> bytes;
   if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
-  // The coder reconstructs what the ladder measured; measured again only if it does not.
-  const ErrorStats es = q.control == passed ? passedError : fitter.error(s.data(), n, q);
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, es, std::move(bytes)};
+  // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
+  if (q.control == passed.control)
+    q = std::move(passed);
+  else
+    q.errorMeasured = false;
+  fitter.measure(s.data(), n, q);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
   return out.error.rmse <= bound;
 }
 
@@ -208,7 +210,7 @@ bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, 
       lattice = false;
       return false;
     }
-    return compare(recon.data(), s).rmse <= bound;
+    return compare([&recon](size_t i) { return recon[i]; }, s).rmse <= bound;
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;

@@ -102,30 +102,33 @@ AxisTaps axisTaps(const Partition& part, const BlockExtent& e, int level, int ax
 struct BlockTaps {
   AxisTaps tx, ty;
   int nx = 0, ny = 0;
-  int64_t y0 = 0, y1 = 0;  ///< the rows of a plane the y taps read
+  int64_t x0 = 0, x1 = 0;  ///< the columns of a plane the x taps read
 };
 
-/// acc[j * nx + i] += w * (the x-then-y filtered plane at block sample (i, j)); rows is scratch.
+/// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)); rows is scratch. y
+/// first: it runs along whole rows of the columns the block reads (vectorised), and x then filters
+/// only the block's rows.
 void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double w, std::vector<double>& rows,
                       std::vector<double>& acc) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
-  const int64_t y0 = bt.y0, y1 = bt.y1;
-  rows.resize(size_t(y1 - y0 + 1) * size_t(bt.nx));
-  for (int64_t y = y0; y <= y1; ++y) {
-    const float* src = plane + y * X;
-    double* h = rows.data() + size_t(y - y0) * size_t(bt.nx);
-    for (int i = 0; i < bt.nx; ++i) {
-      double v = 0;
-      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) v += tx.weight[k] * double(src[tx.index[k]]);
-      h[i] = v;
+  const size_t width = size_t(bt.x1 - bt.x0 + 1);
+  rows.resize(size_t(bt.ny) * width);
+  for (int j = 0; j < bt.ny; ++j) {
+    double* __restrict h = rows.data() + size_t(j) * width;
+    std::fill_n(h, width, 0.0);
+    for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
+      const float* __restrict src = plane + ty.index[k] * X + bt.x0;
+      const double wy = ty.weight[k];
+      for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
     }
   }
   for (int j = 0; j < bt.ny; ++j) {
+    const double* h = rows.data() + size_t(j) * width - bt.x0;
     double* dst = acc.data() + size_t(j) * size_t(bt.nx);
-    for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
-      const double wy = w * ty.weight[k];
-      const double* h = rows.data() + size_t(ty.index[k] - y0) * size_t(bt.nx);
-      for (int i = 0; i < bt.nx; ++i) dst[i] += wy * h[i];
+    for (int i = 0; i < bt.nx; ++i) {
+      double v = 0;
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) v += tx.weight[k] * h[tx.index[k]];
+      dst[i] += w * v;
     }
   }
 }
@@ -140,14 +143,14 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
 }
 
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane).
-void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
                     const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
   auto planeOf = [&](size_t t) {
     const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
-    return buf.data() + i * plane;
+    return buf + i * plane;
   };
   for (int k = k0; k < k1; ++k) {
     float* dst = out + size_t(k) * nxy;
@@ -171,15 +174,17 @@ void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& z
 
 PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
 
-void PlaneReader::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
-  buf.resize(zs.size() * plane_);
+const float* PlaneReader::read(const std::vector<int64_t>& zs) {
+  if (buf_.size() < zs.size() * plane_) buf_.resize(zs.size() * plane_);
+  float* buf = buf_.data();
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
     while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
-    src_.readSlab(zs[i], int64_t(j - i), buf.data() + i * plane_);
+    src_.readSlab(zs[i], int64_t(j - i), buf + i * plane_);
     bytesRead_ += (j - i) * plane_ * sizeof(float);
     i = j;
   }
+  return buf;
 }
 
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
@@ -196,20 +201,19 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
     taps[b].ty = axisTaps(part, e, level, 1, ghost, sampling);
     taps[b].nx = e.samples[0] + 2 * g;
     taps[b].ny = e.samples[1] + 2 * g;
-    const auto ys = std::minmax_element(taps[b].ty.index.begin(), taps[b].ty.index.end());
-    taps[b].y0 = *ys.first;
-    taps[b].y1 = *ys.second;
+    const auto xs = std::minmax_element(taps[b].tx.index.begin(), taps[b].tx.index.end());
+    taps[b].x0 = *xs.first;
+    taps[b].x1 = *xs.second;
     out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
   }
   const int64_t X = part.dims()[0];
   const size_t plane = planes.planeSize();
   const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
-  std::vector<float> buf;
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    planes.read(zs, buf);
+    const float* buf = planes.read(zs);
     auto fill = [&](int64_t b) {
       fillBlockChunk(buf, zs, plane, X, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
     };

@@ -2,8 +2,10 @@
 #include "afam/encoder.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <ctime>
 #include <limits>
 #include <future>
@@ -111,6 +113,36 @@ class EncodeProgress {
 
 Cancelled cancelled() { return Cancelled("encoding cancelled"); }
 
+/// lo/hi extended by the n values (four lanes at a time: min/max vectorised); false if one is NaN
+/// or infinite (lo/hi are then incomplete).
+bool extendRange(const float* v, size_t n, float& lo, float& hi) {
+  using Lanes = float __attribute__((vector_size(16)));
+  using Flags = int __attribute__((vector_size(16)));
+  const Lanes big = {FLT_MAX, FLT_MAX, FLT_MAX, FLT_MAX};
+  Lanes l = {lo, lo, lo, lo}, h = {hi, hi, hi, hi};
+  Flags bad = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    Lanes x;
+    std::memcpy(&x, v + i, sizeof x);
+    bad |= !(x <= big && x >= -big);
+    l = x < l ? x : l;
+    h = x > h ? x : h;
+  }
+  bool finite = true;
+  for (int t = 0; t < 4; ++t) {
+    finite = finite && bad[t] == 0;
+    lo = std::min(lo, l[t]);
+    hi = std::max(hi, h[t]);
+  }
+  for (; i < n; ++i) {
+    finite = finite && std::isfinite(v[i]);
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  return finite;
+}
+
 /// Value range and NaN/Inf check in one streaming pass (unless the source knows its range).
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress, double& vmin,
                     double& vmax) {
@@ -124,18 +156,16 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
     const int64_t nz = std::min(chunk, dims[2] - z);
     buf.resize(size_t(nz * plane));
     source.readSlab(z, nz, buf.data());
-    for (size_t i = 0; i < buf.size(); ++i) {
+    if (!extendRange(buf.data(), buf.size(), lo, hi)) {
+      const size_t i = size_t(std::find_if(buf.begin(), buf.end(), [](float v) { return !std::isfinite(v); }) -
+                              buf.begin());
       const float v = buf[i];
-      if (!std::isfinite(v)) {
-        const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1], z + int64_t(i) / plane};
-        std::ostringstream msg;
-        msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of " << source.name()
-            << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
-            << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
-        throw NumericError(msg.str());
-      }
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
+      const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1], z + int64_t(i) / plane};
+      std::ostringstream msg;
+      msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of " << source.name()
+          << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
+          << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
+      throw NumericError(msg.str());
     }
     if (!progress.report(progress.rangeWork() * double(z + nz) / double(dims[2]))) throw cancelled();
   }

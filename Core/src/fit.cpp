@@ -43,11 +43,37 @@ struct AxisSystem {
   std::vector<double> weight;   ///< (p+1) basis values per sample
   std::vector<double> lower;    ///< L[j][k] at lower[j*(p+1) + k - j + p], k in [j-p, j]
   std::vector<double> invDiag;  ///< 1 / L[j][j]
+  /// Column view of the collocation: control point j is supported by samples rowFirst[j] ..
+  /// rowLast[j], their weights at columnWeight[columnOffset[j] ...] in sample order.
+  std::vector<int> rowFirst, rowLast;
+  std::vector<size_t> columnOffset;
+  std::vector<double> columnWeight;
 
   double L(int j, int k) const { return lower[size_t(j) * size_t(p + 1) + size_t(k - j + p)]; }
 };
 
 double parameterOf(int i, int n) { return n > 1 ? double(i) / double(n - 1) : 0.0; }
+
+/// The column view of the collocation (first[i] is non-decreasing, so a column's samples are
+/// consecutive).
+void buildColumns(AxisSystem& s) {
+  const int w = s.p + 1;
+  s.rowFirst.assign(size_t(s.ncp), s.n);
+  s.rowLast.assign(size_t(s.ncp), -1);
+  for (int i = 0; i < s.n; ++i)
+    for (int r = 0; r < w; ++r) {
+      const size_t j = size_t(s.first[size_t(i)] + r);
+      s.rowFirst[j] = std::min(s.rowFirst[j], i);
+      s.rowLast[j] = std::max(s.rowLast[j], i);
+    }
+  s.columnOffset.assign(size_t(s.ncp), 0);
+  s.columnWeight.clear();
+  for (int j = 0; j < s.ncp; ++j) {
+    s.columnOffset[size_t(j)] = s.columnWeight.size();
+    for (int i = s.rowFirst[size_t(j)]; i <= s.rowLast[size_t(j)]; ++i)
+      s.columnWeight.push_back(s.weight[size_t(i) * size_t(w) + size_t(j - s.first[size_t(i)])]);
+  }
+}
 
 void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
   s.n = n;
@@ -72,6 +98,7 @@ void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
     s.first[size_t(i)] = span - p;
     for (int r = 0; r < w; ++r) s.weight[size_t(i) * size_t(w) + size_t(r)] = N[r];
   }
+  buildColumns(s);
 }
 
 void factorNormal(AxisSystem& s) {
@@ -117,16 +144,27 @@ void factorNormal(AxisSystem& s) {
 template <typename In>
 void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, double* out,
                         size_t outStride, size_t len) {
-  const int w = s.p + 1;
-  for (int j = 0; j < s.ncp; ++j) std::fill_n(out + size_t(j) * outStride, len, 0.0);
-  for (int i = 0; i < s.n; ++i) {
-    const In* __restrict src = in + size_t(i) * inStride;
-    const double* wi = &s.weight[size_t(i) * size_t(w)];
-    const int f = s.first[size_t(i)];
-    for (int r = 0; r < w; ++r) {
-      const double a = wi[r];
-      double* __restrict dst = out + size_t(f + r) * outStride;
-      for (size_t c = 0; c < len; ++c) dst[c] += a * double(src[c]);
+  // Column by column, in blocks of kBlock values summed in registers over the column's samples
+  // (in sample order, from 0): each output is written once.
+  constexpr size_t kBlock = 8;
+  for (int j = 0; j < s.ncp; ++j) {
+    const int i0 = s.rowFirst[size_t(j)], i1 = s.rowLast[size_t(j)];
+    const double* wj = s.columnWeight.data() + s.columnOffset[size_t(j)];
+    double* __restrict dst = out + size_t(j) * outStride;
+    size_t c0 = 0;
+    for (; c0 + kBlock <= len; c0 += kBlock) {
+      double acc[kBlock] = {};
+      for (int i = i0; i <= i1; ++i) {
+        const In* __restrict src = in + size_t(i) * inStride + c0;
+        const double a = wj[i - i0];
+        for (size_t t = 0; t < kBlock; ++t) acc[t] += a * double(src[t]);
+      }
+      for (size_t t = 0; t < kBlock; ++t) dst[c0 + t] = acc[t];
+    }
+    for (; c0 < len; ++c0) {
+      double acc = 0;
+      for (int i = i0; i <= i1; ++i) acc += wj[i - i0] * double(in[size_t(i) * inStride + c0]);
+      dst[c0] = acc;
     }
   }
 }
@@ -154,6 +192,38 @@ void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
     const double d = s.invDiag[size_t(j)];
     for (size_t c = 0; c < len; ++c) xj[c] *= d;
   }
+}
+
+/// In place: rows [0, m) <- L^T rows, so that the squared norm of the result is x^T (A^T A) x.
+void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+  const int m = s.ncp, p = s.p;
+  for (int j = 0; j < m; ++j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    const double d = s.L(j, j);
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+    for (int k = j + 1; k <= std::min(m - 1, j + p); ++k) {
+      const double l = s.L(k, j);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] += l * xk[c];
+    }
+  }
+}
+
+/// Makes v hold at least n values, growing only: a buffer reused across shapes is not filled again.
+void grow(std::vector<double>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
+/// Sum of squares of n values, in four lanes (vectorised).
+template <typename T>
+double sumSquares(const T* v, size_t n) {
+  double lane[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int l = 0; l < 4; ++l) lane[l] += double(v[i + size_t(l)]) * double(v[i + size_t(l)]);
+  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  for (; i < n; ++i) sum += double(v[i]) * double(v[i]);
+  return sum;
 }
 
 /// out rows [0, n) = A * in rows [0, m): the model on the sample parameters of this axis.
@@ -184,66 +254,17 @@ void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, 
   }
 }
 
-// ---- Line kernels along x (contiguous lines, one at a time), specialised on the degree ----
-
-template <int P>
-void fitLine(const AxisSystem& s, const double* __restrict in, double* __restrict b) {
-  constexpr int W = P + 1;
-  const int m = s.ncp, n = s.n;
-  const double* __restrict weight = s.weight.data();
-  const int* __restrict first = s.first.data();
-  const double* __restrict lower = s.lower.data();
-  const double* __restrict invDiag = s.invDiag.data();
-  for (int j = 0; j < m; ++j) b[j] = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const double v = in[i];
-    double* bi = b + first[i];
-    const double* wi = weight + size_t(i) * W;
-    for (int r = 0; r < W; ++r) bi[r] += wi[r] * v;
-  }
-  // Forward: rows j < P have fewer sub-diagonal entries.
-  for (int j = 0; j < m; ++j) {
-    double sum = b[j];
-    const double* lj = lower + size_t(j) * W;  // lj[k - j + P] = L[j][k]
-    const int k0 = j - P < 0 ? 0 : j - P;
-    for (int k = k0; k < j; ++k) sum -= lj[k - j + P] * b[k];
-    b[j] = sum * invDiag[j];
-  }
-  for (int j = m - 1; j >= 0; --j) {
-    double sum = b[j];
-    const int k1 = j + P > m - 1 ? m - 1 : j + P;
-    for (int k = j + 1; k <= k1; ++k) sum -= lower[size_t(k) * W + size_t(j - k + P)] * b[k];
-    b[j] = sum * invDiag[j];
-  }
-}
-
-template <int P>
-void evaluateLine(const AxisSystem& s, const float* __restrict c, double* __restrict out) {
-  constexpr int W = P + 1;
-  const double* __restrict weight = s.weight.data();
-  const int* __restrict first = s.first.data();
-  for (int i = 0; i < s.n; ++i) {
-    const double* wi = weight + size_t(i) * W;
-    const float* ci = c + first[i];
-    double v = 0.0;
-    for (int r = 0; r < W; ++r) v += wi[r] * double(ci[r]);
-    out[i] = v;
-  }
-}
-
-using FitLineFn = void (*)(const AxisSystem&, const double*, double*);
-using EvaluateLineFn = void (*)(const AxisSystem&, const float*, double*);
-
-FitLineFn fitLineFor(int p) {
-  static constexpr FitLineFn table[kMaxOrder] = {fitLine<0>, fitLine<1>, fitLine<2>,
-                                                 fitLine<3>, fitLine<4>, fitLine<5>};
-  return table[p];
-}
-EvaluateLineFn evaluateLineFor(int p) {
-  static constexpr EvaluateLineFn table[kMaxOrder] = {evaluateLine<0>, evaluateLine<1>,
-                                                      evaluateLine<2>, evaluateLine<3>,
-                                                      evaluateLine<4>, evaluateLine<5>};
-  return table[p];
+/// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along x
+/// become the vectors of the row kernels.
+template <typename In, typename Out>
+void transpose(const In* __restrict src, size_t rows, size_t cols, Out* __restrict dst) {
+  constexpr size_t kTile = 16;
+  for (size_t r0 = 0; r0 < rows; r0 += kTile)
+    for (size_t c0 = 0; c0 < cols; c0 += kTile) {
+      const size_t r1 = std::min(rows, r0 + kTile), c1 = std::min(cols, c0 + kTile);
+      for (size_t r = r0; r < r1; ++r)
+        for (size_t c = c0; c < c1; ++c) dst[c * rows + r] = Out(src[r * cols + c]);
+    }
 }
 
 /// Throws NumericError naming the first non-finite sample. The scan is branch-free (vectorised);
@@ -292,9 +313,13 @@ void validateSamples(const std::array<int, 3>& n) {
 
 }  // namespace
 
+double sumOfSquares(const float* samples, std::array<int, 3> n) {
+  return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+}
+
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  std::vector<double> bufZ, bufY, line, bufX, bufEY, plane;
+  std::vector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
 
   /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
   /// between them: clearing inside axis() destroyed the system the caller's earlier reference
@@ -319,6 +344,24 @@ struct BlockFitter::Impl {
     return *found;
   }
 
+  /// The three axis systems of a fit, factored, after the checks on its arguments.
+  struct Axes {
+    const AxisSystem *x, *y, *z;
+  };
+  /// `checkSamples` false: the caller knows the samples are finite (their sum of squares is).
+  Axes prepareFit(const float* samples, const std::array<int, 3>& n, const std::array<int, 3>& ncp,
+                  int degree, bool checkSamples = true);
+
+  /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
+  /// (x fastest) and its float32 control points in `out`; returns max |control point|.
+  double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out);
+
+  /// c^T b = c^T (A^T A) c of the last solve().
+  double energy(const std::array<int, 3>& ncp) const;
+
+  /// e^T (A^T A) e for e = the difference of two models' control points (same shape).
+  double changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b);
+
   /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
   void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
                 ErrorStats* stats, float* gridOut);
@@ -336,8 +379,9 @@ FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::arra
   return out;
 }
 
-void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
-                          int degree, bool computeError, FitResult& out) {
+BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, const std::array<int, 3>& n,
+                                                       const std::array<int, 3>& ncp, int degree,
+                                                       bool checkSamples) {
   validateSamples(n);
   if (degree < 1 || degree > kMaxDegree) {
     std::ostringstream msg;
@@ -348,56 +392,146 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
   for (int a = 0; a < 3; ++a) p[a] = effectiveDegree(degree, n[a]);
   validate(n, ncp, p);
   if (!samples) throw InvalidArgument("afam fit: null sample pointer");
-  checkFinite(samples, n);
+  if (checkSamples) checkFinite(samples, n);
+  trimCache();
+  Axes axes{};
+  axes.x = &axis(n[0], ncp[0], p[0], true);
+  axes.y = &axis(n[1], ncp[1], p[1], true);
+  axes.z = &axis(n[2], ncp[2], p[2], true);
+  return axes;
+}
 
-  Impl& im = *impl_;
-  im.trimCache();
-  const AxisSystem& ax = im.axis(n[0], ncp[0], p[0], true);
-  const AxisSystem& ay = im.axis(n[1], ncp[1], p[1], true);
-  const AxisSystem& az = im.axis(n[2], ncp[2], p[2], true);
+double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::array<int, 3>& n,
+                                FitResult& out) {
+  const AxisSystem &ax = *a.x, &ay = *a.y, &az = *a.z;
   const size_t nx = size_t(n[0]), ny = size_t(n[1]);
-  const size_t mx = size_t(ncp[0]), my = size_t(ncp[1]), mz = size_t(ncp[2]);
-  const size_t plane = nx * ny;
+  const size_t mx = size_t(ax.ncp), my = size_t(ay.ncp), mz = size_t(az.ncp);
+  const size_t planeSize = nx * ny, lines = my * mz, slab = mx * my;
+  constexpr size_t kChunk = 256;  // columns per chunk, so that a chunk's rows stay in cache
 
-  // Pass z: whole xy-planes are the vectors; chunked so that a chunk's rows stay in cache.
-  im.bufZ.resize(plane * mz);
-  constexpr size_t kChunk = 256;
-  for (size_t c0 = 0; c0 < plane; c0 += kChunk) {
-    const size_t len = std::min(kChunk, plane - c0);
-    applyTransposeRows(az, samples + c0, plane, im.bufZ.data() + c0, plane, len);
-    solveRows(az, im.bufZ.data() + c0, plane, len);
-  }
-  // Pass y: per z-slab, x-rows are the vectors.
-  im.bufY.resize(nx * my * mz);
-  for (size_t k = 0; k < mz; ++k) {
-    double* dst = im.bufY.data() + k * nx * my;
-    applyTransposeRows(ay, im.bufZ.data() + k * plane, nx, dst, nx, nx);
-    solveRows(ay, dst, nx, nx);
-  }
-  // Pass x: one contiguous line at a time.
-  out.ncp = ncp;
-  out.degree = p;
-  out.control.resize(mx * my * mz);
-  im.line.resize(mx);
-  const FitLineFn fitX = fitLineFor(p[0]);
+  // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
+  // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
+  grow(bufZ, planeSize * mz);
+  for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
+    applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
+                       std::min(kChunk, planeSize - c0));
+  grow(bufY, nx * lines);
+  for (size_t k = 0; k < mz; ++k)
+    applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
+  grow(bufT, nx * lines);
+  transpose(bufY.data(), lines, nx, bufT.data());
+  grow(bufB, mx * lines);
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines, std::min(kChunk, lines - c0));
+
+  // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
+  // then z and y on the control-point layout (x fastest) in bufC.
+  grow(bufT, mx * lines);
+  std::copy_n(bufB.data(), mx * lines, bufT.data());
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
+  grow(bufC, mx * lines);
+  transpose(bufT.data(), mx, lines, bufC.data());
+  for (size_t c0 = 0; c0 < slab; c0 += kChunk)
+    solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
+  for (size_t k = 0; k < mz; ++k) solveRows(ay, bufC.data() + k * slab, mx, mx);
+
+  out.ncp = {ax.ncp, ay.ncp, az.ncp};
+  out.degree = {ax.p, ay.p, az.p};
+  out.control.resize(mx * lines);
   float* control = out.control.data();
-  int overflow = 0;
-  for (size_t l = 0; l < my * mz; ++l) {
-    fitX(ax, im.bufY.data() + l * nx, im.line.data());
-    float* dst = control + l * mx;
-    for (size_t j = 0; j < mx; ++j) {
-      dst[j] = float(im.line[j]);
-      overflow |= !(std::fabs(dst[j]) <= FLT_MAX);
-    }
+  float largest = 0;
+  for (size_t i = 0; i < mx * lines; ++i) {
+    control[i] = float(bufC[i]);
+    largest = std::max(largest, std::fabs(control[i]));
   }
-  if (overflow) {
+  if (!(largest <= FLT_MAX)) {
     std::ostringstream msg;
     msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
         << " block overflows float32 (samples too close to FLT_MAX)";
     throw NumericError(msg.str());
   }
   out.error = ErrorStats{};
-  if (computeError) im.evaluate(out, n, samples, &out.error, nullptr);
+  out.errorMeasured = false;
+  return double(largest);
+}
+
+double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
+  const size_t mx = size_t(ncp[0]), lines = size_t(ncp[1]) * size_t(ncp[2]);
+  double lane[4] = {0, 0, 0, 0};
+  for (size_t j = 0; j < mx; ++j) {
+    const double* __restrict b = bufB.data() + j * lines;
+    for (size_t l = 0; l < lines; ++l) lane[l % 4] += b[l] * bufC[l * mx + j];
+  }
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
+
+double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b) {
+  trimCache();
+  const AxisSystem& ax = axis(n[0], a.ncp[0], a.degree[0], true);
+  const AxisSystem& ay = axis(n[1], a.ncp[1], a.degree[1], true);
+  const AxisSystem& az = axis(n[2], a.ncp[2], a.degree[2], true);
+  const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
+  const size_t slab = mx * my, lines = my * mz;
+  grow(bufC, mx * lines);
+  for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
+  multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
+  for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
+  grow(bufT, mx * lines);
+  transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
+  multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
+  return sumSquares(bufT.data(), mx * lines);
+}
+
+void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                          int degree, bool computeError, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree);
+  im.solve(axes, samples, n, out);
+  if (computeError) measure(samples, n, out);
+}
+
+bool BlockFitter::decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n,
+                         FitResult& model) {
+  if (range.lo > bound || range.hi <= bound) {
+    model.error.rmse = range.lo > bound ? range.lo : range.hi;
+    return range.hi <= bound;
+  }
+  measure(samples, n, model);
+  return model.error.rmse <= bound;
+}
+
+bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+                            double bound, double sumOfSquares, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree, !std::isfinite(sumOfSquares));
+  const double largest = im.solve(axes, samples, n, out);
+  const RmseRange range =
+      rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  return decide(range, bound, samples, n, out);
+}
+
+bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
+                               FitResult& changed, double bound) {
+  if (!fitted.errorMeasured || changed.ncp != fitted.ncp || changed.degree != fitted.degree ||
+      changed.control.size() != fitted.control.size())
+    throw InvalidArgument("afam changeWithin: needs a measured fit and a model of the same shape");
+  validateSamples(n);
+  validate(n, fitted.ncp, fitted.degree);
+  float largest = 0;
+  for (size_t i = 0; i < fitted.control.size(); ++i)
+    largest = std::max({largest, std::fabs(fitted.control[i]), std::fabs(changed.control[i])});
+  const RmseRange range = changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
+                                           size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  changed.errorMeasured = false;
+  changed.error = ErrorStats{};
+  return decide(range, bound, samples, n, changed);
+}
+
+void BlockFitter::measure(const float* samples, std::array<int, 3> n, FitResult& model) {
+  if (model.errorMeasured) return;
+  model.error = error(samples, n, model);
+  model.errorMeasured = true;
 }
 
 void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3>& n,
@@ -426,33 +560,34 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
   const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
   const size_t planeSize = nx * ny;
 
-  // x: control lines -> sample lines.
-  bufX.resize(nx * my * mz);
-  const EvaluateLineFn evalX = evaluateLineFor(model.degree[0]);
-  for (size_t l = 0; l < my * mz; ++l)
-    evalX(ax, model.control.data() + l * mx, bufX.data() + l * nx);
+  // x: control lines -> sample lines, transposed (line index fastest) so that lines are the vectors.
+  const size_t lines = my * mz;
+  grow(bufT, mx * lines);
+  transpose(model.control.data(), lines, mx, bufT.data());
+  grow(bufC, nx * lines);
+  evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
+  grow(bufX, nx * lines);
+  transpose(bufC.data(), nx, lines, bufX.data());
   // y: per z-slab, x-rows.
-  bufEY.resize(planeSize * mz);
+  grow(bufEY, planeSize * mz);
   for (size_t k = 0; k < mz; ++k)
     evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx,
                  nullptr);
   // z: whole planes; either written out or reduced against the samples plane by plane.
   if (gridOut) {
-    plane.resize(planeSize);
+    grow(plane, planeSize);
     evaluateRows(az, bufEY.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
     return;
   }
   const int w = az.p + 1;
-  plane.resize(planeSize);
-  constexpr int kLanes = 4;
-  double sumSq[kLanes] = {0, 0, 0, 0};
-  double maxErr[kLanes] = {0, 0, 0, 0};
-  double lo[kLanes], hi[kLanes];
-  for (int l = 0; l < kLanes; ++l) {
-    lo[l] = std::numeric_limits<double>::infinity();
-    hi[l] = -std::numeric_limits<double>::infinity();
-  }
-  double tailSum = 0, tailMax = 0, tailLo = lo[0], tailHi = hi[0];
+  grow(plane, planeSize);
+  // Four lanes as two pairs of doubles (GCC/Clang vector types: the reduction is vectorised);
+  // lane l takes the values c = l mod 4, reduced in lane order at the end.
+  using Pair = double __attribute__((vector_size(16)));
+  const double inf = std::numeric_limits<double>::infinity();
+  Pair sumSq[2] = {{0, 0}, {0, 0}}, maxErr[2] = {{0, 0}, {0, 0}};
+  Pair lo[2] = {{inf, inf}, {inf, inf}}, hi[2] = {{-inf, -inf}, {-inf, -inf}};
+  double tailSum = 0, tailMax = 0, tailLo = inf, tailHi = -inf;
   for (size_t i = 0; i < nz; ++i) {
     const double* wi = &az.weight[i * size_t(w)];
     const size_t f = size_t(az.first[i]);
@@ -469,17 +604,17 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
     }
     const float* __restrict sp = samples + i * planeSize;
     size_t c = 0;
-    for (; c + kLanes <= planeSize; c += kLanes) {
-      for (int l = 0; l < kLanes; ++l) {
-        const double value = v[c + size_t(l)];
-        const double d = value - double(sp[c + size_t(l)]);
-        sumSq[l] += d * d;
-        const double ad = std::fabs(d);
-        maxErr[l] = ad > maxErr[l] ? ad : maxErr[l];
-        lo[l] = value < lo[l] ? value : lo[l];
-        hi[l] = value > hi[l] ? value : hi[l];
+    for (; c + 4 <= planeSize; c += 4)
+      for (size_t h = 0; h < 2; ++h) {
+        const size_t q = c + 2 * h;
+        const Pair value = {v[q], v[q + 1]};
+        const Pair d = value - Pair{double(sp[q]), double(sp[q + 1])};
+        sumSq[h] += d * d;
+        const Pair ad = d < 0 ? -d : d;
+        maxErr[h] = ad > maxErr[h] ? ad : maxErr[h];
+        lo[h] = value < lo[h] ? value : lo[h];
+        hi[h] = value > hi[h] ? value : hi[h];
       }
-    }
     for (; c < planeSize; ++c) {
       const double value = v[c];
       const double d = value - double(sp[c]);
@@ -490,11 +625,11 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
     }
   }
   double sum = tailSum, me = tailMax, mn = tailLo, mxv = tailHi;
-  for (int l = 0; l < kLanes; ++l) {
-    sum += sumSq[l];
-    me = std::max(me, maxErr[l]);
-    mn = std::min(mn, lo[l]);
-    mxv = std::max(mxv, hi[l]);
+  for (size_t l = 0; l < 4; ++l) {
+    sum += sumSq[l / 2][l % 2];
+    me = std::max(me, maxErr[l / 2][l % 2]);
+    mn = std::min(mn, lo[l / 2][l % 2]);
+    mxv = std::max(mxv, hi[l / 2][l % 2]);
   }
   const double count = double(nx * ny * nz);
   stats->rmse = std::sqrt(sum / count);

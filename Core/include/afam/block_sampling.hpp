@@ -17,8 +17,9 @@ namespace afam {
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);
-  /// Planes zs (ascending, distinct) into buf, plane i at buf.data() + i * planeSize().
-  void read(const std::vector<int64_t>& zs, std::vector<float>& buf);
+  /// Planes zs (ascending, distinct), plane i at the result + i * planeSize(), valid until the next
+  /// read. The reader's buffer only grows: it is not allocated, page-faulted or cleared again.
+  const float* read(const std::vector<int64_t>& zs);
   size_t planeSize() const { return plane_; }
   uint64_t bytesRead() const { return bytesRead_; }
 
@@ -26,6 +27,7 @@ class PlaneReader {
   VolumeSource& src_;
   size_t plane_;
   uint64_t bytesRead_ = 0;
+  std::vector<float> buf_;
 };
 
 /// Runs fn(block) for block in [0, count), on several threads when the caller provides them
@@ -34,7 +36,7 @@ using BlockLoop = std::function<void(int64_t count, const std::function<void(int
 
 /// Fills the samples of every block in `blocks` (all in the same z-row of one level): the z-planes
 /// the row needs are read in chunks (at most ~256 MB, one readSlab per run of consecutive planes),
-/// and each block is filtered from a chunk separably (x, then y, then z; sums in double), blocks
+/// and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).

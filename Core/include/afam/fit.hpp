@@ -5,8 +5,9 @@
 // (u = 0 for a one-sample axis). On each axis the collocation matrix A (n x ncp, p+1 non-zeros per
 // row, knots implied by afam::Knots) gives a banded normal matrix A^T A of half-bandwidth p. It is
 // built and Cholesky-factored ONCE per (n, ncp, p) in double precision and cached in the fitter.
-// The fit applies A^T and the banded solve along z (whole xy-planes as vectors), then y (x-rows as
-// vectors), then x (one line at a time). Because the tensor least-squares problem
+// The fit applies A^T along z (whole xy-planes as vectors), then y (x-rows as vectors), then x (the
+// x-lines transposed, so that they are the vectors too), and then the banded solves, one axis at a
+// time on the ncp0 x ncp1 x ncp2 coefficients. Because the tensor least-squares problem
 // (Az (x) Ay (x) Ax) c = d has the normal matrix (Nz (x) Ny (x) Nx), this separable result equals
 // the full tensor least-squares solution (tested against a dense solve).
 //
@@ -27,11 +28,13 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
 #include "afam/errors.hpp"
 #include "afam/evaluate.hpp"
+#include "afam/rmse_range.hpp"
 #include "afam/types.hpp"
 
 namespace afam {
@@ -54,6 +57,9 @@ struct FitResult {
   std::array<int, 3> ncp{}, degree{};
   std::vector<float> control;
   ErrorStats error;
+  /// false: `error` was not measured on the samples (BlockFitter::fitWithin decided the bound
+  /// without it; only error.rmse is set, to a bound on the RMSE: see there); measure() fills it.
+  bool errorMeasured = true;
 
   /// Non-owning view for evaluateModel (valid while `control` is not reallocated).
   ModelView view() const {
@@ -89,6 +95,28 @@ class BlockFitter {
   void fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
                bool computeError, FitResult& out);
 
+  /// fitInto, then whether the model's RMSE on the samples is <= `bound`, the same answer as
+  /// measuring it, mostly without measuring: the fit's exact least-squares residual
+  /// (sumOfSquares - c^T A^T A c) bounds the model's RMSE from below and, with the float32 rounding
+  /// of the control points, from above (rmseRange); only when the bound lies between the two is the
+  /// error measured. Otherwise out.errorMeasured is false and out.error.rmse holds the decisive
+  /// end of the range (> bound: false, <= bound: true); measure() then gives the full statistics.
+  /// `sumOfSquares` is afam::sumOfSquares(samples, n): finite, it also vouches that the samples
+  /// are (they are not scanned again). Throws as fitInto.
+  bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
+                 double sumOfSquares, FitResult& out);
+
+  /// Whether `changed`, the model `fitted` (a least-squares fit of these samples, its error
+  /// measured) with other control points (quantized, say), meets `bound`: the same answer as
+  /// measuring it, mostly without measuring, from fitted's RMSE and the energy of the change
+  /// (changedRmseRange). changed.errorMeasured and changed.error as in fitWithin. Throws
+  /// InvalidArgument when the shapes differ or fitted's error was not measured.
+  bool changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted, FitResult& changed,
+                    double bound);
+
+  /// Measures the model's error on the samples unless model.errorMeasured.
+  void measure(const float* samples, std::array<int, 3> n, FitResult& model);
+
   /// Error of an existing model against the samples, via separable evaluation on the sample grid
   /// (O(n^3 (p+1)), never point by point). Throws InvalidArgument if the model does not fit n.
   ErrorStats error(const float* samples, std::array<int, 3> n, const FitResult& model);
@@ -97,9 +125,16 @@ class BlockFitter {
   void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
  private:
+  /// The answer of fitWithin and changeWithin: the decisive end of the range (model unmeasured),
+  /// else the measured error.
+  bool decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n, FitResult& model);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Sum of the squared samples of an n0 x n1 x n2 block, in double.
+double sumOfSquares(const float* samples, std::array<int, 3> n);
 
 /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
 /// Convenience wrapper over a thread-local BlockFitter.

@@ -16,8 +16,10 @@ enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 
 /// In-level search on one block's samples: NCP* = the smallest scalar NCP in [p+1, n] (n the
 /// block's largest sample count, clamped per axis by clampNcp) whose RMSE is <= bound; n if none is.
-/// Returns NCP* and the fit at NCP* in `result`; `fits` counts the fits performed. Fast and
-/// Exhaustive give the same NCP* (see encoder.hpp for how Fast searches).
+/// Returns NCP* and the fit at NCP* in `result` (its error measured on the samples); `fits` counts
+/// the fits performed. Each candidate is judged by BlockFitter::fitWithin, which gives the answer
+/// measuring its error would. Fast and Exhaustive give the same NCP* (see encoder.hpp for how Fast
+/// searches).
 int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree, double bound,
               SearchMethod method, int window, FitResult& result, int64_t& fits);
 
@@ -25,7 +27,8 @@ int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, i
 /// roughest axis (mean squared second difference at most kAnisotropy times smaller), the smallest
 /// NCP on that axis, the others fixed, whose fit still meets `bound` (bisection between p+1 and the
 /// current NCP). Smoothest axis first. `result` must meet the bound on entry and still does on
-/// return, with a control-point count never larger. Returns true when an axis was reduced.
+/// return (its error measured), with a control-point count never larger. Returns true when an axis
+/// was reduced.
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree, double bound,
                       FitResult& result, int64_t& fits);
 

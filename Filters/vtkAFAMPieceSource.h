@@ -1,0 +1,71 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkAFAMPieceSource
+ * @brief   A volume spread over MPI ranks, read by whole z-planes (private to the module).
+ *
+ * Each rank holds the float32 samples of its piece (a sub-extent of the whole extent, split along
+ * any axes; neighbouring pieces may share their boundary points) and exposes it in an MPI window.
+ * readSlab assembles whole planes of the global volume with passive-target one-sided reads
+ * (MPI_Get of the part of each piece inside the planes), so a rank reads only the planes of the
+ * rows it fits, whenever it needs them, without the owners taking part. Construction and
+ * destruction are collective (MPI_Win_create / MPI_Win_free).
+ */
+#ifndef vtkAFAMPieceSource_h
+#define vtkAFAMPieceSource_h
+
+#include "afam/volume_source.hpp"
+
+#include "vtkMPI.h" // for MPI_Comm, MPI_Win
+
+#include <array>
+#include <mutex>
+#include <string>
+#include <vector>
+
+class vtkAFAMPieceSource : public afam::VolumeSource
+{
+public:
+  using Extent = std::array<int, 6>; ///< x0 x1 y0 y1 z0 z1, inclusive; empty when x1 < x0 (any axis)
+
+  /// `pieces[r]` is rank r's extent; `samples` holds this rank's piece, x fastest (it must outlive
+  /// the source). Every MPI call takes `mpiLock`.
+  vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole, std::vector<Extent> pieces,
+    const float* samples, std::string name, std::array<double, 3> origin, std::array<double, 3> spacing,
+    int bytesPerVoxel);
+  ~vtkAFAMPieceSource() override;
+  vtkAFAMPieceSource(const vtkAFAMPieceSource&) = delete;
+  vtkAFAMPieceSource& operator=(const vtkAFAMPieceSource&) = delete;
+
+  afam::Index3 dims() const override;
+  std::array<double, 3> origin() const override { return this->Origin; }
+  std::array<double, 3> spacing() const override { return this->Spacing; }
+  std::string name() const override { return this->Name; }
+  int bytesPerVoxel() const override { return this->BytesPerVoxel; }
+  void readSlab(int64_t z0, int64_t zCount, float* out) override;
+
+  /// Bytes this rank has read from other ranks' pieces so far.
+  uint64_t remoteBytesRead() const { return this->RemoteBytes; }
+
+  static bool IsEmpty(const Extent& e) { return e[1] < e[0] || e[3] < e[2] || e[5] < e[4]; }
+  /// "" when the non-empty pieces lie inside `whole` and together cover it, else what is wrong.
+  static std::string CheckCover(const Extent& whole, const std::vector<Extent>& pieces);
+
+private:
+  /// Reads the part of rank r's piece inside `region` (global extent) into `out` (planes from z0);
+  /// false when MPI failed.
+  bool ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, float* out);
+
+  MPI_Comm Comm;
+  MPI_Win Window;
+  std::mutex& MpiLock;
+  Extent Whole;
+  std::vector<Extent> Pieces;
+  int Rank = 0;
+  std::string Name;
+  std::array<double, 3> Origin, Spacing;
+  int BytesPerVoxel;
+  uint64_t RemoteBytes = 0;
+};
+
+#endif

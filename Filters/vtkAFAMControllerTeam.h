@@ -6,8 +6,9 @@
  *
  * The ranks of the controller encode one volume together (afam/encode_team.hpp). Every call runs
  * under `Lock()`, which the piece source (vtkAFAMPieceSource) also takes around its one-sided reads,
- * so that MPI is entered by one thread at a time: the encoder samples on a thread of its own while
- * its calling thread runs these collectives.
+ * so that MPI is entered by one thread at a time where MPI allows other threads than the main one
+ * (MPI_THREAD_SERIALIZED or more): the encoder then samples on a thread of its own while its calling
+ * thread runs these collectives. Below that level every MPI call stays on the calling thread.
  */
 #ifndef vtkAFAMControllerTeam_h
 #define vtkAFAMControllerTeam_h

@@ -128,6 +128,9 @@ vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const
 {
   std::lock_guard<std::mutex> lock(this->MpiLock);
   MPI_Comm_rank(comm, &this->Rank);
+  int threadLevel = MPI_THREAD_SINGLE;
+  MPI_Query_thread(&threadLevel);
+  this->CallingThreadOnly = threadLevel < MPI_THREAD_SERIALIZED;
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
   const MPI_Aint bytes = IsEmpty(mine)
     ? 0

@@ -43,6 +43,9 @@ public:
   std::string name() const override { return this->Name; }
   int bytesPerVoxel() const override { return this->BytesPerVoxel; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  /// Under an MPI initialised below MPI_THREAD_SERIALIZED (pvbatch initialises it single-threaded),
+  /// reads stay on the encoder's calling thread.
+  bool readsOnCallingThread() const override { return this->CallingThreadOnly; }
 
   /// Bytes this rank has read from other ranks' pieces so far.
   uint64_t remoteBytesRead() const { return this->RemoteBytes; }
@@ -65,6 +68,7 @@ private:
   std::string Name;
   std::array<double, 3> Origin, Spacing;
   int BytesPerVoxel;
+  bool CallingThreadOnly = true;
   uint64_t RemoteBytes = 0;
 };
 

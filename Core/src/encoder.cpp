@@ -291,8 +291,8 @@ class LevelEncoder {
       const RowShare nextRows = more ? RowShare{cur.endKz, rows.end} : l + 1 < part_.levels() ? share(l + 1) : RowShare{};
       if (!nextRows.empty()) {
         const int nl = more ? l : l + 1;
-        next = std::async(std::launch::async,
-                          [this, nl, nextRows] { return gatherRows(nl, nextRows.first, nextRows.end); });
+        const auto policy = source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
+        next = std::async(policy, [this, nl, nextRows] { return gatherRows(nl, nextRows.first, nextRows.end); });
       }
       try {
         fitBatch(l, cur.tasks, levelDone);

@@ -46,7 +46,8 @@ void readFittedBlocks(const std::vector<uint8_t>& in, std::vector<BlockTask>& ou
     if (in.size() - at < sizeof r) throw FormatError("fitted blocks: a record is cut short");
     std::memcpy(&r, in.data() + at, sizeof r);
     at += sizeof r;
-    if (in.size() - at < r.entry.storedSize) throw FormatError("fitted blocks: a payload is cut short");
+    if (in.size() - at < r.entry.storedSize)
+      throw FormatError("fitted blocks: a payload is cut short");
     BlockTask t;
     t.ijk = r.entry.block;
     t.entry = r.entry;
@@ -59,7 +60,8 @@ void readFittedBlocks(const std::vector<uint8_t>& in, std::vector<BlockTask>& ou
     t.refit = r.refit != 0;
     t.exact = r.exact != 0;
     t.reducedDegree = r.reducedDegree != 0;
-    t.stored.assign(in.begin() + std::ptrdiff_t(at), in.begin() + std::ptrdiff_t(at + r.entry.storedSize));
+    t.stored.assign(in.begin() + std::ptrdiff_t(at),
+                    in.begin() + std::ptrdiff_t(at + r.entry.storedSize));
     at += r.entry.storedSize;
     out.push_back(std::move(t));
   }

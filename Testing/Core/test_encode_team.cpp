@@ -24,6 +24,15 @@ std::vector<float> mlVolume(Index3 dims) {
   return v;
 }
 
+EncoderOptions relativeBound(int levels, int blocks, double bound) {
+  EncoderOptions opt;
+  opt.levels = levels;
+  opt.blocksPerAxis = blocks;
+  opt.errorBound = bound;
+  opt.relativeBound = true;
+  return opt;
+}
+
 struct MemberResult {
   InMemoryModels models;
   EncodeStats stats;
@@ -32,7 +41,8 @@ struct MemberResult {
 };
 
 /// Encodes v with `members` threads as a team; member r's sink and statistics in result[r].
-std::vector<MemberResult> encodeAsTeam(const std::vector<float>& v, Index3 dims, EncoderOptions opt, int members) {
+std::vector<MemberResult> encodeAsTeam(const std::vector<float>& v, Index3 dims, EncoderOptions opt,
+                                       int members) {
   afam_test::ThreadTeamHub hub(members);
   std::vector<MemberResult> result(static_cast<size_t>(members));
   std::vector<std::thread> threads;
@@ -55,7 +65,8 @@ std::vector<MemberResult> encodeAsTeam(const std::vector<float>& v, Index3 dims,
   return result;
 }
 
-InMemoryModels encodeAlone(const std::vector<float>& v, Index3 dims, EncoderOptions opt, EncodeStats& stats) {
+InMemoryModels encodeAlone(const std::vector<float>& v, Index3 dims, EncoderOptions opt,
+                           EncodeStats& stats) {
   ArraySource source(v.data(), dims, "ml");
   InMemoryModels models;
   opt.threads = 2;
@@ -103,11 +114,7 @@ TEST(EncodeTeam, ThreeMembersGiveTheModelsOfOneProcess) {
   std::vector<float> v = mlVolume(dims);
   for (size_t i = 0; i < v.size(); ++i)
     if (i % 41 < 20) v[i] = 0.25f;  // a flat half: simple blocks whose children skip the search
-  EncoderOptions opt;
-  opt.levels = 3;
-  opt.blocksPerAxis = 5;
-  opt.errorBound = 2e-3;
-  opt.relativeBound = true;
+  const EncoderOptions opt = relativeBound(3, 5, 2e-3);
   EncodeStats alone;
   const InMemoryModels want = encodeAlone(v, dims, opt, alone);
   const std::vector<MemberResult> team = encodeAsTeam(v, dims, opt, 3);
@@ -126,7 +133,8 @@ TEST(EncodeTeam, ThreeMembersGiveTheModelsOfOneProcess) {
 TEST(EncodeTeam, MoreMembersThanRowsAndOtherModes) {
   const Index3 dims{20, 24, 18};
   const std::vector<float> v = mlVolume(dims);
-  for (EncodingMode mode : {EncodingMode::Adaptive, EncodingMode::InLevel, EncodingMode::Downsampled}) {
+  for (EncodingMode mode :
+       {EncodingMode::Adaptive, EncodingMode::InLevel, EncodingMode::Downsampled}) {
     EncoderOptions opt;
     opt.levels = 2;
     opt.blocksPerAxis = 2;  // one row at level 0, two at level 1: 5 members have nothing to fit
@@ -140,10 +148,40 @@ TEST(EncodeTeam, MoreMembersThanRowsAndOtherModes) {
   }
 }
 
+/// A source that may only be read on the thread that made it (an MPI without thread support).
+class CallingThreadSource : public ArraySource {
+ public:
+  using ArraySource::ArraySource;
+  bool readsOnCallingThread() const override { return true; }
+  void readSlab(int64_t z0, int64_t zCount, float* out) override {
+    if (std::this_thread::get_id() != owner_) ++readsElsewhere;
+    ArraySource::readSlab(z0, zCount, out);
+  }
+  int readsElsewhere = 0;
+
+ private:
+  std::thread::id owner_ = std::this_thread::get_id();
+};
+
+TEST(EncodeTeam, ASourceReadOnTheCallingThreadOnlyGivesTheSameModels) {
+  const Index3 dims{30, 26, 34};
+  const std::vector<float> v = mlVolume(dims);
+  EncoderOptions opt = relativeBound(3, 4, 1e-3);
+  EncodeStats alone;
+  const InMemoryModels want = encodeAlone(v, dims, opt, alone);
+  CallingThreadSource source(v.data(), dims, "ml");
+  InMemoryModels got;
+  opt.threads = 2;
+  encodeVolume(source, opt, got);
+  EXPECT_EQ(source.readsElsewhere, 0);
+  expectSameModels(got, want);
+}
+
 TEST(EncodeTeam, AnErrorOnOneMemberReachesEveryMember) {
   const Index3 dims{16, 16, 30};
   std::vector<float> v = mlVolume(dims);
-  v[size_t((25 * 16 + 3) * 16 + 5)] = std::numeric_limits<float>::quiet_NaN();  // plane 25: member 2 of 3 scans it
+  v[size_t((25 * 16 + 3) * 16 + 5)] =
+      std::numeric_limits<float>::quiet_NaN();  // plane 25: member 2 of 3 scans it
   EncoderOptions opt;
   opt.levels = 2;
   opt.blocksPerAxis = 2;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // An EncodeTeam whose processes are threads of the test (no MPI): each collective is a deposit of
-// every member's part, a barrier, a read of all parts, and a second barrier before parts are reused.
+// every member's part, a barrier, a read of all parts, and a second barrier before parts are
+// reused.
 #pragma once
 
 #include <algorithm>
@@ -18,7 +19,10 @@ namespace afam_test {
 class ThreadTeamHub {
  public:
   explicit ThreadTeamHub(int members)
-      : bytes_(size_t(members)), ranges_(size_t(members)), errors_(size_t(members)), size_(members) {}
+      : bytes_(size_t(members)),
+        ranges_(size_t(members)),
+        errors_(size_t(members)),
+        size_(members) {}
   int size() const { return size_; }
   void barrier() {
     std::unique_lock<std::mutex> lock(mutex_);

@@ -42,7 +42,9 @@ class SoloTeam : public EncodeTeam {
   int size() const override { return 1; }
   void reduceRange(double&, double&) override {}
   void mergeFlags(std::vector<uint8_t>&) override {}
-  std::vector<std::vector<uint8_t>> gatherToFirst(const std::vector<uint8_t>& bytes) override { return {bytes}; }
+  std::vector<std::vector<uint8_t>> gatherToFirst(const std::vector<uint8_t>& bytes) override {
+    return {bytes};
+  }
   std::string agreeOnError(const std::string& localError) override {
     return localError.empty() ? localError : "rank 0: " + localError;
   }

@@ -32,6 +32,10 @@ class VolumeSource {
   }
   /// Bytes per voxel of the original data (for the compression ratio).
   virtual int bytesPerVoxel() const { return 4; }
+  /// true when readSlab may only run on the thread that called the encoder (e.g. it reads through
+  /// an MPI library initialised without thread support); the encoder then samples a batch and fits
+  /// it in turn, instead of sampling the next batch on a thread of its own meanwhile.
+  virtual bool readsOnCallingThread() const { return false; }
 };
 
 /// Over a caller-owned float array (x fastest). The array must outlive the source.

@@ -46,6 +46,14 @@ void Agree(vtkAFAMControllerTeam& team, const std::string& error)
   }
 }
 
+/// The type in which `array`'s values are exposed to other ranks: its own where the piece source
+/// can (a plain array of a standard numeric type), else float32 (a converted copy).
+int ExposedType(vtkDataArray* array)
+{
+  const int type = array->GetDataType();
+  return array->HasStandardMemoryLayout() && vtkAFAMPieceSource::IsExposable(type) ? type : VTK_FLOAT;
+}
+
 /// What is wrong with this rank's piece and array ("" when nothing is).
 std::string CheckPiece(vtkImageData* piece, vtkDataArray* array, const std::string& arrayError)
 {
@@ -118,18 +126,26 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   std::array<double, 3> origin{}, spacing{};
   AgreeOnGeometry(team, piece, first, wholeExtent, origin, spacing);
 
-  const std::vector<int> all = team.allGather(mine.data(), 6);
+  // Extents and scalar types of every piece (-1: an empty piece).
+  const int mineType = empty ? -1 : ExposedType(array);
+  const int info[7] = { mine[0], mine[1], mine[2], mine[3], mine[4], mine[5], mineType };
+  const std::vector<int> all = team.allGather(info, 7);
   std::vector<Extent> pieces(static_cast<size_t>(team.size()));
+  int type = -1;
   for (size_t r = 0; r < pieces.size(); ++r)
   {
-    std::copy(all.begin() + 6 * static_cast<std::ptrdiff_t>(r),
-      all.begin() + 6 * static_cast<std::ptrdiff_t>(r + 1), pieces[r].begin());
+    std::copy(&all[7 * r], &all[7 * r + 6], pieces[r].begin());
+    const int other = all[7 * r + 6];
+    type = other < 0 ? type : type < 0 || type == other ? other : VTK_FLOAT;
   }
   Agree(team, team.rank() == 0 ? vtkAFAMPieceSource::CheckCover(whole, pieces) : std::string());
 
-  vtkSmartPointer<vtkFloatArray> values = empty ? nullptr : vtkAFAMFloatValues(array);
+  // The values as they are where every piece has the same exposable type, else float32 copies.
+  vtkSmartPointer<vtkFloatArray> copy =
+    !empty && type != mineType ? vtkAFAMFloatValues(array) : nullptr;
+  const void* samples = empty ? nullptr : copy ? copy->GetVoidPointer(0) : array->GetVoidPointer(0);
   vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(), team.Lock(), whole,
-    std::move(pieces), values ? values->GetPointer(0) : nullptr, name, origin, spacing, bytes);
+    std::move(pieces), samples, type, name, origin, spacing, bytes);
   vtkAFAMPiecesEncoded result;
   result.stats = afam::encodeVolume(source, options, path, team);
   std::copy(mine.begin(), mine.end(), result.pieceExtent);

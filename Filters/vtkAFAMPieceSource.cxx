@@ -4,6 +4,9 @@
 
 #include "afam/errors.hpp"
 
+#include "vtkSetGet.h" // vtkTemplateMacro
+#include "vtkType.h"
+
 #include <algorithm>
 #include <set>
 #include <sstream>
@@ -36,11 +39,60 @@ std::string Text(const Extent& e)
   return s.str();
 }
 
+/// The MPI type of a VTK scalar type (MPI_DATATYPE_NULL when there is none here).
+MPI_Datatype MpiType(int vtkType)
+{
+  switch (vtkType)
+  {
+    case VTK_FLOAT:
+      return MPI_FLOAT;
+    case VTK_DOUBLE:
+      return MPI_DOUBLE;
+    case VTK_UNSIGNED_CHAR:
+      return MPI_UNSIGNED_CHAR;
+    case VTK_SIGNED_CHAR:
+      return MPI_SIGNED_CHAR;
+    case VTK_SHORT:
+      return MPI_SHORT;
+    case VTK_UNSIGNED_SHORT:
+      return MPI_UNSIGNED_SHORT;
+    case VTK_INT:
+      return MPI_INT;
+    case VTK_UNSIGNED_INT:
+      return MPI_UNSIGNED;
+    case VTK_LONG_LONG:
+      return MPI_LONG_LONG;
+    case VTK_UNSIGNED_LONG_LONG:
+      return MPI_UNSIGNED_LONG_LONG;
+    default:
+      return MPI_DATATYPE_NULL;
+  }
+}
+
+template <class T>
+void ToFloat(const unsigned char* raw, size_t count, float* out)
+{
+  const T* in = reinterpret_cast<const T*>(raw);
+  for (size_t i = 0; i < count; ++i)
+  {
+    out[i] = static_cast<float>(in[i]);
+  }
+}
+
+/// out[i] = float(value i of `raw`, of VTK type `vtkType`), as vtkFloatArray::DeepCopy converts.
+void Convert(int vtkType, const unsigned char* raw, size_t count, float* out)
+{
+  switch (vtkType)
+  {
+    vtkTemplateMacro(ToFloat<VTK_TT>(raw, count, out));
+  }
+}
+
 /// An MPI subarray type (x fastest) of `sub` points starting at `start` in a box of `box` points.
-MPI_Datatype Subarray(const int box[3], const int sub[3], const int start[3])
+MPI_Datatype Subarray(MPI_Datatype element, const int box[3], const int sub[3], const int start[3])
 {
   MPI_Datatype type;
-  MPI_Type_create_subarray(3, box, sub, start, MPI_ORDER_FORTRAN, MPI_FLOAT, &type);
+  MPI_Type_create_subarray(3, box, sub, start, MPI_ORDER_FORTRAN, element, &type);
   MPI_Type_commit(&type);
   return type;
 }
@@ -81,6 +133,11 @@ bool FindUncovered(const Extent& whole, const std::vector<Extent>& pieces, std::
 }
 } // namespace
 
+bool vtkAFAMPieceSource::IsExposable(int vtkType)
+{
+  return MpiType(vtkType) != MPI_DATATYPE_NULL;
+}
+
 std::string vtkAFAMPieceSource::CheckCover(const Extent& whole, const std::vector<Extent>& pieces)
 {
   if (IsEmpty(whole))
@@ -115,9 +172,11 @@ std::string vtkAFAMPieceSource::CheckCover(const Extent& whole, const std::vecto
 }
 
 vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole,
-  std::vector<Extent> pieces, const float* samples, std::string name, std::array<double, 3> origin,
-  std::array<double, 3> spacing, int bytesPerVoxel)
+  std::vector<Extent> pieces, const void* samples, int vtkType, std::string name,
+  std::array<double, 3> origin, std::array<double, 3> spacing, int bytesPerVoxel)
   : Comm(comm)
+  , Type(vtkType)
+  , Element(MpiType(vtkType))
   , MpiLock(mpiLock)
   , Whole(whole)
   , Pieces(std::move(pieces))
@@ -131,12 +190,13 @@ vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const
   int threadLevel = MPI_THREAD_SINGLE;
   MPI_Query_thread(&threadLevel);
   this->CallingThreadOnly = threadLevel < MPI_THREAD_SERIALIZED;
+  MPI_Type_size(this->Element, &this->ElementSize);
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
-  const MPI_Aint bytes = IsEmpty(mine)
-    ? 0
-    : static_cast<MPI_Aint>(sizeof(float)) * Points(mine, 0) * Points(mine, 1) * Points(mine, 2);
-  static float nothing = 0;
-  MPI_Win_create(const_cast<float*>(bytes ? samples : &nothing), bytes, sizeof(float),
+  const MPI_Aint bytes = IsEmpty(mine) ? 0
+                                       : static_cast<MPI_Aint>(this->ElementSize) * Points(mine, 0) *
+      Points(mine, 1) * Points(mine, 2);
+  static double nothing = 0;
+  MPI_Win_create(const_cast<void*>(bytes ? samples : &nothing), bytes, this->ElementSize,
     MPI_INFO_NULL, comm, &this->Window);
 }
 
@@ -151,7 +211,7 @@ afam::Index3 vtkAFAMPieceSource::dims() const
   return { Points(this->Whole, 0), Points(this->Whole, 1), Points(this->Whole, 2) };
 }
 
-bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, float* out)
+bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, void* out)
 {
   const Extent& piece = this->Pieces[static_cast<size_t>(r)];
   const int pieceBox[3] = { Points(piece, 0), Points(piece, 1), Points(piece, 2) };
@@ -161,14 +221,15 @@ bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, int64_t z0, int6
   const int inPiece[3] = { region[0] - piece[0], region[2] - piece[2], region[4] - piece[4] };
   const int inOut[3] = { region[0] - this->Whole[0], region[2] - this->Whole[2],
     region[4] - this->Whole[4] - static_cast<int>(z0) };
-  MPI_Datatype target = Subarray(pieceBox, sub, inPiece);
-  MPI_Datatype origin = Subarray(outBox, sub, inOut);
+  MPI_Datatype target = Subarray(this->Element, pieceBox, sub, inPiece);
+  MPI_Datatype origin = Subarray(this->Element, outBox, sub, inOut);
   const int rc = MPI_Get(out, 1, origin, r, 0, 1, target, this->Window);
   MPI_Type_free(&origin);
   MPI_Type_free(&target);
   if (r != this->Rank)
   {
-    this->RemoteBytes += sizeof(float) * static_cast<uint64_t>(sub[0]) * sub[1] * sub[2];
+    this->RemoteBytes +=
+      static_cast<uint64_t>(this->ElementSize) * static_cast<uint64_t>(sub[0]) * sub[1] * sub[2];
   }
   return rc == MPI_SUCCESS;
 }
@@ -178,13 +239,21 @@ void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
   Extent planes = this->Whole;
   planes[4] = this->Whole[4] + static_cast<int>(z0);
   planes[5] = planes[4] + static_cast<int>(zCount) - 1;
+  const size_t count = static_cast<size_t>(Points(planes, 0)) * static_cast<size_t>(Points(planes, 1)) *
+    static_cast<size_t>(zCount);
+  const bool direct = this->Type == VTK_FLOAT;
+  if (!direct)
+  {
+    this->Raw.resize(count * static_cast<size_t>(this->ElementSize));
+  }
+  void* into = direct ? static_cast<void*>(out) : static_cast<void*>(this->Raw.data());
   std::lock_guard<std::mutex> lock(this->MpiLock);
   MPI_Win_lock_all(0, this->Window);
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
   int failed = -1;
   if (!IsEmpty(mine) && Intersect(mine, planes) == planes) // all here: no other rank is asked
   {
-    failed = this->ReadPiece(this->Rank, planes, z0, zCount, out) ? -1 : this->Rank;
+    failed = this->ReadPiece(this->Rank, planes, z0, zCount, into) ? -1 : this->Rank;
   }
   else
   {
@@ -192,7 +261,7 @@ void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
     {
       const Extent region = Intersect(this->Pieces[r], planes);
       if (!IsEmpty(this->Pieces[r]) && !IsEmpty(region) &&
-        !this->ReadPiece(static_cast<int>(r), region, z0, zCount, out))
+        !this->ReadPiece(static_cast<int>(r), region, z0, zCount, into))
       {
         failed = static_cast<int>(r);
       }
@@ -204,5 +273,9 @@ void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
     throw afam::IoError("reading planes " + std::to_string(z0) + ".." +
       std::to_string(z0 + zCount - 1) + " from the piece of rank " + std::to_string(failed) +
       " failed (MPI_Get)");
+  }
+  if (!direct)
+  {
+    Convert(this->Type, this->Raw.data(), count, out);
   }
 }

@@ -4,8 +4,10 @@
  * @class   vtkAFAMPieceSource
  * @brief   A volume spread over MPI ranks, read by whole z-planes (private to the module).
  *
- * Each rank holds the float32 samples of its piece (a sub-extent of the whole extent, split along
- * any axes; neighbouring pieces may share their boundary points) and exposes it in an MPI window.
+ * Each rank holds the samples of its piece (a sub-extent of the whole extent, split along any axes;
+ * neighbouring pieces may share their boundary points) in their own scalar type and exposes them in
+ * an MPI window; what is read is converted to float32 as VTK converts values (static_cast), so a
+ * uint8 piece costs one byte per sample, not five.
  * readSlab assembles whole planes of the global volume with passive-target one-sided reads
  * (MPI_Get of the part of each piece inside the planes), so a rank reads only the planes of the
  * rows it fits, whenever it needs them, without the owners taking part. Construction and
@@ -28,11 +30,15 @@ class vtkAFAMPieceSource : public afam::VolumeSource
 public:
   using Extent = std::array<int, 6>; ///< x0 x1 y0 y1 z0 z1, inclusive; empty when x1 < x0 (any axis)
 
-  /// `pieces[r]` is rank r's extent; `samples` holds this rank's piece, x fastest (it must outlive
-  /// the source). Every MPI call takes `mpiLock`.
+  /// The VTK scalar types whose values are exposed as they are (others are copied to float32).
+  static bool IsExposable(int vtkType);
+
+  /// `pieces[r]` is rank r's extent; `samples` holds this rank's piece, x fastest, as values of
+  /// `vtkType` (IsExposable, the same on every rank; the array must outlive the source). Every MPI
+  /// call takes `mpiLock`.
   vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole, std::vector<Extent> pieces,
-    const float* samples, std::string name, std::array<double, 3> origin, std::array<double, 3> spacing,
-    int bytesPerVoxel);
+    const void* samples, int vtkType, std::string name, std::array<double, 3> origin,
+    std::array<double, 3> spacing, int bytesPerVoxel);
   ~vtkAFAMPieceSource() override;
   vtkAFAMPieceSource(const vtkAFAMPieceSource&) = delete;
   vtkAFAMPieceSource& operator=(const vtkAFAMPieceSource&) = delete;
@@ -57,10 +63,14 @@ public:
 private:
   /// Reads the part of rank r's piece inside `region` (global extent) into `out` (planes from z0);
   /// false when MPI failed.
-  bool ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, float* out);
+  bool ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, void* out);
 
   MPI_Comm Comm;
   MPI_Win Window;
+  int Type;                   ///< VTK type of the exposed values
+  MPI_Datatype Element;       ///< the same, for MPI
+  int ElementSize;
+  std::vector<unsigned char> Raw; ///< a slab in the exposed type, before conversion
   std::mutex& MpiLock;
   Extent Whole;
   std::vector<Extent> Pieces;

@@ -5,8 +5,10 @@ axis, kind, errors, checksum, stored bytes), those of a one-process encode of th
   - ParaView's Wavelet (80 x 78 x 72, float), split along x by ParaView: the first rank's piece is
     half the volume and it reads samples from the other rank's piece;
   - a uint8 raw volume through Apps/pvbatch/afam_encode.py (ParaView's raw reader reads each rank's
-    piece), against the same script on one process and against `afam encode`;
-  - 3 ranks for 2 rows of blocks (one rank fits nothing), and a source whose only piece is rank 0's;
+    piece; the ranks expose their uint8 samples and convert what they read), against the same
+    script on one process and against `afam encode`;
+  - an int16 volume on 3 ranks for 2 rows of blocks (one rank fits nothing), and a source whose
+    only piece is rank 0's;
   - bad input: a missing array, an empty whole extent and pieces that leave a hole give one clear
     error on every rank, no file and no hang (each run inside a time limit)."""
 import json
@@ -91,13 +93,13 @@ subprocess.run([afam, "encode", raw, cli, "--quiet"] + options, check=True)
 expect_same(paths[2], paths[1], "uint8 raw via afam_encode.py, 2 ranks against 1 process")
 expect_same(paths[1], cli, "uint8 raw via afam_encode.py against afam encode")
 
-# More ranks than rows of blocks: 3 ranks, 2 rows at the finest level, 1 at the coarsest.
-bucky = os.path.join(volumes, "bucky_32x32x32_uint8.raw")
+# More ranks than rows of blocks, int16: 3 ranks, 2 rows at the finest level, 1 at the coarsest.
+head = os.path.join(volumes, "headsq_quarter_64x64x93_int16.raw")
 few = ["--levels", "2", "--blocks", "2", "--error-bound", "1e-2", "--relative", "--threads", "1"]
-three, bucky_cli = os.path.join(out, "bucky_3.afam"), os.path.join(out, "bucky_cli.afam")
-run(3, [encode_script, "--plugin", plugin, bucky, three] + few)
-subprocess.run([afam, "encode", bucky, bucky_cli, "--quiet"] + few, check=True)
-expect_same(three, bucky_cli, "3 ranks for 2 rows of blocks against afam encode")
+three, head_cli = os.path.join(out, "head_3.afam"), os.path.join(out, "head_cli.afam")
+run(3, [encode_script, "--plugin", plugin, head, three] + few)
+subprocess.run([afam, "encode", head, head_cli, "--quiet"] + few, check=True)
+expect_same(three, head_cli, "int16 on 3 ranks for 2 rows of blocks against afam encode")
 
 # Only rank 0 holds a piece: the other rank fits blocks from it.
 alone, _, _ = encode_case(1, "rank0", "rank0_1")

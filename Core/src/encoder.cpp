@@ -297,7 +297,7 @@ class LevelEncoder {
       try {
         fitBatch(l, cur.tasks, levelDone);
       } catch (...) {
-        if (next.valid()) next.wait();  // the sampling thread uses members: let it finish first
+        settle(next);
         throw;
       }
       for (BlockTask& t : cur.tasks) {
@@ -311,7 +311,7 @@ class LevelEncoder {
         countBlock(t, ds(), ls);
       }
       if (!progress_.report(levelDone)) {
-        if (next.valid()) next.wait();
+        settle(next);
         throw cancelled();
       }
       if (!more) {
@@ -323,6 +323,12 @@ class LevelEncoder {
   }
 
   bool ds() const { return opt_.mode == EncodingMode::Downsampled; }
+
+  /// Before leaving on an error: a batch being sampled on another thread uses members, so it must
+  /// finish first; a deferred one (readsOnCallingThread) has not started and is dropped.
+  static void settle(std::future<Batch>& next) {
+    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) next.wait();
+  }
 
   /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
   /// blocks are all known (a batch may be sampled before that).
@@ -442,8 +448,9 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   team.reduceRange(stats.valueMin, stats.valueMax);
   progress.finishRange();
   stats.bound = opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
-  const bool writes = team.rank() == 0;  // the first process alone hands models to the sink
-  if (writes) sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  teamStep(team, [&] {  // the first process alone hands models to the sink
+    if (team.rank() == 0) sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  });
   stats.levelsUsed = resolved.levels;
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 

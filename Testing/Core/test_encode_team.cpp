@@ -33,8 +33,17 @@ EncoderOptions relativeBound(int levels, int blocks, double bound) {
   return opt;
 }
 
+/// Models in memory, or an I/O error when the file would be started (e.g. a full disk on rank 0).
+struct MemberSink : InMemoryModels {
+  bool fails = false;
+  void begin(const VolumeHeader& h) override {
+    if (fails) throw IoError("cannot create the temporary file (test)");
+    InMemoryModels::begin(h);
+  }
+};
+
 struct MemberResult {
-  InMemoryModels models;
+  MemberSink models;
   EncodeStats stats;
   std::string error;
   bool numericError = false;
@@ -42,7 +51,7 @@ struct MemberResult {
 
 /// Encodes v with `members` threads as a team; member r's sink and statistics in result[r].
 std::vector<MemberResult> encodeAsTeam(const std::vector<float>& v, Index3 dims, EncoderOptions opt,
-                                       int members) {
+                                       int members, bool firstSinkFails = false) {
   afam_test::ThreadTeamHub hub(members);
   std::vector<MemberResult> result(static_cast<size_t>(members));
   std::vector<std::thread> threads;
@@ -52,6 +61,7 @@ std::vector<MemberResult> encodeAsTeam(const std::vector<float>& v, Index3 dims,
       afam_test::ThreadTeam team(hub, r);
       ArraySource source(v.data(), dims, "ml");
       MemberResult& out = result[size_t(r)];
+      out.models.fails = firstSinkFails && r == 0;
       try {
         out.stats = encodeVolume(source, opt, out.models, team);
       } catch (const NumericError& e) {
@@ -194,6 +204,18 @@ TEST(EncodeTeam, AnErrorOnOneMemberReachesEveryMember) {
     EXPECT_NE(team[size_t(r)].error.find("is NaN"), std::string::npos) << team[size_t(r)].error;
     EXPECT_TRUE(team[size_t(r)].models.entries.empty());
   }
+}
+
+TEST(EncodeTeam, TheFirstMembersSinkFailingStopsEveryMember) {
+  const Index3 dims{16, 16, 20};
+  const std::vector<float> v = mlVolume(dims);
+  const std::vector<MemberResult> team = encodeAsTeam(v, dims, relativeBound(2, 2, 1e-3), 3, true);
+  EXPECT_NE(team[0].error.find("cannot create the temporary file"), std::string::npos)
+      << team[0].error;
+  for (int r : {1, 2})
+    EXPECT_NE(team[size_t(r)].error.find("rank 0: cannot create the temporary file"),
+              std::string::npos)
+        << team[size_t(r)].error;
 }
 
 }  // namespace

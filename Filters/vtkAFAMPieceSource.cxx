@@ -211,16 +211,14 @@ afam::Index3 vtkAFAMPieceSource::dims() const
   return { Points(this->Whole, 0), Points(this->Whole, 1), Points(this->Whole, 2) };
 }
 
-bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, void* out)
+bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, const Extent& box, void* out)
 {
   const Extent& piece = this->Pieces[static_cast<size_t>(r)];
   const int pieceBox[3] = { Points(piece, 0), Points(piece, 1), Points(piece, 2) };
-  const int outBox[3] = { Points(this->Whole, 0), Points(this->Whole, 1),
-    static_cast<int>(zCount) };
+  const int outBox[3] = { Points(box, 0), Points(box, 1), Points(box, 2) };
   const int sub[3] = { Points(region, 0), Points(region, 1), Points(region, 2) };
   const int inPiece[3] = { region[0] - piece[0], region[2] - piece[2], region[4] - piece[4] };
-  const int inOut[3] = { region[0] - this->Whole[0], region[2] - this->Whole[2],
-    region[4] - this->Whole[4] - static_cast<int>(z0) };
+  const int inOut[3] = { region[0] - box[0], region[2] - box[2], region[4] - box[4] };
   MPI_Datatype target = Subarray(this->Element, pieceBox, sub, inPiece);
   MPI_Datatype origin = Subarray(this->Element, outBox, sub, inOut);
   const int rc = MPI_Get(out, 1, origin, r, 0, 1, target, this->Window);
@@ -236,10 +234,17 @@ bool vtkAFAMPieceSource::ReadPiece(int r, const Extent& region, int64_t z0, int6
 
 void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
 {
-  Extent planes = this->Whole;
-  planes[4] = this->Whole[4] + static_cast<int>(z0);
-  planes[5] = planes[4] + static_cast<int>(zCount) - 1;
-  const size_t count = static_cast<size_t>(Points(planes, 0)) * static_cast<size_t>(Points(planes, 1)) *
+  this->readRows(z0, zCount, 0, Points(this->Whole, 1), out);
+}
+
+void vtkAFAMPieceSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out)
+{
+  Extent wanted = this->Whole;
+  wanted[2] = this->Whole[2] + static_cast<int>(y0);
+  wanted[3] = wanted[2] + static_cast<int>(yCount) - 1;
+  wanted[4] = this->Whole[4] + static_cast<int>(z0);
+  wanted[5] = wanted[4] + static_cast<int>(zCount) - 1;
+  const size_t count = static_cast<size_t>(Points(wanted, 0)) * static_cast<size_t>(Points(wanted, 1)) *
     static_cast<size_t>(zCount);
   const bool direct = this->Type == VTK_FLOAT;
   if (!direct)
@@ -251,17 +256,17 @@ void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
   MPI_Win_lock_all(0, this->Window);
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
   int failed = -1;
-  if (!IsEmpty(mine) && Intersect(mine, planes) == planes) // all here: no other rank is asked
+  if (!IsEmpty(mine) && Intersect(mine, wanted) == wanted) // all here: no other rank is asked
   {
-    failed = this->ReadPiece(this->Rank, planes, z0, zCount, into) ? -1 : this->Rank;
+    failed = this->ReadPiece(this->Rank, wanted, wanted, into) ? -1 : this->Rank;
   }
   else
   {
     for (size_t r = 0; r < this->Pieces.size() && failed < 0; ++r)
     {
-      const Extent region = Intersect(this->Pieces[r], planes);
+      const Extent region = Intersect(this->Pieces[r], wanted);
       if (!IsEmpty(this->Pieces[r]) && !IsEmpty(region) &&
-        !this->ReadPiece(static_cast<int>(r), region, z0, zCount, into))
+        !this->ReadPiece(static_cast<int>(r), region, wanted, into))
       {
         failed = static_cast<int>(r);
       }

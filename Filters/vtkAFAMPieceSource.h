@@ -49,6 +49,8 @@ public:
   std::string name() const override { return this->Name; }
   int bytesPerVoxel() const override { return this->BytesPerVoxel; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  /// Only the rows asked for travel (a rank fitting some lines of blocks reads their rows).
+  void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
   /// Under an MPI initialised below MPI_THREAD_SERIALIZED (pvbatch initialises it single-threaded),
   /// reads stay on the encoder's calling thread.
   bool readsOnCallingThread() const override { return this->CallingThreadOnly; }
@@ -61,9 +63,9 @@ public:
   static std::string CheckCover(const Extent& whole, const std::vector<Extent>& pieces);
 
 private:
-  /// Reads the part of rank r's piece inside `region` (global extent) into `out` (planes from z0);
-  /// false when MPI failed.
-  bool ReadPiece(int r, const Extent& region, int64_t z0, int64_t zCount, void* out);
+  /// Reads the part of rank r's piece inside `region` (global extent) into `out`, which holds the
+  /// box `box` (global extent); false when MPI failed.
+  bool ReadPiece(int r, const Extent& region, const Extent& box, void* out);
 
   MPI_Comm Comm;
   MPI_Win Window;

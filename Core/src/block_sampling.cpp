@@ -106,13 +106,14 @@ struct BlockTaps {
 };
 
 /// acc[j * nx + i] += w * (the x-then-y filtered plane at block sample (i, j)); rows is scratch.
-void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double w, std::vector<double>& rows,
-                      std::vector<double>& acc) {
+/// The plane holds rows from yBase on.
+void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
+                      std::vector<double>& rows, std::vector<double>& acc) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const int64_t y0 = bt.y0, y1 = bt.y1;
   rows.resize(size_t(y1 - y0 + 1) * size_t(bt.nx));
   for (int64_t y = y0; y <= y1; ++y) {
-    const float* src = plane + y * X;
+    const float* src = plane + (y - yBase) * X;
     double* h = rows.data() + size_t(y - y0) * size_t(bt.nx);
     for (int i = 0; i < bt.nx; ++i) {
       double v = 0;
@@ -139,9 +140,10 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
   return zs;
 }
 
-/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane).
+/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
+/// yBase on).
 void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
-                    const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
+                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
@@ -155,29 +157,30 @@ void fillBlockChunk(const std::vector<float>& buf, const std::vector<int64_t>& z
     if (unitXY && t1 == t0 + 1 && tz.weight[t0] == 1.0) {  // grid samples: a copy
       const float* p = planeOf(t0);
       for (int j = 0; j < bt.ny; ++j) {
-        const float* src = p + bt.ty.index[size_t(j)] * X;
+        const float* src = p + (bt.ty.index[size_t(j)] - yBase) * X;
         float* row = dst + size_t(j) * size_t(bt.nx);
         for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
       }
       continue;
     }
     acc.assign(nxy, 0.0);
-    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, bt, tz.weight[t], rows, acc);
+    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
   }
 }
 
 }  // namespace
 
-PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
+PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
 
-void PlaneReader::read(const std::vector<int64_t>& zs, std::vector<float>& buf) {
-  buf.resize(zs.size() * plane_);
+void PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount, std::vector<float>& buf) {
+  const size_t plane = size_t(rowSize_ * yCount);
+  buf.resize(zs.size() * plane);
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
     while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
-    src_.readSlab(zs[i], int64_t(j - i), buf.data() + i * plane_);
-    bytesRead_ += (j - i) * plane_ * sizeof(float);
+    src_.readRows(zs[i], int64_t(j - i), y0, yCount, buf.data() + i * plane);
+    bytesRead_ += (j - i) * plane * sizeof(float);
     i = j;
   }
 }
@@ -202,16 +205,21 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
     out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
   }
   const int64_t X = part.dims()[0];
-  const size_t plane = planes.planeSize();
+  int64_t yBase = taps[0].y0, yEnd = taps[0].y1;  // the rows the blocks read
+  for (const BlockTaps& bt : taps) {
+    yBase = std::min(yBase, bt.y0);
+    yEnd = std::max(yEnd, bt.y1);
+  }
+  const size_t plane = size_t(X * (yEnd - yBase + 1));
   const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
   std::vector<float> buf;
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    planes.read(zs, buf);
+    planes.read(zs, yBase, yEnd - yBase + 1, buf);
     auto fill = [&](int64_t b) {
-      fillBlockChunk(buf, zs, plane, X, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
+      fillBlockChunk(buf, zs, plane, X, yBase, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
     };
     if (loop)
       loop(int64_t(blocks.size()), fill);

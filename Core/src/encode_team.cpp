@@ -5,10 +5,10 @@
 
 namespace afam {
 
-RowShare rowShare(int rows, int rank, int size) {
-  if (size < 1 || rank < 0 || rank >= size || rows < 1) return {};
-  const int64_t n = rows, p = size, r = rank;
-  return {int(n * r / p), int(n * (r + 1) / p)};
+WorkShare workShare(int64_t count, int rank, int size) {
+  if (size < 1 || rank < 0 || rank >= size || count < 1) return {};
+  const int64_t p = size, r = rank;
+  return {count * r / p, count * (r + 1) / p};
 }
 
 }  // namespace afam

@@ -120,7 +120,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
   const int64_t chunk = std::max<int64_t>(1, (int64_t(4) << 20) / std::max<int64_t>(plane, 1));
-  const RowShare planes = rowShare(int(dims[2]), team.rank(), team.size());
+  const WorkShare planes = workShare(dims[2], team.rank(), team.size());
   std::vector<float> buf;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
   for (int64_t z = planes.first; z < planes.end; z += chunk) {
@@ -222,7 +222,7 @@ void addLevel(const LevelStats& ls, EncodeStats& stats) {
 }
 
 /// Encodes the levels coarse to fine; one instance per encodeVolume call. In a team of several
-/// processes each fits its rowShare of every level, and finishLevel hands the level's models to the
+/// processes each fits its workShare of every level, and finishLevel hands the level's models to the
 /// first process, which alone calls the sink.
 class LevelEncoder {
  public:
@@ -235,14 +235,14 @@ class LevelEncoder {
     };
   }
 
-  /// Rows of blocks of one level, sampled.
+  /// Lines of blocks of one level, sampled.
   struct Batch {
     std::vector<BlockTask> tasks;
-    int endKz = 0;         ///< the first row not in this batch
+    int64_t endLine = 0;   ///< the first line not in this batch
     double seconds = 0;    ///< spent sampling it
   };
 
-  /// Batches of block rows (this process's share): the next batch is sampled (I/O and filtering,
+  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and filtering,
   /// on the sampling pool) while the fitting pool fits the current one, so reading the volume does
   /// not leave the fitting threads idle; during the level's last batch the next level's first batch
   /// is sampled, handed back in `pending` (empty: level l samples its first batch itself).
@@ -251,14 +251,14 @@ class LevelEncoder {
     LevelStats ls;
     ls.blocks = part_.blockCount(l);
     complexCur_.assign(size_t(ls.blocks), 0);
-    const RowShare rows = share(l);
-    if (!rows.empty()) fitRows(l, rows, pending, ls);
+    const WorkShare lines = share(l);
+    if (!lines.empty()) fitLines(l, lines, pending, ls);
     ls.seconds = secondsSince(tl);
     return ls;
   }
 
   /// After every process has run encodeLevel(l): the models of a team reach the first process's
-  /// sink (in the file's order: rows in rank order) and its statistics; every process learns which
+  /// sink (in the file's order: lines in rank order) and its statistics; every process learns which
   /// blocks of level l are complex (the next level's cross-level reuse).
   void finishLevel(int l, LevelStats& ls) {
     if (team_.size() > 1) {
@@ -279,20 +279,26 @@ class LevelEncoder {
   }
 
  private:
-  RowShare share(int l) const { return rowShare(part_.blocksPerAxis(l)[2], team_.rank(), team_.size()); }
+  /// This process's lines of blocks of level l.
+  WorkShare share(int l) const {
+    const Int3 nb = part_.blocksPerAxis(l);
+    return workShare(int64_t(nb[1]) * nb[2], team_.rank(), team_.size());
+  }
 
-  void fitRows(int l, const RowShare& rows, std::future<Batch>& pending, LevelStats& ls) {
+  void fitLines(int l, const WorkShare& lines, std::future<Batch>& pending, LevelStats& ls) {
     double levelDone = 0;
-    Batch cur = pending.valid() ? pending.get() : gatherRows(l, rows.first, rows.end);
+    Batch cur = pending.valid() ? pending.get() : gatherLines(l, lines.first, lines.end);
     for (;;) {
       ls.sampleSeconds += cur.seconds;
-      const bool more = cur.endKz < rows.end;
+      const bool more = cur.endLine < lines.end;
       std::future<Batch> next;
-      const RowShare nextRows = more ? RowShare{cur.endKz, rows.end} : l + 1 < part_.levels() ? share(l + 1) : RowShare{};
-      if (!nextRows.empty()) {
+      const WorkShare nextLines = more                     ? WorkShare{cur.endLine, lines.end}
+                                  : l + 1 < part_.levels() ? share(l + 1)
+                                                           : WorkShare{};
+      if (!nextLines.empty()) {
         const int nl = more ? l : l + 1;
         const auto policy = source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
-        next = std::async(policy, [this, nl, nextRows] { return gatherRows(nl, nextRows.first, nextRows.end); });
+        next = std::async(policy, [this, nl, nextLines] { return gatherLines(nl, nextLines.first, nextLines.end); });
       }
       try {
         fitBatch(l, cur.tasks, levelDone);
@@ -338,19 +344,22 @@ class LevelEncoder {
     return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
   }
 
-  /// Rows of blocks of level l from row kz on (before endKz), sampled, until the batch holds ~24 M
-  /// samples (at least one row). Runs beside the fitting pool: it touches only planes_, samplePool_
-  /// and its own batch (no progress callback, which the calling thread owns).
-  Batch gatherRows(int l, int kz, int endKz) {
+  /// Lines of blocks of level l from `line` on (before endLine), sampled a z-row (or the part of
+  /// one in the range) at a time, until the batch holds ~24 M samples (at least one row or part).
+  /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
+  /// progress callback, which the calling thread owns).
+  Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
     const size_t budgetFloats = size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
     std::vector<BlockTask>& tasks = batch.tasks;
     size_t floats = 0;
-    while (kz < endKz && (tasks.empty() || floats < budgetFloats)) {
+    while (line < endLine && (tasks.empty() || floats < budgetFloats)) {
+      const int kz = int(line / nb[1]), j0 = int(line % nb[1]);
+      const int j1 = int(std::min<int64_t>(nb[1], j0 + (endLine - line)));
       std::vector<Int3> row;
-      for (int j = 0; j < nb[1]; ++j)
+      for (int j = j0; j < j1; ++j)
         for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});
       const size_t first = tasks.size();
       tasks.resize(first + row.size());
@@ -361,9 +370,9 @@ class LevelEncoder {
       }
       sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
-      ++kz;
+      line += j1 - j0;
     }
-    batch.endKz = kz;
+    batch.endLine = line;
     batch.seconds = secondsSince(t0);
     return batch;
   }

@@ -103,20 +103,20 @@ void expectSameModels(const InMemoryModels& a, const InMemoryModels& b) {
   }
 }
 
-TEST(EncodeTeam, RowSharesAreContiguousAndCoverEveryRow) {
-  for (int rows : {1, 2, 5, 16, 37})
+TEST(EncodeTeam, SharesAreContiguousAndCoverEveryLine) {
+  for (int64_t lines : {1, 2, 5, 16, 37})
     for (int size : {1, 2, 3, 7, 64}) {
-      int next = 0;
+      int64_t next = 0;
       for (int r = 0; r < size; ++r) {
-        const RowShare s = rowShare(rows, r, size);
+        const WorkShare s = workShare(lines, r, size);
         if (s.empty()) continue;
-        EXPECT_EQ(s.first, next) << rows << " rows, " << size << " members";
-        EXPECT_LE(s.end - s.first, (rows + size - 1) / size);
+        EXPECT_EQ(s.first, next) << lines << " lines, " << size << " members";
+        EXPECT_LE(s.end - s.first, (lines + size - 1) / size);
         next = s.end;
       }
-      EXPECT_EQ(next, rows) << rows << " rows, " << size << " members";
+      EXPECT_EQ(next, lines) << lines << " lines, " << size << " members";
     }
-  EXPECT_TRUE(rowShare(2, 5, 7).empty());
+  EXPECT_TRUE(workShare(2, 5, 7).empty());
 }
 
 TEST(EncodeTeam, ThreeMembersGiveTheModelsOfOneProcess) {

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The processes that encode one volume together (e.g. MPI ranks), as the encoder sees them.
 //
-// Each process fits a contiguous share of every level's z-rows of blocks (rowShare), so the blocks
-// of one level, concatenated in rank order, are in the file's order. Per level the processes merge
-// the per-block flags the next level's cross-level reuse needs (mergeFlags) and hand their fitted
-// models to the first process (gatherToFirst), which alone writes the file. The global value range
-// comes from a reduction (reduceRange). Any exception on any process reaches every process at the
-// next collective step (agreeOnError), so none waits for a process that has stopped.
+// Each process fits a contiguous share (workShare) of every level's lines of blocks (the blocks
+// (0..Bx-1, j, k) of one j and k, numbered k * By + j), so the blocks of one level, concatenated in
+// rank order, are in the file's order; a process reads only the rows of the planes its lines need.
+// Per level the processes merge the per-block flags the next level's cross-level reuse needs
+// (mergeFlags) and hand their fitted models to the first process (gatherToFirst), which alone
+// writes the file. The global value range comes from a reduction (reduceRange). Any exception on
+// any process reaches every process at the next collective step (agreeOnError), so none waits for a
+// process that has stopped.
 //
 // Every call but rank() / size() is collective: all processes call it, in the same order. Core
 // knows no MPI: the ParaView filter implements this over its vtkMultiProcessController; SoloTeam
@@ -50,12 +52,12 @@ class SoloTeam : public EncodeTeam {
   }
 };
 
-/// Rows [first, end) of `rows` that process `rank` of `size` fits: contiguous, in rank order,
-/// sizes differing by at most one (empty when rank >= rows).
-struct RowShare {
-  int first = 0, end = 0;
+/// Items [first, end) of `count` (lines of blocks, z-planes) that process `rank` of `size` takes:
+/// contiguous, in rank order, sizes differing by at most one (empty when rank >= count).
+struct WorkShare {
+  int64_t first = 0, end = 0;
   bool empty() const { return end <= first; }
 };
-RowShare rowShare(int rows, int rank, int size);
+WorkShare workShare(int64_t count, int rank, int size);
 
 }  // namespace afam

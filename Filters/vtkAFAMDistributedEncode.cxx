@@ -119,7 +119,8 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   }
   const std::string mineName = empty || !array->GetName() ? "scalars" : array->GetName();
   const std::string name = team.broadcast(mineName, first);
-  const int bytes = std::stoi(team.broadcast(empty ? "4" : std::to_string(array->GetDataTypeSize()), first));
+  const int bytes =
+    std::stoi(team.broadcast(empty ? "4" : std::to_string(array->GetDataTypeSize()), first));
   Agree(team, empty || mineName == name ? std::string()
                                         : "this piece's array is '" + mineName + "', rank " +
         std::to_string(first) + "'s is '" + name + "': every rank must encode the same array");
@@ -141,8 +142,8 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   Agree(team, team.rank() == 0 ? vtkAFAMPieceSource::CheckCover(whole, pieces) : std::string());
 
   // The values as they are where every piece has the same exposable type, else float32 copies.
-  vtkSmartPointer<vtkFloatArray> copy =
-    !empty && type != mineType ? vtkAFAMFloatValues(array) : nullptr;
+  const bool asTheyAre = !empty && type == array->GetDataType() && array->HasStandardMemoryLayout();
+  vtkSmartPointer<vtkFloatArray> copy = !empty && !asTheyAre ? vtkAFAMFloatValues(array) : nullptr;
   const void* samples = empty ? nullptr : copy ? copy->GetVoidPointer(0) : array->GetVoidPointer(0);
   vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(), team.Lock(), whole,
     std::move(pieces), samples, type, name, origin, spacing, bytes);

@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMEncoder.h"
 
+#include "vtkAFAMDistributedEncode.h"
 #include "vtkAFAMModelTree.h"
 
 #include "afam/afam_file.hpp"
@@ -15,9 +16,12 @@
 #include "vtkInformationVector.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMultiBlockDataSet.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
@@ -55,7 +59,8 @@ int vtkAFAMEncoder::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
-vtkDataArray* vtkAFAMEncoder::ChooseArray(vtkImageData* input, vtkInformationVector** inputVector)
+vtkDataArray* vtkAFAMEncoder::ChooseArray(
+  vtkImageData* input, vtkInformationVector** inputVector, std::string& error)
 {
   vtkInformation* selection = this->GetInputArrayInformation(0);
   const char* name = selection && selection->Has(vtkDataObject::FIELD_NAME())
@@ -98,23 +103,82 @@ vtkDataArray* vtkAFAMEncoder::ChooseArray(vtkImageData* input, vtkInformationVec
         (a->GetName() ? a->GetName() : "(unnamed)") + "'";
     }
   }
+  std::ostringstream msg;
   if (name && *name && !array)
   {
-    vtkErrorMacro(<< "the input has no point-data array '" << name << "'; one-component point "
-                  << "arrays: " << (candidates.empty() ? "none" : candidates));
+    msg << "the input has no point-data array '" << name << "'; one-component point "
+        << "arrays: " << (candidates.empty() ? "none" : candidates);
   }
   else if (array)
   {
-    vtkErrorMacro(<< "array '" << (array->GetName() ? array->GetName() : "") << "' has "
-                  << array->GetNumberOfComponents() << " components; choose one of the "
-                  << "one-component point arrays: " << (candidates.empty() ? "none" : candidates));
+    msg << "array '" << (array->GetName() ? array->GetName() : "") << "' has "
+        << array->GetNumberOfComponents() << " components; choose one of the "
+        << "one-component point arrays: " << (candidates.empty() ? "none" : candidates);
   }
   else
   {
-    vtkErrorMacro(<< "no array chosen and no active point scalars; choose one of the "
-                  << "one-component point arrays: " << (candidates.empty() ? "none" : candidates));
+    msg << "no array chosen and no active point scalars; choose one of the "
+        << "one-component point arrays: " << (candidates.empty() ? "none" : candidates);
   }
+  error = msg.str();
   return nullptr;
+}
+
+afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
+{
+  afam::EncoderOptions options;
+  options.levels = this->Levels;
+  options.blocksPerAxis = this->BlocksPerAxis;
+  options.degree = this->Degree;
+  options.errorBound = this->ErrorBound;
+  options.relativeBound = this->RelativeBound;
+  static_assert(MODE_ADAPTIVE == static_cast<int>(afam::EncodingMode::Adaptive) &&
+      MODE_IN_LEVEL == static_cast<int>(afam::EncodingMode::InLevel) &&
+      MODE_FIXED_NCP == static_cast<int>(afam::EncodingMode::Fixed) &&
+      MODE_DOWNSAMPLED == static_cast<int>(afam::EncodingMode::Downsampled),
+    "the filter's modes are Core's");
+  options.mode = static_cast<afam::EncodingMode>(this->Mode);
+  options.fixedNcp = this->FixedNcp;
+  options.threads = this->NumberOfThreads;
+  options.progress = [this](double f) {
+    this->UpdateProgress(0.95 * f);
+    return !this->CheckAbort();
+  };
+  return options;
+}
+
+std::string vtkAFAMEncoder::NewModelPath()
+{
+  static std::atomic<int> counter{ 0 };
+  return (std::filesystem::temp_directory_path() /
+    ("afam-encoder-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".afam"))
+    .string();
+}
+
+void vtkAFAMEncoder::KeepStatistics(const afam::EncodeStats& stats)
+{
+  this->LastEncodeSeconds = stats.seconds;
+  this->LastMaxRmse = stats.maxRmse;
+  this->LastMaxError = stats.maxError;
+  this->LastBound = stats.bound;
+  std::ostringstream report;
+  for (size_t l = 0; l < stats.levels.size(); ++l)
+  {
+    report << (l ? "\n" : "") << "level " << l << ": max_rmse=" << stats.levels[l].maxRmse
+           << " max_error=" << stats.levels[l].maxError << " bound=" << stats.bound;
+  }
+  this->LastLevelReport = report.str();
+  vtkDebugMacro(<< "encoded within the bound " << stats.bound << ":\n" << this->LastLevelReport);
+  this->LastCompressionRatio =
+    stats.bytesOut > 0 ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut) : 0;
+}
+
+void vtkAFAMEncoder::BuildOutput(const std::string& path, vtkMultiBlockDataSet* output)
+{
+  this->ModelFile = path;
+  auto file = afam::AfamFile::open(path);
+  vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), 0, 1,
+    output, [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
 }
 
 int vtkAFAMEncoder::RequestData(
@@ -127,10 +191,45 @@ int vtkAFAMEncoder::RequestData(
     vtkErrorMacro(<< "needs a vtkImageData input");
     return 0;
   }
-  vtkDataArray* array = this->ChooseArray(input, inputVector);
+  this->RemoveModelFile();
+  input->GetExtent(this->LastPieceExtent);
+  this->LastRemoteBytesRead = 0;
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
+  try
+  {
+    if (pieces ? !this->EncodePieces(controller, input, inputVector, output)
+               : !this->EncodeWhole(input, inputVector, output))
+    {
+      return 0;
+    }
+  }
+  catch (const afam::Cancelled&)
+  {
+    output->Initialize();
+    this->RemoveModelFile();
+    vtkWarningMacro(<< "encoding cancelled");
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    output->Initialize();
+    this->RemoveModelFile();
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  return 1;
+}
+
+bool vtkAFAMEncoder::EncodeWhole(
+  vtkImageData* input, vtkInformationVector** inputVector, vtkMultiBlockDataSet* output)
+{
+  std::string error;
+  vtkDataArray* array = this->ChooseArray(input, inputVector, error);
   if (!array)
   {
-    return 0;
+    vtkErrorMacro(<< error);
+    return false;
   }
   int dims[3];
   input->GetDimensions(dims);
@@ -139,16 +238,9 @@ int vtkAFAMEncoder::RequestData(
     vtkErrorMacro(<< "array '" << (array->GetName() ? array->GetName() : "") << "' has "
                   << array->GetNumberOfTuples() << " values for " << dims[0] << "x" << dims[1]
                   << "x" << dims[2] << " points");
-    return 0;
+    return false;
   }
-
-  // Any scalar type -> float32 (no copy when it already is).
-  vtkSmartPointer<vtkFloatArray> values = vtkFloatArray::SafeDownCast(array);
-  if (!values)
-  {
-    values = vtkSmartPointer<vtkFloatArray>::New();
-    values->DeepCopy(array);
-  }
+  vtkSmartPointer<vtkFloatArray> values = vtkAFAMFloatValues(array);
   // The file's origin is the world position of the first sample that arrived: the image's origin
   // is that of index (0, 0, 0), and the extent (the whole extent's or a sub-extent's) may start
   // elsewhere, e.g. at -20 for ParaView's Wavelet.
@@ -169,67 +261,41 @@ int vtkAFAMEncoder::RequestData(
     array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
     { spacing[0], spacing[1], spacing[2] });
   source.setOriginalBytesPerVoxel(array->GetDataTypeSize());
+  const std::string path = NewModelPath();
+  this->KeepStatistics(afam::encodeVolume(source, this->MakeOptions(), path));
+  this->BuildOutput(path, output);
+  return true;
+}
 
-  afam::EncoderOptions options;
-  options.levels = this->Levels;
-  options.blocksPerAxis = this->BlocksPerAxis;
-  options.degree = this->Degree;
-  options.errorBound = this->ErrorBound;
-  options.relativeBound = this->RelativeBound;
-  static_assert(MODE_ADAPTIVE == static_cast<int>(afam::EncodingMode::Adaptive) &&
-      MODE_IN_LEVEL == static_cast<int>(afam::EncodingMode::InLevel) &&
-      MODE_FIXED_NCP == static_cast<int>(afam::EncodingMode::Fixed) &&
-      MODE_DOWNSAMPLED == static_cast<int>(afam::EncodingMode::Downsampled),
-    "the filter's modes are Core's");
-  options.mode = static_cast<afam::EncodingMode>(this->Mode);
-  options.fixedNcp = this->FixedNcp;
-  options.threads = this->NumberOfThreads;
-  options.progress = [this](double f) {
-    this->UpdateProgress(0.95 * f);
-    return !this->CheckAbort();
-  };
-
-  static std::atomic<int> counter{ 0 };
-  const std::string path = (std::filesystem::temp_directory_path() /
-    ("afam-encoder-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".afam"))
-                             .string();
-  this->RemoveModelFile();
-  try
+bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller, vtkImageData* input,
+  vtkInformationVector** inputVector, vtkMultiBlockDataSet* output)
+{
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  int whole[6];
+  input->GetExtent(whole);
+  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
   {
-    const afam::EncodeStats stats = afam::encodeVolume(source, options, path);
-    this->ModelFile = path;
-    this->LastEncodeSeconds = stats.seconds;
-    this->LastMaxRmse = stats.maxRmse;
-    this->LastMaxError = stats.maxError;
-    this->LastBound = stats.bound;
-    std::ostringstream report;
-    for (size_t l = 0; l < stats.levels.size(); ++l)
-    {
-      report << (l ? "\n" : "") << "level " << l << ": max_rmse=" << stats.levels[l].maxRmse
-             << " max_error=" << stats.levels[l].maxError << " bound=" << stats.bound;
-    }
-    this->LastLevelReport = report.str();
-    vtkDebugMacro(<< "encoded within the bound " << stats.bound << ":\n" << this->LastLevelReport);
-    this->LastCompressionRatio =
-      stats.bytesOut > 0 ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut) : 0;
-    auto file = afam::AfamFile::open(path);
-    vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), 0, 1,
-      output, [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
+    inInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
   }
-  catch (const afam::Cancelled&)
+  std::string error;
+  vtkDataArray* array =
+    input->GetNumberOfPoints() > 0 ? this->ChooseArray(input, inputVector, error) : nullptr;
+  if (controller->GetLocalProcessId() == 0 && input->GetDirectionMatrix() &&
+    !input->GetDirectionMatrix()->IsIdentity())
   {
-    output->Initialize();
-    vtkWarningMacro(<< "encoding cancelled");
-    return 0;
+    vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
   }
-  catch (const std::exception& e)
+  const std::string path = NewModelPath();
+  const vtkAFAMPiecesEncoded done =
+    vtkAFAMEncodePieces(controller, input, array, error, whole, this->MakeOptions(), path);
+  this->KeepStatistics(done.stats);
+  std::copy(done.pieceExtent, done.pieceExtent + 6, this->LastPieceExtent);
+  this->LastRemoteBytesRead = static_cast<double>(done.remoteBytesRead);
+  if (controller->GetLocalProcessId() == 0) // the one file; the other ranks' outputs stay empty
   {
-    output->Initialize();
-    this->RemoveModelFile();
-    vtkErrorMacro(<< e.what());
-    return 0;
+    this->BuildOutput(path, output);
   }
-  return 1;
+  return true;
 }
 
 void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
@@ -247,4 +313,8 @@ void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastEncodeSeconds: " << this->LastEncodeSeconds << "\n";
   os << indent << "LastMaxRmse: " << this->LastMaxRmse << "\n";
   os << indent << "LastCompressionRatio: " << this->LastCompressionRatio << "\n";
+  os << indent << "LastPieceExtent: " << this->LastPieceExtent[0] << " " << this->LastPieceExtent[1]
+     << " " << this->LastPieceExtent[2] << " " << this->LastPieceExtent[3] << " "
+     << this->LastPieceExtent[4] << " " << this->LastPieceExtent[5] << "\n";
+  os << indent << "LastRemoteBytesRead: " << this->LastRemoteBytesRead << "\n";
 }

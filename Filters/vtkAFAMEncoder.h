@@ -11,6 +11,10 @@
  * point array; when none fits, the error lists the arrays that could be chosen. The encoding runs in Core (encodeVolume);
  * progress is reported and the abort flag (ParaView's abort button) cancels it.
  *
+ * Under MPI (several ranks, e.g. `mpirun -np N pvbatch`), each rank gets its piece of the image
+ * from the pipeline and fits a share of the blocks; rank 0 writes the one file and alone outputs
+ * the models, which are those of a one-process encode of the whole image (vtkAFAMDistributedEncode).
+ *
  * Output: the same metadata multiblock as vtkAFAMReader (one block per level, one leaf per
  * micro-model). The models are stored in a temporary .afam file owned by this filter (removed when
  * the filter is destroyed or re-executes), which vtkAFAMVolumeMapper renders at once and
@@ -26,6 +30,12 @@
 
 class vtkDataArray;
 class vtkImageData;
+class vtkMultiProcessController;
+namespace afam
+{
+struct EncoderOptions;
+struct EncodeStats;
+}
 
 class VTKAFAM_EXPORT vtkAFAMEncoder : public vtkMultiBlockDataSetAlgorithm
 {
@@ -100,6 +110,13 @@ public:
   const char* GetLastLevelReport() { return this->LastLevelReport.c_str(); }
   ///@}
 
+  ///@{
+  /// This process's piece of the last input (its extent; the whole image on one process) and the
+  /// bytes of samples it read from other ranks' pieces (0 on one process).
+  vtkGetVector6Macro(LastPieceExtent, int);
+  vtkGetMacro(LastRemoteBytesRead, double);
+  ///@}
+
 protected:
   vtkAFAMEncoder();
   ~vtkAFAMEncoder() override;
@@ -107,9 +124,21 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   void RemoveModelFile();
-  /// The array to encode (see the class documentation); nullptr after an error naming the
+  /// The array to encode (see the class documentation); nullptr with `error` naming the
   /// candidates.
-  vtkDataArray* ChooseArray(vtkImageData* input, vtkInformationVector** inputVector);
+  vtkDataArray* ChooseArray(
+    vtkImageData* input, vtkInformationVector** inputVector, std::string& error);
+  /// One process: the input is the whole image.
+  bool EncodeWhole(
+    vtkImageData* input, vtkInformationVector** inputVector, vtkMultiBlockDataSet* output);
+  /// Several ranks, each with its piece of the image: one file, written by rank 0, whose output
+  /// holds the models (the other ranks' outputs are empty).
+  bool EncodePieces(vtkMultiProcessController* controller, vtkImageData* input,
+    vtkInformationVector** inputVector, vtkMultiBlockDataSet* output);
+  afam::EncoderOptions MakeOptions();
+  void KeepStatistics(const afam::EncodeStats& stats);
+  void BuildOutput(const std::string& path, vtkMultiBlockDataSet* output);
+  static std::string NewModelPath();
 
   double ErrorBound = 1e-3;
   bool RelativeBound = true;
@@ -121,6 +150,8 @@ protected:
   int NumberOfThreads = 0;
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0, LastCompressionRatio = 0;
   std::string LastLevelReport;
+  int LastPieceExtent[6] = { 0, -1, 0, -1, 0, -1 };
+  double LastRemoteBytesRead = 0;
   std::string ModelFile;
 
 private:

@@ -8,8 +8,11 @@
 
 #include "vtkErrorCode.h"
 #include "vtkInformation.h"
+#include "vtkInformationVector.h"
 #include "vtkMultiBlockDataSet.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <filesystem>
 
@@ -28,6 +31,24 @@ int vtkAFAMWriter::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
+vtkTypeBool vtkAFAMWriter::ProcessRequest(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (request->Has(vtkStreamingDemandDrivenPipeline::REQUEST_UPDATE_EXTENT()) && controller &&
+    controller->GetNumberOfProcesses() > 1)
+  {
+    // Each rank asks for its own piece, so that an encoder upstream encodes pieces of the image
+    // (the default, piece 0 of 1, would give every rank the whole image).
+    vtkInformation* in = inputVector[0]->GetInformationObject(0);
+    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), controller->GetLocalProcessId());
+    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(),
+      controller->GetNumberOfProcesses());
+    return 1;
+  }
+  return this->Superclass::ProcessRequest(request, inputVector, outputVector);
+}
+
 void vtkAFAMWriter::WriteData()
 {
   namespace fs = std::filesystem;
@@ -39,6 +60,11 @@ void vtkAFAMWriter::WriteData()
   }
   const std::string source =
     vtkAFAMModelTree::FileName(vtkMultiBlockDataSet::SafeDownCast(this->GetInput()));
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (controller && controller->GetLocalProcessId() > 0)
+  {
+    return; // under MPI rank 0 writes the one file (it holds the encoder's models)
+  }
   if (source.empty())
   {
     vtkErrorMacro(<< "The input is not an Adaptive-FAM model set (no "

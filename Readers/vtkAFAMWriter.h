@@ -6,7 +6,9 @@
  *
  * The input multiblock names the .afam file that holds its models (field data); the writer
  * validates that file through Core (header, index and every payload's checksum) and copies it to
- * FileName atomically (temporary file + rename): a failed write leaves no half file.
+ * FileName atomically (temporary file + rename): a failed write leaves no half file. Under MPI,
+ * rank 0 alone writes (the encoder's models are on rank 0; a reader's file is the same on every
+ * rank); the other ranks write nothing.
  */
 #ifndef vtkAFAMWriter_h
 #define vtkAFAMWriter_h
@@ -31,6 +33,9 @@ protected:
   vtkAFAMWriter();
   ~vtkAFAMWriter() override;
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  /// Under MPI, asks for this rank's piece (see the class documentation).
+  vtkTypeBool ProcessRequest(vtkInformation* request, vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector) override;
   void WriteData() override;
 
   char* FileName = nullptr;

@@ -23,7 +23,14 @@ set(_afam_private
   Mapper/vtkAFAMCoreRenderer
   Mapper/vtkAFAMImageDraw
   Mapper/vtkAFAMCudaGLBuffer
+  Filters/vtkAFAMDistributedEncode
+  Filters/vtkAFAMControllerTeam
   )
+# Encoding across MPI ranks needs VTK::ParallelMPI (an optional dependency in vtk.module); without
+# it the encoder runs on one process and says so under several ranks.
+if (TARGET VTK::ParallelMPI)
+  list(APPEND _afam_private Filters/vtkAFAMPieceSource)
+endif ()
 set(_afam_private_headers)
 foreach (_helper IN LISTS _afam_private)
   list(APPEND _afam_sources "${_afam_root}/${_helper}.cxx")
@@ -40,6 +47,9 @@ vtk_module_include(AFAM::vtkAFAM
     "$<BUILD_INTERFACE:${_afam_root}/Readers>"
     "$<BUILD_INTERFACE:${_afam_root}/Filters>"
     "$<BUILD_INTERFACE:${_afam_root}/Mapper>")
+if (TARGET VTK::ParallelMPI)
+  vtk_module_definitions(AFAM::vtkAFAM PRIVATE AFAM_HAVE_MPI=1)
+endif ()
 # Core is VTK-free and static (PIC): linked into the module, nothing of it is exported.
 vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)
 # The CUDA renderer only when the project builds it (AFAM_ENABLE_CUDA): afam_cuda is static, PIC,

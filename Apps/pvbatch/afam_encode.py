@@ -1,13 +1,18 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Encodes any volume ParaView can read (VTK XML image data .vti, legacy .vtk, NRRD, MetaImage,
-DICOM folders, netCDF, ...) into an .afam file, with the options of `afam encode` and a progress
-bar. ParaView's reader opens the file; the Adaptive-FAM Encoder filter of the plugin encodes the
-chosen point array with Core's encoder; the plugin's writer saves the .afam file (atomically, so a
-failed run leaves nothing behind). Spacing and origin come from the data set.
+DICOM folders, netCDF, ...) or a raw file named name_XxYxZ_type.raw (as `afam encode` reads it)
+into an .afam file, with the options of `afam encode` and a progress bar. ParaView's reader opens
+the file; the Adaptive-FAM Encoder filter of the plugin encodes the chosen point array with Core's
+encoder; the plugin's writer saves the .afam file (atomically, so a failed run leaves nothing
+behind). Spacing and origin come from the data set.
 
     pvbatch afam_encode.py IN OUT.afam [--plugin AdaptiveFAM.so] [--array NAME]
         [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]
         [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--quiet]
+
+Under `mpirun -np N pvbatch afam_encode.py ...` each rank reads only its piece of the volume and
+fits a share of the blocks; rank 0 writes the one file, whose micro-models are those of a
+one-process encode (--threads is then per rank).
 
 The plugin is found from --plugin, else PV_PLUGIN_PATH, else the build tree next to this script
 (build/lib/paraview-5.11/plugins/AdaptiveFAM/AdaptiveFAM.so). Exit status 1 on any error, with one
@@ -15,6 +20,8 @@ line on stderr naming the problem.
 """
 import argparse
 import os
+import re
+import struct
 import sys
 import time
 
@@ -29,8 +36,9 @@ def parse_args():
     p.add_argument("--array", help="point array to encode (default: the first one-component array)")
     p.add_argument("--error-bound", type=float, default=1e-4, help="RMSE bound per micro-block (1e-4)")
     p.add_argument("--relative", action="store_true", help="the bound is E * (max - min) of the volume")
-    p.add_argument("--levels", type=int, default=4, help="levels of detail (4)")
-    p.add_argument("--blocks", type=int, default=16, help="blocks per axis at the finest level (16)")
+    p.add_argument("--levels", type=int, default=0, help="levels of detail (0: from the dimensions)")
+    p.add_argument("--blocks", type=int, default=0,
+                   help="blocks per axis at the finest level (0: from the dimensions, blocks of ~64 samples)")
     p.add_argument("--degree", type=int, default=2, help="B-spline degree (2)")
     p.add_argument("--mode", choices=sorted(MODES), default="adaptive")
     p.add_argument("--ncp", type=int, default=0, help="NCP per axis for --mode fixed (0 = n)")
@@ -83,6 +91,31 @@ class ProgressBar:
         sys.stderr.flush()
 
 
+RAW_TYPES = {"uint8": "unsigned char", "int16": "short", "uint16": "unsigned short", "float32": "float",
+             "float64": "double"}
+
+
+def open_volume(path):
+    """ParaView's reader for `path`; a raw file named name_XxYxZ_type.raw through ImageReader,
+    which reads only each rank's piece."""
+    from paraview.simple import ImageReader, OpenDataFile
+    raw = re.match(r".*_(\d+)x(\d+)x(\d+)_(\w+)\.raw$", os.path.basename(path))
+    if not raw:
+        return OpenDataFile(path)
+    if raw.group(4) not in RAW_TYPES:
+        fail("%s: unknown sample type '%s' (%s)" % (path, raw.group(4), ", ".join(sorted(RAW_TYPES))))
+    dims = [int(raw.group(i)) for i in (1, 2, 3)]
+    return ImageReader(FileNames=[path], DataScalarType=RAW_TYPES[raw.group(4)], DataByteOrder="LittleEndian",
+                       DataExtent=[0, dims[0] - 1, 0, dims[1] - 1, 0, dims[2] - 1])
+
+
+def file_partition(path):
+    """Levels and finest blocks per axis of an .afam file (docs/FORMAT.md: header offsets 120, 124)."""
+    with open(path, "rb") as f:
+        header = f.read(128)
+    return struct.unpack_from("<ii", header, 120)
+
+
 def pick_array(source, wanted):
     info = source.GetPointDataInformation()
     names = [(info.GetArray(i).GetName(), info.GetArray(i).GetNumberOfComponents())
@@ -104,14 +137,11 @@ def main():
     a = parse_args()
     from paraview import servermanager
     ranks = servermanager.vtkProcessModule.GetProcessModule().GetNumberOfLocalPartitions()
-    if ranks > 1:  # each rank would hold a piece of the volume, and the writer takes one process
-        fail("encoding runs on one process (%d MPI ranks here): run pvbatch without mpirun; the "
-             "encoder's threads use every core (--threads)" % ranks)
     if not os.path.exists(a.input):
         fail("%s: no such file" % a.input)
-    from paraview.simple import LoadPlugin, OpenDataFile, SaveData
+    from paraview.simple import LoadPlugin, SaveData
     LoadPlugin(find_plugin(a.plugin), remote=False, ns=globals())
-    reader = OpenDataFile(a.input)
+    reader = open_volume(a.input)
     if reader is None:
         fail("%s: ParaView has no reader for this file" % a.input)
     reader.UpdatePipeline()
@@ -139,10 +169,12 @@ def main():
         extent = info.GetExtent()
         dims = [extent[2 * i + 1] - extent[2 * i] + 1 for i in range(3)]
         size = os.path.getsize(a.output)
+        levels, blocks = file_partition(a.output)
         print("encoded %s (array %s, %dx%dx%d) -> %s" % (a.input, array, dims[0], dims[1], dims[2], a.output))
-        print("mode=%s levels=%d blocks=%d degree=%d bound=%g%s seconds=%.3f bytes_out=%d ratio_float32=%.2f" % (
-            a.mode, a.levels, a.blocks, a.degree, a.error_bound, " (relative)" if a.relative else "", seconds,
-            size, 4.0 * dims[0] * dims[1] * dims[2] / size))
+        print("mode=%s levels=%d blocks=%d degree=%d bound=%g%s ranks=%d seconds=%.3f bytes_out=%d "
+              "ratio_float32=%.2f" % (a.mode, levels, blocks, a.degree, a.error_bound,
+                                      " (relative)" if a.relative else "", ranks, seconds, size,
+                                      4.0 * dims[0] * dims[1] * dims[2] / size))
 
 if __name__ == "__main__":
     main()

@@ -103,13 +103,14 @@ struct BlockTaps {
   AxisTaps tx, ty;
   int nx = 0, ny = 0;
   int64_t x0 = 0, x1 = 0;  ///< the columns of a plane the x taps read
+  int64_t y0 = 0, y1 = 0;  ///< the rows of a plane the y taps read
 };
 
 /// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)); rows is scratch. y
 /// first: it runs along whole rows of the columns the block reads (vectorised), and x then filters
-/// only the block's rows.
-void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double w, std::vector<double>& rows,
-                      std::vector<double>& acc) {
+/// only the block's rows. The plane holds rows from yBase on.
+void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
+                      std::vector<double>& rows, std::vector<double>& acc) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const size_t width = size_t(bt.x1 - bt.x0 + 1);
   rows.resize(size_t(bt.ny) * width);
@@ -117,7 +118,7 @@ void addFilteredPlane(const float* plane, int64_t X, const BlockTaps& bt, double
     double* __restrict h = rows.data() + size_t(j) * width;
     std::fill_n(h, width, 0.0);
     for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
-      const float* __restrict src = plane + ty.index[k] * X + bt.x0;
+      const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
       const double wy = ty.weight[k];
       for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
     }
@@ -142,9 +143,10 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
   return zs;
 }
 
-/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane).
+/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
+/// yBase on).
 void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
-                    const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
+                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
@@ -158,30 +160,31 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
     if (unitXY && t1 == t0 + 1 && tz.weight[t0] == 1.0) {  // grid samples: a copy
       const float* p = planeOf(t0);
       for (int j = 0; j < bt.ny; ++j) {
-        const float* src = p + bt.ty.index[size_t(j)] * X;
+        const float* src = p + (bt.ty.index[size_t(j)] - yBase) * X;
         float* row = dst + size_t(j) * size_t(bt.nx);
         for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
       }
       continue;
     }
     acc.assign(nxy, 0.0);
-    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, bt, tz.weight[t], rows, acc);
+    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
   }
 }
 
 }  // namespace
 
-PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), plane_(size_t(dims[0] * dims[1])) {}
+PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
 
-const float* PlaneReader::read(const std::vector<int64_t>& zs) {
-  if (buf_.size() < zs.size() * plane_) buf_.resize(zs.size() * plane_);
+const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount) {
+  const size_t plane = size_t(rowSize_ * yCount);
+  if (buf_.size() < zs.size() * plane) buf_.resize(zs.size() * plane);
   float* buf = buf_.data();
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
     while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
-    src_.readSlab(zs[i], int64_t(j - i), buf + i * plane_);
-    bytesRead_ += (j - i) * plane_ * sizeof(float);
+    src_.readRows(zs[i], int64_t(j - i), y0, yCount, buf + i * plane);
+    bytesRead_ += (j - i) * plane * sizeof(float);
     i = j;
   }
   return buf;
@@ -204,18 +207,26 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
     const auto xs = std::minmax_element(taps[b].tx.index.begin(), taps[b].tx.index.end());
     taps[b].x0 = *xs.first;
     taps[b].x1 = *xs.second;
+    const auto ys = std::minmax_element(taps[b].ty.index.begin(), taps[b].ty.index.end());
+    taps[b].y0 = *ys.first;
+    taps[b].y1 = *ys.second;
     out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
   }
   const int64_t X = part.dims()[0];
-  const size_t plane = planes.planeSize();
+  int64_t yBase = taps[0].y0, yEnd = taps[0].y1;  // the rows the blocks read
+  for (const BlockTaps& bt : taps) {
+    yBase = std::min(yBase, bt.y0);
+    yEnd = std::max(yEnd, bt.y1);
+  }
+  const size_t plane = size_t(X * (yEnd - yBase + 1));
   const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    const float* buf = planes.read(zs);
+    const float* buf = planes.read(zs, yBase, yEnd - yBase + 1);
     auto fill = [&](int64_t b) {
-      fillBlockChunk(buf, zs, plane, X, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
+      fillBlockChunk(buf, zs, plane, X, yBase, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
     };
     if (loop)
       loop(int64_t(blocks.size()), fill);

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "afam/fit.hpp"
+#include "fitted_blocks.hpp"
 #include "afam/ncp_search.hpp"
 #include "block_encoding.hpp"
 #include "worker_pool.hpp"
@@ -143,17 +144,19 @@ bool extendRange(const float* v, size_t n, float& lo, float& hi) {
   return finite;
 }
 
-/// Value range and NaN/Inf check in one streaming pass (unless the source knows its range).
-void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress, double& vmin,
-                    double& vmax) {
+/// Value range and NaN/Inf check in one streaming pass (unless the source knows its range) over
+/// this process's share of the z-planes; the team reduces the shares to the volume's range.
+void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress, EncodeTeam& team,
+                    double& vmin, double& vmax) {
   if (source.knownRange(vmin, vmax)) return;
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
   const int64_t chunk = std::max<int64_t>(1, (int64_t(4) << 20) / std::max<int64_t>(plane, 1));
+  const WorkShare planes = workShare(dims[2], team.rank(), team.size());
   std::vector<float> buf;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (int64_t z = 0; z < dims[2]; z += chunk) {
-    const int64_t nz = std::min(chunk, dims[2] - z);
+  for (int64_t z = planes.first; z < planes.end; z += chunk) {
+    const int64_t nz = std::min(chunk, planes.end - z);
     buf.resize(size_t(nz * plane));
     source.readSlab(z, nz, buf.data());
     if (!extendRange(buf.data(), buf.size(), lo, hi)) {
@@ -167,10 +170,36 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
           << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
       throw NumericError(msg.str());
     }
-    if (!progress.report(progress.rangeWork() * double(z + nz) / double(dims[2]))) throw cancelled();
+    if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) / double(planes.end - planes.first)))
+      throw cancelled();
   }
   vmin = lo;
   vmax = hi;
+}
+
+/// Runs one step of the encode; in a team, an exception of any process is thrown on every process
+/// once all have run the step (a process's own exception as it is, another's as afam::Error naming
+/// its rank), so no process waits in a later collective for one that has stopped.
+template <class Step>
+void teamStep(EncodeTeam& team, Step&& step) {
+  if (team.size() == 1) {
+    step();
+    return;
+  }
+  std::exception_ptr failure;
+  std::string message;
+  try {
+    step();
+  } catch (const std::exception& e) {
+    failure = std::current_exception();
+    message = *e.what() ? e.what() : "an error with no message";
+  } catch (...) {
+    failure = std::current_exception();
+    message = "an error that is not a std::exception";
+  }
+  const std::string agreed = team.agreeOnError(message);
+  if (failure) std::rethrow_exception(failure);
+  if (!agreed.empty()) throw Error("encode: " + agreed);
 }
 
 VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels, double vmin,
@@ -222,59 +251,103 @@ void addLevel(const LevelStats& ls, EncodeStats& stats) {
   stats.maxError = std::max(stats.maxError, ls.maxError);
 }
 
-/// Encodes the levels coarse to fine; one instance per encodeVolume call.
+/// Encodes the levels coarse to fine; one instance per encodeVolume call. In a team of several
+/// processes each fits its workShare of every level, and finishLevel hands the level's models to the
+/// first process, which alone calls the sink.
 class LevelEncoder {
  public:
   LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound, int threads,
-               EncodeProgress& progress, ModelSink& sink)
-      : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink),
+               EncodeProgress& progress, ModelSink& sink, EncodeTeam& team)
+      : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink), team_(team),
         fitters_(size_t(threads)), pool_(threads), samplePool_(threads), planes_(source, part.dims()) {
     sampleLoop_ = [this](int64_t count, const std::function<void(int64_t)>& fn) {
       samplePool_.run(count, [&fn](int, int64_t b) { fn(b); }, [] { return true; });
     };
   }
 
-  /// Rows of blocks of one level, sampled.
+  /// Lines of blocks of one level, sampled.
   struct Batch {
     std::vector<BlockTask> tasks;
-    int endKz = 0;         ///< the first row not in this batch
+    int64_t endLine = 0;   ///< the first line not in this batch
     double seconds = 0;    ///< spent sampling it
   };
 
-  /// Batches of block rows: the next batch is sampled (I/O and filtering, on the sampling pool)
-  /// while the fitting pool fits the current one, so reading the volume does not leave the fitting
-  /// threads idle; during the level's last batch the next level's first batch is sampled, handed
-  /// back in `pending` (empty: level l samples its first batch itself).
+  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and filtering,
+  /// on the sampling pool) while the fitting pool fits the current one, so reading the volume does
+  /// not leave the fitting threads idle; during the level's last batch the next level's first batch
+  /// is sampled, handed back in `pending` (empty: level l samples its first batch itself).
   LevelStats encodeLevel(int l, std::future<Batch>& pending) {
     const auto tl = Clock::now();
     LevelStats ls;
     ls.blocks = part_.blockCount(l);
     complexCur_.assign(size_t(ls.blocks), 0);
+    const WorkShare lines = share(l);
+    if (!lines.empty()) fitLines(l, lines, pending, ls);
+    ls.seconds = secondsSince(tl);
+    return ls;
+  }
+
+  /// After every process has run encodeLevel(l): the models of a team reach the first process's
+  /// sink (in the file's order: lines in rank order) and its statistics; every process learns which
+  /// blocks of level l are complex (the next level's cross-level reuse).
+  void finishLevel(int l, LevelStats& ls) {
+    if (team_.size() > 1) {
+      if (opt_.mode == EncodingMode::Adaptive && l + 1 < part_.levels()) team_.mergeFlags(complexCur_);
+      const std::vector<std::vector<uint8_t>> all = team_.gatherToFirst(outgoing_);
+      outgoing_.clear();
+      outgoing_.shrink_to_fit();
+      for (const std::vector<uint8_t>& records : all) {
+        std::vector<BlockTask> tasks;
+        readFittedBlocks(records, tasks);
+        for (const BlockTask& t : tasks) {
+          sink_.add(t.entry, t.stored.data());
+          countBlock(t, ds(), ls);
+        }
+      }
+    }
+    complexPrev_.swap(complexCur_);
+  }
+
+ private:
+  /// This process's lines of blocks of level l.
+  WorkShare share(int l) const {
+    const Int3 nb = part_.blocksPerAxis(l);
+    return workShare(int64_t(nb[1]) * nb[2], team_.rank(), team_.size());
+  }
+
+  void fitLines(int l, const WorkShare& lines, std::future<Batch>& pending, LevelStats& ls) {
     double levelDone = 0;
-    const int rows = part_.blocksPerAxis(l)[2];
-    Batch cur = pending.valid() ? pending.get() : gatherRows(l, 0);
+    Batch cur = pending.valid() ? pending.get() : gatherLines(l, lines.first, lines.end);
     for (;;) {
       ls.sampleSeconds += cur.seconds;
-      const bool more = cur.endKz < rows;
+      const bool more = cur.endLine < lines.end;
       std::future<Batch> next;
-      if (more || l + 1 < part_.levels()) {
-        const int nl = more ? l : l + 1, kz = more ? cur.endKz : 0;
-        next = std::async(std::launch::async, [this, nl, kz] { return gatherRows(nl, kz); });
+      const WorkShare nextLines = more                     ? WorkShare{cur.endLine, lines.end}
+                                  : l + 1 < part_.levels() ? share(l + 1)
+                                                           : WorkShare{};
+      if (!nextLines.empty()) {
+        const int nl = more ? l : l + 1;
+        const auto policy = source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
+        next = std::async(policy, [this, nl, nextLines] { return gatherLines(nl, nextLines.first, nextLines.end); });
       }
       try {
         fitBatch(l, cur.tasks, levelDone);
       } catch (...) {
-        if (next.valid()) next.wait();  // the sampling thread uses members: let it finish first
+        settle(next);
         throw;
       }
       for (BlockTask& t : cur.tasks) {
-        sink_.add(t.entry, t.stored.data());
         complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
-        countBlock(t, ds(), ls);
         levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
+        if (team_.size() > 1) {
+          appendFittedBlock(t, outgoing_);
+          continue;
+        }
+        sink_.add(t.entry, t.stored.data());
+        countBlock(t, ds(), ls);
       }
       if (!progress_.report(levelDone)) {
-        if (next.valid()) next.wait();
+        settle(next);
         throw cancelled();
       }
       if (!more) {
@@ -283,13 +356,15 @@ class LevelEncoder {
       }
       cur = next.get();
     }
-    complexPrev_.swap(complexCur_);
-    ls.seconds = secondsSince(tl);
-    return ls;
   }
 
- private:
   bool ds() const { return opt_.mode == EncodingMode::Downsampled; }
+
+  /// Before leaving on an error: a batch being sampled on another thread uses members, so it must
+  /// finish first; a deferred one (readsOnCallingThread) has not started and is dropped.
+  static void settle(std::future<Batch>& next) {
+    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) next.wait();
+  }
 
   /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
   /// blocks are all known (a batch may be sampled before that).
@@ -299,19 +374,22 @@ class LevelEncoder {
     return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
   }
 
-  /// Rows of blocks of level l from row kz on, sampled, until the batch holds ~24 M samples (at
-  /// least one row). Runs beside the fitting pool: it touches only planes_, samplePool_ and its own
-  /// batch (no progress callback, which the calling thread owns).
-  Batch gatherRows(int l, int kz) {
+  /// Lines of blocks of level l from `line` on (before endLine), sampled a z-row (or the part of
+  /// one in the range) at a time, until the batch holds ~24 M samples (at least one row or part).
+  /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
+  /// progress callback, which the calling thread owns).
+  Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
     const size_t budgetFloats = size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
     std::vector<BlockTask>& tasks = batch.tasks;
     size_t floats = 0;
-    while (kz < nb[2] && (tasks.empty() || floats < budgetFloats)) {
+    while (line < endLine && (tasks.empty() || floats < budgetFloats)) {
+      const int kz = int(line / nb[1]), j0 = int(line % nb[1]);
+      const int j1 = int(std::min<int64_t>(nb[1], j0 + (endLine - line)));
       std::vector<Int3> row;
-      for (int j = 0; j < nb[1]; ++j)
+      for (int j = j0; j < j1; ++j)
         for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});
       const size_t first = tasks.size();
       tasks.resize(first + row.size());
@@ -322,9 +400,9 @@ class LevelEncoder {
       }
       sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
-      ++kz;
+      line += j1 - j0;
     }
-    batch.endKz = kz;
+    batch.endLine = line;
     batch.seconds = secondsSince(t0);
     return batch;
   }
@@ -368,6 +446,8 @@ class LevelEncoder {
   double bound_;
   EncodeProgress& progress_;
   ModelSink& sink_;
+  EncodeTeam& team_;
+  std::vector<uint8_t> outgoing_;  ///< a team's records of this level's fitted blocks
   std::vector<BlockFitter> fitters_;
   WorkerPool pool_;
   WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
@@ -379,6 +459,11 @@ class LevelEncoder {
 }  // namespace
 
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
+  SoloTeam solo;
+  return encodeVolume(source, opt, sink, solo);
+}
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink, EncodeTeam& team) {
   const auto t0 = Clock::now();
   const double cpu0 = processCpuSeconds();
   validateOptions(opt);
@@ -398,18 +483,24 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   stats.bytesIn = uint64_t(stats.inputVoxels) * uint64_t(source.bytesPerVoxel());
 
   EncodeProgress progress(part, opt);
-  scanValueRange(source, part, progress, stats.valueMin, stats.valueMax);
+  teamStep(team, [&] { scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax); });
+  team.reduceRange(stats.valueMin, stats.valueMax);
   progress.finishRange();
   stats.bound = opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
-  sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  teamStep(team, [&] {  // the first process alone hands models to the sink
+    if (team.rank() == 0) sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  });
   stats.levelsUsed = resolved.levels;
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 
   const auto tFit0 = Clock::now();
-  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink);
+  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team);
   std::future<LevelEncoder::Batch> pending;  // a level's first batch, sampled during the previous level
   for (int l = 0; l < part.levels(); ++l) {
-    stats.levels.push_back(levels.encodeLevel(l, pending));
+    LevelStats ls;
+    teamStep(team, [&] { ls = levels.encodeLevel(l, pending); });
+    teamStep(team, [&] { levels.finishLevel(l, ls); });
+    stats.levels.push_back(ls);
     progress.finishLevel(l);
     addLevel(stats.levels.back(), stats);
   }
@@ -422,11 +513,19 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
 }
 
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath) {
+  SoloTeam solo;
+  return encodeVolume(source, options, outPath, solo);
+}
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
+                         EncodeTeam& team) {
   FileModelSink sink(outPath);
   const auto t0 = Clock::now();
   const double cpu0 = processCpuSeconds();
-  EncodeStats stats = encodeVolume(source, options, sink);
-  stats.bytesOut = sink.commit();
+  EncodeStats stats = encodeVolume(source, options, sink, team);
+  teamStep(team, [&] {
+    if (team.rank() == 0) stats.bytesOut = sink.commit();
+  });
   stats.seconds = secondsSince(t0);
   stats.cpuSeconds = processCpuSeconds() - cpu0;
   return stats;

@@ -24,6 +24,19 @@ ArraySource::ArraySource(const float* data, Index3 dims, std::string name, std::
     if (dims[a] < 1) throw InvalidArgument("ArraySource: dimensions must be >= 1");
 }
 
+void VolumeSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) {
+  const Index3 d = dims();
+  if (y0 == 0 && yCount == d[1]) {
+    readSlab(z0, zCount, out);
+    return;
+  }
+  std::vector<float> plane(size_t(d[0] * d[1]));
+  for (int64_t z = 0; z < zCount; ++z) {
+    readSlab(z0 + z, 1, plane.data());
+    std::copy(plane.begin() + y0 * d[0], plane.begin() + (y0 + yCount) * d[0], out + z * d[0] * yCount);
+  }
+}
+
 void ArraySource::readSlab(int64_t z0, int64_t zCount, float* out) {
   if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2])
     throw InvalidArgument("ArraySource: planes [" + std::to_string(z0) + ", " + std::to_string(z0 + zCount) +

@@ -196,3 +196,37 @@ def foreground_box(png, background=(0.1, 0.1, 0.15), tolerance=8):
 def non_blank(png, background=(0.1, 0.1, 0.15), min_pixels=500):
     """Number of pixels that differ from the background colour by more than 8/255."""
     return int(foreground_mask(png, background, 8).sum())
+
+
+def afam_models(path):
+    """The partition and micro-models of an .afam file (docs/FORMAT.md), for comparing encodes:
+    (header bytes 24..176 and 240..444: dims, origin, spacing, value range, bound, partition, mode;
+    not the scalar name or checksums), and per model its index entry but the payload offset (NCP,
+    kind, value range, errors, checksum, size) with its stored bytes."""
+    import struct
+    with open(path, "rb") as f:
+        data = f.read()
+    entries = struct.unpack_from("<Q", data, 144)[0]
+    header = data[24:140] + data[144:152] + data[240:444]
+    models = []
+    for e in range(entries):
+        at = 1024 + 40 * e
+        offset, = struct.unpack_from("<Q", data, at)
+        stored, = struct.unpack_from("<I", data, at + 36)
+        models.append((data[at + 8:at + 40], data[offset:offset + stored]))
+    return header, models
+
+
+def compare_models(path, reference):
+    """None when the two files hold the same micro-models (afam_models), else what differs first."""
+    (h1, m1), (h2, m2) = afam_models(path), afam_models(reference)
+    if h1 != h2:
+        return "headers differ (dims, range, bound or partition)"
+    if len(m1) != len(m2):
+        return "%d models against %d" % (len(m1), len(m2))
+    for i, (a, b) in enumerate(zip(m1, m2)):
+        if a[0] != b[0]:
+            return "model %d: index entries differ (NCP, kind, range, errors or checksum)" % i
+        if a[1] != b[1]:
+            return "model %d: stored bytes differ" % i
+    return None

@@ -13,19 +13,19 @@
 
 namespace afam {
 
-/// Reads listed z-planes of a source into a buffer, consecutive planes in one readSlab call.
+/// Reads rows of listed z-planes of a source into a buffer, consecutive planes in one readRows call.
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);
-  /// Planes zs (ascending, distinct), plane i at the result + i * planeSize(), valid until the next
-  /// read. The reader's buffer only grows: it is not allocated, page-faulted or cleared again.
-  const float* read(const std::vector<int64_t>& zs);
-  size_t planeSize() const { return plane_; }
+  /// Rows [y0, y0 + yCount) of planes zs (ascending, distinct), plane i at the result
+  /// + i * dims[0] * yCount, valid until the next read. The reader's buffer only grows: it is not
+  /// allocated, page-faulted or cleared again.
+  const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount);
   uint64_t bytesRead() const { return bytesRead_; }
 
  private:
   VolumeSource& src_;
-  size_t plane_;
+  int64_t rowSize_;
   uint64_t bytesRead_ = 0;
   std::vector<float> buf_;
 };
@@ -34,9 +34,10 @@ class PlaneReader {
 /// (the encoder's sampling pool), else in order on the calling thread.
 using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
 
-/// Fills the samples of every block in `blocks` (all in the same z-row of one level): the z-planes
-/// the row needs are read in chunks (at most ~256 MB, one readSlab per run of consecutive planes),
-/// and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
+/// Fills the samples of every block in `blocks` (all in the same z-row of one level): the rows of
+/// the z-planes the blocks need are read in chunks (at most ~256 MB, one readRows per run of
+/// consecutive planes; whole planes for a whole row of blocks), and each block is filtered from a
+/// chunk separably (y, then x, then z; sums in double), blocks
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).

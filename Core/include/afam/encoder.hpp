@@ -38,6 +38,7 @@
 #include "afam/afam_file.hpp"
 #include "afam/block_sampling.hpp"
 #include "afam/decode.hpp"
+#include "afam/encode_team.hpp"
 #include "afam/errors.hpp"
 #include "afam/model_sink.hpp"
 #include "afam/ncp_search.hpp"
@@ -117,5 +118,15 @@ struct EncodeStats {
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink);
 /// Encodes into an .afam file, written atomically (nothing is left on error or cancel).
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath);
+
+/// The same models, fitted by the processes of a team (encode_team.hpp), every one calling this
+/// with the same options and a source of the same volume (which may read other processes' memory).
+/// Only the first process (rank 0) calls the sink, and its statistics count every block; the
+/// others' count nothing but their levels' block totals and their own timings. An exception on any
+/// process is thrown on all (another's as afam::Error naming its rank).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink, EncodeTeam& team);
+/// Into an .afam file that the first process writes (atomically; the others write nothing).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
+                         EncodeTeam& team);
 
 }  // namespace afam

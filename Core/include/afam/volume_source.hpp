@@ -23,6 +23,9 @@ class VolumeSource {
   virtual std::string name() const { return "scalars"; }
   /// dims[0] * dims[1] * zCount floats, x fastest, planes z0 .. z0+zCount-1.
   virtual void readSlab(int64_t z0, int64_t zCount, float* out) = 0;
+  /// Rows y0 .. y0+yCount-1 of the same planes: dims[0] * yCount * zCount floats. The default
+  /// reads whole planes (readSlab) and keeps the rows; a source that can read fewer overrides it.
+  virtual void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out);
   /// If the source knows its value range without a pass over the data, it says so here; else
   /// the encoder computes it (and checks for NaN/Inf) in one streaming pass.
   virtual bool knownRange(double& lo, double& hi) const {
@@ -32,6 +35,10 @@ class VolumeSource {
   }
   /// Bytes per voxel of the original data (for the compression ratio).
   virtual int bytesPerVoxel() const { return 4; }
+  /// true when readSlab may only run on the thread that called the encoder (e.g. it reads through
+  /// an MPI library initialised without thread support); the encoder then samples a batch and fits
+  /// it in turn, instead of sampling the next batch on a thread of its own meanwhile.
+  virtual bool readsOnCallingThread() const { return false; }
 };
 
 /// Over a caller-owned float array (x fastest). The array must outlive the source.

@@ -1,0 +1,171 @@
+// SPDX-FileCopyrightText: Adaptive-FAM authors
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkAFAMDistributedEncode.h"
+
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkMultiProcessController.h"
+
+#ifdef AFAM_HAVE_MPI
+#include "vtkAFAMControllerTeam.h"
+#include "vtkAFAMPieceSource.h"
+#include "vtkMPICommunicator.h"
+#endif
+
+#include <sstream>
+
+vtkSmartPointer<vtkFloatArray> vtkAFAMFloatValues(vtkDataArray* array)
+{
+  vtkSmartPointer<vtkFloatArray> values = vtkFloatArray::SafeDownCast(array);
+  if (!values)
+  {
+    values = vtkSmartPointer<vtkFloatArray>::New();
+    values->DeepCopy(array);
+  }
+  return values;
+}
+
+#ifdef AFAM_HAVE_MPI
+
+bool vtkAFAMCanEncodePieces()
+{
+  return true;
+}
+
+namespace
+{
+using Extent = vtkAFAMPieceSource::Extent;
+
+/// Throws on every rank when any rank's `error` is not empty.
+void Agree(vtkAFAMControllerTeam& team, const std::string& error)
+{
+  const std::string agreed = team.agreeOnError(error);
+  if (!agreed.empty())
+  {
+    throw afam::Error("encode: " + agreed);
+  }
+}
+
+/// The type in which `array`'s values are exposed to other ranks: its own where the piece source
+/// can (a plain array of a standard numeric type), else float32 (a converted copy).
+int ExposedType(vtkDataArray* array)
+{
+  const int type = array->GetDataType();
+  return array->HasStandardMemoryLayout() && vtkAFAMPieceSource::IsExposable(type) ? type : VTK_FLOAT;
+}
+
+/// What is wrong with this rank's piece and array ("" when nothing is).
+std::string CheckPiece(vtkImageData* piece, vtkDataArray* array, const std::string& arrayError)
+{
+  if (!arrayError.empty())
+  {
+    return arrayError;
+  }
+  const vtkIdType points = piece->GetNumberOfPoints();
+  if (array->GetNumberOfTuples() != points)
+  {
+    std::ostringstream msg;
+    msg << "array '" << (array->GetName() ? array->GetName() : "") << "' has "
+        << array->GetNumberOfTuples() << " values for the " << points << " points of this piece";
+    return msg.str();
+  }
+  return std::string();
+}
+
+/// Origin and spacing of rank `first` (whose piece is not empty), on every rank: the file's origin
+/// is the world position of the whole extent's first point.
+void AgreeOnGeometry(vtkAFAMControllerTeam& team, vtkImageData* piece, int first, const int whole[6],
+  std::array<double, 3>& origin, std::array<double, 3>& spacing)
+{
+  std::ostringstream text;
+  text.precision(17);
+  const double* o = piece->GetOrigin();
+  const double* s = piece->GetSpacing();
+  text << o[0] << " " << o[1] << " " << o[2] << " " << s[0] << " " << s[1] << " " << s[2];
+  std::istringstream agreed(team.broadcast(text.str(), first));
+  agreed >> origin[0] >> origin[1] >> origin[2] >> spacing[0] >> spacing[1] >> spacing[2];
+  for (int a = 0; a < 3; ++a)
+  {
+    origin[a] += static_cast<double>(whole[2 * a]) * spacing[a];
+  }
+}
+} // namespace
+
+vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, vtkImageData* piece,
+  vtkDataArray* array, const std::string& arrayError, const int wholeExtent[6],
+  const afam::EncoderOptions& options, const std::string& path)
+{
+  vtkAFAMControllerTeam team(controller);
+  auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
+  Extent mine{ 0, -1, 0, -1, 0, -1 };
+  if (piece && piece->GetNumberOfPoints() > 0)
+  {
+    piece->GetExtent(mine.data());
+  }
+  const bool empty = vtkAFAMPieceSource::IsEmpty(mine);
+  Agree(team, !communicator ? "the ranks are not connected by MPI (vtkMPICommunicator)"
+      : empty               ? std::string()
+                            : CheckPiece(piece, array, arrayError));
+
+  const Extent whole{ wholeExtent[0], wholeExtent[1], wholeExtent[2], wholeExtent[3],
+    wholeExtent[4], wholeExtent[5] };
+  const int first = team.reduceMin(empty ? team.size() : team.rank());
+  if (first == team.size())
+  {
+    throw afam::Error("encode: every rank's piece of the whole extent [" +
+      std::to_string(whole[0]) + ".." + std::to_string(whole[1]) + ", " + std::to_string(whole[2]) +
+      ".." + std::to_string(whole[3]) + ", " + std::to_string(whole[4]) + ".." +
+      std::to_string(whole[5]) + "] is empty: nothing to encode");
+  }
+  const std::string mineName = empty || !array->GetName() ? "scalars" : array->GetName();
+  const std::string name = team.broadcast(mineName, first);
+  const int bytes =
+    std::stoi(team.broadcast(empty ? "4" : std::to_string(array->GetDataTypeSize()), first));
+  Agree(team, empty || mineName == name ? std::string()
+                                        : "this piece's array is '" + mineName + "', rank " +
+        std::to_string(first) + "'s is '" + name + "': every rank must encode the same array");
+  std::array<double, 3> origin{}, spacing{};
+  AgreeOnGeometry(team, piece, first, wholeExtent, origin, spacing);
+
+  // Extents and scalar types of every piece (-1: an empty piece).
+  const int mineType = empty ? -1 : ExposedType(array);
+  const int info[7] = { mine[0], mine[1], mine[2], mine[3], mine[4], mine[5], mineType };
+  const std::vector<int> all = team.allGather(info, 7);
+  std::vector<Extent> pieces(static_cast<size_t>(team.size()));
+  int type = -1;
+  for (size_t r = 0; r < pieces.size(); ++r)
+  {
+    std::copy(&all[7 * r], &all[7 * r + 6], pieces[r].begin());
+    const int other = all[7 * r + 6];
+    type = other < 0 ? type : type < 0 || type == other ? other : VTK_FLOAT;
+  }
+  Agree(team, team.rank() == 0 ? vtkAFAMPieceSource::CheckCover(whole, pieces) : std::string());
+
+  // The values as they are where every piece has the same exposable type, else float32 copies.
+  const bool asTheyAre = !empty && type == array->GetDataType() && array->HasStandardMemoryLayout();
+  vtkSmartPointer<vtkFloatArray> copy = !empty && !asTheyAre ? vtkAFAMFloatValues(array) : nullptr;
+  const void* samples = empty ? nullptr : copy ? copy->GetVoidPointer(0) : array->GetVoidPointer(0);
+  vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(), team.Lock(), whole,
+    std::move(pieces), samples, type, name, origin, spacing, bytes);
+  vtkAFAMPiecesEncoded result;
+  result.stats = afam::encodeVolume(source, options, path, team);
+  std::copy(mine.begin(), mine.end(), result.pieceExtent);
+  result.remoteBytesRead = source.remoteBytesRead();
+  return result;
+}
+
+#else
+
+bool vtkAFAMCanEncodePieces()
+{
+  return false;
+}
+
+vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController*, vtkImageData*, vtkDataArray*,
+  const std::string&, const int*, const afam::EncoderOptions&, const std::string&)
+{
+  throw afam::Error("encode: this build of the plugin has no MPI (VTK::ParallelMPI): encoding "
+                    "runs on one process");
+}
+
+#endif

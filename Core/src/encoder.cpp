@@ -375,12 +375,16 @@ class LevelEncoder {
   }
 
   /// Lines of blocks of level l from `line` on (before endLine), sampled a z-row (or the part of
-  /// one in the range) at a time, until the batch holds ~24 M samples (at least one row or part).
+  /// one in the range) at a time, until the batch holds ~24 M samples (at least one row or part;
+  /// in a team of several processes, exactly one).
   /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
   /// progress callback, which the calling thread owns).
   Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
-    const size_t budgetFloats = size_t(24) << 20;
+    // One process samples ahead in batches of ~24 M samples; a member of a team holds its piece
+    // and one line of blocks at a time (its samples, and the rows of the planes they are filtered
+    // from), so its memory is its piece plus one row of blocks of the level.
+    const size_t budgetFloats = team_.size() > 1 ? 0 : size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
     std::vector<BlockTask>& tasks = batch.tasks;

@@ -21,6 +21,16 @@ namespace {
 
 using afam_test::ramp;
 
+/// A ramp over the file's values from 30% of its range, sample distance 0.01.
+FrameSettings rampSettings(const AfamFile& file) {
+  const double lo = file.header().valueMin, hi = file.header().valueMax;
+  FrameSettings s;
+  s.hasTransferFunction = true;
+  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
+  s.sampleDistance = 0.01f;
+  return s;
+}
+
 double maxDiff(const ImageRGBA& a, const ImageRGBA& b) {
   double worst = 0;
   for (size_t i = 0; i < a.rgba.size(); ++i) worst = std::max(worst, double(std::fabs(a.rgba[i] - b.rgba[i])));
@@ -79,11 +89,7 @@ TEST(GpuFrameEdits, ImageLeftOnTheDeviceEqualsTheHostImage) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
   auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 2, 4, 1e-3);
-  const double lo = file->header().valueMin, hi = file->header().valueMax;
-  FrameSettings s;
-  s.hasTransferFunction = true;
-  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
-  s.sampleDistance = 0.01f;
+  const FrameSettings s = rampSettings(*file);
   Renderer renderer(file, RendererResources{}, s);
   GpuCaster caster = installGpuCaster(renderer, size_t(64) << 20, [](const std::string&) {});
   ASSERT_TRUE(caster);
@@ -127,11 +133,7 @@ TEST(GpuFrameEdits, AFailingGpuHandsThisAndLaterFramesToTheCpuOnce) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
   auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 2, 4, 1e-3);
-  const double lo = file->header().valueMin, hi = file->header().valueMax;
-  FrameSettings s;
-  s.hasTransferFunction = true;
-  s.transferFunction = ramp(lo, hi, lo + 0.3 * (hi - lo), 0.1);
-  s.sampleDistance = 0.01f;
+  const FrameSettings s = rampSettings(*file);
   Renderer gpu(file, RendererResources{}, s), cpu(file, RendererResources{}, s);
   std::vector<std::string> reports;
   GpuCaster caster = installGpuCaster(gpu, size_t(64) << 20, [&](const std::string& m) { reports.push_back(m); });

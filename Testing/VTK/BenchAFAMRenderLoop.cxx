@@ -216,17 +216,17 @@ int main(int argc, char* argv[])
     file->header().valueMax, unit);
   vtkNew<vtkRenderer> renderer;
   renderer->AddVolume(volume);
-  vtkNew<vtkPlaneSource> plane;
-  plane->SetOrigin(b[0], b[2], c[2]);
-  plane->SetPoint1(b[1], b[2], c[2]);
-  plane->SetPoint2(b[0], b[3], c[2]);
-  vtkNew<vtkPolyDataMapper> planeMapper;
-  planeMapper->SetInputConnection(plane->GetOutputPort());
-  vtkNew<vtkActor> planeActor;
-  planeActor->SetMapper(planeMapper);
   if (o.Plane)
   {
-    renderer->AddActor(planeActor);
+    vtkNew<vtkPlaneSource> plane;
+    plane->SetOrigin(b[0], b[2], c[2]);
+    plane->SetPoint1(b[1], b[2], c[2]);
+    plane->SetPoint2(b[0], b[3], c[2]);
+    vtkNew<vtkPolyDataMapper> planeMapper;
+    planeMapper->SetInputConnection(plane->GetOutputPort());
+    vtkNew<vtkActor> planeActor;
+    planeActor->SetMapper(planeMapper);
+    renderer->AddActor(planeActor); // the renderer keeps the actor, the actor its mapper
   }
   vtkNew<vtkRenderWindow> window;
   window->SetSize(o.Size, o.Size);

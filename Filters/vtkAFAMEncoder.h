@@ -15,8 +15,8 @@
  * from the pipeline and fits a share of the blocks; rank 0 writes the one file and alone outputs
  * the models, which are those of a one-process encode of the whole image (vtkAFAMDistributedEncode).
  *
- * Output: the same metadata multiblock as vtkAFAMReader (one block per level, one leaf per
- * micro-model). The models are stored in a temporary .afam file owned by this filter (removed when
+ * Output: the same metadata multiblock as vtkAFAMReader (one leaf per level, one field-data row
+ * per micro-model). The models are stored in a temporary .afam file owned by this filter (removed when
  * the filter is destroyed or re-executes), which vtkAFAMVolumeMapper renders at once and
  * vtkAFAMWriter copies to its destination.
  */

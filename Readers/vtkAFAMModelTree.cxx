@@ -13,10 +13,13 @@
 #include "vtkMultiBlockDataSet.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
+#include "vtkSmartPointer.h"
 #include "vtkStringArray.h"
 #include "vtkTypeInt64Array.h"
 
 #include <algorithm>
+#include <climits>
+#include <stdexcept>
 #include <string>
 
 namespace
@@ -43,6 +46,63 @@ void AddString(vtkFieldData* fd, const char* name, const std::string& value)
   s->InsertNextValue(value);
   fd->AddArray(s);
 }
+
+/// A field-data column of `rows` tuples of `components`, filled by value(row, component).
+template <typename ArrayT, typename Fn>
+void AddColumn(vtkFieldData* fd, const char* name, int components, const std::vector<int64_t>& rows, Fn value)
+{
+  vtkNew<ArrayT> a;
+  a->SetName(name);
+  a->SetNumberOfComponents(components);
+  a->SetNumberOfTuples(static_cast<vtkIdType>(rows.size()));
+  for (size_t r = 0; r < rows.size(); ++r)
+  {
+    for (int c = 0; c < components; ++c)
+    {
+      a->SetTypedComponent(static_cast<vtkIdType>(r), c, value(rows[r], c));
+    }
+  }
+  fd->AddArray(a);
+}
+
+/// The leaf of one level: an image covering its models' blocks (no samples) whose field data has
+/// one row per model.
+vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
+  const afam::Partition& partition, const std::vector<afam::ModelEntry>& entries,
+  const std::vector<int64_t>& rows)
+{
+  int extent[6] = { INT_MAX, INT_MIN, INT_MAX, INT_MIN, INT_MAX, INT_MIN };
+  for (int64_t r : rows)
+  {
+    const afam::ModelEntry& e = entries[static_cast<size_t>(r)];
+    const afam::BlockExtent ext = partition.extent(e.level, e.block);
+    for (int a = 0; a < 3; ++a)
+    {
+      extent[2 * a] = std::min(extent[2 * a], static_cast<int>(ext.lo[a]));
+      extent[2 * a + 1] = std::max(extent[2 * a + 1], static_cast<int>(ext.hi[a]));
+    }
+  }
+  auto leaf = vtkSmartPointer<vtkImageData>::New();
+  leaf->SetExtent(extent);
+  leaf->SetOrigin(header.origin.data());
+  leaf->SetSpacing(header.spacing.data());
+  vtkFieldData* fd = leaf->GetFieldData();
+  auto entry = [&](int64_t r) -> const afam::ModelEntry& { return entries[static_cast<size_t>(r)]; };
+  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::LevelArray, 1, rows, [&](int64_t r, int) { return entry(r).level; });
+  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::BlockArray, 3, rows, [&](int64_t r, int c) { return entry(r).block[c]; });
+  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::NcpArray, 3, rows, [&](int64_t r, int c) { return entry(r).ncp[c]; });
+  AddColumn<vtkIntArray>(
+    fd, vtkAFAMModelTree::DegreeArray, 3, rows, [&](int64_t r, int c) { return entry(r).degree[c]; });
+  AddColumn<vtkDoubleArray>(fd, vtkAFAMModelTree::ValueRangeArray, 2, rows,
+    [&](int64_t r, int c) { return c == 0 ? entry(r).minValue : entry(r).maxValue; });
+  AddColumn<vtkDoubleArray>(fd, vtkAFAMModelTree::RmseArray, 1, rows, [&](int64_t r, int) { return entry(r).rmse; });
+  AddColumn<vtkDoubleArray>(
+    fd, vtkAFAMModelTree::MaxErrorArray, 1, rows, [&](int64_t r, int) { return entry(r).maxError; });
+  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::EntryArray, 1, rows, [](int64_t r, int) { return r; });
+  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::PayloadBytesArray, 1, rows,
+    [&](int64_t r, int) { return static_cast<vtkTypeInt64>(entry(r).size); });
+  return leaf;
+}
 }
 
 void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Partition& partition,
@@ -61,59 +121,36 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Parti
   const int64_t last = coarse * (piece + 1) / numPieces;
 
   int64_t next = 0;
-  const auto total = static_cast<double>(std::max<size_t>(1, entries.size()));
   for (int level = 0; level < levels; ++level)
   {
-    vtkNew<vtkMultiBlockDataSet> levelBlock;
     const int64_t count = partition.blockCount(level);
-    levelBlock->SetNumberOfBlocks(static_cast<unsigned>(count));
-    out->SetBlock(static_cast<unsigned>(level), levelBlock);
-    out->GetMetaData(static_cast<unsigned>(level))
-      ->Set(vtkCompositeDataSet::NAME(), ("Level " + std::to_string(level)).c_str());
+    std::vector<int64_t> rows; // the level's models in this piece, as entry indices
     for (int64_t b = 0; b < count; ++b, ++next)
     {
-      const afam::Int3 ijk = partition.blockFromLinear(level, b);
-      afam::Int3 root = ijk;
+      afam::Int3 root = partition.blockFromLinear(level, b);
       for (int l = level; l > 0; --l)
       {
         root = partition.parent(l, root);
       }
       const int64_t rootIndex = partition.linearIndex(0, root);
-      const std::string name = "L" + std::to_string(level) + " [" + std::to_string(ijk[0]) + "," +
-        std::to_string(ijk[1]) + "," + std::to_string(ijk[2]) + "]";
-      levelBlock->GetMetaData(static_cast<unsigned>(b))->Set(vtkCompositeDataSet::NAME(), name.c_str());
-      if (rootIndex < first || rootIndex >= last)
+      if (rootIndex >= first && rootIndex < last)
       {
-        continue;
+        rows.push_back(next);
       }
-      const int64_t entryIndex = next;
-      const afam::ModelEntry& e = entries.at(static_cast<size_t>(entryIndex));
-      const afam::BlockExtent ext = partition.extent(level, ijk);
-
-      // The leaf covers the block's voxels of the full grid; it carries no samples.
-      vtkNew<vtkImageData> leaf;
-      leaf->SetExtent(static_cast<int>(ext.lo[0]), static_cast<int>(ext.hi[0]),
-        static_cast<int>(ext.lo[1]), static_cast<int>(ext.hi[1]), static_cast<int>(ext.lo[2]),
-        static_cast<int>(ext.hi[2]));
-      leaf->SetOrigin(header.origin.data());
-      leaf->SetSpacing(header.spacing.data());
-      vtkFieldData* fd = leaf->GetFieldData();
-      AddTuple<vtkIntArray, int>(fd, LevelArray, { e.level });
-      AddTuple<vtkIntArray, int>(fd, BlockArray, { e.block[0], e.block[1], e.block[2] });
-      AddTuple<vtkIntArray, int>(fd, NcpArray, { e.ncp[0], e.ncp[1], e.ncp[2] });
-      AddTuple<vtkIntArray, int>(fd, DegreeArray, { e.degree[0], e.degree[1], e.degree[2] });
-      AddTuple<vtkDoubleArray, double>(fd, ValueRangeArray, { e.minValue, e.maxValue });
-      AddTuple<vtkDoubleArray, double>(fd, RmseArray, { e.rmse });
-      AddTuple<vtkDoubleArray, double>(fd, MaxErrorArray, { e.maxError });
-      AddTuple<vtkTypeInt64Array, vtkTypeInt64>(fd, EntryArray, { entryIndex });
-      AddTuple<vtkTypeInt64Array, vtkTypeInt64>(
-        fd, PayloadBytesArray, { static_cast<vtkTypeInt64>(e.size) });
-      AddString(fd, FileNameArray, path);
-      levelBlock->SetBlock(static_cast<unsigned>(b), leaf);
-      if (progress && (next & 255) == 0)
-      {
-        progress(static_cast<double>(next) / total);
-      }
+    }
+    if (next > static_cast<int64_t>(entries.size()))
+    {
+      throw std::runtime_error("the index has fewer entries than the partition has blocks");
+    }
+    if (!rows.empty())
+    {
+      out->SetBlock(static_cast<unsigned>(level), LevelLeaf(header, partition, entries, rows));
+    }
+    out->GetMetaData(static_cast<unsigned>(level))
+      ->Set(vtkCompositeDataSet::NAME(), ("Level " + std::to_string(level)).c_str());
+    if (progress)
+    {
+      progress(static_cast<double>(level + 1) / static_cast<double>(levels));
     }
   }
   // Last block: a 2x2x2 probe spanning the volume whose point array holds the value range, so that

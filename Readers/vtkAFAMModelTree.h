@@ -1,8 +1,9 @@
 // SPDX-FileCopyrightText: Adaptive-FAM authors
 // SPDX-License-Identifier: BSD-3-Clause
 // Private helper shared by vtkAFAMReader and vtkAFAMEncoder (not wrapped, not installed): builds
-// the metadata multiblock of a set of micro-models (one block per level, one leaf per model) from
-// Core's index structures. It reads no payload.
+// the metadata multiblock of a set of micro-models from Core's index structures: one leaf per
+// level, whose field data holds one row per model (a leaf per model would cost kilobytes of VTK
+// objects per model, and ParaView's data information more, on every update). It reads no payload.
 #ifndef vtkAFAMModelTree_h
 #define vtkAFAMModelTree_h
 
@@ -20,8 +21,8 @@ class Partition;
 
 namespace vtkAFAMModelTree
 {
-/// Field-data array names on every leaf (one tuple each) and on the root.
-constexpr const char* FileNameArray = "AFAM_FileName";     // root and leaves: the .afam path
+/// Field-data array names on the level leaves (one tuple per model) and on the root.
+constexpr const char* FileNameArray = "AFAM_FileName";     // root: the .afam path
 constexpr const char* LevelArray = "AFAM_Level";           // leaves: 0 = coarsest
 constexpr const char* BlockArray = "AFAM_Block";           // leaves: block i, j, k
 constexpr const char* NcpArray = "AFAM_NCP";               // leaves: control points per axis
@@ -33,9 +34,12 @@ constexpr const char* EntryArray = "AFAM_EntryIndex";      // leaves: index entr
 constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves
 constexpr const char* DimensionsArray = "AFAM_Dimensions"; // root: volume samples per axis
 
-/// Fills `out` (blocks 0..levels-1 = levels, block `levels` = "Value range" probe). Piece `piece` of `numPieces` keeps the leaves whose coarsest-level ancestor lies in
-/// its contiguous range of coarsest blocks (z-major slabs: spatially coherent); other leaves are
-/// null, so every rank has the same structure. `progress` gets fractions in [0, 1].
+/// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A level's
+/// leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays hold one
+/// tuple per model, in file order. Piece `piece` of `numPieces` keeps the models whose
+/// coarsest-level ancestor lies in its contiguous range of coarsest blocks (z-major slabs:
+/// spatially coherent); a level with none of them is a null block, so every rank has the same
+/// structure. `progress` gets fractions in [0, 1].
 void Build(const afam::VolumeHeader& header, const afam::Partition& partition,
   const std::vector<afam::ModelEntry>& entries, const std::string& path, int piece, int numPieces,
   vtkMultiBlockDataSet* out, const std::function<void(double)>& progress);

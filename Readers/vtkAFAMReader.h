@@ -4,10 +4,11 @@
  * @class   vtkAFAMReader
  * @brief   Reads an Adaptive-FAM (.afam) file of multi-resolution B-spline micro-models.
  *
- * The output is a vtkMultiBlockDataSet with one block per level of detail and one leaf per
- * micro-model. A leaf is a vtkImageData covering the micro-model's block (origin, spacing and
- * extent of the encoded volume) with no point data; its field data holds the model's level, block
- * index, NCP, value range, achieved RMSE and max error, its index in the file and the file path.
+ * The output is a vtkMultiBlockDataSet with one leaf per level of detail and a last "Value range"
+ * leaf. A level's leaf is a vtkImageData covering its micro-models' blocks (origin, spacing and
+ * extent of the encoded volume) with no point data; its field data has one row per micro-model:
+ * level, block index, NCP, degree, value range, achieved RMSE and max error, index in the file and
+ * payload bytes (ParaView's spreadsheet shows them). The root's field data names the file.
  * No payload (control points) is read: renderers open the file themselves, out of core.
  *
  * Output port 1 ("Decoded Level"): on request (DecodeLevel >= 0, 0 = coarsest) the reader decodes
@@ -21,7 +22,8 @@
  * per decode naming the damaged blocks.
  *
  * MPI pieces of port 0: piece p of n keeps the micro-models whose coarsest-level ancestor lies in
- * its contiguous range of coarsest blocks (z-major slabs, spatially coherent).
+ * its contiguous range of coarsest blocks (z-major slabs, spatially coherent); its level leaves
+ * span only those blocks.
  *
  * Anything that is not a valid .afam file is reported with vtkErrorMacro and a failed request.
  */

@@ -143,6 +143,16 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
   return zs;
 }
 
+/// How many planes of `plane` floats a chunk may hold: a quarter of the samples it fills (so a
+/// row of blocks and the planes it is filtered from take at most 1.25 times the row's samples), at
+/// most 256 MB, at least one plane (a chunk always covers one z-sample, whatever its taps).
+size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out) {
+  size_t samples = 0;
+  for (const std::vector<float>* o : out) samples += o->size();
+  const size_t floats = std::min(samples / 4, (size_t(256) << 20) / sizeof(float));
+  return std::max<size_t>(1, floats / plane);
+}
+
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
 /// yBase on).
 void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
@@ -178,7 +188,10 @@ PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(d
 
 const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount) {
   const size_t plane = size_t(rowSize_ * yCount);
-  if (buf_.size() < zs.size() * plane) buf_.resize(zs.size() * plane);
+  if (buf_.size() < zs.size() * plane) {
+    buf_.clear();  // no copy of the old contents on growth
+    buf_.resize(zs.size() * plane);
+  }
   float* buf = buf_.data();
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;
@@ -219,7 +232,7 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
     yEnd = std::max(yEnd, bt.y1);
   }
   const size_t plane = size_t(X * (yEnd - yBase + 1));
-  const size_t maxPlanes = std::max<size_t>(1, (size_t(256) << 20) / (plane * sizeof(float)));
+  const size_t maxPlanes = chunkPlaneBudget(plane, out);
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;

@@ -151,7 +151,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   if (source.knownRange(vmin, vmax)) return;
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
-  const int64_t chunk = std::max<int64_t>(1, (int64_t(4) << 20) / std::max<int64_t>(plane, 1));
+  const int64_t chunk = std::max<int64_t>(1, (int64_t(1) << 20) / std::max<int64_t>(plane, 1));  // ~4 MB
   const WorkShare planes = workShare(dims[2], team.rank(), team.size());
   std::vector<float> buf;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
@@ -374,24 +374,25 @@ class LevelEncoder {
     return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
   }
 
-  /// Lines of blocks of level l from `line` on (before endLine), sampled a z-row (or the part of
-  /// one in the range) at a time, until the batch holds ~24 M samples (at least one row or part;
-  /// in a team of several processes, exactly one).
+  /// Lines of blocks of level l from `line` on (before endLine), until the batch holds ~24 M
+  /// samples (in a team of several processes ~1 M), at least one line. One process samples a
+  /// z-row (or the part of one in the range) at a time; a member of a team one line at a time.
   /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
   /// progress callback, which the calling thread owns).
   Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
     // One process samples ahead in batches of ~24 M samples; a member of a team holds its piece
-    // and one line of blocks at a time (its samples, and the rows of the planes they are filtered
-    // from), so its memory is its piece plus one row of blocks of the level.
-    const size_t budgetFloats = team_.size() > 1 ? 0 : size_t(24) << 20;
+    // and ~4 MB of samples at a time, plus the rows of the planes one line is filtered from (at
+    // most a quarter of the line's samples, see sampleBlockRow): less than one z-row of blocks.
+    const bool member = team_.size() > 1;
+    const size_t budgetFloats = member ? size_t(1) << 18 : size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
     std::vector<BlockTask>& tasks = batch.tasks;
     size_t floats = 0;
     while (line < endLine && (tasks.empty() || floats < budgetFloats)) {
       const int kz = int(line / nb[1]), j0 = int(line % nb[1]);
-      const int j1 = int(std::min<int64_t>(nb[1], j0 + (endLine - line)));
+      const int j1 = member ? j0 + 1 : int(std::min<int64_t>(nb[1], j0 + (endLine - line)));
       std::vector<Int3> row;
       for (int j = j0; j < j1; ++j)
         for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});

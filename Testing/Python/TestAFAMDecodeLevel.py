@@ -137,7 +137,8 @@ for piece in range(2):
         leaf = it.GetCurrentDataObject()
         fd = leaf.GetFieldData()
         if fd.GetArray("AFAM_EntryIndex") is not None:
-            entries.add(int(fd.GetArray("AFAM_EntryIndex").GetTuple1(0)))
+            column = fd.GetArray("AFAM_EntryIndex")
+            entries.update(int(column.GetTuple1(r)) for r in range(column.GetNumberOfTuples()))
             b = leaf.GetBounds()
             zr = [min(zr[0], b[4]), max(zr[1], b[5])]
         it.GoToNextItem()

@@ -40,7 +40,7 @@ encoder = AdaptiveFAMEncoder(Input=wavelet, Levels=3, BlocksPerAxis=4, ErrorBoun
 encoder.Scalars = ["POINTS", "RTData"]
 encoder.UpdatePipeline()
 leaves = encoder.GetDataInformation().GetNumberOfDataSets()
-expected = 4 ** 3 + 2 ** 3 + 1 + 1  # levels 2, 1, 0 and the value-range probe
+expected = 3 + 1  # levels 2, 1, 0 (a leaf each) and the value-range probe
 if leaves != expected:
     u.fail("encoder produced %d leaves, expected %d" % (leaves, expected))
 path = os.path.join(u.shared_dir(), "wavelet.afam")
@@ -53,6 +53,37 @@ model = OpenDataFile(path)
 model.UpdatePipeline()
 if model.GetDataInformation().GetNumberOfDataSets() != expected:
     u.fail("reopened file has %d leaves" % model.GetDataInformation().GetNumberOfDataSets())
+
+
+def model_rows(proxy):
+    """Per level: the field-data rows of its leaf as (entry, level, ncp, rmse) tuples."""
+    tree = servermanager.Fetch(proxy)
+    levels = []
+    for level in range(tree.GetNumberOfBlocks() - 1):
+        fd = tree.GetBlock(level).GetFieldData()
+        cols = [fd.GetArray(n) for n in ("AFAM_EntryIndex", "AFAM_Level", "AFAM_NCP", "AFAM_RMSE")]
+        levels.append([(int(cols[0].GetTuple1(r)), int(cols[1].GetTuple1(r)), cols[2].GetTuple3(r),
+                        cols[3].GetTuple1(r)) for r in range(cols[0].GetNumberOfTuples())])
+    return levels
+
+
+# One row per model, in file order (coarsest level first), within the bound; the reader's rows are
+# the encoder's.
+encoded_rows = model_rows(encoder)
+if [len(rows) for rows in encoded_rows] != [1, 8, 64]:
+    u.fail("rows per level %s, expected [1, 8, 64]" % [len(rows) for rows in encoded_rows])
+flat = [row for rows in encoded_rows for row in rows]
+if [row[0] for row in flat] != list(range(73)) or any(row[1] != lv for lv, rows in enumerate(encoded_rows)
+                                                        for row in rows):
+    u.fail("entry or level columns out of order: %s" % flat[:10])
+encoder.UpdatePropertyInformation()
+bound = encoder.GetProperty("LastBound").GetData()  # 0.005 of the Wavelet's value range
+if not 0 < bound < 5 or any(min(row[2]) < 3 or row[3] > bound for row in flat):
+    u.fail("a model row has NCP below degree + 1 or RMSE above the bound %g: %s" % (bound, flat))
+if model_rows(model) != encoded_rows:
+    u.fail("the reopened file's model rows differ from the encoder's")
+print("model rows: 1 + 8 + 64, NCP %d..%d, max RMSE %.4g, bound %.4g" % (
+    min(min(r[2]) for r in flat), max(max(r[2]) for r in flat), max(r[3] for r in flat), bound))
 
 # The models sit where the Wavelet is: the file's origin is the world position of the first sample
 # (origin + extent minimum x spacing), so bounds survive encoder -> writer -> reader.

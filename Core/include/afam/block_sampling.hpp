@@ -22,6 +22,8 @@ class PlaneReader {
   /// allocated, page-faulted or cleared again.
   const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount);
   uint64_t bytesRead() const { return bytesRead_; }
+  /// The buffer's size: the largest chunk read so far.
+  size_t bufferBytes() const { return buf_.size() * sizeof(float); }
 
  private:
   VolumeSource& src_;
@@ -35,9 +37,9 @@ class PlaneReader {
 using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
 
 /// Fills the samples of every block in `blocks` (all in the same z-row of one level): the rows of
-/// the z-planes the blocks need are read in chunks (at most ~256 MB, one readRows per run of
-/// consecutive planes; whole planes for a whole row of blocks), and each block is filtered from a
-/// chunk separably (y, then x, then z; sums in double), blocks
+/// the z-planes the blocks need are read in chunks (one readRows per run of consecutive planes;
+/// whole planes for a whole row of blocks) of at most a quarter of the samples they fill (and
+/// 256 MB), at least the planes of one z-sample, and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).

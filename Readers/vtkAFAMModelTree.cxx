@@ -101,6 +101,8 @@ vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
   AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::EntryArray, 1, rows, [](int64_t r, int) { return r; });
   AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::PayloadBytesArray, 1, rows,
     [&](int64_t r, int) { return static_cast<vtkTypeInt64>(entry(r).size); });
+  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::StoredBytesArray, 1, rows,
+    [&](int64_t r, int) { return static_cast<vtkTypeInt64>(entry(r).storedSize); });
   return leaf;
 }
 }

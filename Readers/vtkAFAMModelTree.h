@@ -31,7 +31,8 @@ constexpr const char* ValueRangeArray = "AFAM_ValueRange"; // leaves: model min,
 constexpr const char* RmseArray = "AFAM_RMSE";             // leaves: achieved RMSE
 constexpr const char* MaxErrorArray = "AFAM_MaxError";     // leaves: achieved max abs error
 constexpr const char* EntryArray = "AFAM_EntryIndex";      // leaves: index entry in the file
-constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves
+constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves: decoded control points
+constexpr const char* StoredBytesArray = "AFAM_StoredBytes";   // leaves: bytes in the file
 constexpr const char* DimensionsArray = "AFAM_Dimensions"; // root: volume samples per axis
 
 /// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A level's

@@ -7,8 +7,9 @@
  * The output is a vtkMultiBlockDataSet with one leaf per level of detail and a last "Value range"
  * leaf. A level's leaf is a vtkImageData covering its micro-models' blocks (origin, spacing and
  * extent of the encoded volume) with no point data; its field data has one row per micro-model:
- * level, block index, NCP, degree, value range, achieved RMSE and max error, index in the file and
- * payload bytes (ParaView's spreadsheet shows them). The root's field data names the file.
+ * level, block index, NCP, degree, value range, achieved RMSE and max error, index in the file,
+ * bytes of its decoded control points and bytes stored in the file (ParaView's spreadsheet shows
+ * them). The root's field data names the file.
  * No payload (control points) is read: renderers open the file themselves, out of core.
  *
  * Output port 1 ("Decoded Level"): on request (DecodeLevel >= 0, 0 = coarsest) the reader decodes

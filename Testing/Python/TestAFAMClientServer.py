@@ -8,7 +8,9 @@ opaque sphere inside it (depth compositing, default threshold): the VTK tests' c
 threshold 0, and at most 0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
 The frame statistics summed over the server ranks (afam_client.frame_statistics) show the bytes
 builtin mode reads for the same cold view (bar: within 1.1x); an interactive frame is drawn smaller on
-the server and a still one whole. A file missing on the server gives a clear error on the client."""
+the server and a still one whole. The Wavelet encoded on the server's ranks (split among them) and
+saved from the client holds builtin's micro-models. A file missing on the server gives a clear error
+on the client."""
 import os
 import sys
 
@@ -91,6 +93,20 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
              still["MaxTotalTime"]), flush=True)
     if not interactive["MinImageScale"] < 1.0 or still["MinImageScale"] != 1.0:
         u.fail("interaction scaling on the server: interactive %s, still %s" % (interactive, still))
+
+    # Encoding on the server's ranks (the Wavelet split among them), saved by the client's SaveData:
+    # the micro-models of the builtin encode.
+    encoded_here = os.path.join(out, "wavelet_cs_server%d.afam" % ranks)
+    _, server_encoder = u.encode_wavelet(globals(), [-20, 20, -20, 20, -20, 20], 3, 4, 0.005, encoded_here)
+    difference = u.compare_models(encoded_here, path)
+    if difference:
+        u.fail("the encode on %d server rank(s) differs from builtin's: %s" % (ranks, difference))
+    server_encoder.UpdatePropertyInformation()
+    piece = list(server_encoder.GetProperty("LastPieceExtent").GetData())  # rank 0's
+    print("encode on %d server rank(s): %d micro-models identical to builtin's; rank 0's piece %s"
+          % (ranks, len(u.afam_models(encoded_here)[1]), piece), flush=True)
+    if (piece == [-20, 20, -20, 20, -20, 20]) != (ranks == 1):
+        u.fail("rank 0 encoded the piece %s of the Wavelet on %d rank(s)" % (piece, ranks))
 
     # 3. A file the server does not have: the client hears why.
     missing = os.path.join(out, "no_such_file.afam")

@@ -56,14 +56,14 @@ if model.GetDataInformation().GetNumberOfDataSets() != expected:
 
 
 def model_rows(proxy):
-    """Per level: the field-data rows of its leaf as (entry, level, ncp, rmse) tuples."""
+    """Per level: the field-data rows of its leaf as (entry, level, ncp, rmse, stored bytes) tuples."""
     tree = servermanager.Fetch(proxy)
     levels = []
     for level in range(tree.GetNumberOfBlocks() - 1):
         fd = tree.GetBlock(level).GetFieldData()
-        cols = [fd.GetArray(n) for n in ("AFAM_EntryIndex", "AFAM_Level", "AFAM_NCP", "AFAM_RMSE")]
+        cols = [fd.GetArray(n) for n in ("AFAM_EntryIndex", "AFAM_Level", "AFAM_NCP", "AFAM_RMSE", "AFAM_StoredBytes")]
         levels.append([(int(cols[0].GetTuple1(r)), int(cols[1].GetTuple1(r)), cols[2].GetTuple3(r),
-                        cols[3].GetTuple1(r)) for r in range(cols[0].GetNumberOfTuples())])
+                        cols[3].GetTuple1(r), int(cols[4].GetTuple1(r))) for r in range(cols[0].GetNumberOfTuples())])
     return levels
 
 
@@ -80,10 +80,17 @@ encoder.UpdatePropertyInformation()
 bound = encoder.GetProperty("LastBound").GetData()  # 0.005 of the Wavelet's value range
 if not 0 < bound < 5 or any(min(row[2]) < 3 or row[3] > bound for row in flat):
     u.fail("a model row has NCP below degree + 1 or RMSE above the bound %g: %s" % (bound, flat))
+# The stored bytes fill the file's payload area (docs/FORMAT.md): its size less the 1024-byte
+# header and the 40-byte entries, less the padding that aligns each payload to 4 bytes (and the area
+# to at most 64).
+stored = sum(row[4] for row in flat)
+if not 0 <= os.path.getsize(path) - 1024 - 73 * 40 - stored < 64 + 3 * 73:
+    u.fail("stored bytes %d do not fit the %d-byte file" % (stored, os.path.getsize(path)))
 if model_rows(model) != encoded_rows:
     u.fail("the reopened file's model rows differ from the encoder's")
-print("model rows: 1 + 8 + 64, NCP %d..%d, max RMSE %.4g, bound %.4g" % (
-    min(min(r[2]) for r in flat), max(max(r[2]) for r in flat), max(r[3] for r in flat), bound))
+print("model rows: 1 + 8 + 64, NCP %d..%d, max RMSE %.4g, bound %.4g, %d stored bytes of %d" % (
+    min(min(r[2]) for r in flat), max(max(r[2]) for r in flat), max(r[3] for r in flat), bound, stored,
+    os.path.getsize(path)))
 
 # The models sit where the Wavelet is: the file's origin is the world position of the first sample
 # (origin + extent minimum x spacing), so bounds survive encoder -> writer -> reader.

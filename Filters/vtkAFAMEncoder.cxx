@@ -23,11 +23,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
+#include <signal.h>
 #include <unistd.h>
 
 vtkStandardNewMacro(vtkAFAMEncoder);
@@ -147,10 +150,40 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
   return options;
 }
 
+namespace
+{
+/// Removes the model files that encoders of processes no longer running left in `dir` (a pvserver
+/// or pvbatch that was killed never destroys its filters). Files of live processes, or of other
+/// users (not removable), stay.
+void RemoveOrphanModelFiles(const std::filesystem::path& dir)
+{
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+  {
+    const std::string name = it->path().filename().string();
+    long pid = 0;
+    int counter = 0, used = 0;
+    if (std::sscanf(name.c_str(), "afam-encoder-%ld-%d.afam%n", &pid, &counter, &used) != 2 ||
+      used != static_cast<int>(name.size()) || pid <= 0 || pid == static_cast<long>(::getpid()))
+    {
+      continue;
+    }
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
+    {
+      std::error_code ignored;
+      std::filesystem::remove(it->path(), ignored);
+    }
+  }
+}
+}
+
 std::string vtkAFAMEncoder::NewModelPath()
 {
   static std::atomic<int> counter{ 0 };
-  return (std::filesystem::temp_directory_path() /
+  static std::once_flag swept;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path();
+  std::call_once(swept, [&dir] { RemoveOrphanModelFiles(dir); });
+  return (dir /
     ("afam-encoder-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".afam"))
     .string();
 }

@@ -16,8 +16,9 @@
  * the models, which are those of a one-process encode of the whole image (vtkAFAMDistributedEncode).
  *
  * Output: the same metadata multiblock as vtkAFAMReader (one leaf per level, one field-data row
- * per micro-model). The models are stored in a temporary .afam file owned by this filter (removed when
- * the filter is destroyed or re-executes), which vtkAFAMVolumeMapper renders at once and
+ * per micro-model). The models are stored in a temporary .afam file owned by this filter (removed
+ * when the filter is destroyed or re-executes; the first encode of a process removes the files
+ * that processes no longer running left behind), which vtkAFAMVolumeMapper renders at once and
  * vtkAFAMWriter copies to its destination.
  */
 #ifndef vtkAFAMEncoder_h

@@ -151,7 +151,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   if (source.knownRange(vmin, vmax)) return;
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
-  const int64_t chunk = std::max<int64_t>(1, (int64_t(1) << 20) / std::max<int64_t>(plane, 1));  // ~4 MB
+  const int64_t chunk = std::max<int64_t>(1, (int64_t(1) << 18) / std::max<int64_t>(plane, 1));  // ~1 MB
   const WorkShare planes = workShare(dims[2], team.rank(), team.size());
   std::vector<float> buf;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;

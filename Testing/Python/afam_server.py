@@ -51,7 +51,9 @@ def descendants(pid):
 
 class PVServer:
     """`with PVServer(pvserver, ranks, log) as server:` starts the server and stops it on exit;
-    `env` adds variables to the server's environment (PV_PLUGIN_PATH, say)."""
+    `env` adds variables to the server's environment (PV_PLUGIN_PATH, say). The server's TMPDIR is
+    the log's folder: an encoder's temporary model file, which a server stopped by its process id
+    leaves behind, stays in the test's output."""
 
     def __init__(self, pvserver, ranks, log_path, mpirun="", start_timeout=60.0, env=None):
         self.port = free_port()
@@ -59,7 +61,7 @@ class PVServer:
         self.log_path = log_path
         self.command = server_command(pvserver, ranks, self.port, mpirun)
         self.start_timeout = start_timeout
-        self.env = dict(launcher_environment(), **(env or {}))
+        self.env = dict(launcher_environment(), TMPDIR=os.path.dirname(os.path.abspath(log_path)), **(env or {}))
         self.process = None
         self.ranks_started = []  # pvserver ranks under mpirun, known once it accepts connections
 

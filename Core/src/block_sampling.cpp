@@ -143,13 +143,17 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
   return zs;
 }
 
-/// How many planes of `plane` floats a chunk may hold: a quarter of the samples it fills (so a
-/// row of blocks and the planes it is filtered from take at most 1.25 times the row's samples), at
-/// most 256 MB, at least one plane (a chunk always covers one z-sample, whatever its taps).
-size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out) {
-  size_t samples = 0;
-  for (const std::vector<float>* o : out) samples += o->size();
-  const size_t floats = std::min(samples / 4, (size_t(256) << 20) / sizeof(float));
+/// How many planes of `plane` floats a chunk may hold: at most 256 MB, and with
+/// ChunkBudget::QuarterOfSamples at most a quarter of the samples it fills (so a row of blocks and
+/// the planes it is filtered from take at most 1.25 times the row's samples); at least one plane (a
+/// chunk always covers one z-sample, whatever its taps).
+size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out, ChunkBudget budget) {
+  size_t floats = (size_t(256) << 20) / sizeof(float);
+  if (budget == ChunkBudget::QuarterOfSamples) {
+    size_t samples = 0;
+    for (const std::vector<float>* o : out) samples += o->size();
+    floats = std::min(floats, samples / 4);
+  }
   return std::max<size_t>(1, floats / plane);
 }
 
@@ -204,7 +208,8 @@ const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64
 }
 
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
-                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop) {
+                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop,
+                    ChunkBudget budget) {
   if (blocks.empty()) return;
   const int g = ghost ? 1 : 0;
   std::vector<BlockTaps> taps(blocks.size());
@@ -232,7 +237,7 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
     yEnd = std::max(yEnd, bt.y1);
   }
   const size_t plane = size_t(X * (yEnd - yBase + 1));
-  const size_t maxPlanes = chunkPlaneBudget(plane, out);
+  const size_t maxPlanes = chunkPlaneBudget(plane, out, budget);
   for (int k0 = 0; k0 < nz;) {
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;

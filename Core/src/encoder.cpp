@@ -403,7 +403,8 @@ class LevelEncoder {
         tasks[first + r].ijk = row[r];
         outs[r] = &tasks[first + r].samples;
       }
-      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
+      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_,
+                     member ? ChunkBudget::QuarterOfSamples : ChunkBudget::Large);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
       line += j1 - j0;
     }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Block sampling from a streaming source: a row of blocks is read in chunks of planes bounded by
-// the samples it fills (what an encoding rank holds beside its piece), and the chunking does not
-// change a sample.
+// Block sampling from a streaming source: with ChunkBudget::QuarterOfSamples a row of blocks is
+// read in chunks of planes bounded by the samples it fills (what an encoding rank holds beside its
+// piece), and the chunking does not change a sample (each block alone is sampled in other chunks).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,7 +34,7 @@ struct RowCase {
 
 }  // namespace
 
-TEST(BlockSampling, ChunksHoldAtMostAQuarterOfTheRowOrOneSamplesPlanes) {
+TEST(BlockSampling, QuarterBudgetChunksHoldAQuarterOfTheRowOrOneSamplesPlanes) {
   const Index3 dims{96, 80, 88};
   std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
   marschnerLobbSlab(MarschnerLobb{}, dims, 0, dims[2], v.data());
@@ -55,7 +55,7 @@ TEST(BlockSampling, ChunksHoldAtMostAQuarterOfTheRowOrOneSamplesPlanes) {
         std::vector<std::vector<float>*> outs;
         size_t rowFloats = 0;
         for (auto& s : samples) outs.push_back(&s);
-        sampleBlockRow(part, planes, l, row, rc.ghost, rc.sampling, outs);
+        sampleBlockRow(part, planes, l, row, rc.ghost, rc.sampling, outs, {}, ChunkBudget::QuarterOfSamples);
         for (const auto& s : samples) rowFloats += s.size();
         // One z-sample's planes: a box of width stride + the ghost's step, whole rows of the volume.
         const size_t oneSample = size_t(part.stride(l) + 2) * size_t(dims[0] * dims[1]);

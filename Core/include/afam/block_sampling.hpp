@@ -36,16 +36,21 @@ class PlaneReader {
 /// (the encoder's sampling pool), else in order on the calling thread.
 using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
 
+/// How many planes sampleBlockRow reads at once: up to 256 MB (the fewest reads: a process that
+/// holds batches of rows anyway), or at most a quarter of the samples they fill too (a rank of a
+/// team, whose memory beside its piece is one line of blocks).
+enum class ChunkBudget { Large, QuarterOfSamples };
+
 /// Fills the samples of every block in `blocks` (all in the same z-row of one level): the rows of
 /// the z-planes the blocks need are read in chunks (one readRows per run of consecutive planes;
-/// whole planes for a whole row of blocks) of at most a quarter of the samples they fill (and
-/// 256 MB), at least the planes of one z-sample, and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
+/// whole planes for a whole row of blocks) as large as `budget` allows, at least the planes of one
+/// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
 /// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
                     bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out,
-                    const BlockLoop& loop = {});
+                    const BlockLoop& loop = {}, ChunkBudget budget = ChunkBudget::Large);
 
 /// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
 /// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample

@@ -382,8 +382,8 @@ class LevelEncoder {
   Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
     // One process samples ahead in batches of ~24 M samples; a member of a team holds its piece
-    // and ~4 MB of samples at a time, plus the rows of the planes one line is filtered from (at
-    // most a quarter of the line's samples, see sampleBlockRow): less than one z-row of blocks.
+    // and ~1 MB of samples at a time, plus the rows of the planes one line is filtered from (at
+    // most a quarter of the line's samples: ChunkBudget): less than one z-row of blocks.
     const bool member = team_.size() > 1;
     const size_t budgetFloats = member ? size_t(1) << 18 : size_t(24) << 20;
     const Int3 nb = part_.blocksPerAxis(l);

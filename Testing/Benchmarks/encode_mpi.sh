@@ -5,7 +5,8 @@
 # (/usr/bin/time: the whole pvbatch process, ParaView's start included) and the encode's own wall
 # time (afam_encode.py's seconds=), the bytes of the files, and whether the 2-rank file is byte-identical to the
 # one-process file. A run on a 16^3 volume gives pvbatch's own footprint (ParaView + plugin); a
-# read-only run of the volume on the ranks (read_piece.py) gives the reference for what the encode
+# reference run on the ranks (read_piece.py: each rank reads its piece of the volume, then a 16^3
+# Wavelet is encoded so that the encoder's code is resident) gives what the encode of the volume
 # adds on each rank beside its piece, printed last beside one z-row of finest blocks.
 #
 # usage: Testing/Benchmarks/encode_mpi.sh [BUILD_DIR] [WORK_DIR] [SIZE]
@@ -35,12 +36,12 @@ volume="ml_${SIZE}x${SIZE}x${SIZE}_float32.raw"
 [ -f ml_16x16x16_float32.raw ] || "$BUILD/Apps/afam" ml --size 16 ml_16x16x16_float32.raw >/dev/null
 
 declare -A PEAK  # label:rank -> peak RSS (KiB), or peak heap under HEAPTRACK
-# run LABEL RANKS THREADS IN OUT: one line per rank with wall seconds and peak RSS; OUT "read-only":
-# the reference run (read_piece.py: ParaView, the plugin and the reader, no encode)
+# run LABEL RANKS THREADS IN OUT: one line per rank with wall seconds and peak RSS; OUT "reference":
+# the reference run (read_piece.py) instead of an encode of IN
 run() {
   local label="$1" ranks="$2" threads="$3" in="$4" out="$5"
   local encode=(pvbatch "$SCRIPT" --plugin "$PLUGIN" "$in" "$out" --threads "$threads" "${OPTIONS[@]}")
-  if [ "$out" = read-only ]; then
+  if [ "$out" = reference ]; then
     encode=(pvbatch "$here/Testing/Benchmarks/read_piece.py" "$in" --plugin "$PLUGIN")
   else
     rm -f "$out"
@@ -71,7 +72,7 @@ run() {
     done < <(grep "^rank=" <<<"$text")
   fi
   # the encoder's own time (filter + writer, after the reader): afam_encode.py's summary
-  [ "$out" = read-only ] || echo "$label encode_s=$(grep -o "seconds=[0-9.]*" <<<"$text" | cut -d= -f2) bytes=$(stat -c %s "$out")"
+  [ "$out" = reference ] || echo "$label encode_s=$(grep -o "seconds=[0-9.]*" <<<"$text" | cut -d= -f2) bytes=$(stat -c %s "$out")"
 }
 
 echo "volume $volume ($(stat -c %s "$volume") bytes), options ${OPTIONS[*]}, $(nproc) cores, load $(cut -d' ' -f1 /proc/loadavg)"
@@ -80,16 +81,16 @@ if [ -z "${ONLY_RANKS:-}" ]; then
   run "1proc,1thread" 1 1 "$volume" one_t1.afam
   run "1proc,2threads" 1 2 "$volume" one_t2.afam
 fi
-run "read-only,${RANKS}ranks" "$RANKS" 1 "$volume" read-only
+run "reference,${RANKS}ranks" "$RANKS" 1 "$volume" reference
 run "${RANKS}ranks,1thread" "$RANKS" 1 "$volume" ranks_t1.afam
-# What the encode adds on each rank beside the reader's piece, against one z-row of finest blocks
+# What the encode adds on each rank beside its piece, against one z-row of finest blocks
 # (their samples: blocks per axis^2 x (edge + 1)^3 floats; ~65-sample blocks when --blocks is 0).
 blocks="$(sed -n 's/.*--blocks \([0-9]*\).*/\1/p' <<<" ${OPTIONS[*]} ")"
 [ -n "$blocks" ] && [ "$blocks" != 0 ] || blocks=$(( (SIZE + 63) / 64 ))
 row=$(( blocks * blocks * (SIZE / blocks + 1) ** 3 * 4 ))
 for ((r = 0; r < RANKS; ++r)); do
-  added=$(( ${PEAK["${RANKS}ranks,1thread:$r"]} - ${PEAK["read-only,${RANKS}ranks:$r"]} ))
-  echo "rank $r: the encode adds $(( added / 1000 )) kB to the read-only run's peak (${HEAPTRACK:+heap, }one z-row of finest blocks: $(( row / 1000 )) kB; $(( added >= row ? 1 : 0 )) = over)"
+  added=$(( ${PEAK["${RANKS}ranks,1thread:$r"]} - ${PEAK["reference,${RANKS}ranks:$r"]} ))
+  echo "rank $r: the encode adds $(( added / 1000 )) kB to the reference run's peak (${HEAPTRACK:+heap, }one z-row of finest blocks: $(( row / 1000 )) kB; $(( added >= row ? 1 : 0 )) = over)"
 done
 if cmp -s one_t1.afam ranks_t1.afam && cmp -s one_t1.afam one_t2.afam; then
   echo "files: the ${RANKS}-rank file is byte-identical to the one-process files"

@@ -44,8 +44,8 @@ enum class ChunkBudget { Large, QuarterOfSamples };
 /// Fills the samples of every block in `blocks` (all in the same z-row of one level): the rows of
 /// the z-planes the blocks need are read in chunks (one readRows per run of consecutive planes;
 /// whole planes for a whole row of blocks) as large as `budget` allows, at least the planes of one
-/// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk separably (y, then x, then z; sums in double), blocks
-/// in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
+/// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk
+/// separably (y, then x, then z; sums in double), blocks in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
 /// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
 /// coarse levels are filtered (see LevelSampling).
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
+#include "afam/base/errors.hpp"
 
 namespace afam::cli {
 

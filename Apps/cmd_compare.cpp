@@ -5,8 +5,8 @@
 // elsewhere (the ParaView plugin, ParaView's own volume mapper) are scored the same way.
 #include <cstdio>
 
-#include "afam/image_metrics.hpp"
-#include "afam/png_io.hpp"
+#include "afam/eval/image_metrics.hpp"
+#include "afam/eval/png_io.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

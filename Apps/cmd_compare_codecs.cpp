@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "level_error.hpp"

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/fit.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/spline/fit.hpp"
 #include "commands.hpp"
 
 namespace {

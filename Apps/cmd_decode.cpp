@@ -7,8 +7,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

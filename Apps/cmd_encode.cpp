@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <thread>
 
-#include "afam/encoder.hpp"
+#include "afam/encode/encoder.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "source_args.hpp"

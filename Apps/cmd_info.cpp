@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <map>
 
-#include "afam/afam_file.hpp"
+#include "afam/format/afam_file.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

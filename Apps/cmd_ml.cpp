@@ -8,7 +8,7 @@
 #include <cstring>
 #include <vector>
 
-#include "afam/marschner_lobb.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/camera.hpp"
-#include "afam/predictors/lstm.hpp"
-#include "afam/predictors/prefetch_predictors.hpp"
-#include "afam/transfer_function.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/predict/lstm.hpp"
+#include "afam/predict/predictor_factory.hpp"
+#include "afam/scene/transfer_function.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

@@ -5,12 +5,12 @@
 // --ground-truth-ml, psnr=<x> ssim=<y> against the analytic Marschner-Lobb ray cast.
 #include <cstdio>
 
-#include "afam/camera.hpp"
-#include "afam/cpu_raycaster.hpp"
-#include "afam/ground_truth.hpp"
-#include "afam/image_metrics.hpp"
-#include "afam/png_io.hpp"
-#include "afam/renderer.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/eval/ground_truth.hpp"
+#include "afam/eval/image_metrics.hpp"
+#include "afam/eval/png_io.hpp"
+#include "afam/render/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "gpu_device.hpp"

@@ -11,9 +11,9 @@
 #include <fstream>
 #include <vector>
 
-#include "afam/camera.hpp"
-#include "afam/errors.hpp"
-#include "afam/renderer.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/render/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "gpu_device.hpp"

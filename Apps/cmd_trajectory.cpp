@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "afam/camera.hpp"
-#include "afam/trajectory_gen.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/scene/trajectory_gen.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 

@@ -2,9 +2,9 @@
 // afam verify FILE.afam [--against IN.raw] [--level K]
 #include <cstdio>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/errors.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/errors.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "level_error.hpp"

@@ -9,9 +9,9 @@
 #include <memory>
 #include <string>
 
-#include "afam/cpu_raycaster.hpp"
-#include "afam/errors.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/render/renderer.hpp"
 #if defined(AFAM_HAVE_CUDA)
 #include "afam/cuda/gpu_caster.hpp"
 #endif

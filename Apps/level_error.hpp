@@ -8,8 +8,9 @@
 #include <cstdint>
 #include <functional>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
 
 namespace afam::cli {
 

@@ -6,7 +6,7 @@
 #include <exception>
 #include <string>
 
-#include "afam/errors.hpp"
+#include "afam/base/errors.hpp"
 #include "commands.hpp"
 
 namespace {

@@ -6,8 +6,8 @@
 #include <string>
 #include <utility>
 
-#include "afam/predictors/prefetch_predictors.hpp"
-#include "afam/renderer.hpp"
+#include "afam/predict/predictor_factory.hpp"
+#include "afam/render/renderer.hpp"
 #include "cli.hpp"
 
 namespace afam::cli {

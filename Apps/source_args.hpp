@@ -6,8 +6,8 @@
 #include <memory>
 #include <string>
 
-#include "afam/encoder.hpp"
-#include "afam/volume_formats.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/volume_formats.hpp"
 #include "cli.hpp"
 
 namespace afam::cli {

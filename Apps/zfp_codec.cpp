@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
+#include "afam/base/errors.hpp"
 
 #ifdef AFAM_HAVE_ZFP
 #include <zfp.h>

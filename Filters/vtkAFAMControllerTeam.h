@@ -4,7 +4,7 @@
  * @class   vtkAFAMControllerTeam
  * @brief   Core's EncodeTeam over a vtkMultiProcessController (private to the module).
  *
- * The ranks of the controller encode one volume together (afam/encode_team.hpp). Every call runs
+ * The ranks of the controller encode one volume together (afam/encode/encode_team.hpp). Every call runs
  * under `Lock()`, which the piece source (vtkAFAMPieceSource) also takes around its one-sided reads,
  * so that MPI is entered by one thread at a time where MPI allows other threads than the main one
  * (MPI_THREAD_SERIALIZED or more): the encoder then samples on a thread of its own while its calling
@@ -13,7 +13,7 @@
 #ifndef vtkAFAMControllerTeam_h
 #define vtkAFAMControllerTeam_h
 
-#include "afam/encode_team.hpp"
+#include "afam/encode/encode_team.hpp"
 
 #include <mutex>
 #include <string>

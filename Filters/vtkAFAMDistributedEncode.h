@@ -12,7 +12,7 @@
 #ifndef vtkAFAMDistributedEncode_h
 #define vtkAFAMDistributedEncode_h
 
-#include "afam/encoder.hpp"
+#include "afam/encode/encoder.hpp"
 
 #include "vtkFloatArray.h"
 #include "vtkSmartPointer.h"

@@ -5,8 +5,8 @@
 #include "vtkAFAMDistributedEncode.h"
 #include "vtkAFAMModelTree.h"
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
 
 #include "vtkDataArray.h"
 #include "vtkDataSetAttributes.h"

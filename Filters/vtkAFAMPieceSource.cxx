@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMPieceSource.h"
 
-#include "afam/errors.hpp"
+#include "afam/base/errors.hpp"
 
 #include "vtkSetGet.h" // vtkTemplateMacro
 #include "vtkType.h"

@@ -16,7 +16,7 @@
 #ifndef vtkAFAMPieceSource_h
 #define vtkAFAMPieceSource_h
 
-#include "afam/volume_source.hpp"
+#include "afam/volume/volume_source.hpp"
 
 #include "vtkMPI.h" // for MPI_Comm, MPI_Win
 

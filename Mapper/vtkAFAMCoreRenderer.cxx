@@ -2,8 +2,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMCoreRenderer.h"
 
-#include "afam/afam_file.hpp"
-#include "afam/renderer.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/renderer.hpp"
 #if defined(AFAM_HAVE_CUDA)
 #include "afam/cuda/gpu_caster.hpp" // plain C++: the CUDA renderer behind Core's caster hook
 #include "afam/cuda/gpu_renderer.hpp" // plain C++: the pool's upload count

@@ -8,10 +8,10 @@
 #ifndef vtkAFAMCoreRenderer_h
 #define vtkAFAMCoreRenderer_h
 
-#include "afam/camera.hpp"
-#include "afam/depth_limits.hpp"
-#include "afam/frame_settings.hpp"
-#include "afam/image.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/scene/depth_limits.hpp"
+#include "afam/render/frame_settings.hpp"
+#include "afam/render/image.hpp"
 
 #include <cstddef>
 #include <cstdint>

@@ -7,8 +7,8 @@
 #include "vtkAFAMImageDraw.h"
 #include "vtkAFAMModelTree.h"
 
-#include "afam/file_identity.hpp"
-#include "afam/view_mapping.hpp"
+#include "afam/format/file_identity.hpp"
+#include "afam/scene/view_mapping.hpp"
 
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"

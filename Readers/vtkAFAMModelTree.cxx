@@ -2,8 +2,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMModelTree.h"
 
-#include "afam/afam_file.hpp"
-#include "afam/partition.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/format/partition.hpp"
 
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"

@@ -4,9 +4,10 @@
 
 #include "vtkAFAMModelTree.h"
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/errors.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/errors.hpp"
 
 #include "vtkDataObject.h"
 #include "vtkFloatArray.h"

@@ -4,7 +4,7 @@
 
 #include "vtkAFAMModelTree.h"
 
-#include "afam/afam_file.hpp"
+#include "afam/format/afam_file.hpp"
 
 #include "vtkErrorCode.h"
 #include "vtkInformation.h"

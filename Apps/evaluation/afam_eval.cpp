@@ -30,17 +30,17 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/camera.hpp"
-#include "afam/cpu_raycaster.hpp"
-#include "afam/encoder.hpp"
-#include "afam/evaluate.hpp"
-#include "afam/fit.hpp"
-#include "afam/ground_truth.hpp"
-#include "afam/image_metrics.hpp"
-#include "afam/marschner_lobb.hpp"
-#include "afam/png_io.hpp"
-#include "afam/renderer.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/eval/ground_truth.hpp"
+#include "afam/eval/image_metrics.hpp"
+#include "afam/volume/marschner_lobb.hpp"
+#include "afam/eval/png_io.hpp"
+#include "afam/render/renderer.hpp"
 #include "gpu_device.hpp"
 #include "zfp_codec.hpp"
 

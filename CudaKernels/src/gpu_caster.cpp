@@ -3,8 +3,8 @@
 
 #include <vector>
 
-#include "afam/cpu_raycaster.hpp"
-#include "afam/device_selection.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/render/device_selection.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
 
 namespace afam {

@@ -11,7 +11,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "afam/hash.hpp"
+#include "afam/base/hash.hpp"
 #include "cuda_check.hpp"
 #include "kernel_launch.hpp"
 

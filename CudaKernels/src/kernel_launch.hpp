@@ -10,8 +10,8 @@
 
 #include <string>
 
-#include "afam/depth_limits.hpp"
-#include "afam/raycast.hpp"
+#include "afam/scene/depth_limits.hpp"
+#include "afam/render/raycast.hpp"
 
 #define AFAM_DECLARE_KERNEL_SET(NS)                                                            \
   namespace afam::NS {                                                                        \

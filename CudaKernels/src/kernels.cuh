@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Internal: the kernels and their launchers, compiled three times with different floating-point
 // contracts (see kernel_launch.hpp): each .cu that includes this defines AFAM_KERNEL_NS first.
-// The kernels call the shared afam::castRay / castRayWith (Core/include/afam/raycast.hpp); nothing
+// The kernels call the shared afam::castRay / castRayWith (Core/include/afam/render/raycast.hpp); nothing
 // of the ray's math is written here.
 #include <cuda_runtime.h>
 
 #include <string>
 
-#include "afam/raycast.hpp"
+#include "afam/render/raycast.hpp"
 #include "cuda_check.hpp"
 #include "kernel_launch.hpp"
 

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "afam/raycast.hpp"
+#include "afam/render/raycast.hpp"
 #include "cuda_check.hpp"
 #include "kernel_launch.hpp"
 

@@ -20,11 +20,11 @@
 #include <random>
 #include <vector>
 
-#include "afam/basis.hpp"
-#include "afam/evaluate.hpp"
-#include "afam/evaluate_batch.hpp"
-#include "afam/fit.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/spline/basis.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/evaluate_batch.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace {
 

@@ -18,10 +18,10 @@
 #include <unistd.h>
 #include <vector>
 
-#include "afam/cpu_raycaster.hpp"
-#include "afam/encoder.hpp"
-#include "afam/marschner_lobb.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/marschner_lobb.hpp"
+#include "afam/render/renderer.hpp"
 
 using namespace afam;
 

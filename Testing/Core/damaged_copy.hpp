@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/errors.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/base/errors.hpp"
 
 namespace afam_test {
 

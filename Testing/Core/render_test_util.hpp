@@ -7,10 +7,10 @@
 #include <unistd.h>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/marschner_lobb.hpp"
-#include "afam/transfer_function.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/marschner_lobb.hpp"
+#include "afam/scene/transfer_function.hpp"
 #include "scratch_dir.hpp"
 
 namespace afam_test {

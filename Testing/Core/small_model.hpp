@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "afam/evaluate.hpp"
+#include "afam/spline/evaluate.hpp"
 
 struct SmallModel {
   std::vector<float> control;

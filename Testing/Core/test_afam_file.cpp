@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/errors.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/base/errors.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;

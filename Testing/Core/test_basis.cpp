@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "afam/basis.hpp"
-#include "afam/evaluate.hpp"
+#include "afam/spline/basis.hpp"
+#include "afam/spline/evaluate.hpp"
 #include "small_model.hpp"
 
 namespace {

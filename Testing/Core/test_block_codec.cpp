@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include "afam/block_codec.hpp"
-#include "afam/errors.hpp"
+#include "afam/format/block_codec.hpp"
+#include "afam/base/errors.hpp"
 
 using namespace afam;
 

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <vector>
 
-#include "afam/block_sampling.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/encode/block_sampling.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 using namespace afam;
 

@@ -5,10 +5,10 @@
 #include <random>
 #include <thread>
 
-#include "afam/cache.hpp"
-#include "afam/errors.hpp"
-#include "afam/predictors/prefetch_predictors.hpp"
-#include "afam/prefetch.hpp"
+#include "afam/render/cache.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/predict/predictor_factory.hpp"
+#include "afam/render/prefetch.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;

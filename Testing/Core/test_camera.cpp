@@ -4,8 +4,8 @@
 #include <cmath>
 #include <fstream>
 
-#include "afam/camera.hpp"
-#include "afam/errors.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/base/errors.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;

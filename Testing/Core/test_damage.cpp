@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "afam/decode.hpp"
-#include "afam/errors.hpp"
-#include "afam/raycast.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/render/raycast.hpp"
+#include "afam/render/renderer.hpp"
 #include "damaged_copy.hpp"
 #include "render_test_util.hpp"
 

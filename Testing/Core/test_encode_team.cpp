@@ -10,8 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "afam/encoder.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "thread_team.hpp"
 
 using namespace afam;

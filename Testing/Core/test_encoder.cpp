@@ -10,10 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/fit.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "render_test_util.hpp"
 #include "scratch_dir.hpp"
 

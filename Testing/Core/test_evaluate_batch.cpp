@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "afam/evaluate.hpp"
-#include "afam/evaluate_batch.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/evaluate_batch.hpp"
 #include "small_model.hpp"
 
 namespace {

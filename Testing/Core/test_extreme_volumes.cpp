@@ -11,7 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/encoder.hpp"
+#include "afam/format/block_decode.hpp"
+#include "afam/encode/encoder.hpp"
 
 using namespace afam;
 

@@ -20,10 +20,10 @@
 #include <thread>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/errors.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/file_identity.hpp"
-#include "afam/renderer.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/format/file_identity.hpp"
+#include "afam/render/renderer.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;

@@ -10,10 +10,10 @@
 #include <random>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/evaluate.hpp"
-#include "afam/fit.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace {
 

@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include "afam/fit.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 using namespace afam;
 

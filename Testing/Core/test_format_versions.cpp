@@ -13,8 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
 
 using namespace afam;
 

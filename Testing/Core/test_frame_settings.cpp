@@ -11,9 +11,9 @@
 #include <limits>
 #include <set>
 
-#include "afam/errors.hpp"
-#include "afam/frame_settings.hpp"
-#include "afam/renderer.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/render/frame_settings.hpp"
+#include "afam/render/renderer.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;

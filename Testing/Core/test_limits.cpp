@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "afam/camera.hpp"
-#include "afam/renderer.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/render/renderer.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;

@@ -3,8 +3,8 @@
 
 #include <random>
 
-#include "afam/camera.hpp"
-#include "afam/lod.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/scene/lod.hpp"
 
 using namespace afam;
 

@@ -9,11 +9,11 @@
 #include <cstdio>
 #include <random>
 
-#include "afam/camera.hpp"
-#include "afam/cpu_raycaster.hpp"
-#include "afam/errors.hpp"
-#include "afam/ground_truth.hpp"
-#include "afam/lod.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/eval/ground_truth.hpp"
+#include "afam/scene/lod.hpp"
 
 using namespace afam;
 

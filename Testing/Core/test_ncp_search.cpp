@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <vector>
 
-#include "afam/encoder.hpp"
-#include "afam/fit.hpp"
-#include "afam/model_sink.hpp"
-#include "afam/ncp_search.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/encode/model_sink.hpp"
+#include "afam/encode/ncp_search.hpp"
 
 using namespace afam;
 

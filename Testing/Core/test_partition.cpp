@@ -5,8 +5,8 @@
 #include <cmath>
 #include <set>
 
-#include "afam/errors.hpp"
-#include "afam/partition.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/format/partition.hpp"
 
 using afam::Index3;
 using afam::Int3;

@@ -15,14 +15,14 @@
 #include <random>
 #include <set>
 
-#include "afam/errors.hpp"
-#include "afam/lod.hpp"
-#include "afam/predictors/appa.hpp"
-#include "afam/predictors/forecache.hpp"
-#include "afam/predictors/lstm.hpp"
-#include "afam/predictors/prefetch_predictors.hpp"
-#include "afam/trajectory_gen.hpp"
-#include "afam/transfer_function.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/scene/lod.hpp"
+#include "afam/predict/appa.hpp"
+#include "afam/predict/forecache.hpp"
+#include "afam/predict/lstm.hpp"
+#include "afam/predict/predictor_factory.hpp"
+#include "afam/scene/trajectory_gen.hpp"
+#include "afam/scene/transfer_function.hpp"
 #include "render_test_util.hpp"
 #include "scratch_dir.hpp"
 

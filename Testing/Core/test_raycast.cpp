@@ -5,8 +5,8 @@
 #include <random>
 #include <type_traits>
 
-#include "afam/partition.hpp"
-#include "afam/raycast.hpp"
+#include "afam/format/partition.hpp"
+#include "afam/render/raycast.hpp"
 
 using namespace afam;
 

@@ -3,12 +3,12 @@
 
 #include <cmath>
 
-#include "afam/cpu_raycaster.hpp"
-#include "afam/errors.hpp"
-#include "afam/ground_truth.hpp"
-#include "afam/image_metrics.hpp"
-#include "afam/png_io.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/eval/ground_truth.hpp"
+#include "afam/eval/image_metrics.hpp"
+#include "afam/eval/png_io.hpp"
+#include "afam/render/renderer.hpp"
 #include "render_test_util.hpp"
 #include "scratch_dir.hpp"
 

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/fit.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace {
 

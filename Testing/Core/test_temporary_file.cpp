@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-#include "afam/temporary_file.hpp"
+#include "afam/format/temporary_file.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;

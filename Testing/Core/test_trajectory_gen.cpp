@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <numeric>
 
-#include "afam/camera.hpp"
-#include "afam/errors.hpp"
-#include "afam/trajectory_gen.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/scene/trajectory_gen.hpp"
 
 using namespace afam;
 

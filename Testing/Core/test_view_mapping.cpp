@@ -8,9 +8,9 @@
 #include <cmath>
 #include <limits>
 
-#include "afam/errors.hpp"
-#include "afam/raycast.hpp"
-#include "afam/view_mapping.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/render/raycast.hpp"
+#include "afam/scene/view_mapping.hpp"
 
 using namespace afam;
 

@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/errors.hpp"
-#include "afam/volume_formats.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/volume/volume_formats.hpp"
 
 using namespace afam;
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/encode_team.hpp"
+#include "afam/encode/encode_team.hpp"
 
 namespace afam_test {
 

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/cpu_raycaster.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
 #include "gpu_scene.hpp"
 

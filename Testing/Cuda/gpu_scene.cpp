@@ -11,11 +11,11 @@
 #include <sys/stat.h>
 #include <thread>
 
-#include "afam/errors.hpp"
-#include "afam/lod.hpp"
-#include "afam/marschner_lobb.hpp"
-#include "afam/trajectory_gen.hpp"
-#include "afam/transfer_function.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/scene/lod.hpp"
+#include "afam/volume/marschner_lobb.hpp"
+#include "afam/scene/trajectory_gen.hpp"
+#include "afam/scene/transfer_function.hpp"
 
 namespace afam::gputest {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "afam/camera.hpp"
-#include "afam/fit.hpp"
-#include "afam/partition.hpp"
-#include "afam/raycast.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/format/partition.hpp"
+#include "afam/render/raycast.hpp"
 
 namespace afam::gputest {
 

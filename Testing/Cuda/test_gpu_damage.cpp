@@ -10,7 +10,7 @@
 #include "../Core/render_test_util.hpp"
 #include "afam/cuda/gpu_caster.hpp"
 #include "afam/cuda/gpu_error.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/renderer.hpp"
 
 namespace afam {
 namespace {

@@ -13,7 +13,7 @@
 
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
-#include "afam/view_mapping.hpp"
+#include "afam/scene/view_mapping.hpp"
 
 namespace afam {
 namespace {

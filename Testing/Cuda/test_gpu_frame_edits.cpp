@@ -14,7 +14,7 @@
 #include "afam/cuda/gpu_caster.hpp"
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/renderer.hpp"
 
 namespace afam {
 namespace {

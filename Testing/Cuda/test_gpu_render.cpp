@@ -12,7 +12,7 @@
 #include <memory>
 #include <tuple>
 
-#include "afam/cpu_raycaster.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
 #include "gpu_scene.hpp"
 

@@ -11,7 +11,7 @@
 #include <cstring>
 #include <vector>
 
-#include "afam/afam_file.hpp"
+#include "afam/format/afam_file.hpp"
 
 namespace afam_fuzz {
 

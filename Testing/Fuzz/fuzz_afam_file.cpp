@@ -8,9 +8,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "afam/afam_file.hpp"
-#include "afam/encoder.hpp"
-#include "afam/errors.hpp"
+#include "afam/render/level_decode.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/errors.hpp"
 #include "afam_checksums.hpp"
 #include "memory_file.hpp"
 

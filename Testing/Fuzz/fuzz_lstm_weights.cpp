@@ -7,9 +7,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/hash.hpp"
-#include "afam/predictors/lstm.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/base/hash.hpp"
+#include "afam/predict/lstm.hpp"
 #include "memory_file.hpp"
 
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/errors.hpp"
-#include "afam/volume_formats.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/volume/volume_formats.hpp"
 #include "memory_file.hpp"
 
 namespace {

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/encoder.hpp"
-#include "afam/hash.hpp"
-#include "afam/marschner_lobb.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/base/hash.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace {
 

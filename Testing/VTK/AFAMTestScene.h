@@ -9,7 +9,7 @@
 #include "vtkAFAMEncoder.h"
 #include "vtkAFAMVolumeMapper.h"
 
-#include "afam/encoder.hpp"
+#include "afam/encode/encoder.hpp"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCamera.h"

@@ -24,10 +24,10 @@
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
 
-#include "afam/afam_file.hpp"
-#include "afam/camera.hpp"
-#include "afam/trajectory_gen.hpp"
-#include "afam/transfer_function.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/scene/trajectory_gen.hpp"
+#include "afam/scene/transfer_function.hpp"
 
 #include "vtkActor.h"
 #include "vtkCamera.h"

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "afam/cuda/gpu_renderer.hpp"
-#include "afam/renderer.hpp"
+#include "afam/render/renderer.hpp"
 
 namespace afam {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "afam/errors.hpp"
+#include "afam/base/errors.hpp"
 
 namespace afam {
 

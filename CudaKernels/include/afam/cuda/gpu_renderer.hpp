@@ -15,8 +15,8 @@
 
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/gpu_model_pool.hpp"
-#include "afam/depth_limits.hpp"
-#include "afam/raycast.hpp"
+#include "afam/scene/depth_limits.hpp"
+#include "afam/render/raycast.hpp"
 
 namespace afam {
 

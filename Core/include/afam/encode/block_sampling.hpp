@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Micro-block samples from a streaming volume source: the Partition's sampling rule applied to
+// whole z-planes, of which only the ones a row of blocks needs are read.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "afam/format/partition.hpp"
+#include "afam/volume/volume_source.hpp"
+
+namespace afam {
+
+/// Reads rows of listed z-planes of a source into a buffer, consecutive planes in one readRows call.
+class PlaneReader {
+ public:
+  PlaneReader(VolumeSource& src, Index3 dims);
+  /// Rows [y0, y0 + yCount) of planes zs (ascending, distinct), plane i at the result
+  /// + i * dims[0] * yCount, valid until the next read. The reader's buffer only grows: it is not
+  /// allocated, page-faulted or cleared again.
+  const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount);
+  uint64_t bytesRead() const { return bytesRead_; }
+  /// The buffer's size: the largest chunk read so far.
+  size_t bufferBytes() const { return buf_.size() * sizeof(float); }
+
+ private:
+  VolumeSource& src_;
+  int64_t rowSize_;
+  uint64_t bytesRead_ = 0;
+  std::vector<float> buf_;
+};
+
+/// Runs fn(block) for block in [0, count), on several threads when the caller provides them
+/// (the encoder's sampling pool), else in order on the calling thread.
+using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
+
+/// How many planes sampleBlockRow reads at once: up to 256 MB (the fewest reads: a process that
+/// holds batches of rows anyway), or at most a quarter of the samples they fill too (a rank of a
+/// team, whose memory beside its piece is one line of blocks).
+enum class ChunkBudget { Large, QuarterOfSamples };
+
+/// Fills the samples of every block in `blocks` (all in the same z-row of one level): the rows of
+/// the z-planes the blocks need are read in chunks (one readRows per run of consecutive planes;
+/// whole planes for a whole row of blocks) as large as `budget` allows, at least the planes of one
+/// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk
+/// separably (y, then x, then z; sums in double), blocks in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
+/// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
+/// coarse levels are filtered (see LevelSampling).
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
+                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out,
+                    const BlockLoop& loop = {}, ChunkBudget budget = ChunkBudget::Large);
+
+/// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
+/// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample
+/// on each side at the same spacing, clamped to the volume (DS payload layout).
+std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk,
+                                bool ghost = false, LevelSampling sampling = LevelSampling::Point);
+
+/// Streams the micro-block samples of one z-row of blocks of a level from a source, reading only
+/// the planes needed (in chunks, see sampleBlockRow). Used by the encoder, `afam verify --against` and tests.
+class BlockRowReader {
+ public:
+  BlockRowReader(VolumeSource& source, const Partition& partition);
+  ~BlockRowReader();
+  /// out[j * bx + i] = samples of block (i, j, kz), x fastest; ghost as in extractBlock.
+  void readRow(int level, int kz, bool ghost, LevelSampling sampling, std::vector<std::vector<float>>& out);
+  uint64_t bytesRead() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace afam

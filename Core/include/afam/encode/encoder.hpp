@@ -1,0 +1,131 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The Adaptive-FAM encoder (paper, Algorithm 1) over a streaming volume source.
+//
+// Levels are encoded coarse to fine (level 0 first). Per micro-block, the in-level search finds
+// NCP* = the smallest scalar NCP in [p+1, n] (n = the block's largest sample count; per axis the
+// NCP is clamped by clampNcp) whose RMSE is <= the bound; if none is, NCP* = n. Two searches give
+// the same NCP* (tested on every block of the corpus and Marschner-Lobb 128^3):
+//   - Exhaustive: the paper's loop, every NCP from p+1 to n is fitted.
+//   - Fast: fit p+1 (done if it passes) and n (if n fails too, fall back to an ascending scan);
+//     bisect between them for a passing NCP whose predecessor fails, then check the `window` NCPs
+//     below it (and below any smaller passing NCP found) so that a non-monotone error curve that
+//     dips under the bound just below the bisection point is still found.
+// A searched block whose samples are much smoother along some axes than along the roughest one
+// (layers, sheets, Marschner-Lobb's slow z) then gets fewer control points on those axes
+// (refineNcpPerAxis, ncp_search.hpp; EncoderOptions::perAxisNcp), the bound still met.
+// Modes: Adaptive searches every level-0 block and, at finer levels, only the children of complex
+// blocks (NCP* > p+1); the others get NCP = p+1 without a search. InLevel searches every block.
+// Fixed fits NCP = fixedNcp (0 = n) per axis. Downsampled stores the micro-block's samples with a
+// one-sample ghost layer at the same stride (positions clamped to the volume), for trilinear
+// rendering.
+//
+// Memory: the encoder never holds the volume. Per level it walks the rows of blocks along z, reads
+// only the z-planes its sample positions need (one or two per sample, via VolumeSource::readSlab),
+// and keeps the samples of the blocks being fitted: rows of blocks are gathered up to ~24 M samples
+// (96 MB) per batch, at least one row, and the next batch is sampled while the current one is
+// fitted (two batches in memory, and up to 256 MB of planes being filtered: peak RSS 1.9 GB at
+// 1024^3 with 16 threads). Measured peak RSS before that overlap of `afam encode`: 174 MB at 512^3,
+// 497 MB at 1024^3 (2 threads).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afam/format/afam_file.hpp"
+#include "afam/encode/block_sampling.hpp"
+#include "afam/encode/encode_team.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/encode/model_sink.hpp"
+#include "afam/encode/ncp_search.hpp"
+#include "afam/format/partition.hpp"
+#include "afam/volume/volume_source.hpp"
+
+namespace afam {
+
+struct EncoderOptions {
+  int levels = 0;              ///< 0: from the volume's dimensions (defaultPartition)
+  int blocksPerAxis = 0;       ///< finest blocks per axis; 0: from the dimensions (defaultPartition)
+  int degree = 2;
+  double errorBound = 1e-4;
+  bool relativeBound = false;  ///< bound = errorBound * (valueMax - valueMin)
+  EncodingMode mode = EncodingMode::Adaptive;
+  int fixedNcp = 0;            ///< Fixed mode: NCP per axis, 0 = n
+  int threads = 0;             ///< 0 = hardware concurrency
+  SearchMethod search = SearchMethod::Fast;
+  int fastWindow = 3;          ///< Fast search: NCPs checked below the bisection result
+  /// Bounded modes: store each block in its smallest form within the bound (a constant, a coded
+  /// spline or coded samples; block_codec.hpp). false: float32 splines, the paper's payloads.
+  bool compact = true;
+  /// Searched blocks whose samples are much smoother along some axes get fewer control points
+  /// there (refineNcpPerAxis); false: the paper's one NCP for all axes.
+  bool perAxisNcp = true;
+  /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
+  /// (encodeVolume then throws afam::Cancelled; nothing is written).
+  std::function<bool(double fraction)> progress;
+};
+
+struct LevelStats {
+  int64_t blocks = 0;          ///< micro-blocks of the level
+  int64_t searched = 0;        ///< blocks that ran the in-level search
+  int64_t complex = 0;         ///< blocks with NCP* > p+1
+  int64_t refits = 0;          ///< blocks whose cross-level reuse missed the bound and were searched
+  int64_t exact = 0;           ///< blocks no NCP could fit within the bound, stored as their samples
+  int64_t reducedDegree = 0;   ///< blocks with an axis of 2..degree samples (degree lowered there)
+  int64_t fits = 0;            ///< fits performed at this level
+  int64_t samples = 0;         ///< micro-block samples fitted (sum of n0 n1 n2)
+  uint64_t payloadBytes = 0;   ///< sum of stored payload sizes
+  std::array<int64_t, 4> kinds{};  ///< blocks per BlockKind (spline, samples, constant, interpolant)
+  uint64_t paperBytes = 0;     ///< the paper's layout for the same models
+  double maxRmse = 0, maxError = 0;
+  double seconds = 0;
+  double sampleSeconds = 0;    ///< time spent sampling the volume (overlaps fitting after the first batch)
+  std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
+};
+
+struct EncodeStats {
+  std::vector<LevelStats> levels;
+  int64_t fits = 0;
+  int64_t blocks = 0;
+  int64_t inputVoxels = 0;
+  uint64_t bytesIn = 0;        ///< raw volume size as float32 (dims product * 4)
+  uint64_t bytesOut = 0;       ///< file size (or header+index+payloads for a sink)
+  uint64_t payloadBytes = 0;
+  uint64_t paperBytes = 0;     ///< the paper's layout: sum of 1 + ((NCP+p)*3 + NCP^3)*4
+  double seconds = 0;          ///< wall time of the whole encode
+  double fitSeconds = 0;       ///< wall time of the fitting phases
+  double cpuSeconds = 0;       ///< process CPU time (user + system) spent in the encode
+  double maxRmse = 0, maxError = 0;
+  double bound = 0;            ///< absolute RMSE bound used
+  double valueMin = 0, valueMax = 0;
+  int threads = 1;
+  int levelsUsed = 0, blocksPerAxisUsed = 0;  ///< the partition encoded (defaults resolved)
+  /// Input voxels per second per thread over the whole encode (wall clock / threads).
+  double voxelsPerSecondPerThread() const {
+    return seconds > 0 ? double(inputVoxels) / seconds / threads : 0;
+  }
+  /// Input voxels per CPU-second: the per-thread rate that other processes sharing the cores
+  /// do not distort.
+  double voxelsPerCpuSecond() const { return cpuSeconds > 0 ? double(inputVoxels) / cpuSeconds : 0; }
+};
+
+/// Encodes into a sink. Throws InvalidArgument (options), NumericError (NaN/Inf, naming the block),
+/// IoError (source), Cancelled.
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink);
+/// Encodes into an .afam file, written atomically (nothing is left on error or cancel).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath);
+
+/// The same models, fitted by the processes of a team (encode_team.hpp), every one calling this
+/// with the same options and a source of the same volume (which may read other processes' memory).
+/// Only the first process (rank 0) calls the sink, and its statistics count every block; the
+/// others' count nothing but their levels' block totals and their own timings. An exception on any
+/// process is thrown on all (another's as afam::Error naming its rank).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink, EncodeTeam& team);
+/// Into an .afam file that the first process writes (atomically; the others write nothing).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
+                         EncodeTeam& team);
+
+}  // namespace afam

@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The .afam container: one file holding every micro-model of every level of one volume.
+//
+// Layout (byte-exact description in docs/FORMAT.md), little-endian, offsets not pointers:
+//   [0, 1024)                   FileHeader (fixed size, CRC32 over its bytes)
+//   [1024, 1024 + 40 E)         index: E = one 40-byte entry per micro-block of every level, ordered
+//                               by level (0 = coarsest) then by the block's linear index (x
+//                               fastest); CRC32 of the whole index stored in the header
+//   [payloadOffset, fileSize)   payloads (payloadOffset a multiple of 64; each payload offset a
+//                               multiple of 4, the float32 alignment), each with its CRC32 in its
+//                               index entry
+// Because the index is complete and ordered, entryIndex(level, ijk) is O(1) arithmetic, and level,
+// block, samples and degree of an entry are implied (not stored).
+//
+// Opening reads and validates the header and the index only (every count and offset is checked
+// against the file size before anything is allocated); a payload is one pread.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "afam/format/file_identity.hpp"
+#include "afam/format/partition.hpp"
+
+namespace afam {
+
+enum class EncodingMode : uint8_t { Adaptive = 0, InLevel = 1, Fixed = 2, Downsampled = 3 };
+
+/// Name used on the command line and in `afam info`: adaptive, inlevel, fixed, ds.
+const char* modeName(EncodingMode mode);
+/// Parses adaptive|inlevel|fixed|ds; throws InvalidArgument otherwise.
+EncodingMode parseMode(const std::string& name);
+
+struct VolumeHeader {
+  Index3 dims{1, 1, 1};
+  std::array<double, 3> origin{0, 0, 0}, spacing{1, 1, 1};
+  double valueMin = 0, valueMax = 0;
+  std::string scalarName;  ///< at most 63 bytes are stored
+  int levels = 1;
+  int blocksPerAxis = 1;   ///< requested finest B (Partition reduces it on short axes)
+  int degree = 2;
+  double errorBound = 0;   ///< as given by the user (absolute, or relative when relativeBound)
+  bool relativeBound = false;
+  EncodingMode mode = EncodingMode::Adaptive;
+  int fixedNcp = 0;        ///< Fixed mode: requested NCP (0 = n)
+  /// How coarse levels were sampled (and what their error is measured against).
+  LevelSampling sampling = LevelSampling::Point;
+  int sourceBytesPerSample = 0;  ///< of the encoded input (1 for uint8, ...); 0 when unknown
+};
+
+/// How a micro-model is stored (format version 2; version-1 files hold float32 splines only).
+///   Spline:   B-spline of the header's degree (lowered per axis by short axes), NCP per axis.
+///   Samples:  the block's samples as a degree-1 spline with NCP = samples (the implied knots put
+///             each control point on its sample: trilinear interpolation, exact at the samples).
+///   Constant: one value; decoded to a spline of the header's degree with p+1 equal control points.
+///   Interpolant: the block's samples (always coded), decoded to the spline of the header's degree
+///             with NCP = samples that interpolates them: smooth value and gradient like a fitted
+///             spline, exact at the (quantized) samples.
+/// Spline and Samples payloads are float32 control points, or `coded` (block_codec.hpp).
+enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2, Interpolant = 3 };
+const char* blockKindName(BlockKind kind);
+
+struct ModelEntry {
+  int level = 0;
+  Int3 block{};
+  Int3 ncp{};       ///< control points per axis (DS: samples + 2)
+  Int3 degree{};    ///< effective degree per axis (DS: 1)
+  Int3 samples{};   ///< micro-block samples per axis (Partition::extent)
+  uint64_t offset = 0;
+  uint64_t size = 0;        ///< bytes of the decoded float32 control points (what readPayload gives)
+  float minValue = 0, maxValue = 0, rmse = 0, maxError = 0;
+  uint32_t checksum = 0;    ///< CRC32 of the stored bytes
+  BlockKind kind = BlockKind::Spline;
+  bool coded = false;       ///< quantized, predicted and zstd-coded (block_codec.hpp)
+  uint64_t storedSize = 0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
+};
+
+/// The decoded control points of a stored payload (entry.storedSize bytes) into out
+/// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
+void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out, const std::string& where);
+// For B-spline modes the payload is ncp.x*ncp.y*ncp.z float32 control points, x fastest.
+// For Downsampled (DS) the payload is (samples+2) per axis float32 raw samples with a one-voxel
+// ghost layer (clamped at the volume edge), x fastest, and ncp holds samples+2, degree holds 1.
+
+/// CRC-32 (IEEE 802.3, the zlib polynomial), continuing from `crc` (0 to start).
+uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0);
+
+/// Payload bytes of a model: ncp product * 4.
+uint64_t payloadBytes(const Int3& ncp);
+
+/// Bytes of a file holding `entries` models whose payloads total `payloadBytes` (header + index +
+/// payloads, before the payload area's alignment padding).
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes);
+
+/// Size in bytes the paper's layout gives the same model: 1 + ((NCP + p) * 3 + NCP^3) * 4, with
+/// per-axis NCP and degree: 1 + (sum_a (ncp_a + p_a) + prod_a ncp_a) * 4.
+uint64_t paperModelBytes(const Int3& ncp, const Int3& degree);
+
+/// True when the file's first 8 bytes are the .afam magic; false when they are not or the file
+/// cannot be read. Readers claim such files and let AfamFile::open say what is wrong with them.
+bool startsWithAfamMagic(const std::string& path);
+
+class AfamFile {  // read-only; opening reads only header and index
+ public:
+  /// Throws FormatError (not an .afam file, damaged) or IoError (cannot open/read), each message
+  /// naming the path and the problem.
+  static std::shared_ptr<const AfamFile> open(const std::string& path);
+  ~AfamFile();
+  AfamFile(const AfamFile&) = delete;
+  AfamFile& operator=(const AfamFile&) = delete;
+
+  const std::string& path() const { return path_; }
+  const VolumeHeader& header() const { return header_; }
+  const Partition& partition() const { return partition_; }
+  const std::vector<ModelEntry>& entries() const { return entries_; }
+  uint32_t version() const { return version_; }
+  /// Index of the entry of block ijk at a level; -1 if the level or block is out of range.
+  int64_t entryIndex(int level, Int3 ijk) const;
+  /// First entry of a level (entries of a level are contiguous, x fastest).
+  int64_t levelStart(int level) const { return levelStart_.at(static_cast<size_t>(level)); }
+  /// One pread of entry.size bytes into out, CRC verified (FormatError names file, level, block).
+  /// Thread-safe. Throws FileChangedError instead when the open file's size or modification time
+  /// is no longer what it was at open (another process truncated or rewrote it): its bytes may
+  /// then belong to another file, and are neither returned nor taken for damage.
+  void readPayload(int64_t entry, void* out) const;
+  /// Reads and returns the payload as floats.
+  std::vector<float> readPayload(int64_t entry) const;
+  /// Throws FileChangedError (naming the path and what changed) when the file is no longer the
+  /// one opened: rewritten or truncated in place, replaced by another file (rename) or removed.
+  /// One fstat and one stat; renderers call it once per frame, before reading.
+  void checkUnchanged() const;
+  int nativeHandle() const { return fd_; }  ///< POSIX fd, for posix_fadvise in benchmarks
+  uint64_t fileSize() const { return fileSize_; }
+  uint64_t payloadOffset() const { return payloadOffset_; }
+
+ private:
+  AfamFile() = default;
+  void readVerifiedPayload(int64_t entry, void* out) const;  ///< readPayload without the change check
+  void throwIfChanged(const FileIdentity& now) const;        ///< FileChangedError unless now == identity_
+  std::string path_;
+  int fd_ = -1;
+  uint32_t version_ = 0;
+  uint64_t fileSize_ = 0, payloadOffset_ = 0;
+  FileIdentity identity_;  ///< at open
+  VolumeHeader header_;
+  Partition partition_;
+  std::vector<ModelEntry> entries_;
+  std::vector<int64_t> levelStart_;
+};
+
+/// Writes header + index + payloads to PATH.tmp-XXXXXX, then fsync + rename on commit(): atomic.
+/// The destructor without commit() removes the temporary file; a writer killed before either
+/// leaves it, and the next writer to PATH removes it (temporary_file.hpp says how it knows). add() is thread-safe (one mutex;
+/// the payload write happens under it) and takes the blocks in any order; every block of every
+/// level of the header's Partition must be added exactly once before commit().
+class AfamWriter {
+ public:
+  AfamWriter(const std::string& path, const VolumeHeader& header);
+  ~AfamWriter();
+  AfamWriter(const AfamWriter&) = delete;
+  AfamWriter& operator=(const AfamWriter&) = delete;
+
+  /// An uncoded model: payload holds its float32 control points (payloadBytes(entry.ncp) bytes; a
+  /// Constant stores payload[0] only). entry's offset/size/checksum/storedSize are filled in here.
+  /// Payloads are stored in the order they are added, 4-byte aligned.
+  /// Throws InvalidArgument for a block out of range, added twice, or whose samples, kind, NCP or
+  /// degree do not match the partition; IoError when the write fails.
+  void add(const ModelEntry& entryWithoutOffsets, const float* payload);
+  /// A model in its stored form: entry.storedSize bytes (coded payloads, or as add() stores them).
+  void addStored(const ModelEntry& entryWithoutOffsets, const void* stored);
+  /// Writes the index and header, fsyncs and renames onto the final path. Throws InvalidArgument
+  /// if blocks are missing, IoError on failure (the temporary file is then removed).
+  void commit();
+  const VolumeHeader& header() const { return header_; }
+  const Partition& partition() const { return partition_; }
+  uint64_t bytesWritten() const;  ///< current end of the file (header + index + payloads so far)
+
+ private:
+  std::string path_, tmpPath_;
+  int fd_ = -1;
+  bool committed_ = false;
+  VolumeHeader header_;
+  Partition partition_;
+  std::vector<int64_t> levelStart_;
+  std::vector<ModelEntry> entries_;
+  std::vector<uint8_t> present_;
+  uint64_t end_ = 0, payloadOffset_ = 0;
+  mutable std::mutex mutex_;
+};
+
+}  // namespace afam

@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Error-bounded coding of one micro-model's values (control points of a spline, or the samples of a
+// block stored as a degree-1 spline), the way SZ's predictors work: every value is predicted from
+// the values already reconstructed, the residual is quantized to an integer code with a uniform
+// step (reconstruction = prediction + code * step, within step / 2 of the value), and zstd packs
+// the codes.
+//
+// Why the bound carries over to the model: B-spline basis functions are non-negative and sum to
+// one, so moving every control point by at most step/2 moves the model by at most step/2
+// everywhere (the maximum error the quantization can add). The encoder still measures the coded
+// model on the block's samples before accepting it.
+//
+// Predictors (double arithmetic in one fixed order, compiled without FMA contraction, so encoder
+// and decoder reconstruct bit-identical values):
+//   Lorenzo: from the seven lower neighbours of the unit cube (missing = 0); suits the small,
+//            smooth lattices of control points.
+//   Interpolation: multi-resolution. The points whose coordinates are all multiples of S (the
+//            largest power of two below the longest axis) are Lorenzo-predicted on their own
+//            lattice; then for s = S/2, ..., 1 the points at odd multiples of s are predicted along
+//            x, then y, then z from the known points at +-s (cubic (-a + 9b + 9c - d) / 16 where
+//            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour). Suits samples.
+// Codes are zigzag varints (1 byte when |code| < 64) compressed by zstd.
+//
+// Coded payload bytes: [0, 8) f64 step; [8] u8 predictor (0 Lorenzo, 1 interpolation);
+// [9, end) one zstd frame holding the varints, one per value, in the predictor's visiting order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "afam/format/partition.hpp"
+
+namespace afam {
+
+enum class Predictor : uint8_t { Lorenzo = 0, Interpolation = 1 };
+
+/// Bytes before the zstd frame in a coded payload.
+constexpr size_t kCodedHeaderBytes = 9;
+
+/// Predicts, quantizes with `step` and codes `values` (n[0] * n[1] * n[2], x fastest). Returns
+/// false (and leaves `out` empty) when a residual code would exceed 2^50 (step far too small).
+/// `reconstructed` receives the decoded values (float), as decodeValues would produce them.
+bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
+                  std::vector<uint8_t>& out, std::vector<float>& reconstructed);
+
+/// The values as encodeValues would reconstruct them, without the entropy coding (to choose a step).
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor, std::vector<float>& reconstructed);
+
+/// Order-0 entropy, in bytes, of the codes encodeValues would produce (a cheap estimate of its
+/// coded size, to skip coding a candidate that cannot win); infinity when the step does not fit.
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor);
+
+/// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
+/// `where` in the message) when the bytes are not a valid coded payload of that size.
+void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);
+
+}  // namespace afam

@@ -1,0 +1,129 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// LRU cache of micro-model payloads in RAM, filled by positioned reads from an .afam file.
+//
+// Budgets: a byte budget and a block-count budget (the paper keeps 200 micro-models); 0 means
+// unlimited. Neither is ever exceeded: before a payload is inserted, least-recently-used blocks are
+// evicted until it fits. A payload larger than the byte budget on its own is returned to the
+// caller without being cached (counted as a miss and a bypass).
+//
+// Pinning: the renderer pins the blocks of the frame being rendered (setPinned). Prefetch loads
+// (Purpose::Prefetch) never evict a pinned block: when only pinned blocks are left to evict, the
+// prefetch load is dropped. Loads of the current frame (Purpose::Frame) may evict pinned blocks
+// as a last resort (the frame's earlier blocks are already copied out), so a frame needing more
+// than the budget still renders and the budget still holds.
+//
+// Cold storage (benchmarks): dropOsCache() calls posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED) so
+// the next reads come from the device, not the OS page cache; no root needed. The paper disables
+// the OS cache; this is the per-point-of-view equivalent.
+//
+// Storage bandwidth cap (benchmarks): an EMULATION of a slower tier. The cache keeps one virtual
+// device clock shared by all threads: a read of B bytes occupies the device for B / cap seconds
+// starting when the previous read finished (or now), and the caller sleeps until then, so bytes
+// per wall-clock second never exceed the cap. Real read time is included (the sleep only tops it
+// up). It models throughput, not seek latency.
+//
+// Damage: a load whose payload fails its checksum (FormatError) records the entry in the cache's
+// DamageLog; getIntact() and prefetch() never read a recorded entry again (damage.hpp).
+//
+// Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
+// the lock, and a block being loaded by one thread is waited for, not read twice.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "afam/format/afam_file.hpp"
+#include "afam/render/damage.hpp"
+
+namespace afam {
+
+struct CacheBudget {
+  uint64_t bytes = 0;   ///< 0 = unlimited
+  uint64_t blocks = 0;  ///< 0 = unlimited (paper: 200)
+};
+
+struct CacheStats {
+  uint64_t hits = 0, misses = 0;          ///< frame lookups (get with Purpose::Frame)
+  uint64_t bytesRead = 0, blocksRead = 0; ///< all reads, frame and prefetch
+  uint64_t prefetchLoads = 0, prefetchBytes = 0, prefetchDropped = 0;
+  uint64_t evictions = 0, bypasses = 0;
+  double readSeconds = 0;       ///< wall time inside reads, including the bandwidth sleep
+  double throttleSeconds = 0;   ///< of which sleeping for the bandwidth cap
+};
+
+using Payload = std::shared_ptr<const std::vector<float>>;
+
+class LruCache {
+ public:
+  enum class Purpose { Frame, Prefetch };
+
+  /// damage: the file's damage log, shared with earlier caches of the same file so that a block
+  /// is reported and read once per file (null: a new one).
+  LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
+           std::shared_ptr<DamageLog> damage = nullptr);
+
+  /// Returns the payload of an entry, loading it on a miss. Frame lookups count hits and misses
+  /// and mark the block most recently used. Throws what AfamFile::readPayload throws.
+  Payload get(int64_t entry, Purpose purpose = Purpose::Frame, bool* wasHit = nullptr);
+  /// Like get(), but null for a damaged entry: one found damaged now (recorded in damage()) or
+  /// before (not read again). Other errors (I/O) are thrown.
+  Payload getIntact(int64_t entry, Purpose purpose = Purpose::Frame);
+  /// Prefetch: loads the entry if absent (never evicting pinned blocks) and not known damaged.
+  /// Returns true if a read happened; a damaged payload is recorded, not thrown.
+  bool prefetch(int64_t entry);
+  bool contains(int64_t entry) const;
+
+  void setPinned(const std::vector<int64_t>& entries);
+  void clearPinned();
+
+  void dropOsCache() const;                ///< posix_fadvise DONTNEED on the whole file
+  void setBandwidthCap(double bytesPerSecond);  ///< 0 = no cap
+
+  CacheStats stats() const;
+  void resetStats();
+  uint64_t residentBytes() const;
+  /// The most bytes resident at any moment since the previous call (or construction); the count
+  /// then restarts from the bytes resident now. Never above the byte budget.
+  uint64_t takePeakResidentBytes();
+  uint64_t residentBlocks() const;
+  /// Entries from most to least recently used (tests).
+  std::vector<int64_t> lruOrder() const;
+  const CacheBudget& budget() const { return budget_; }
+  const AfamFile& file() const { return *file_; }
+  DamageLog& damage() { return *damage_; }
+  const std::shared_ptr<DamageLog>& damageLog() const { return damage_; }
+
+ private:
+  struct Node {
+    Payload data;
+    uint64_t bytes = 0;
+    std::list<int64_t>::iterator pos;
+  };
+  Payload load(int64_t entry);                       // read + throttle, outside the lock
+  bool makeRoom(uint64_t bytes, bool mayEvictPinned); // under the lock
+  void throttle(uint64_t bytes, std::chrono::steady_clock::time_point readStart);
+
+  std::shared_ptr<const AfamFile> file_;
+  CacheBudget budget_;
+  std::shared_ptr<DamageLog> damage_;
+  mutable std::mutex mutex_;
+  std::condition_variable loaded_;
+  std::list<int64_t> lru_;  // front = most recent
+  std::unordered_map<int64_t, Node> map_;
+  std::unordered_set<int64_t> loading_, pinned_;
+  uint64_t resident_ = 0;
+  uint64_t peakResident_ = 0;  // for takePeakResidentBytes
+  CacheStats stats_;
+  double capBytesPerSecond_ = 0;
+  std::mutex deviceMutex_;
+  std::chrono::steady_clock::time_point deviceFree_{};
+};
+
+}  // namespace afam

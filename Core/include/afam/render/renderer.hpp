@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The out-of-core multi-resolution renderer of one .afam file (the paper's Algorithms 2-4).
+//
+// A Renderer is built from what owns memory and threads (RendererResources: the RAM cache, the
+// prefetch thread, ray-casting threads); what a person edits while looking (FrameSettings: transfer
+// function, shading, blend mode, sample distance, LOD) goes with each frame, so an edit keeps the
+// cache, the prefetcher's history and an installed GPU caster's model pool.
+//
+// One frame:  prepare()  = LOD cut -> frustum and TF culling -> cache lookups (misses read from the
+//                          file) -> FrameView + float pool of the visible models     ("caching")
+//             then the ray caster (the CPU's, or one installed with setRayCaster such as the CUDA
+//                          path) while the prefetch thread loads the predicted next view ("rendering")
+//             latency = caching + rendering.
+// A PreparedFrame owns every array its FrameView points to (host memory); a GPU caster copies them
+// and re-points the view.
+// The method follows the file: Adaptive-FAM / FAM files give spline slots, DS files raw slots.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afam/format/afam_file.hpp"
+#include "afam/render/cache.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/render/damage.hpp"
+#include "afam/render/frame_settings.hpp"
+#include "afam/render/image.hpp"
+#include "afam/scene/lod.hpp"
+#include "afam/predict/predictor.hpp"
+#include "afam/render/prefetch.hpp"
+#include "afam/render/raycast.hpp"
+#include "afam/scene/transfer_function.hpp"
+
+namespace afam {
+
+/// What a Renderer owns for its whole life: memory (the RAM cache), threads (ray casting, the
+/// prefetch thread and its predictor) and the way the file is read. Changing any of these needs a
+/// new Renderer.
+struct RendererResources {
+  int threads = 0;                ///< ray-casting threads (0 = all cores)
+  CacheBudget cache{0, 200};      ///< the paper's 200 micro-models by default
+  bool cold = false;              ///< drop the file from the OS page cache before each frame
+  double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none
+  std::string prefetch = "none";  ///< none | linear | appa | forecache | lstm
+};
+
+/// Both at once, for front ends that set everything in one place (the command line, benchmarks).
+struct RenderOptions : RendererResources, FrameSettings {};
+
+struct FrameStats {
+  double cachingMs = 0, renderMs = 0, latencyMs = 0;
+  uint64_t hits = 0, misses = 0, bytesRead = 0;      ///< frame lookups and all reads during the frame
+  uint64_t prefetchedBlocks = 0, prefetchedBytes = 0;  ///< loaded by the prefetch thread during the frame
+  CullCounts culled;
+  int64_t slots = 0;                                 ///< models in the FrameView
+  uint64_t poolBytes = 0;
+  /// The cache's resident bytes at the end of the frame, and the most it held during the frame
+  /// (frame and prefetch loads); both stay within the cache's byte budget.
+  uint64_t cacheBytes = 0, cachePeakBytes = 0;
+  /// Damaged micro-models (damage.hpp): blocks of this frame's selection that are damaged (drawn
+  /// from a coarser or finer level), of which those whose region stayed empty; every block of the
+  /// file known to be damaged so far; and the reports of blocks first found damaged during this
+  /// frame (by its loads or its prefetching), one sentence each, each handed out once.
+  int64_t damagedBlocks = 0, emptyDamagedBlocks = 0, knownDamagedBlocks = 0;
+  std::vector<std::string> damageReports;
+};
+
+/// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if
+/// bind() is called again.
+struct PreparedFrame {
+  FrameView view;
+  std::vector<FrameSlot> slots;
+  std::vector<float> pool;
+  std::vector<int32_t> cellSlot;
+  std::array<std::vector<float>, 3> cellBounds;
+  std::vector<float> tf;
+  std::vector<int64_t> entries;  ///< file entries of the slots, slot order
+  void bind();                   ///< points view at the vectors above
+};
+
+/// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
+/// coordinates), its floats at `offset` of the pool.
+FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset);
+
+class Renderer {
+ public:
+  /// damage: the file's damage log from an earlier Renderer of the same file (null: a new one),
+  /// so that a damaged block is reported and read once per file however often the resources change.
+  Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
+           FrameSettings settings = {}, std::shared_ptr<DamageLog> damage = nullptr);
+  Renderer(std::shared_ptr<const AfamFile> file, const RenderOptions& options)
+      : Renderer(std::move(file), RendererResources(options), FrameSettings(options)) {}
+  ~Renderer();
+
+  const AfamFile& file() const { return *file_; }
+  const RendererResources& resources() const { return resources_; }
+  /// The settings of the next frame; settings().transferFunction is the table's function (the
+  /// preset when none was given).
+  const FrameSettings& settings() const { return settings_; }
+  LruCache& cache() { return *cache_; }
+  const std::vector<float>& tfTable() const { return tf_; }
+  double tfLo() const { return tfLo_; }
+  double tfHi() const { return tfHi_; }
+
+  /// Settings for the frames from now on: the transfer-function table, LOD and culling follow at
+  /// once; the cache, the prefetcher and an installed ray caster are kept. Throws InvalidArgument
+  /// (and changes nothing) for a sample distance that is not > 0, an unknown blend mode or a
+  /// transfer function with non-finite points (frame_settings.hpp checks these for front ends that
+  /// warn and keep the last good value instead). Not while a frame renders.
+  void setFrameSettings(const FrameSettings& settings);
+
+  /// LOD cut + culling for a camera (no I/O).
+  Selection select(const Camera& camera) const;
+  /// A FrameView with camera, geometry, TF and shading set, and no models (cellSlot all -1).
+  void prepareEmpty(const Camera& camera, PreparedFrame& frame) const;
+  /// The caching step: selection, cache loads (a damaged model replaced as damage.hpp says),
+  /// FrameView + pool. Fills stats' caching and damage fields. Throws FileChangedError when the
+  /// file changed on disk since it was opened (checked first, and by every read): the renderer
+  /// is then done, and a new one on the file opened again draws its new contents.
+  void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
+  /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
+  /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
+  /// maxDistance (optional, caller-owned, width * height floats, row 0 = top): per-pixel ray
+  /// length limit from opaque geometry (FrameView::maxDistance); the installed caster sees it too.
+  ImageRGBA renderFrame(const Camera& camera, FrameStats& stats,
+                        const float* maxDistance = nullptr);
+  /// setFrameSettings(settings), then renderFrame.
+  ImageRGBA renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& stats,
+                        const float* maxDistance = nullptr);
+
+  /// Replaces renderFrame's CPU ray casting (the CUDA path of `--device gpu` plugs in here): the
+  /// caster fills `image` (premultiplied RGBA of frame.view's size) from the prepared frame.
+  using RayCaster = std::function<void(const PreparedFrame& frame, ImageRGBA& image)>;
+  void setRayCaster(RayCaster caster) { caster_ = std::move(caster); }
+
+ private:
+  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
+  int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
+  void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
+
+  std::shared_ptr<const AfamFile> file_;
+  RendererResources resources_;
+  FrameSettings settings_;
+  LodSelector lod_;
+  std::unique_ptr<LruCache> cache_;
+  std::unique_ptr<Predictor> predictor_;
+  std::unique_ptr<Prefetcher> prefetcher_;
+  std::vector<Camera> history_;
+  std::vector<float> tf_;
+  double tfLo_ = 0, tfHi_ = 1;
+  std::array<std::vector<float>, 3> bounds_;
+  RayCaster caster_;  ///< empty: renderCpu
+};
+
+}  // namespace afam

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Separable tensor-product least-squares fitting of one micro-block, and its error on the samples.
+//
+// Method. Samples of an n0 x n1 x n2 block (x fastest) sit on uniform parameters u_k = k/(n-1)
+// (u = 0 for a one-sample axis). On each axis the collocation matrix A (n x ncp, p+1 non-zeros per
+// row, knots implied by afam::Knots) gives a banded normal matrix A^T A of half-bandwidth p. It is
+// built and Cholesky-factored ONCE per (n, ncp, p) in double precision and cached in the fitter.
+// The fit applies A^T along z (whole xy-planes as vectors), then y (x-rows as vectors), then x (the
+// x-lines transposed, so that they are the vectors too), and then the banded solves, one axis at a
+// time on the ncp0 x ncp1 x ncp2 coefficients. Because the tensor least-squares problem
+// (Az (x) Ay (x) Ax) c = d has the normal matrix (Nz (x) Ny (x) Nx), this separable result equals
+// the full tensor least-squares solution (tested against a dense solve).
+//
+// Stability. The implied knots are de Boor averages of uniform parameters, so NCP = n is a
+// well-conditioned interpolation (collocation cond < 10 for p <= 3 at every n, see
+// axisConditioning and test_stability.cpp), unlike plain uniform knots (cond ~ 1e9 for cubics at
+// n = 128, where the normal equations break down).
+//
+// Magnitudes. No internal rescaling is done, by decision: every intermediate is double. Samples are
+// finite floats (|x| <= 3.4e38), basis weights lie in [0, 1] and the normal matrices depend only on
+// (n, ncp, p), so sums stay below ~1e44, far from double overflow; squares of errors stay below
+// ~5e77. Float denormal samples are ordinary doubles. Only the final float32 control points can
+// overflow (solution beyond FLT_MAX): that throws NumericError. Results at 1e30 and 1e-30 scale
+// with the data (tested).
+//
+// Non-finite samples: the fit refuses them (NumericError naming the first offending sample's
+// (x, y, z) and flat index); callers add the block's name. There is no masking policy.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+#include "afam/base/errors.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/rmse_range.hpp"
+#include "afam/base/types.hpp"
+
+namespace afam {
+
+/// Per-axis degree used for an axis of n samples: min(degree, n-1).
+int effectiveDegree(int degree, int samples);
+
+/// NCP clamped per axis to [p_axis+1, n_axis] for a scalar NCP request.
+std::array<int, 3> clampNcp(int ncp, const std::array<int, 3>& samples,
+                            const std::array<int, 3>& degrees);
+
+/// Error of a model on the block's samples. min/max are of the model, evaluated on the samples.
+struct ErrorStats {
+  double rmse = 0, maxError = 0;
+  double minValue = 0, maxValue = 0;
+};
+
+/// One fitted micro-model: per-axis NCP and effective degree, float32 control points x fastest.
+struct FitResult {
+  std::array<int, 3> ncp{}, degree{};
+  std::vector<float> control;
+  ErrorStats error;
+  /// false: `error` was not measured on the samples (BlockFitter::fitWithin decided the bound
+  /// without it; only error.rmse is set, to a bound on the RMSE: see there); measure() fills it.
+  bool errorMeasured = true;
+
+  /// Non-owning view for evaluateModel (valid while `control` is not reallocated).
+  ModelView view() const {
+    ModelView v;
+    for (int a = 0; a < 3; ++a) v.knots[a] = Knots::make(ncp[a], degree[a]);
+    v.control = control.data();
+    return v;
+  }
+};
+
+/// Reusable fitter; NOT thread-safe: one per thread. Caches per-axis factorisations keyed by
+/// (n, ncp, p) and keeps its work buffers between calls, so a fit allocates nothing but its result.
+class BlockFitter {
+ public:
+  BlockFitter();
+  ~BlockFitter();
+  BlockFitter(BlockFitter&&) noexcept;
+  BlockFitter& operator=(BlockFitter&&) noexcept;
+  BlockFitter(const BlockFitter&) = delete;
+  BlockFitter& operator=(const BlockFitter&) = delete;
+
+  /// Least-squares fit of samples (x fastest, n[0]*n[1]*n[2] floats) on uniform parameters
+  /// k/(n-1). `degree` (1..5) is reduced per axis by effectiveDegree; ncp[a] must lie in
+  /// [effectiveDegree(degree, n[a]) + 1, n[a]] (see clampNcp).
+  /// Throws InvalidArgument for n < 1, a degree outside 1..5 or an NCP outside its range, and
+  /// NumericError naming the sample if any sample is NaN or Inf (or if a control point overflows
+  /// float32). With computeError the result's `error` holds the model's error on all samples.
+  FitResult fit(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+                bool computeError = true);
+
+  /// Same as fit() but reuses `out`'s control-point storage (no allocation once it is large
+  /// enough): the form for encoders fitting many blocks.
+  void fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+               bool computeError, FitResult& out);
+
+  /// fitInto, then whether the model's RMSE on the samples is <= `bound`, the same answer as
+  /// measuring it, mostly without measuring: the fit's exact least-squares residual
+  /// (sumOfSquares - c^T A^T A c) bounds the model's RMSE from below and, with the float32 rounding
+  /// of the control points, from above (rmseRange); only when the bound lies between the two is the
+  /// error measured. Otherwise out.errorMeasured is false and out.error.rmse holds the decisive
+  /// end of the range (> bound: false, <= bound: true); measure() then gives the full statistics.
+  /// `sumOfSquares` is afam::sumOfSquares(samples, n): finite, it also vouches that the samples
+  /// are (they are not scanned again). Throws as fitInto.
+  bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
+                 double sumOfSquares, FitResult& out);
+
+  /// Whether `changed`, the model `fitted` (a least-squares fit of these samples, its error
+  /// measured) with other control points (quantized, say), meets `bound`: the same answer as
+  /// measuring it, mostly without measuring, from fitted's RMSE and the energy of the change
+  /// (changedRmseRange). changed.errorMeasured and changed.error as in fitWithin. Throws
+  /// InvalidArgument when the shapes differ or fitted's error was not measured.
+  bool changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted, FitResult& changed,
+                    double bound);
+
+  /// Measures the model's error on the samples unless model.errorMeasured.
+  void measure(const float* samples, std::array<int, 3> n, FitResult& model);
+
+  /// Error of an existing model against the samples, via separable evaluation on the sample grid
+  /// (O(n^3 (p+1)), never point by point). Throws InvalidArgument if the model does not fit n.
+  ErrorStats error(const float* samples, std::array<int, 3> n, const FitResult& model);
+
+  /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
+  void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
+
+ private:
+  /// The answer of fitWithin and changeWithin: the decisive end of the range (model unmeasured),
+  /// else the measured error.
+  bool decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n, FitResult& model);
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Sum of the squared samples of an n0 x n1 x n2 block, in double.
+double sumOfSquares(const float* samples, std::array<int, 3> n);
+
+/// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
+/// Convenience wrapper over a thread-local BlockFitter.
+void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
+
+/// 2-norm condition number of the n x ncp collocation matrix on one axis (Eigen JacobiSVD), and of
+/// the normal matrix A^T A (the square of the former, from the same singular values). The degree
+/// is reduced by effectiveDegree; infinity when the matrix is rank deficient.
+struct AxisConditioning {
+  double collocation = 0, normal = 0;
+};
+AxisConditioning axisConditioning(int n, int ncp, int degree);
+
+/// Peak signal-to-noise ratio in dB: 20 log10(valueRange / rmse); +inf when rmse == 0.
+double psnr(double rmse, double valueRange);
+
+}  // namespace afam

@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Where the encoder's samples come from: a scalar volume read by whole z-planes, converted to
+// float32. Sources: a caller's array, a headerless raw file, the Marschner-Lobb function.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "afam/format/partition.hpp"
+
+namespace afam {
+
+/// A scalar volume read by whole z-planes. Implementations: ArraySource, RawFileSource,
+/// MarschnerLobbSource. readSlab is called from one thread at a time.
+class VolumeSource {
+ public:
+  virtual ~VolumeSource() = default;
+  virtual Index3 dims() const = 0;
+  virtual std::array<double, 3> origin() const { return {0, 0, 0}; }
+  virtual std::array<double, 3> spacing() const { return {1, 1, 1}; }
+  virtual std::string name() const { return "scalars"; }
+  /// dims[0] * dims[1] * zCount floats, x fastest, planes z0 .. z0+zCount-1.
+  virtual void readSlab(int64_t z0, int64_t zCount, float* out) = 0;
+  /// Rows y0 .. y0+yCount-1 of the same planes: dims[0] * yCount * zCount floats. The default
+  /// reads whole planes (readSlab) and keeps the rows; a source that can read fewer overrides it.
+  virtual void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out);
+  /// If the source knows its value range without a pass over the data, it says so here; else
+  /// the encoder computes it (and checks for NaN/Inf) in one streaming pass.
+  virtual bool knownRange(double& lo, double& hi) const {
+    (void)lo;
+    (void)hi;
+    return false;
+  }
+  /// Bytes per voxel of the original data (for the compression ratio).
+  virtual int bytesPerVoxel() const { return 4; }
+  /// true when readSlab may only run on the thread that called the encoder (e.g. it reads through
+  /// an MPI library initialised without thread support); the encoder then samples a batch and fits
+  /// it in turn, instead of sampling the next batch on a thread of its own meanwhile.
+  virtual bool readsOnCallingThread() const { return false; }
+};
+
+/// Over a caller-owned float array (x fastest). The array must outlive the source.
+class ArraySource : public VolumeSource {
+ public:
+  ArraySource(const float* data, Index3 dims, std::string name = "scalars",
+              std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
+  Index3 dims() const override { return dims_; }
+  std::array<double, 3> origin() const override { return origin_; }
+  std::array<double, 3> spacing() const override { return spacing_; }
+  std::string name() const override { return name_; }
+  void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  /// Bytes a sample had before it was converted to these floats (for the ratio; default 4).
+  void setOriginalBytesPerVoxel(int bytes) { originalBytes_ = bytes; }
+  int bytesPerVoxel() const override { return originalBytes_; }
+
+ private:
+  const float* data_;
+  Index3 dims_;
+  std::string name_;
+  std::array<double, 3> origin_, spacing_;
+  int originalBytes_ = 4;
+};
+
+enum class ScalarType : uint8_t { Float32, Float64, UInt8, UInt16, Int16 };
+const char* scalarTypeName(ScalarType t);
+ScalarType parseScalarType(const std::string& name);  ///< float32|float64|uint8|uint16|int16
+int scalarTypeSize(ScalarType t);
+
+/// Parses name_XxYxZ_type.raw (the convention of shared/data/volumes); false if it does not match.
+bool parseRawName(const std::string& path, Index3& dims, ScalarType& type);
+
+/// Over a raw little-endian file, converted to float32; reads only the planes asked for.
+class RawFileSource : public VolumeSource {
+ public:
+  /// Throws IoError if the file cannot be opened, InvalidArgument if its size is not dims * type.
+  RawFileSource(const std::string& path, Index3 dims, ScalarType type,
+                std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
+  ~RawFileSource() override;
+  Index3 dims() const override { return dims_; }
+  std::array<double, 3> origin() const override { return origin_; }
+  std::array<double, 3> spacing() const override { return spacing_; }
+  std::string name() const override;
+  void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  int bytesPerVoxel() const override { return scalarTypeSize(type_); }
+  ScalarType type() const { return type_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+  Index3 dims_;
+  ScalarType type_;
+  std::array<double, 3> origin_, spacing_;
+  std::vector<unsigned char> buffer_;
+};
+
+/// The Marschner-Lobb function sampled on dims over [-1, 1]^3, generated plane by plane.
+class MarschnerLobbSource : public VolumeSource {
+ public:
+  explicit MarschnerLobbSource(Index3 dims) : dims_(dims) {}
+  Index3 dims() const override { return dims_; }
+  std::string name() const override { return "marschner_lobb"; }
+  void readSlab(int64_t z0, int64_t zCount, float* out) override;
+
+ private:
+  Index3 dims_;
+};
+
+}  // namespace afam

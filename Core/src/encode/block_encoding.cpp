@@ -1,0 +1,336 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "block_encoding.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "afam/format/block_codec.hpp"
+
+namespace afam {
+
+namespace {
+
+// Compact mode: the spline is fitted to kFitShare of the bound, the rest of the budget (in
+// quadrature) goes to the quantization of its control points. Steps are tried from the largest
+// (the basis averages independent rounding errors, so the model moves less than the points) down.
+// The largest step whose reconstruction meets the bound is kept: a larger step is fewer bits, and a
+// block whose error budget is not spent gains nothing from it. Factors of 2 sqrt(3) x budget (the
+// step whose uniform rounding error alone would spend it), tried from the largest.
+constexpr double kFitShare = 0.9;
+constexpr double kStepFactors[] = {4.0, 3.2, 2.6, 2.1, 1.7, 1.4, 1.15, 1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
+constexpr int kZstdLevel = 15;
+
+template <typename T>
+std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
+  std::vector<uint8_t> out(v.size() * sizeof(T));
+  if (!out.empty()) std::memcpy(out.data(), v.data(), out.size());
+  return out;
+}
+
+/// Error of model values (on the block's sample grid; model(i) gives value i) against the samples;
+/// min/max of the model.
+template <typename Model>
+ErrorStats compare(const Model& model, const std::vector<float>& s) {
+  ErrorStats es;
+  es.minValue = std::numeric_limits<double>::infinity();
+  es.maxValue = -es.minValue;
+  double sum = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const double d = double(model(i)) - double(s[i]);
+    sum += d * d;
+    es.maxError = std::max(es.maxError, std::fabs(d));
+    es.minValue = std::min(es.minValue, double(model(i)));
+    es.maxValue = std::max(es.maxValue, double(model(i)));
+  }
+  es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
+  return es;
+}
+
+void setError(BlockTask& t, const ErrorStats& es) {
+  ModelEntry& m = t.entry;
+  t.rmse = es.rmse;
+  t.maxError = es.maxError;
+  m.minValue = float(es.minValue);
+  m.maxValue = float(es.maxValue);
+  m.rmse = float(es.rmse);
+  m.maxError = float(es.maxError);
+}
+
+/// The block's samples themselves as a degree-1 spline with NCP = n per axis: its implied knots
+/// put the control points on the sample parameters, so it reproduces every (float) sample exactly.
+void exactModel(const BlockExtent& e, const std::vector<float>& samples, FitResult& fr) {
+  fr.ncp = e.samples;
+  for (int a = 0; a < 3; ++a) fr.degree[a] = effectiveDegree(1, e.samples[a]);
+  fr.control = samples;
+  const auto mm = std::minmax_element(samples.begin(), samples.end());
+  fr.error = ErrorStats{0, 0, double(*mm.first), double(*mm.second)};
+}
+
+/// Fits one block to `bound`: the searched NCP*, or the mode's NCP without a search. In bounded
+/// modes the error is then checked on the block's own samples: a block that skipped the search
+/// (cross-level reuse) and misses the bound is searched, and one that misses it even at NCP = n is
+/// the exact model (t.exact).
+void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, double bound, BlockTask& t,
+              FitResult& fr) {
+  Int3 degs{};
+  int nmax = 1;
+  for (int a = 0; a < 3; ++a) {
+    degs[a] = effectiveDegree(c.opt.degree, e.samples[a]);
+    nmax = std::max(nmax, e.samples[a]);
+  }
+  const int lo = std::min(c.opt.degree + 1, nmax);
+  auto search = [&]() {
+    t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search, c.opt.fastWindow,
+                          fr, t.fits);
+    t.complex = t.ncpStar > lo;
+    if (c.opt.perAxisNcp && t.complex && fr.error.rmse <= bound)
+      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits);
+  };
+  if (t.search) {
+    search();
+  } else {
+    const Int3 ncp = c.opt.mode == EncodingMode::Fixed
+                         ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
+                         : clampNcp(lo, e.samples, degs);
+    fitter.fitInto(t.samples.data(), e.samples, ncp, c.opt.degree, true, fr);
+    ++t.fits;
+    t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
+  }
+  if (!bounded(c.opt.mode) || fr.error.rmse <= bound) return;
+  if (!t.search) {
+    t.search = true;
+    t.refit = true;
+    search();
+    if (fr.error.rmse <= bound) return;
+  }
+  exactModel(e, t.samples, fr);
+  t.exact = true;
+  t.complex = true;
+}
+
+/// Float32 payload of a fitted model (Spline, or Samples for the exact model).
+void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  m.kind = exact ? BlockKind::Samples : BlockKind::Spline;
+  m.coded = false;
+  m.ncp = fr.ncp;
+  m.degree = fr.degree;
+  setError(t, fr.error);
+  t.stored = bytesOf(fr.control);
+  m.storedSize = t.stored.size();
+}
+
+/// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
+/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails. The
+/// largest is tried first (a block that passes there costs one evaluation); the last call that
+/// returned true is the answer's.
+template <typename Passes>
+int largestPassingStep(Passes&& passes) {
+  const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
+  if (passes(kStepFactors[0])) return 0;
+  int fail = 0, pass = n;  // kStepFactors[fail] fails; [pass] passes (n: none known to)
+  while (pass - fail > 1) {
+    const int mid = (pass + fail) / 2;
+    if (passes(kStepFactors[mid]))
+      pass = mid;
+    else
+      fail = mid;
+  }
+  return pass < n ? pass : -1;
+}
+
+/// A candidate stored form of the block.
+struct Candidate {
+  BlockKind kind = BlockKind::Spline;
+  Int3 ncp{}, degree{};
+  ErrorStats error;
+  std::vector<uint8_t> bytes;
+};
+
+bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound, Candidate& out) {
+  double mean = 0;
+  for (float v : s) mean += double(v);
+  const float c = float(mean / double(s.size()));
+  const ErrorStats es = compare([c](size_t) { return c; }, s);
+  if (!(es.rmse <= bound)) return false;
+  out.kind = BlockKind::Constant;
+  for (int a = 0; a < 3; ++a) {
+    out.degree[a] = effectiveDegree(degree, e.samples[a]);
+    out.ncp[a] = out.degree[a] + 1;
+  }
+  out.error = es;
+  out.bytes.resize(4);
+  std::memcpy(out.bytes.data(), &c, 4);
+  return true;
+}
+
+bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound, BlockFitter& fitter,
+                Candidate& out) {
+  const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
+  if (!(budget > 0)) return false;
+  FitResult q = fr;
+  bool lattice = true;
+  FitResult passed;  // the last passing step's model (its error measured only near the bound)
+  auto passes = [&](double k) {
+    if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
+      lattice = false;
+      return false;
+    }
+    if (!fitter.changeWithin(s.data(), n, fr, q, bound)) return false;
+    passed = q;
+    return true;
+  };
+  const int best = largestPassingStep(passes);
+  if (best < 0 || !lattice) return false;
+  const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
+  std::vector<uint8_t> bytes;
+  if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
+  // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
+  if (q.control == passed.control)
+    q = std::move(passed);
+  else
+    q.errorMeasured = false;
+  fitter.measure(s.data(), n, q);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
+  return out.error.rmse <= bound;
+}
+
+/// The samples, predicted and coded, as an Interpolant: the step is chosen on the quantized samples,
+/// then the decoded model (the interpolating spline) is measured on the samples.
+bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, double beat, BlockFitter& fitter,
+                 Candidate& out) {
+  if (!(bound > 0)) return false;
+  std::vector<float> recon;
+  bool lattice = true;
+  auto passes = [&](double k) {
+    if (!quantizeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation, recon)) {
+      lattice = false;
+      return false;
+    }
+    return compare([&recon](size_t i) { return recon[i]; }, s).rmse <= bound;
+  };
+  const int best = largestPassingStep(passes);
+  if (best < 0 || !lattice) return false;
+  if (estimateCodedBytes(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation) >
+      beat)
+    return false;  // cannot win: spare the coding
+  Candidate c;
+  c.kind = BlockKind::Interpolant;
+  c.ncp = n;
+  for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
+  if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation, kZstdLevel,
+                    c.bytes, recon))
+    return false;
+  ModelEntry probe;
+  probe.kind = c.kind;
+  probe.coded = true;
+  probe.ncp = c.ncp;
+  probe.degree = c.degree;
+  probe.size = payloadBytes(n);
+  probe.storedSize = c.bytes.size();
+  FitResult model;
+  model.ncp = n;
+  model.degree = c.degree;
+  model.control.resize(s.size());
+  decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
+  c.error = fitter.error(s.data(), n, model);
+  if (!(c.error.rmse <= bound)) return false;  // float rounding of the interpolant: leave it to the others
+  out = std::move(c);
+  return true;
+}
+
+void storeCandidate(Candidate& c, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  m.kind = c.kind;
+  m.coded = c.kind != BlockKind::Constant;
+  m.ncp = c.ncp;
+  m.degree = c.degree;
+  setError(t, c.error);
+  t.stored = std::move(c.bytes);
+  m.storedSize = t.stored.size();
+}
+
+/// Compact storage: a constant where one meets the bound; else the smaller of the coded spline
+/// (fitted to kFitShare of the bound) and the coded samples; the float samples where neither does.
+void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  Candidate best, other;
+  if (constantFits(e, t.samples, c.opt.degree, c.bound, best)) {
+    t.complex = false;
+    storeCandidate(best, t);
+    return;
+  }
+  FitResult fr;
+  fitBlock(c, e, fitter, kFitShare * c.bound, t, fr);
+  const int64_t count = int64_t(t.samples.size());
+  const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
+                          codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
+  // Samples pay when the spline is missing or spends more than a bit per sample; they are coded only
+  // when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
+  const double beat = haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
+  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) &&
+      codeSamples(t.samples, e.samples, c.opt.degree, c.bound, beat, fitter, other) &&
+      (!haveSpline || other.bytes.size() < best.bytes.size())) {
+    best = std::move(other);
+    t.complex = true;
+  } else if (!haveSpline) {
+    exactModel(e, t.samples, fr);
+    t.exact = true;
+    t.complex = true;
+    storeFloat(fr, true, t);
+    return;
+  }
+  storeCandidate(best, t);
+}
+
+}  // namespace
+
+void storeDownsampled(const BlockExtent& e, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  for (int a = 0; a < 3; ++a) {
+    m.ncp[a] = e.samples[a] + 2;
+    m.degree[a] = 1;
+  }
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  const int gx = m.ncp[0], gy = m.ncp[1];
+  for (int z = 1; z <= e.samples[2]; ++z)
+    for (int y = 1; y <= e.samples[1]; ++y)
+      for (int x = 1; x <= e.samples[0]; ++x) {
+        const float v = t.samples[(size_t(z) * size_t(gy) + size_t(y)) * size_t(gx) + size_t(x)];
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+  m.minValue = lo;
+  m.maxValue = hi;
+  m.kind = BlockKind::Spline;
+  t.stored = bytesOf(t.samples);
+  m.storedSize = t.stored.size();
+  std::vector<float>().swap(t.samples);
+}
+
+void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  try {
+    if (c.opt.compact && bounded(c.opt.mode)) {
+      encodeCompact(c, e, fitter, t);
+    } else {
+      FitResult fr;
+      fitBlock(c, e, fitter, c.bound, t, fr);
+      storeFloat(fr, t.exact, t);
+    }
+  } catch (const NumericError& ex) {
+    throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
+  }
+  if (bounded(c.opt.mode) && !(t.rmse <= c.bound)) {
+    std::ostringstream msg;
+    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << t.entry.rmse
+        << " over the bound " << c.bound << " even stored exactly";
+    throw NumericError(msg.str());
+  }
+  for (int a = 0; a < 3; ++a)
+    if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
+  std::vector<float>().swap(t.samples);
+}
+
+}  // namespace afam

@@ -1,0 +1,290 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/encode/block_sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace afam {
+
+namespace {
+
+/// The taps of one axis: sample s is sum_k weight[k] * v[index[k]] for k in [first[s], first[s+1]).
+struct AxisTaps {
+  std::vector<int64_t> index;
+  std::vector<double> weight;
+  std::vector<size_t> first{0};
+  bool unit = true;  ///< every sample is one tap of weight 1 (a grid sample)
+  void close() { first.push_back(index.size()); }
+  void add(int64_t i, double w) {
+    if (w == 0) return;
+    if (!index.empty() && first.back() < index.size() && index.back() == i) {
+      weight.back() += w;
+      return;
+    }
+    index.push_back(i);
+    weight.push_back(w);
+  }
+};
+
+/// Linear interpolation at pos (clamped to [0, dim - 1]).
+void addPointTaps(double pos, int64_t dim, AxisTaps& t) {
+  pos = std::min(std::max(pos, 0.0), double(dim - 1));
+  int64_t i0 = static_cast<int64_t>(std::floor(pos));
+  double w = pos - double(i0);
+  if (w < 1e-12) w = 0;
+  if (w > 1 - 1e-12) {
+    ++i0;
+    w = 0;
+  }
+  i0 = std::min(i0, dim - 1);
+  t.add(i0, 1 - w);
+  if (w != 0) t.add(std::min(i0 + 1, dim - 1), w);
+  t.close();
+  if (w != 0) t.unit = false;
+}
+
+/// Adds scale x the integral of the axis' linear interpolant over [a, b] (0 <= a < b <= dim - 1):
+/// per unit interval the trapezoid rule is exact for a linear function.
+void addIntegral(double a, double b, double scale, AxisTaps& t) {
+  for (int64_t i = int64_t(std::floor(a)); double(i) < b; ++i) {
+    const double s = std::max(a, double(i)) - double(i), e = std::min(b, double(i + 1)) - double(i);
+    if (e <= s) continue;
+    const double len = (e - s) * scale, mid = 0.5 * (s + e);  // the interpolant's mean is at mid
+    t.add(i, len * (1 - mid));
+    t.add(i + 1, len * mid);
+  }
+}
+
+/// Mean of the interpolant over a window of `width` centred on pos, the volume mirrored at its
+/// ends (the filtered field stays smooth up to the boundary; a shifted window would freeze it there
+/// and leave a kink that splines pay for); the whole axis when the window is longer than it.
+void addBoxTaps(double pos, double width, int64_t dim, AxisTaps& t) {
+  const double last = double(dim - 1);
+  if (width >= last) {
+    addIntegral(0, last, 1 / last, t);
+  } else {
+    const double lo = pos - 0.5 * width, hi = pos + 0.5 * width;
+    addIntegral(std::max(lo, 0.0), std::min(hi, last), 1 / width, t);
+    if (lo < 0) addIntegral(0, -lo, 1 / width, t);
+    if (hi > last) addIntegral(2 * last - hi, last, 1 / width, t);
+  }
+  t.close();
+  t.unit = false;
+}
+
+AxisTaps axisTaps(const Partition& part, const BlockExtent& e, int level, int axis, bool ghost,
+                  LevelSampling sampling) {
+  const int64_t dim = part.dims()[axis];
+  const int n = e.samples[axis];
+  const int g = ghost ? 1 : 0;
+  const int r = part.stride(level);
+  const bool box = sampling == LevelSampling::Box && r > 1 && dim > 1;
+  AxisTaps t;
+  const double step = n > 1 ? double(e.hi[axis] - e.lo[axis]) / double(n - 1) : 0.0;
+  for (int k = -g; k < n + g; ++k) {
+    double pos;
+    if (k < 0)
+      pos = double(e.lo[axis]) - step;
+    else if (k >= n)
+      pos = double(e.hi[axis]) + step;
+    else
+      pos = part.samplePosition(e, axis, k);
+    if (!box) {
+      addPointTaps(pos, dim, t);
+      continue;
+    }
+    addBoxTaps(std::min(std::max(pos, 0.0), double(dim - 1)), double(r), dim, t);
+  }
+  if (t.first.size() != t.index.size() + 1) t.unit = false;
+  return t;
+}
+
+struct BlockTaps {
+  AxisTaps tx, ty;
+  int nx = 0, ny = 0;
+  int64_t x0 = 0, x1 = 0;  ///< the columns of a plane the x taps read
+  int64_t y0 = 0, y1 = 0;  ///< the rows of a plane the y taps read
+};
+
+/// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)); rows is scratch. y
+/// first: it runs along whole rows of the columns the block reads (vectorised), and x then filters
+/// only the block's rows. The plane holds rows from yBase on.
+void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
+                      std::vector<double>& rows, std::vector<double>& acc) {
+  const AxisTaps &tx = bt.tx, &ty = bt.ty;
+  const size_t width = size_t(bt.x1 - bt.x0 + 1);
+  rows.resize(size_t(bt.ny) * width);
+  for (int j = 0; j < bt.ny; ++j) {
+    double* __restrict h = rows.data() + size_t(j) * width;
+    std::fill_n(h, width, 0.0);
+    for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
+      const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
+      const double wy = ty.weight[k];
+      for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
+    }
+  }
+  for (int j = 0; j < bt.ny; ++j) {
+    const double* h = rows.data() + size_t(j) * width - bt.x0;
+    double* dst = acc.data() + size_t(j) * size_t(bt.nx);
+    for (int i = 0; i < bt.nx; ++i) {
+      double v = 0;
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) v += tx.weight[k] * h[tx.index[k]];
+      dst[i] += w * v;
+    }
+  }
+}
+
+/// The planes z-samples [k0, k1) need (ascending, distinct).
+std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
+  std::vector<int64_t> zs(tz.index.begin() + std::ptrdiff_t(tz.first[size_t(k0)]),
+                          tz.index.begin() + std::ptrdiff_t(tz.first[size_t(k1)]));
+  std::sort(zs.begin(), zs.end());
+  zs.erase(std::unique(zs.begin(), zs.end()), zs.end());
+  return zs;
+}
+
+/// How many planes of `plane` floats a chunk may hold: at most 256 MB, and with
+/// ChunkBudget::QuarterOfSamples at most a quarter of the samples it fills (so a row of blocks and
+/// the planes it is filtered from take at most 1.25 times the row's samples); at least one plane (a
+/// chunk always covers one z-sample, whatever its taps).
+size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out, ChunkBudget budget) {
+  size_t floats = (size_t(256) << 20) / sizeof(float);
+  if (budget == ChunkBudget::QuarterOfSamples) {
+    size_t samples = 0;
+    for (const std::vector<float>* o : out) samples += o->size();
+    floats = std::min(floats, samples / 4);
+  }
+  return std::max<size_t>(1, floats / plane);
+}
+
+/// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
+/// yBase on).
+void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
+  const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
+  const bool unitXY = bt.tx.unit && bt.ty.unit;
+  std::vector<double> rows, acc;
+  auto planeOf = [&](size_t t) {
+    const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
+    return buf + i * plane;
+  };
+  for (int k = k0; k < k1; ++k) {
+    float* dst = out + size_t(k) * nxy;
+    const size_t t0 = tz.first[size_t(k)], t1 = tz.first[size_t(k) + 1];
+    if (unitXY && t1 == t0 + 1 && tz.weight[t0] == 1.0) {  // grid samples: a copy
+      const float* p = planeOf(t0);
+      for (int j = 0; j < bt.ny; ++j) {
+        const float* src = p + (bt.ty.index[size_t(j)] - yBase) * X;
+        float* row = dst + size_t(j) * size_t(bt.nx);
+        for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
+      }
+      continue;
+    }
+    acc.assign(nxy, 0.0);
+    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
+    for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
+  }
+}
+
+}  // namespace
+
+PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
+
+const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount) {
+  const size_t plane = size_t(rowSize_ * yCount);
+  if (buf_.size() < zs.size() * plane) {
+    buf_.clear();  // no copy of the old contents on growth
+    buf_.resize(zs.size() * plane);
+  }
+  float* buf = buf_.data();
+  for (size_t i = 0; i < zs.size();) {
+    size_t j = i + 1;
+    while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
+    src_.readRows(zs[i], int64_t(j - i), y0, yCount, buf + i * plane);
+    bytesRead_ += (j - i) * plane * sizeof(float);
+    i = j;
+  }
+  return buf;
+}
+
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
+                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop,
+                    ChunkBudget budget) {
+  if (blocks.empty()) return;
+  const int g = ghost ? 1 : 0;
+  std::vector<BlockTaps> taps(blocks.size());
+  const BlockExtent ez = part.extent(level, blocks[0]);
+  const AxisTaps tz = axisTaps(part, ez, level, 2, ghost, sampling);
+  const int nz = ez.samples[2] + 2 * g;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const BlockExtent e = part.extent(level, blocks[b]);
+    taps[b].tx = axisTaps(part, e, level, 0, ghost, sampling);
+    taps[b].ty = axisTaps(part, e, level, 1, ghost, sampling);
+    taps[b].nx = e.samples[0] + 2 * g;
+    taps[b].ny = e.samples[1] + 2 * g;
+    const auto xs = std::minmax_element(taps[b].tx.index.begin(), taps[b].tx.index.end());
+    taps[b].x0 = *xs.first;
+    taps[b].x1 = *xs.second;
+    const auto ys = std::minmax_element(taps[b].ty.index.begin(), taps[b].ty.index.end());
+    taps[b].y0 = *ys.first;
+    taps[b].y1 = *ys.second;
+    out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
+  }
+  const int64_t X = part.dims()[0];
+  int64_t yBase = taps[0].y0, yEnd = taps[0].y1;  // the rows the blocks read
+  for (const BlockTaps& bt : taps) {
+    yBase = std::min(yBase, bt.y0);
+    yEnd = std::max(yEnd, bt.y1);
+  }
+  const size_t plane = size_t(X * (yEnd - yBase + 1));
+  const size_t maxPlanes = chunkPlaneBudget(plane, out, budget);
+  for (int k0 = 0; k0 < nz;) {
+    int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
+    while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
+    const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
+    const float* buf = planes.read(zs, yBase, yEnd - yBase + 1);
+    auto fill = [&](int64_t b) {
+      fillBlockChunk(buf, zs, plane, X, yBase, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
+    };
+    if (loop)
+      loop(int64_t(blocks.size()), fill);
+    else
+      for (size_t b = 0; b < blocks.size(); ++b) fill(int64_t(b));
+    k0 = k1;
+  }
+}
+
+std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk, bool ghost,
+                                LevelSampling sampling) {
+  ArraySource src(volume, part.dims());
+  PlaneReader planes(src, part.dims());
+  std::vector<float> out;
+  std::vector<std::vector<float>*> outs{&out};
+  sampleBlockRow(part, planes, level, {ijk}, ghost, sampling, outs);
+  return out;
+}
+
+struct BlockRowReader::Impl {
+  Impl(VolumeSource& s, const Partition& p) : part(p), planes(s, p.dims()) {}
+  const Partition& part;
+  PlaneReader planes;
+};
+
+BlockRowReader::BlockRowReader(VolumeSource& source, const Partition& partition)
+    : impl_(std::make_unique<Impl>(source, partition)) {}
+BlockRowReader::~BlockRowReader() = default;
+uint64_t BlockRowReader::bytesRead() const { return impl_->planes.bytesRead(); }
+
+void BlockRowReader::readRow(int level, int kz, bool ghost, LevelSampling sampling,
+                             std::vector<std::vector<float>>& out) {
+  const Int3 nb = impl_->part.blocksPerAxis(level);
+  std::vector<Int3> row;
+  for (int j = 0; j < nb[1]; ++j)
+    for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});
+  out.resize(row.size());
+  std::vector<std::vector<float>*> outs(row.size());
+  for (size_t r = 0; r < row.size(); ++r) outs[r] = &out[r];
+  sampleBlockRow(impl_->part, impl_->planes, level, row, ghost, sampling, outs);
+}
+
+}  // namespace afam

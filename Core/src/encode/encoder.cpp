@@ -1,0 +1,540 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/encode/encoder.hpp"
+
+#include <algorithm>
+#include <cfloat>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <ctime>
+#include <limits>
+#include <future>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "afam/spline/fit.hpp"
+#include "fitted_blocks.hpp"
+#include "afam/encode/ncp_search.hpp"
+#include "block_encoding.hpp"
+#include "afam/base/worker_pool.hpp"
+
+namespace afam {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------------------
+// Encoder, in steps: value range, header, then per level batches of block rows (sample, fit in
+// parallel, hand to the sink in order, count).
+
+namespace {
+
+/// Spline modes fit coarse levels to the box-filtered volume; DS keeps the paper's strided samples.
+LevelSampling levelSampling(EncodingMode mode) {
+  return mode == EncodingMode::Downsampled ? LevelSampling::Point : LevelSampling::Box;
+}
+
+void validateOptions(const EncoderOptions& opt) {
+  if (opt.degree < 1 || opt.degree > 5) throw InvalidArgument("encode: degree " + std::to_string(opt.degree) + " outside [1, 5]");
+  if (!std::isfinite(opt.errorBound) || opt.errorBound < 0)
+    throw InvalidArgument("encode: error bound " + std::to_string(opt.errorBound) + " must be finite and > 0");
+  if (bounded(opt.mode) && opt.errorBound == 0)
+    throw InvalidArgument("encode: error bound 0 asks for an exact copy: give a positive bound (e.g. --error-bound "
+                          "1e-6 --relative) or use --mode fixed --ncp 0 (interpolation at every sample)");
+  if (opt.fixedNcp < 0) throw InvalidArgument("encode: --ncp must be >= 0");
+}
+
+/// The finest-level block holding sample xyz (for messages).
+Int3 finestBlockOf(const Partition& part, const int64_t xyz[3]) {
+  const int lf = part.levels() - 1;
+  const Int3 nb = part.blocksPerAxis(lf);
+  Int3 blk{0, 0, 0};
+  for (int a = 0; a < 3; ++a) {
+    Int3 probe{0, 0, 0};
+    for (int j = 0; j < nb[a]; ++j) {
+      probe[a] = j;
+      if (part.extent(lf, probe).hi[a] >= xyz[a]) {
+        blk[a] = j;
+        break;
+      }
+    }
+  }
+  return blk;
+}
+
+/// Progress in [0, 1] over the range scan and the levels, weighted by samples.
+class EncodeProgress {
+ public:
+  EncodeProgress(const Partition& part, const EncoderOptions& opt) : callback_(opt.progress) {
+    for (int l = 0; l < part.levels(); ++l) {
+      const Int3 b = part.blocksPerAxis(l);
+      double s = 1;
+      for (int a = 0; a < 3; ++a) {
+        Int3 ijk{0, 0, 0};
+        double sum = 0;
+        for (int i = 0; i < b[a]; ++i) {
+          ijk[a] = i;
+          sum += part.extent(l, ijk).samples[a];
+        }
+        s *= sum;
+      }
+      levelWork_.push_back(s);
+      total_ += s;
+    }
+    rangeWork_ = (opt.relativeBound ? 0.05 : 0.02) * total_;
+    total_ += rangeWork_;
+  }
+  /// false when the caller asked to cancel.
+  bool report(double extra) const {
+    return !callback_ || callback_(std::min(1.0, (done_ + extra) / total_));
+  }
+  double rangeWork() const { return rangeWork_; }
+  void finishRange() { done_ += rangeWork_; }
+  void finishLevel(int l) { done_ += levelWork_[size_t(l)]; }
+
+ private:
+  std::function<bool(double)> callback_;
+  std::vector<double> levelWork_;
+  double total_ = 0, rangeWork_ = 0, done_ = 0;
+};
+
+Cancelled cancelled() { return Cancelled("encoding cancelled"); }
+
+/// lo/hi extended by the n values (four lanes at a time: min/max vectorised); false if one is NaN
+/// or infinite (lo/hi are then incomplete).
+bool extendRange(const float* v, size_t n, float& lo, float& hi) {
+  using Lanes = float __attribute__((vector_size(16)));
+  using Flags = int __attribute__((vector_size(16)));
+  const Lanes big = {FLT_MAX, FLT_MAX, FLT_MAX, FLT_MAX};
+  Lanes l = {lo, lo, lo, lo}, h = {hi, hi, hi, hi};
+  Flags bad = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    Lanes x;
+    std::memcpy(&x, v + i, sizeof x);
+    bad |= !(x <= big && x >= -big);
+    l = x < l ? x : l;
+    h = x > h ? x : h;
+  }
+  bool finite = true;
+  for (int t = 0; t < 4; ++t) {
+    finite = finite && bad[t] == 0;
+    lo = std::min(lo, l[t]);
+    hi = std::max(hi, h[t]);
+  }
+  for (; i < n; ++i) {
+    finite = finite && std::isfinite(v[i]);
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  return finite;
+}
+
+/// Value range and NaN/Inf check in one streaming pass (unless the source knows its range) over
+/// this process's share of the z-planes; the team reduces the shares to the volume's range.
+void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress, EncodeTeam& team,
+                    double& vmin, double& vmax) {
+  if (source.knownRange(vmin, vmax)) return;
+  const Index3 dims = source.dims();
+  const int64_t plane = dims[0] * dims[1];
+  const int64_t chunk = std::max<int64_t>(1, (int64_t(1) << 18) / std::max<int64_t>(plane, 1));  // ~1 MB
+  const WorkShare planes = workShare(dims[2], team.rank(), team.size());
+  std::vector<float> buf;
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (int64_t z = planes.first; z < planes.end; z += chunk) {
+    const int64_t nz = std::min(chunk, planes.end - z);
+    buf.resize(size_t(nz * plane));
+    source.readSlab(z, nz, buf.data());
+    if (!extendRange(buf.data(), buf.size(), lo, hi)) {
+      const size_t i = size_t(std::find_if(buf.begin(), buf.end(), [](float v) { return !std::isfinite(v); }) -
+                              buf.begin());
+      const float v = buf[i];
+      const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1], z + int64_t(i) / plane};
+      std::ostringstream msg;
+      msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of " << source.name()
+          << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
+          << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
+      throw NumericError(msg.str());
+    }
+    if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) / double(planes.end - planes.first)))
+      throw cancelled();
+  }
+  vmin = lo;
+  vmax = hi;
+}
+
+/// Runs one step of the encode; in a team, an exception of any process is thrown on every process
+/// once all have run the step (a process's own exception as it is, another's as afam::Error naming
+/// its rank), so no process waits in a later collective for one that has stopped.
+template <class Step>
+void teamStep(EncodeTeam& team, Step&& step) {
+  if (team.size() == 1) {
+    step();
+    return;
+  }
+  std::exception_ptr failure;
+  std::string message;
+  try {
+    step();
+  } catch (const std::exception& e) {
+    failure = std::current_exception();
+    message = *e.what() ? e.what() : "an error with no message";
+  } catch (...) {
+    failure = std::current_exception();
+    message = "an error that is not a std::exception";
+  }
+  const std::string agreed = team.agreeOnError(message);
+  if (failure) std::rethrow_exception(failure);
+  if (!agreed.empty()) throw Error("encode: " + agreed);
+}
+
+VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels, double vmin,
+                        double vmax) {
+  VolumeHeader header;
+  header.dims = source.dims();
+  header.origin = source.origin();
+  header.spacing = source.spacing();
+  header.valueMin = vmin;
+  header.valueMax = vmax;
+  header.scalarName = source.name();
+  header.levels = levels;
+  header.blocksPerAxis = opt.blocksPerAxis;
+  header.degree = opt.degree;
+  header.errorBound = opt.errorBound;
+  header.relativeBound = opt.relativeBound;
+  header.mode = opt.mode;
+  header.fixedNcp = opt.fixedNcp;
+  header.sampling = levelSampling(opt.mode);
+  header.sourceBytesPerSample = source.bytesPerVoxel();
+  return header;
+}
+
+void countBlock(const BlockTask& t, bool ds, LevelStats& ls) {
+  const ModelEntry& m = t.entry;
+  ls.searched += t.search ? 1 : 0;
+  ls.complex += t.complex ? 1 : 0;
+  ls.refits += t.refit ? 1 : 0;
+  ls.exact += t.exact ? 1 : 0;
+  ls.reducedDegree += t.reducedDegree ? 1 : 0;
+  ls.fits += t.fits;
+  ls.samples += int64_t(m.samples[0]) * m.samples[1] * m.samples[2];
+  ls.payloadBytes += m.storedSize;
+  ls.paperBytes += ds ? m.storedSize : paperModelBytes(m.ncp, m.degree);
+  ++ls.kinds[size_t(m.kind)];
+  ls.maxRmse = std::max(ls.maxRmse, t.rmse);
+  ls.maxError = std::max(ls.maxError, t.maxError);
+  const int k = std::max({m.ncp[0], m.ncp[1], m.ncp[2]});
+  if (ls.ncpHistogram.size() <= size_t(k)) ls.ncpHistogram.resize(size_t(k) + 1, 0);
+  ++ls.ncpHistogram[size_t(k)];
+}
+
+void addLevel(const LevelStats& ls, EncodeStats& stats) {
+  stats.fits += ls.fits;
+  stats.blocks += ls.blocks;
+  stats.payloadBytes += ls.payloadBytes;
+  stats.paperBytes += ls.paperBytes;
+  stats.maxRmse = std::max(stats.maxRmse, ls.maxRmse);
+  stats.maxError = std::max(stats.maxError, ls.maxError);
+}
+
+/// Encodes the levels coarse to fine; one instance per encodeVolume call. In a team of several
+/// processes each fits its workShare of every level, and finishLevel hands the level's models to the
+/// first process, which alone calls the sink.
+class LevelEncoder {
+ public:
+  LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound, int threads,
+               EncodeProgress& progress, ModelSink& sink, EncodeTeam& team)
+      : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink), team_(team),
+        fitters_(size_t(threads)), pool_(threads), samplePool_(threads), planes_(source, part.dims()) {
+    sampleLoop_ = [this](int64_t count, const std::function<void(int64_t)>& fn) {
+      samplePool_.run(count, [&fn](int, int64_t b) { fn(b); }, [] { return true; });
+    };
+  }
+
+  /// Lines of blocks of one level, sampled.
+  struct Batch {
+    std::vector<BlockTask> tasks;
+    int64_t endLine = 0;   ///< the first line not in this batch
+    double seconds = 0;    ///< spent sampling it
+  };
+
+  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and filtering,
+  /// on the sampling pool) while the fitting pool fits the current one, so reading the volume does
+  /// not leave the fitting threads idle; during the level's last batch the next level's first batch
+  /// is sampled, handed back in `pending` (empty: level l samples its first batch itself).
+  LevelStats encodeLevel(int l, std::future<Batch>& pending) {
+    const auto tl = Clock::now();
+    LevelStats ls;
+    ls.blocks = part_.blockCount(l);
+    complexCur_.assign(size_t(ls.blocks), 0);
+    const WorkShare lines = share(l);
+    if (!lines.empty()) fitLines(l, lines, pending, ls);
+    ls.seconds = secondsSince(tl);
+    return ls;
+  }
+
+  /// After every process has run encodeLevel(l): the models of a team reach the first process's
+  /// sink (in the file's order: lines in rank order) and its statistics; every process learns which
+  /// blocks of level l are complex (the next level's cross-level reuse).
+  void finishLevel(int l, LevelStats& ls) {
+    if (team_.size() > 1) {
+      if (opt_.mode == EncodingMode::Adaptive && l + 1 < part_.levels()) team_.mergeFlags(complexCur_);
+      const std::vector<std::vector<uint8_t>> all = team_.gatherToFirst(outgoing_);
+      outgoing_.clear();
+      outgoing_.shrink_to_fit();
+      for (const std::vector<uint8_t>& records : all) {
+        std::vector<BlockTask> tasks;
+        readFittedBlocks(records, tasks);
+        for (const BlockTask& t : tasks) {
+          sink_.add(t.entry, t.stored.data());
+          countBlock(t, ds(), ls);
+        }
+      }
+    }
+    complexPrev_.swap(complexCur_);
+  }
+
+ private:
+  /// This process's lines of blocks of level l.
+  WorkShare share(int l) const {
+    const Int3 nb = part_.blocksPerAxis(l);
+    return workShare(int64_t(nb[1]) * nb[2], team_.rank(), team_.size());
+  }
+
+  void fitLines(int l, const WorkShare& lines, std::future<Batch>& pending, LevelStats& ls) {
+    double levelDone = 0;
+    Batch cur = pending.valid() ? pending.get() : gatherLines(l, lines.first, lines.end);
+    for (;;) {
+      ls.sampleSeconds += cur.seconds;
+      const bool more = cur.endLine < lines.end;
+      std::future<Batch> next;
+      const WorkShare nextLines = more                     ? WorkShare{cur.endLine, lines.end}
+                                  : l + 1 < part_.levels() ? share(l + 1)
+                                                           : WorkShare{};
+      if (!nextLines.empty()) {
+        const int nl = more ? l : l + 1;
+        const auto policy = source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
+        next = std::async(policy, [this, nl, nextLines] { return gatherLines(nl, nextLines.first, nextLines.end); });
+      }
+      try {
+        fitBatch(l, cur.tasks, levelDone);
+      } catch (...) {
+        settle(next);
+        throw;
+      }
+      for (BlockTask& t : cur.tasks) {
+        complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
+        levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
+        if (team_.size() > 1) {
+          appendFittedBlock(t, outgoing_);
+          continue;
+        }
+        sink_.add(t.entry, t.stored.data());
+        countBlock(t, ds(), ls);
+      }
+      if (!progress_.report(levelDone)) {
+        settle(next);
+        throw cancelled();
+      }
+      if (!more) {
+        pending = std::move(next);
+        break;
+      }
+      cur = next.get();
+    }
+  }
+
+  bool ds() const { return opt_.mode == EncodingMode::Downsampled; }
+
+  /// Before leaving on an error: a batch being sampled on another thread uses members, so it must
+  /// finish first; a deferred one (readsOnCallingThread) has not started and is dropped.
+  static void settle(std::future<Batch>& next) {
+    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) next.wait();
+  }
+
+  /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
+  /// blocks are all known (a batch may be sampled before that).
+  bool searches(int l, const Int3& ijk) const {
+    if (ds() || opt_.mode == EncodingMode::Fixed) return false;
+    if (opt_.mode == EncodingMode::InLevel || l == 0) return true;
+    return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
+  }
+
+  /// Lines of blocks of level l from `line` on (before endLine), until the batch holds ~24 M
+  /// samples (in a team of several processes ~1 M), at least one line. One process samples a
+  /// z-row (or the part of one in the range) at a time; a member of a team one line at a time.
+  /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
+  /// progress callback, which the calling thread owns).
+  Batch gatherLines(int l, int64_t line, int64_t endLine) {
+    const auto t0 = Clock::now();
+    // One process samples ahead in batches of ~24 M samples; a member of a team holds its piece
+    // and ~1 MB of samples at a time, plus the rows of the planes one line is filtered from (at
+    // most a quarter of the line's samples: ChunkBudget): less than one z-row of blocks.
+    const bool member = team_.size() > 1;
+    const size_t budgetFloats = member ? size_t(1) << 18 : size_t(24) << 20;
+    const Int3 nb = part_.blocksPerAxis(l);
+    Batch batch;
+    std::vector<BlockTask>& tasks = batch.tasks;
+    size_t floats = 0;
+    while (line < endLine && (tasks.empty() || floats < budgetFloats)) {
+      const int kz = int(line / nb[1]), j0 = int(line % nb[1]);
+      const int j1 = member ? j0 + 1 : int(std::min<int64_t>(nb[1], j0 + (endLine - line)));
+      std::vector<Int3> row;
+      for (int j = j0; j < j1; ++j)
+        for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});
+      const size_t first = tasks.size();
+      tasks.resize(first + row.size());
+      std::vector<std::vector<float>*> outs(row.size());
+      for (size_t r = 0; r < row.size(); ++r) {
+        tasks[first + r].ijk = row[r];
+        outs[r] = &tasks[first + r].samples;
+      }
+      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_,
+                     member ? ChunkBudget::QuarterOfSamples : ChunkBudget::Large);
+      for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
+      line += j1 - j0;
+    }
+    batch.endLine = line;
+    batch.seconds = secondsSince(t0);
+    return batch;
+  }
+
+  void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
+    const FitContext ctx{opt_, bound_, l, source_.name()};
+    for (BlockTask& t : tasks) t.search = searches(l, t.ijk);
+    std::mutex doneMutex;
+    bool cancelRequested = false;
+    double batchDone = 0;
+    pool_.run(
+        int64_t(tasks.size()),
+        [&](int w, int64_t ti) {
+          BlockTask& t = tasks[size_t(ti)];
+          const BlockExtent e = part_.extent(l, t.ijk);
+          t.entry.level = l;
+          t.entry.block = t.ijk;
+          t.entry.samples = e.samples;
+          if (ds())
+            storeDownsampled(e, t);
+          else
+            encodeBlock(ctx, e, fitters_[size_t(w)], t);
+          std::lock_guard<std::mutex> lock(doneMutex);
+          batchDone += double(e.samples[0]) * e.samples[1] * e.samples[2];
+        },
+        [&]() {
+          double v;
+          {
+            std::lock_guard<std::mutex> lock(doneMutex);
+            v = batchDone;
+          }
+          if (!progress_.report(levelDone + v)) cancelRequested = true;
+          return !cancelRequested;
+        });
+    if (cancelRequested) throw cancelled();
+  }
+
+  VolumeSource& source_;
+  const EncoderOptions& opt_;
+  const Partition& part_;
+  double bound_;
+  EncodeProgress& progress_;
+  ModelSink& sink_;
+  EncodeTeam& team_;
+  std::vector<uint8_t> outgoing_;  ///< a team's records of this level's fitted blocks
+  std::vector<BlockFitter> fitters_;
+  WorkerPool pool_;
+  WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
+  BlockLoop sampleLoop_;
+  PlaneReader planes_;
+  std::vector<uint8_t> complexPrev_, complexCur_;
+};
+
+}  // namespace
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
+  SoloTeam solo;
+  return encodeVolume(source, opt, sink, solo);
+}
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink, EncodeTeam& team) {
+  const auto t0 = Clock::now();
+  const double cpu0 = processCpuSeconds();
+  validateOptions(opt);
+  const Index3 dims = source.dims();
+  if (opt.levels < 0 || opt.blocksPerAxis < 0)
+    throw InvalidArgument("encode: levels and blocks per axis must be >= 1 (or 0 for the default)");
+  const PartitionShape shape = defaultPartition(dims);
+  EncoderOptions resolved = opt;
+  if (resolved.levels == 0) resolved.levels = shape.levels;
+  if (resolved.blocksPerAxis == 0) resolved.blocksPerAxis = shape.blocksPerAxis;
+  const Partition part(dims, resolved.levels, resolved.blocksPerAxis);  // validates levels, blocks, dims
+  const int threads = std::max(1, opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency()));
+
+  EncodeStats stats;
+  stats.threads = threads;
+  stats.inputVoxels = dims[0] * dims[1] * dims[2];
+  stats.bytesIn = uint64_t(stats.inputVoxels) * uint64_t(source.bytesPerVoxel());
+
+  EncodeProgress progress(part, opt);
+  teamStep(team, [&] { scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax); });
+  team.reduceRange(stats.valueMin, stats.valueMax);
+  progress.finishRange();
+  stats.bound = opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
+  teamStep(team, [&] {  // the first process alone hands models to the sink
+    if (team.rank() == 0) sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+  });
+  stats.levelsUsed = resolved.levels;
+  stats.blocksPerAxisUsed = resolved.blocksPerAxis;
+
+  const auto tFit0 = Clock::now();
+  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team);
+  std::future<LevelEncoder::Batch> pending;  // a level's first batch, sampled during the previous level
+  for (int l = 0; l < part.levels(); ++l) {
+    LevelStats ls;
+    teamStep(team, [&] { ls = levels.encodeLevel(l, pending); });
+    teamStep(team, [&] { levels.finishLevel(l, ls); });
+    stats.levels.push_back(ls);
+    progress.finishLevel(l);
+    addLevel(stats.levels.back(), stats);
+  }
+  stats.fitSeconds = secondsSince(tFit0);
+  stats.bytesOut = fileBytes(uint64_t(stats.blocks), stats.payloadBytes);
+  stats.seconds = secondsSince(t0);
+  stats.cpuSeconds = processCpuSeconds() - cpu0;
+  progress.report(0);
+  return stats;
+}
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath) {
+  SoloTeam solo;
+  return encodeVolume(source, options, outPath, solo);
+}
+
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
+                         EncodeTeam& team) {
+  FileModelSink sink(outPath);
+  const auto t0 = Clock::now();
+  const double cpu0 = processCpuSeconds();
+  EncodeStats stats = encodeVolume(source, options, sink, team);
+  teamStep(team, [&] {
+    if (team.rank() == 0) stats.bytesOut = sink.commit();
+  });
+  stats.seconds = secondsSince(t0);
+  stats.cpuSeconds = processCpuSeconds() - cpu0;
+  return stats;
+}
+
+}  // namespace afam

@@ -1,0 +1,724 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/format/afam_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "afam/format/block_codec.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/format/temporary_file.hpp"
+
+namespace afam {
+
+#if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
+#error "the .afam reader and writer copy little-endian structs byte for byte: little-endian hosts only"
+#endif
+
+namespace {
+
+constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
+constexpr uint32_t kVersion = 2;      // written; version 1 is still read
+constexpr uint32_t kEndianTag = 0x01020304u;
+constexpr uint64_t kAlign = 64;         // start of the payload area
+constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
+constexpr int kMaxLevels = 16;
+
+// On-disk header, version 1: 1024 bytes, little-endian; each member's byte offset and size beside
+// it (@offset, size), checked by the static_asserts below.
+struct FileHeaderV1 {
+  char magic[8];                  // @0, 8 B
+  uint32_t version;               // @8, 4 B
+  uint32_t endianTag;             // @12, 4 B
+  uint32_t headerSize;            // @16, 4 B
+  uint32_t entrySize;             // @20, 4 B
+  int64_t dims[3];                // @24, 24 B
+  double origin[3];               // @48, 24 B
+  double spacing[3];              // @72, 24 B
+  double valueMin;                // @96, 8 B
+  double valueMax;                // @104, 8 B
+  double errorBound;              // @112, 8 B
+  int32_t levels;                 // @120, 4 B
+  int32_t blocksPerAxis;          // @124, 4 B
+  int32_t degree;                 // @128, 4 B
+  int32_t fixedNcp;               // @132, 4 B
+  uint8_t mode;                   // @136, 1 B
+  uint8_t relativeBound;          // @137, 1 B
+  uint8_t levelSampling;          // @138, 1 B; LevelSampling: 0 point (older files), 1 box
+  uint8_t sourceBytesPerSample;   // @139, 1 B; bytes of one sample of the encoded input (0: unknown)
+  uint32_t indexChecksum;         // @140, 4 B
+  uint64_t entryCount;            // @144, 8 B
+  uint64_t indexOffset;           // @152, 8 B
+  uint64_t payloadOffset;         // @160, 8 B
+  uint64_t fileSize;              // @168, 8 B
+  char scalarName[64];            // @176, 64 B
+  int32_t levelBlocks[kMaxLevels][3];  // @240, 192 B
+  uint64_t totalPayloadBytes;     // @432, 8 B
+  uint32_t payloadAlignment;      // @440, 4 B; a power of two in [4, 4096] that every payload
+                                  // offset is a multiple of
+  uint8_t reserved1[576];         // @444, 576 B
+  uint32_t headerChecksum;        // @1020, 4 B; CRC32 of bytes [0, 1020)
+};
+static_assert(sizeof(FileHeaderV1) == 1024, "header size");
+static_assert(offsetof(FileHeaderV1, version) == 8, "layout");
+static_assert(offsetof(FileHeaderV1, endianTag) == 12, "layout");
+static_assert(offsetof(FileHeaderV1, headerSize) == 16, "layout");
+static_assert(offsetof(FileHeaderV1, entrySize) == 20, "layout");
+static_assert(offsetof(FileHeaderV1, dims) == 24, "layout");
+static_assert(offsetof(FileHeaderV1, origin) == 48, "layout");
+static_assert(offsetof(FileHeaderV1, spacing) == 72, "layout");
+static_assert(offsetof(FileHeaderV1, valueMin) == 96, "layout");
+static_assert(offsetof(FileHeaderV1, valueMax) == 104, "layout");
+static_assert(offsetof(FileHeaderV1, errorBound) == 112, "layout");
+static_assert(offsetof(FileHeaderV1, levels) == 120, "layout");
+static_assert(offsetof(FileHeaderV1, blocksPerAxis) == 124, "layout");
+static_assert(offsetof(FileHeaderV1, degree) == 128, "layout");
+static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
+static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
+static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
+static_assert(offsetof(FileHeaderV1, levelSampling) == 138, "layout");
+static_assert(offsetof(FileHeaderV1, sourceBytesPerSample) == 139, "layout");
+static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
+static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
+static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
+static_assert(offsetof(FileHeaderV1, payloadOffset) == 160, "layout");
+static_assert(offsetof(FileHeaderV1, fileSize) == 168, "layout");
+static_assert(offsetof(FileHeaderV1, scalarName) == 176, "layout");
+static_assert(offsetof(FileHeaderV1, levelBlocks) == 240, "layout");
+static_assert(offsetof(FileHeaderV1, totalPayloadBytes) == 432, "layout");
+static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
+static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
+static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
+
+// On-disk index entry, version 1: 40 bytes, each member's offset and size beside it. Level, block
+// ijk, samples and degree are implied by the entry's position (the index is complete and ordered)
+// and the header; the payload size by the NCP. Keeping the entry this small is what makes the
+// file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
+// against 169).
+struct IndexEntryV1 {
+  uint64_t offset;                // @0, 8 B
+  uint16_t ncp[3];                // @8, 6 B
+  uint16_t flags;                 // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
+                                  // bits: an unknown feature
+  float minValue;                 // @16, 4 B
+  float maxValue;                 // @20, 4 B
+  float rmse;                     // @24, 4 B
+  float maxError;                 // @28, 4 B
+  uint32_t checksum;              // @32, 4 B
+  uint32_t storedBytes;           // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
+                                  // the NCP's floats)
+};
+static_assert(sizeof(IndexEntryV1) == 40, "entry size");
+static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
+static_assert(offsetof(IndexEntryV1, flags) == 14, "layout");
+static_assert(offsetof(IndexEntryV1, minValue) == 16, "layout");
+static_assert(offsetof(IndexEntryV1, maxValue) == 20, "layout");
+static_assert(offsetof(IndexEntryV1, rmse) == 24, "layout");
+static_assert(offsetof(IndexEntryV1, maxError) == 28, "layout");
+static_assert(offsetof(IndexEntryV1, checksum) == 32, "layout");
+static_assert(offsetof(IndexEntryV1, storedBytes) == 36, "layout");
+
+struct CrcTables {
+  uint32_t t[8][256];
+  CrcTables() {
+    for (uint32_t i = 0; i < 256; ++i) {
+      uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[0][i] = c;
+    }
+    for (uint32_t i = 0; i < 256; ++i)
+      for (int s = 1; s < 8; ++s) t[s][i] = (t[s - 1][i] >> 8) ^ t[0][t[s - 1][i] & 0xFFu];
+  }
+};
+const CrcTables& crcTables() {
+  static const CrcTables tables;
+  return tables;
+}
+
+uint64_t alignUp(uint64_t v, uint64_t a = kAlign) { return (v + a - 1) / a * a; }
+
+std::string sysError() { return std::strerror(errno); }
+
+
+void preadAll(int fd, void* out, uint64_t bytes, uint64_t offset, const std::string& path,
+              const std::string& what) {
+  auto* p = static_cast<char*>(out);
+  uint64_t done = 0;
+  while (done < bytes) {
+    const ssize_t r = ::pread(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                              static_cast<off_t>(offset + done));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(path + ": cannot read " + what + ": " + sysError());
+    }
+    if (r == 0)
+      throw FormatError(path + ": truncated: " + what + " ends at byte " +
+                        std::to_string(offset + bytes) + " past the end of the file");
+    done += static_cast<uint64_t>(r);
+  }
+}
+
+void pwriteAll(int fd, const void* data, uint64_t bytes, uint64_t offset, const std::string& path) {
+  const auto* p = static_cast<const char*>(data);
+  uint64_t done = 0;
+  while (done < bytes) {
+    const ssize_t r = ::pwrite(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                               static_cast<off_t>(offset + done));
+    if (r < 0) {
+      if (errno == EINTR) continue;
+      throw IoError(path + ": write failed: " + sysError());
+    }
+    done += static_cast<uint64_t>(r);
+  }
+}
+
+// Checked product of three non-negative ints times 4 (payload bytes); false on overflow.
+template <typename Int>
+bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
+  uint64_t v = 4;
+  for (int a = 0; a < 3; ++a) {
+    if (ncp[a] < 1) return false;
+    const uint64_t f = static_cast<uint64_t>(ncp[a]);
+    if (v > std::numeric_limits<uint64_t>::max() / f) return false;
+    v *= f;
+  }
+  out = v;
+  return true;
+}
+
+
+
+/// NCP and degree a model of this kind must have on one axis of n samples.
+struct AxisRule {
+  int degree, ncpLo, ncpHi;
+};
+AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
+  if (mode == EncodingMode::Downsampled) return {1, n + 2, n + 2};
+  if (kind == BlockKind::Samples) return {effectiveDegree(1, n), n, n};
+  const int p = effectiveDegree(headerDegree, n);
+  if (kind == BlockKind::Constant) return {p, p + 1, p + 1};
+  if (kind == BlockKind::Interpolant) return {p, n, n};
+  return {p, p + 1, n};
+}
+
+/// Empty when the model is valid for its block, else what is wrong.
+std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree, const BlockExtent& e) {
+  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Interpolant))
+    return "unknown block kind " + std::to_string(static_cast<int>(m.kind));
+  if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded))
+    return "a downsampled file holds raw samples only";
+  if (m.kind == BlockKind::Constant && m.coded) return "a constant block is never coded";
+  if (m.kind == BlockKind::Interpolant && !m.coded) return "an interpolant block is always coded";
+  for (int a = 0; a < 3; ++a) {
+    const AxisRule r = axisRule(m.kind, mode, headerDegree, e.samples[a]);
+    if (m.ncp[a] < r.ncpLo || m.ncp[a] > r.ncpHi || m.degree[a] != r.degree || m.ncp[a] > 65535)
+      return std::string(blockKindName(m.kind)) + " NCP " + std::to_string(m.ncp[a]) + " / degree " +
+             std::to_string(m.degree[a]) + " invalid on axis " + std::to_string(a) + " (NCP in [" +
+             std::to_string(r.ncpLo) + ", " + std::to_string(r.ncpHi) + "], degree " + std::to_string(r.degree) + ")";
+  }
+  return {};
+}
+
+/// Stored bytes of an uncoded model.
+uint64_t uncodedBytes(const ModelEntry& m) { return m.kind == BlockKind::Constant ? 4 : payloadBytes(m.ncp); }
+
+void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh, const BlockExtent& e,
+                const std::string& where, ModelEntry& m) {
+  const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
+  if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
+  if ((r.flags & ~uint16_t(0x1ff)) != 0) throw bad("unknown entry flags " + std::to_string(r.flags));
+  m.kind = static_cast<BlockKind>(r.flags & 0xff);
+  m.coded = (r.flags & 0x100) != 0;
+  m.samples = e.samples;
+  for (int a = 0; a < 3; ++a) {
+    m.ncp[a] = r.ncp[a];
+    m.degree[a] = axisRule(m.kind, vh.mode, vh.degree, e.samples[a]).degree;
+  }
+  const std::string problem = modelProblem(m, vh.mode, vh.degree, e);
+  if (!problem.empty()) throw bad(problem);
+  if (!checkedPayloadBytes(r.ncp, m.size)) throw bad("payload size overflows");
+  m.storedSize = version == 1 ? m.size : r.storedBytes;
+  if (!m.coded && m.storedSize != uncodedBytes(m))
+    throw bad("stored size " + std::to_string(m.storedSize) + " is not the " + std::to_string(uncodedBytes(m)) +
+              " bytes of an uncoded " + blockKindName(m.kind));
+  if (m.coded && m.storedSize <= kCodedHeaderBytes) throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
+}
+
+}  // namespace
+
+uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
+  const auto& T = crcTables().t;
+  const auto* p = static_cast<const uint8_t*>(data);
+  crc = ~crc;
+  while (bytes >= 8) {
+    uint32_t lo, hi;
+    std::memcpy(&lo, p, 4);
+    std::memcpy(&hi, p + 4, 4);
+    lo ^= crc;
+    crc = T[7][lo & 0xFF] ^ T[6][(lo >> 8) & 0xFF] ^ T[5][(lo >> 16) & 0xFF] ^ T[4][lo >> 24] ^
+          T[3][hi & 0xFF] ^ T[2][(hi >> 8) & 0xFF] ^ T[1][(hi >> 16) & 0xFF] ^ T[0][hi >> 24];
+    p += 8;
+    bytes -= 8;
+  }
+  while (bytes--) crc = T[0][(crc ^ *p++) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes) {
+  return sizeof(FileHeaderV1) + entries * sizeof(IndexEntryV1) + payloadBytes;
+}
+
+uint64_t payloadBytes(const Int3& ncp) {
+  const int32_t n[3] = {ncp[0], ncp[1], ncp[2]};
+  uint64_t out = 0;
+  if (!checkedPayloadBytes(n, out)) throw InvalidArgument("payload size: invalid or overflowing NCP");
+  return out;
+}
+
+uint64_t paperModelBytes(const Int3& ncp, const Int3& degree) {
+  uint64_t knots = 0;
+  for (int a = 0; a < 3; ++a) knots += static_cast<uint64_t>(ncp[a] + degree[a]);
+  return 1 + (knots + uint64_t(ncp[0]) * uint64_t(ncp[1]) * uint64_t(ncp[2])) * 4;
+}
+
+const char* blockKindName(BlockKind kind) {
+  switch (kind) {
+    case BlockKind::Spline: return "spline";
+    case BlockKind::Samples: return "samples";
+    case BlockKind::Constant: return "constant";
+    case BlockKind::Interpolant: return "interpolant";
+  }
+  return "unknown";
+}
+
+void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out, const std::string& where) {
+  const size_t count = e.size / sizeof(float);
+  if (e.kind == BlockKind::Constant) {
+    float c;
+    std::memcpy(&c, stored, 4);
+    std::fill(out, out + count, c);
+  } else if (e.kind == BlockKind::Interpolant) {
+    thread_local std::vector<float> samples;
+    thread_local BlockFitter fitter;
+    thread_local FitResult fit;
+    samples.resize(count);
+    decodeValues(stored, e.storedSize, e.ncp, samples.data(), where.c_str());
+    try {
+      fitter.fitInto(samples.data(), e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
+    } catch (const Error& ex) {
+      throw FormatError(where + ": interpolant does not decode: " + ex.what());
+    }
+    std::memcpy(out, fit.control.data(), count * sizeof(float));
+  } else if (e.coded) {
+    decodeValues(stored, e.storedSize, e.ncp, out, where.c_str());
+  } else {
+    std::memcpy(out, stored, e.size);
+  }
+}
+
+const char* modeName(EncodingMode mode) {
+  switch (mode) {
+    case EncodingMode::Adaptive: return "adaptive";
+    case EncodingMode::InLevel: return "inlevel";
+    case EncodingMode::Fixed: return "fixed";
+    case EncodingMode::Downsampled: return "ds";
+  }
+  return "unknown";
+}
+
+EncodingMode parseMode(const std::string& name) {
+  if (name == "adaptive") return EncodingMode::Adaptive;
+  if (name == "inlevel") return EncodingMode::InLevel;
+  if (name == "fixed") return EncodingMode::Fixed;
+  if (name == "ds") return EncodingMode::Downsampled;
+  throw InvalidArgument("unknown mode '" + name + "' (expected adaptive, inlevel, fixed or ds)");
+}
+
+// ------------------------------------------------------------------------------------------------
+// Reader
+
+AfamFile::~AfamFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
+  std::shared_ptr<AfamFile> f(new AfamFile());
+  f->path_ = path;
+  f->fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (f->fd_ < 0) throw IoError(path + ": cannot open: " + sysError());
+  struct stat st {};
+  if (::fstat(f->fd_, &st) != 0) throw IoError(path + ": cannot stat: " + sysError());
+  if (!S_ISREG(st.st_mode)) throw IoError(path + ": not a regular file");
+  f->fileSize_ = static_cast<uint64_t>(st.st_size);
+  f->identity_ = identityOfDescriptor(f->fd_);
+  const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
+
+  if (f->fileSize_ < sizeof(FileHeaderV1)) {
+    if (f->fileSize_ >= 8) {
+      char m[8];
+      preadAll(f->fd_, m, 8, 0, path, "magic");
+      if (std::memcmp(m, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
+    }
+    throw bad("truncated: " + std::to_string(f->fileSize_) + " bytes, the header alone needs " +
+              std::to_string(sizeof(FileHeaderV1)));
+  }
+  FileHeaderV1 h{};
+  preadAll(f->fd_, &h, sizeof h, 0, path, "header");
+  if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
+  if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
+  if (h.version != 1 && h.version != kVersion)
+    throw bad("unsupported format version " + std::to_string(h.version) + " (this reader knows versions 1 and " +
+              std::to_string(kVersion) + ")");
+  if (crc32(&h, offsetof(FileHeaderV1, headerChecksum)) != h.headerChecksum)
+    throw bad("header checksum mismatch (header damaged)");
+  if (h.headerSize != sizeof(FileHeaderV1) || h.entrySize != sizeof(IndexEntryV1))
+    throw bad("header or index entry size does not match version " + std::to_string(h.version));
+  if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 || (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
+    throw bad("payload alignment " + std::to_string(h.payloadAlignment) + " is not a power of two in [4, 4096]");
+  if (h.fileSize != f->fileSize_)
+    throw bad(h.fileSize > f->fileSize_
+                  ? "truncated: " + std::to_string(f->fileSize_) + " bytes, header says " +
+                        std::to_string(h.fileSize)
+                  : "file has " + std::to_string(f->fileSize_) + " bytes, header says " +
+                        std::to_string(h.fileSize) + " (trailing garbage)");
+
+  VolumeHeader& vh = f->header_;
+  for (int a = 0; a < 3; ++a) {
+    if (h.dims[a] < 1 || h.dims[a] > std::numeric_limits<int32_t>::max())
+      throw bad("absurd dimension " + std::to_string(h.dims[a]) + " on axis " + std::to_string(a));
+    vh.dims[a] = h.dims[a];
+    vh.origin[a] = h.origin[a];
+    vh.spacing[a] = h.spacing[a];
+  }
+  if (h.levels < 1 || h.levels > kMaxLevels)
+    throw bad("absurd level count " + std::to_string(h.levels));
+  if (h.blocksPerAxis < 1 || h.blocksPerAxis > 65535)
+    throw bad("absurd blocks per axis " + std::to_string(h.blocksPerAxis));
+  if (h.degree < 1 || h.degree > 5) throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
+  if (h.mode > static_cast<uint8_t>(EncodingMode::Downsampled))
+    throw bad("unknown encoding mode " + std::to_string(h.mode));
+  vh.valueMin = h.valueMin;
+  vh.valueMax = h.valueMax;
+  vh.levels = h.levels;
+  vh.blocksPerAxis = h.blocksPerAxis;
+  vh.degree = h.degree;
+  vh.errorBound = h.errorBound;
+  vh.relativeBound = h.relativeBound != 0;
+  vh.mode = static_cast<EncodingMode>(h.mode);
+  if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
+    throw bad("unknown level sampling " + std::to_string(h.levelSampling));
+  vh.sampling = static_cast<LevelSampling>(h.levelSampling);
+  vh.sourceBytesPerSample = h.sourceBytesPerSample;
+  vh.fixedNcp = h.fixedNcp;
+  vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
+  f->version_ = h.version;
+
+  f->partition_ = Partition(vh.dims, vh.levels, vh.blocksPerAxis);
+  const Partition& part = f->partition_;
+  for (int l = 0; l < vh.levels; ++l) {
+    const Int3 b = part.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a)
+      if (h.levelBlocks[l][a] != b[a])
+        throw bad("blocks per axis of level " + std::to_string(l) + " disagree with the partition");
+  }
+  const uint64_t expected = static_cast<uint64_t>(part.totalBlockCount());
+  if (h.entryCount != expected)
+    throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
+              std::to_string(expected) + " blocks of the partition");
+  if (h.indexOffset != sizeof(FileHeaderV1)) throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
+  // Overflow-safe: the index must fit between its offset and the payload start, inside the file.
+  if (h.entryCount > (f->fileSize_ - h.indexOffset) / sizeof(IndexEntryV1))
+    throw bad("truncated: index of " + std::to_string(h.entryCount) + " entries runs past the end of the file");
+  const uint64_t indexBytes = h.entryCount * sizeof(IndexEntryV1);
+  if (h.payloadOffset < h.indexOffset + indexBytes || h.payloadOffset > f->fileSize_ ||
+      h.payloadOffset % kAlign != 0)
+    throw bad("payload offset " + std::to_string(h.payloadOffset) + " invalid");
+  f->payloadOffset_ = h.payloadOffset;
+
+  std::vector<IndexEntryV1> raw(h.entryCount);
+  preadAll(f->fd_, raw.data(), indexBytes, h.indexOffset, path, "index");
+  if (crc32(raw.data(), indexBytes) != h.indexChecksum) throw bad("index checksum mismatch (index damaged)");
+
+  f->levelStart_.resize(static_cast<size_t>(vh.levels) + 1);
+  f->levelStart_[0] = 0;
+  for (int l = 0; l < vh.levels; ++l)
+    f->levelStart_[static_cast<size_t>(l) + 1] = f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
+
+  f->entries_.resize(raw.size());
+  uint64_t payloadSum = 0;
+  int level = 0;
+  for (size_t i = 0; i < raw.size(); ++i) {
+    while (static_cast<int64_t>(i) >= f->levelStart_[static_cast<size_t>(level) + 1]) ++level;
+    const IndexEntryV1& r = raw[i];
+    const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
+    const std::string where = "index entry " + std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
+    ModelEntry& m = f->entries_[i];
+    m.level = level;
+    m.block = ijk;
+    parseEntry(r, h.version, vh, part.extent(level, ijk), path + ": " + where, m);
+    if (r.offset < h.payloadOffset || r.offset % h.payloadAlignment != 0 || r.offset > f->fileSize_ ||
+        m.storedSize > f->fileSize_ - r.offset)
+      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(m.storedSize) +
+                ") lies outside the payload area or is misaligned (file size " + std::to_string(f->fileSize_) + ")");
+    const uint64_t bytes = m.storedSize;
+    payloadSum += bytes;
+    m.offset = r.offset;
+    m.minValue = r.minValue;
+    m.maxValue = r.maxValue;
+    m.rmse = r.rmse;
+    m.maxError = r.maxError;
+    m.checksum = r.checksum;
+  }
+  if (payloadSum != h.totalPayloadBytes) throw bad("payload sizes do not add up to the header's total");
+  return f;
+}
+
+bool startsWithAfamMagic(const std::string& path) {
+  char m[8] = {};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const ssize_t r = ::pread(fd, m, sizeof m, 0);
+  ::close(fd);
+  return r == ssize_t(sizeof m) && std::memcmp(m, kMagic, sizeof m) == 0;
+}
+
+int64_t AfamFile::entryIndex(int level, Int3 ijk) const {
+  if (level < 0 || level >= header_.levels) return -1;
+  const Int3 b = partition_.blocksPerAxis(level);
+  for (int a = 0; a < 3; ++a)
+    if (ijk[a] < 0 || ijk[a] >= b[a]) return -1;
+  return levelStart_[static_cast<size_t>(level)] + partition_.linearIndex(level, ijk);
+}
+
+void AfamFile::throwIfChanged(const FileIdentity& now) const {
+  const std::string change = describeChange(identity_, now);
+  if (!change.empty())
+    throw FileChangedError(path_ + ": the file changed since it was opened (" + change +
+                           "); nothing more is read from it until it is opened again");
+}
+
+void AfamFile::checkUnchanged() const {
+  throwIfChanged(identityOfDescriptor(fd_));
+  throwIfChanged(identityOfPath(path_));
+}
+
+void AfamFile::readPayload(int64_t entry, void* out) const {
+  // The descriptor is checked after the read, whatever its outcome: bytes read while (or after)
+  // another process rewrote the file are neither returned nor recorded as damage.
+  try {
+    readVerifiedPayload(entry, out);
+  } catch (const FormatError&) {
+    throwIfChanged(identityOfDescriptor(fd_));
+    throw;
+  }
+  throwIfChanged(identityOfDescriptor(fd_));
+}
+
+void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
+  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
+    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
+  const ModelEntry& e = entries_[static_cast<size_t>(entry)];
+  const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
+  if (e.storedSize == e.size) {  // uncoded floats: read in place
+    preadAll(fd_, out, e.size, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
+    if (crc32(out, e.size) != e.checksum) throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
+    return;
+  }
+  thread_local std::vector<uint8_t> stored;
+  stored.resize(e.storedSize);
+  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
+  if (crc32(stored.data(), e.storedSize) != e.checksum)
+    throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
+  decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
+}
+
+std::vector<float> AfamFile::readPayload(int64_t entry) const {
+  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
+    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
+  std::vector<float> out(entries_[static_cast<size_t>(entry)].size / 4);
+  readPayload(entry, out.data());
+  return out;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Writer
+
+AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
+    : path_(path), header_(header) {
+  if (header.degree < 1 || header.degree > 5)
+    throw InvalidArgument("writer: degree " + std::to_string(header.degree) + " outside [1, 5]");
+  if (header.levels > kMaxLevels) throw InvalidArgument("writer: more than 16 levels");
+  partition_ = Partition(header.dims, header.levels, header.blocksPerAxis);
+  const int64_t total = partition_.totalBlockCount();
+  if (total > (int64_t(1) << 31)) throw InvalidArgument("writer: more than 2^31 micro-blocks");
+  levelStart_.resize(static_cast<size_t>(header.levels) + 1, 0);
+  for (int l = 0; l < header.levels; ++l)
+    levelStart_[static_cast<size_t>(l) + 1] = levelStart_[static_cast<size_t>(l)] + partition_.blockCount(l);
+  entries_.resize(static_cast<size_t>(total));
+  present_.assign(static_cast<size_t>(total), 0);
+  payloadOffset_ = alignUp(sizeof(FileHeaderV1) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
+  for (int a = 0; a < 3; ++a)
+    if (partition_.extent(header.levels - 1, {0, 0, 0}).samples[a] > 65533 ||
+        partition_.extent(0, {0, 0, 0}).samples[a] > 65533)
+      throw InvalidArgument("writer: micro-blocks of more than 65533 samples per axis (use more blocks)");
+  end_ = payloadOffset_;
+
+  removeStaleTemporaries(path);                 // left by writers killed before they finished
+  fd_ = createLockedTemporary(path, tmpPath_);  // locked until the rename (temporary_file.hpp)
+}
+
+AfamWriter::~AfamWriter() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !tmpPath_.empty()) ::unlink(tmpPath_.c_str());
+}
+
+uint64_t AfamWriter::bytesWritten() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return end_;
+}
+
+void AfamWriter::add(const ModelEntry& in, const float* payload) {
+  ModelEntry e = in;
+  e.coded = false;
+  e.storedSize = uncodedBytes(e);
+  addStored(e, payload);
+}
+
+void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
+  if (in.level < 0 || in.level >= header_.levels)
+    throw InvalidArgument(path_ + ": level " + std::to_string(in.level) + " out of range");
+  const Int3 b = partition_.blocksPerAxis(in.level);
+  for (int a = 0; a < 3; ++a)
+    if (in.block[a] < 0 || in.block[a] >= b[a])
+      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " out of range");
+  const BlockExtent e = partition_.extent(in.level, in.block);
+  if (in.samples != e.samples)
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": samples disagree with the partition");
+  const std::string problem = modelProblem(in, header_.mode, header_.degree, e);
+  if (!problem.empty()) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": " + problem);
+  const uint64_t bytes = in.storedSize;
+  if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
+               : bytes != uncodedBytes(in))
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": stored size " + std::to_string(bytes) +
+                          " invalid");
+  const uint32_t crc = crc32(stored, bytes);
+  const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
+                                          partition_.linearIndex(in.level, in.block));
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
+  if (present_[slot]) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
+  const uint64_t offset = end_;
+  pwriteAll(fd_, stored, bytes, offset, tmpPath_);
+  end_ = alignUp(offset + bytes, kPayloadAlign);
+  ModelEntry& m = entries_[slot];
+  m = in;
+  m.offset = offset;
+  m.size = payloadBytes(in.ncp);
+  m.checksum = crc;
+  present_[slot] = 1;
+}
+
+void AfamWriter::commit() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_) return;
+  for (size_t i = 0; i < present_.size(); ++i)
+    if (!present_[i]) {
+      int level = 0;
+      while (static_cast<int64_t>(i) >= levelStart_[static_cast<size_t>(level) + 1]) ++level;
+      const Int3 ijk = partition_.blockFromLinear(level, static_cast<int64_t>(i) - levelStart_[static_cast<size_t>(level)]);
+      throw InvalidArgument(path_ + ": commit without " + Partition::blockName(level, ijk));
+    }
+  std::vector<IndexEntryV1> raw(entries_.size());
+  uint64_t payloadSum = 0;
+  for (size_t i = 0; i < entries_.size(); ++i) {
+    const ModelEntry& m = entries_[i];
+    IndexEntryV1& r = raw[i];
+    std::memset(&r, 0, sizeof r);
+    r.offset = m.offset;
+    for (int a = 0; a < 3; ++a) r.ncp[a] = static_cast<uint16_t>(m.ncp[a]);
+    r.minValue = m.minValue;
+    r.maxValue = m.maxValue;
+    r.rmse = m.rmse;
+    r.maxError = m.maxError;
+    r.checksum = m.checksum;
+    r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0));
+    r.storedBytes = static_cast<uint32_t>(m.storedSize);
+    payloadSum += m.storedSize;
+  }
+  const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
+  const uint64_t fileSize = end_;
+  FileHeaderV1 h;
+  std::memset(&h, 0, sizeof h);
+  std::memcpy(h.magic, kMagic, 8);
+  h.version = kVersion;
+  h.endianTag = kEndianTag;
+  h.headerSize = sizeof(FileHeaderV1);
+  h.entrySize = sizeof(IndexEntryV1);
+  for (int a = 0; a < 3; ++a) {
+    h.dims[a] = header_.dims[a];
+    h.origin[a] = header_.origin[a];
+    h.spacing[a] = header_.spacing[a];
+  }
+  h.valueMin = header_.valueMin;
+  h.valueMax = header_.valueMax;
+  h.errorBound = header_.errorBound;
+  h.levels = header_.levels;
+  h.blocksPerAxis = header_.blocksPerAxis;
+  h.degree = header_.degree;
+  h.fixedNcp = header_.fixedNcp;
+  h.mode = static_cast<uint8_t>(header_.mode);
+  h.relativeBound = header_.relativeBound ? 1 : 0;
+  h.levelSampling = static_cast<uint8_t>(header_.sampling);
+  h.sourceBytesPerSample = static_cast<uint8_t>(std::min(header_.sourceBytesPerSample, 255));
+  h.indexChecksum = crc32(raw.data(), indexBytes);
+  h.entryCount = raw.size();
+  h.indexOffset = sizeof(FileHeaderV1);
+  h.payloadOffset = payloadOffset_;
+  h.fileSize = fileSize;
+  std::strncpy(h.scalarName, header_.scalarName.c_str(), sizeof h.scalarName - 1);
+  for (int l = 0; l < header_.levels; ++l) {
+    const Int3 b = partition_.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a) h.levelBlocks[l][a] = b[a];
+  }
+  h.totalPayloadBytes = payloadSum;
+  h.payloadAlignment = kPayloadAlign;
+  h.headerChecksum = crc32(&h, offsetof(FileHeaderV1, headerChecksum));
+  try {
+    if (::ftruncate(fd_, static_cast<off_t>(fileSize)) != 0)
+      throw IoError(tmpPath_ + ": cannot set file size: " + sysError());
+    pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeaderV1), tmpPath_);
+    pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
+    if (::fsync(fd_) != 0) throw IoError(tmpPath_ + ": fsync failed: " + sysError());
+    // Rename while the descriptor (and so the lock) is still held: a closed, unlocked temporary
+    // file would look abandoned to another writer's removeStaleTemporaries.
+    if (::rename(tmpPath_.c_str(), path_.c_str()) != 0)
+      throw IoError(path_ + ": cannot rename the temporary file onto it: " + sysError());
+    ::close(fd_);  // the data is already on disk (fsync); nothing is left to fail
+    fd_ = -1;
+  } catch (...) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmpPath_.c_str());
+    tmpPath_.clear();
+    throw;
+  }
+  committed_ = true;
+  // Make the rename durable: fsync the directory (best effort).
+  const size_t slash = path_.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path_.substr(0, slash));
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+}  // namespace afam

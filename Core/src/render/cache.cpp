@@ -1,0 +1,217 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/render/cache.hpp"
+
+#include <fcntl.h>
+
+#include <algorithm>
+
+#include <thread>
+
+#include "afam/base/errors.hpp"
+
+namespace afam {
+
+using Clock = std::chrono::steady_clock;
+
+LruCache::LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
+                   std::shared_ptr<DamageLog> damage)
+    : file_(std::move(file)), budget_(budget),
+      damage_(damage ? std::move(damage) : std::make_shared<DamageLog>()) {
+  if (!file_) throw InvalidArgument("cache: no file");
+}
+
+void LruCache::setBandwidthCap(double bytesPerSecond) {
+  if (bytesPerSecond < 0) throw InvalidArgument("cache: bandwidth cap must be >= 0");
+  std::lock_guard<std::mutex> g(deviceMutex_);
+  capBytesPerSecond_ = bytesPerSecond;
+}
+
+void LruCache::dropOsCache() const {
+#if defined(POSIX_FADV_DONTNEED)
+  (void)::posix_fadvise(file_->nativeHandle(), 0, 0, POSIX_FADV_DONTNEED);
+#endif
+}
+
+void LruCache::throttle(uint64_t bytes, Clock::time_point readStart) {
+  Clock::time_point until;
+  {
+    std::lock_guard<std::mutex> g(deviceMutex_);
+    if (capBytesPerSecond_ <= 0) return;
+    const auto busy = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(double(bytes) / capBytesPerSecond_));
+    const Clock::time_point start = std::max(readStart, deviceFree_);
+    deviceFree_ = start + busy;
+    until = deviceFree_;
+  }
+  const auto now = Clock::now();
+  if (until > now) {
+    std::this_thread::sleep_until(until);
+    std::lock_guard<std::mutex> g(mutex_);
+    stats_.throttleSeconds += std::chrono::duration<double>(until - now).count();
+  }
+}
+
+Payload LruCache::load(int64_t entry) {
+  const ModelEntry& e = file_->entries().at(size_t(entry));
+  auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
+  const auto t0 = Clock::now();
+  try {
+    file_->readPayload(entry, data->data());
+  } catch (const FormatError& ex) {
+    damage_->record(*file_, entry, ex.what());
+    throw;
+  }
+  throttle(e.size, t0);
+  const double s = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::lock_guard<std::mutex> g(mutex_);
+  stats_.bytesRead += e.size;
+  stats_.blocksRead++;
+  stats_.readSeconds += s;
+  return data;
+}
+
+bool LruCache::makeRoom(uint64_t bytes, bool mayEvictPinned) {
+  auto fits = [&] {
+    return (budget_.bytes == 0 || resident_ + bytes <= budget_.bytes) &&
+           (budget_.blocks == 0 || map_.size() + 1 <= budget_.blocks);
+  };
+  if (budget_.bytes != 0 && bytes > budget_.bytes) return false;
+  for (int pass = 0; pass < (mayEvictPinned ? 2 : 1) && !fits(); ++pass) {
+    // Walk from the least recently used end; pass 0 skips pinned blocks.
+    auto it = lru_.end();
+    while (!fits() && it != lru_.begin()) {
+      --it;
+      const int64_t key = *it;
+      if (pass == 0 && pinned_.count(key)) continue;
+      auto node = map_.find(key);
+      resident_ -= node->second.bytes;
+      map_.erase(node);
+      it = lru_.erase(it);
+      stats_.evictions++;
+    }
+  }
+  return fits();
+}
+
+Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    auto it = map_.find(entry);
+    if (it != map_.end()) {
+      if (purpose == Purpose::Frame) {
+        stats_.hits++;
+        lru_.splice(lru_.begin(), lru_, it->second.pos);
+      }
+      if (wasHit) *wasHit = true;
+      return it->second.data;
+    }
+    if (!loading_.count(entry)) break;
+    loaded_.wait(lock);  // another thread is reading it
+  }
+  if (damage_->isDamaged(entry)) {  // found damaged before: not read again
+    const ModelEntry& e = file_->entries().at(size_t(entry));
+    throw FormatError(file_->path() + ": " + Partition::blockName(e.level, e.block) +
+                      " is damaged (its checksum failed before)");
+  }
+  if (purpose == Purpose::Frame) stats_.misses++;
+  if (wasHit) *wasHit = false;
+  loading_.insert(entry);
+  lock.unlock();
+  Payload data;
+  try {
+    data = load(entry);
+  } catch (...) {
+    lock.lock();
+    loading_.erase(entry);
+    loaded_.notify_all();
+    throw;
+  }
+  lock.lock();
+  loading_.erase(entry);
+  const uint64_t bytes = data->size() * sizeof(float);
+  if (purpose == Purpose::Prefetch) {
+    stats_.prefetchLoads++;
+    stats_.prefetchBytes += bytes;
+  }
+  if (makeRoom(bytes, purpose == Purpose::Frame)) {
+    lru_.push_front(entry);
+    map_[entry] = Node{data, bytes, lru_.begin()};
+    resident_ += bytes;
+    peakResident_ = std::max(peakResident_, resident_);
+  } else if (purpose == Purpose::Frame) {
+    stats_.bypasses++;
+  } else {
+    stats_.prefetchDropped++;
+  }
+  loaded_.notify_all();
+  return data;
+}
+
+Payload LruCache::getIntact(int64_t entry, Purpose purpose) {
+  if (damage_->isDamaged(entry)) return nullptr;
+  try {
+    return get(entry, purpose);
+  } catch (const FormatError&) {
+    if (damage_->isDamaged(entry)) return nullptr;  // recorded by load(), here or in another thread
+    throw;
+  }
+}
+
+bool LruCache::prefetch(int64_t entry) {
+  {
+    std::lock_guard<std::mutex> g(mutex_);
+    if (map_.count(entry) || loading_.count(entry)) return false;
+  }
+  if (damage_->isDamaged(entry)) return false;
+  return getIntact(entry, Purpose::Prefetch) != nullptr;
+}
+
+bool LruCache::contains(int64_t entry) const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return map_.count(entry) != 0;
+}
+
+void LruCache::setPinned(const std::vector<int64_t>& entries) {
+  std::lock_guard<std::mutex> g(mutex_);
+  pinned_.clear();
+  pinned_.insert(entries.begin(), entries.end());
+}
+
+void LruCache::clearPinned() {
+  std::lock_guard<std::mutex> g(mutex_);
+  pinned_.clear();
+}
+
+CacheStats LruCache::stats() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return stats_;
+}
+
+void LruCache::resetStats() {
+  std::lock_guard<std::mutex> g(mutex_);
+  stats_ = CacheStats{};
+}
+
+uint64_t LruCache::takePeakResidentBytes() {
+  std::lock_guard<std::mutex> g(mutex_);
+  const uint64_t peak = std::max(peakResident_, resident_);
+  peakResident_ = resident_;
+  return peak;
+}
+
+uint64_t LruCache::residentBytes() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return resident_;
+}
+
+uint64_t LruCache::residentBlocks() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return map_.size();
+}
+
+std::vector<int64_t> LruCache::lruOrder() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return std::vector<int64_t>(lru_.begin(), lru_.end());
+}
+
+}  // namespace afam

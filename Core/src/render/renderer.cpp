@@ -1,0 +1,292 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/render/renderer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <unordered_map>
+
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/base/errors.hpp"
+#include "afam/predict/predictor_factory.hpp"
+
+namespace afam {
+
+using Clock = std::chrono::steady_clock;
+
+static double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+void PreparedFrame::bind() {
+  view.slots = slots.data();
+  view.slotCount = int32_t(slots.size());
+  view.pool = pool.data();
+  view.cellSlot = cellSlot.data();
+  for (int a = 0; a < 3; ++a) view.cellBounds[a] = cellBounds[a].data();
+  view.tf = tf.data();
+  view.tfSize = int32_t(tf.size() / 4);
+}
+
+Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
+                   FrameSettings settings, std::shared_ptr<DamageLog> damage)
+    : file_(std::move(file)), resources_(std::move(resources)) {
+  if (!file_) throw InvalidArgument("renderer: no file");
+  if (resources_.threads < 0) throw InvalidArgument("renderer: threads must be >= 0");
+  const VolumeHeader& h = file_->header();
+  tfLo_ = h.valueMin;
+  tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
+  setFrameSettings(settings);
+  cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
+  if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
+  prefetcher_ = std::make_unique<Prefetcher>();
+  // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
+  // table and ForeCache's visibility are computed for them): later edits change what is drawn,
+  // not what they predict.
+  PredictorContext ctx;
+  ctx.file = file_;
+  ctx.lod = settings_.lod;
+  ctx.tfTable = tf_;
+  ctx.tfLo = tfLo_;
+  ctx.tfHi = tfHi_;
+  predictor_ = makePrefetchPredictor(resources_.prefetch, ctx);
+  // Finest boundaries per axis (voxel coordinates) from the partition's finest level.
+  const Partition& p = file_->partition();
+  const int finest = p.levels() - 1;
+  const Int3 bf = p.blocksPerAxis(finest);
+  for (int a = 0; a < 3; ++a) {
+    bounds_[a].resize(size_t(bf[a]) + 1);
+    for (int i = 0; i < bf[a]; ++i) {
+      Int3 ijk{0, 0, 0};
+      ijk[a] = i;
+      const BlockExtent e = p.extent(finest, ijk);
+      bounds_[a][size_t(i)] = float(e.lo[a]);
+      bounds_[a][size_t(i) + 1] = float(e.hi[a]);
+    }
+  }
+}
+
+Renderer::~Renderer() {
+  if (prefetcher_) prefetcher_->finish();
+}
+
+void Renderer::setFrameSettings(const FrameSettings& settings) {
+  const std::string problem = frameSettingsProblem(settings);
+  if (!problem.empty()) throw InvalidArgument("renderer: " + problem);
+  FrameSettings next = settings;
+  if (!next.hasTransferFunction) next.transferFunction = TransferFunction::preset(tfLo_, tfHi_);
+  tf_ = next.transferFunction.table(next.tfTableSize, tfLo_, tfHi_);
+  lod_ = LodSelector(next.lod);
+  settings_ = std::move(next);
+}
+
+Selection Renderer::select(const Camera& camera) const {
+  static const std::vector<float> none;
+  return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_, tfHi_);
+}
+
+void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
+  const Partition& p = file_->partition();
+  const Int3 bf = p.blocksPerAxis(p.levels() - 1);
+  FrameView& v = fr.view;
+  v = FrameView{};
+  v.camera = camera.toRayCamera();
+  for (int a = 0; a < 3; ++a) {
+    const double n1 = double(p.dims()[a] - 1);
+    v.boxLo[a] = -1.f;
+    v.boxHi[a] = 1.f;
+    v.voxelPerUnit[a] = float(n1 / 2.0);
+    v.voxelMax[a] = float(n1);
+    v.gridDims[a] = bf[a];
+    v.cellPerVoxel[a] = n1 > 0 ? float(double(bf[a]) / n1) : 0.f;
+    fr.cellBounds[a] = bounds_[a];
+  }
+  fr.cellSlot.assign(size_t(bf[0]) * bf[1] * bf[2], -1);
+  fr.slots.clear();
+  fr.pool.clear();
+  fr.entries.clear();
+  // Opacity corrected for the sample distance once per frame, not per sample.
+  fr.tf = tf_;
+  const float ratio =
+      float(double(settings_.sampleDistance) / settings_.transferFunction.referenceDistance);
+  // Compositing uses opacities per sample step; the projections use the table's own opacity.
+  if (settings_.blendMode == kBlendComposite)
+    for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
+  v.blendMode = settings_.blendMode;
+  v.tfMin = float(tfLo_);
+  v.tfMax = float(tfHi_);
+  v.tfReferenceDistance = settings_.sampleDistance;
+  v.sampleDistance = settings_.sampleDistance;
+  v.shading = settings_.shading ? 1 : 0;
+  // Splines: one value+gradient evaluation per shaded sample is cheaper (H200, ae8b2c9). Raw DS
+  // blocks: a gradient is six more trilinear fetches, so only visible samples pay for it.
+  v.gradientWithValue = file_->header().mode == EncodingMode::Downsampled ? 0 : 1;
+  v.ambient = settings_.ambient;
+  v.diffuse = settings_.diffuse;
+  v.specular = settings_.specular;
+  v.specularPower = settings_.specularPower;
+  fr.bind();
+}
+
+std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st) {
+  std::vector<int64_t> pins;
+  pins.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
+  cache_->setPinned(pins);
+  const IntactLoader load = [this](int64_t entry) {
+    return cache_->getIntact(entry, LruCache::Purpose::Frame);
+  };
+  std::vector<Placement> placed;
+  placed.reserve(sel.visible.size());
+  for (const BlockRef& b : sel.visible) {
+    if (auto data = load(b.entry)) {
+      placed.push_back(Placement{b, b, std::move(data)});
+      continue;
+    }
+    st.damagedBlocks++;
+    if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
+  }
+  return placed;
+}
+
+FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset) {
+  const Partition& p = file.partition();
+  const bool raw = file.header().mode == EncodingMode::Downsampled;
+  const ModelEntry& e = file.entries()[size_t(model.entry)];
+  FrameSlot s;
+  s.kind = raw ? kSlotRaw : kSlotSpline;
+  s.level = model.level;
+  const BlockExtent ext = p.extent(model.level, model.ijk);
+  for (int a = 0; a < 3; ++a) {
+    if (raw) {
+      s.knots[a] = Knots{};
+      s.knots[a].ncp = e.ncp[a];
+      s.knots[a].degree = 1;
+    } else {
+      s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
+    }
+    s.lo[a] = float(ext.lo[a]);
+    s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
+  }
+  s.offset = offset;
+  return s;
+}
+
+int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
+  fr.slots.push_back(modelSlot(*file_, model, offset));
+  fr.entries.push_back(model.entry);
+  return int32_t(fr.slots.size() - 1);
+}
+
+void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr) const {
+  const Partition& p = file_->partition();
+  const Int3 bf = p.blocksPerAxis(p.levels() - 1);
+  const int r = p.stride(region.level);
+  int c0[3], c1[3];
+  for (int a = 0; a < 3; ++a) {
+    c0[a] = region.ijk[a] * r;
+    c1[a] = std::min((region.ijk[a] + 1) * r, bf[a]);
+  }
+  for (int z = c0[2]; z < c1[2]; ++z)
+    for (int y = c0[1]; y < c1[1]; ++y)
+      for (int x = c0[0]; x < c1[0]; ++x) fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+}
+
+void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
+  const auto t0 = Clock::now();
+  // A file changed on disk ends this renderer's frames (FileChangedError): its cache holds blocks
+  // of the old file, which must not be drawn beside blocks of the new one.
+  file_->checkUnchanged();
+  const CacheStats before = cache_->stats();
+  const Selection sel = select(camera);
+  st.culled = sel.counts;
+  prepareEmpty(camera, fr);
+  const std::vector<Placement> placed = loadModels(sel, st);
+  // One slot per model: a coarser model standing in for several damaged blocks is stored once
+  // (the GPU pool keys its models by entry) and covers each of their regions.
+  std::unordered_map<int64_t, int32_t> slotOf;
+  uint64_t poolFloats = 0;
+  for (const Placement& m : placed)
+    if (slotOf.emplace(m.model.entry, -1).second) poolFloats += m.data->size();
+  fr.pool.resize(poolFloats);
+  fr.slots.reserve(slotOf.size());
+  uint64_t offset = 0;
+  for (const Placement& m : placed) {
+    int32_t& slot = slotOf[m.model.entry];
+    if (slot < 0) {
+      std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+      slot = addSlot(m.model, fr, offset);
+      offset += m.data->size();
+    }
+    fillCells(m.region, slot, fr);
+  }
+  fr.bind();
+  const CacheStats after = cache_->stats();
+  st.hits = after.hits - before.hits;
+  st.misses = after.misses - before.misses;
+  st.slots = int64_t(fr.slots.size());
+  st.poolBytes = fr.pool.size() * sizeof(float);
+  st.damageReports = cache_->damage().takeReports();
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
+  st.cachingMs = msSince(t0);
+}
+
+ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& st,
+                                const float* maxDistance) {
+  setFrameSettings(settings);
+  return renderFrame(camera, st, maxDistance);
+}
+
+ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
+  st = FrameStats{};
+  cache_->takePeakResidentBytes();  // the frame's peak starts here
+  if (resources_.cold) cache_->dropOsCache();
+  const CacheStats before = cache_->stats();
+  PreparedFrame fr;
+  prepare(camera, fr, st);
+  fr.view.maxDistance = maxDistance;
+  history_.push_back(camera);
+  if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
+  // Prefetch the predicted next view while this one renders. The prediction itself runs in the
+  // prefetch thread (off the frame's critical path); predictors that know the blocks directly
+  // (APPA's table, ForeCache's signature ranking) hand them over without a view selection.
+  if (resources_.prefetch != "none") {
+    LruCache* cache = cache_.get();
+    const Renderer* self = this;
+    const Predictor* predictor = predictor_.get();
+    prefetcher_->start([cache, self, predictor, history = history_](const std::atomic<bool>& stop,
+                                                                    uint64_t& loaded) {
+      std::vector<int64_t> entries;
+      if (!predictor->predictEntries(history, entries)) {
+        Camera next;
+        if (!predictor->predict(history, next)) return;
+        for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
+      }
+      for (int64_t e : entries) {
+        if (stop.load(std::memory_order_acquire)) return;
+        if (cache->prefetch(e)) ++loaded;
+      }
+    });
+  }
+  const auto t0 = Clock::now();
+  ImageRGBA image;
+  if (caster_)
+    caster_(fr, image);
+  else
+    renderCpu(fr.view, image, resources_.threads);
+  st.renderMs = msSince(t0);
+  prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
+  cache_->clearPinned();
+  for (std::string& r : cache_->damage().takeReports()) st.damageReports.push_back(std::move(r));
+  st.knownDamagedBlocks = int64_t(cache_->damage().count());
+  const CacheStats after = cache_->stats();
+  st.bytesRead = after.bytesRead - before.bytesRead;
+  st.prefetchedBlocks = after.prefetchLoads - before.prefetchLoads;
+  st.prefetchedBytes = after.prefetchBytes - before.prefetchBytes;
+  st.latencyMs = st.cachingMs + st.renderMs;
+  st.cachePeakBytes = cache_->takePeakResidentBytes();
+  st.cacheBytes = cache_->residentBytes();
+  return image;
+}
+
+}  // namespace afam

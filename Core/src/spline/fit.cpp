@@ -1,0 +1,684 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Separable least-squares fitting and separable grid evaluation; see fit.hpp for the method.
+#include "afam/spline/fit.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+#include "afam/spline/basis.hpp"
+
+namespace afam {
+
+int effectiveDegree(int degree, int samples) { return std::max(0, std::min(degree, samples - 1)); }
+
+std::array<int, 3> clampNcp(int ncp, const std::array<int, 3>& samples,
+                            const std::array<int, 3>& degrees) {
+  std::array<int, 3> out{};
+  for (int a = 0; a < 3; ++a) out[a] = std::max(degrees[a] + 1, std::min(ncp, samples[a]));
+  return out;
+}
+
+double psnr(double rmse, double valueRange) {
+  if (rmse == 0) return std::numeric_limits<double>::infinity();
+  return 20.0 * std::log10(valueRange / rmse);
+}
+
+namespace {
+
+constexpr const char* kAxisName[3] = {"x", "y", "z"};
+
+/// One axis: collocation (span start and p+1 weights per sample) and the banded Cholesky factor
+/// of the normal matrix A^T A, all in double.
+struct AxisSystem {
+  int n = 0, ncp = 0, p = 0;
+  bool factored = false;
+  std::vector<int> first;       ///< first control point of sample i's support (span - p)
+  std::vector<double> weight;   ///< (p+1) basis values per sample
+  std::vector<double> lower;    ///< L[j][k] at lower[j*(p+1) + k - j + p], k in [j-p, j]
+  std::vector<double> invDiag;  ///< 1 / L[j][j]
+  /// Column view of the collocation: control point j is supported by samples rowFirst[j] ..
+  /// rowLast[j], their weights at columnWeight[columnOffset[j] ...] in sample order.
+  std::vector<int> rowFirst, rowLast;
+  std::vector<size_t> columnOffset;
+  std::vector<double> columnWeight;
+
+  double L(int j, int k) const { return lower[size_t(j) * size_t(p + 1) + size_t(k - j + p)]; }
+};
+
+double parameterOf(int i, int n) { return n > 1 ? double(i) / double(n - 1) : 0.0; }
+
+/// The column view of the collocation (first[i] is non-decreasing, so a column's samples are
+/// consecutive).
+void buildColumns(AxisSystem& s) {
+  const int w = s.p + 1;
+  s.rowFirst.assign(size_t(s.ncp), s.n);
+  s.rowLast.assign(size_t(s.ncp), -1);
+  for (int i = 0; i < s.n; ++i)
+    for (int r = 0; r < w; ++r) {
+      const size_t j = size_t(s.first[size_t(i)] + r);
+      s.rowFirst[j] = std::min(s.rowFirst[j], i);
+      s.rowLast[j] = std::max(s.rowLast[j], i);
+    }
+  s.columnOffset.assign(size_t(s.ncp), 0);
+  s.columnWeight.clear();
+  for (int j = 0; j < s.ncp; ++j) {
+    s.columnOffset[size_t(j)] = s.columnWeight.size();
+    for (int i = s.rowFirst[size_t(j)]; i <= s.rowLast[size_t(j)]; ++i)
+      s.columnWeight.push_back(s.weight[size_t(i) * size_t(w) + size_t(j - s.first[size_t(i)])]);
+  }
+}
+
+void buildCollocation(AxisSystem& s, int n, int ncp, int p) {
+  s.n = n;
+  s.ncp = ncp;
+  s.p = p;
+  s.factored = false;
+  const int w = p + 1;
+  const Knots knots = Knots::make(ncp, p);
+  s.first.assign(size_t(n), 0);
+  s.weight.assign(size_t(n) * size_t(w), 0.0);
+  // Span search in double (Knots::span works in the float offset/spacing the kernels use).
+  const double h = ncp > 1 ? 1.0 / double(ncp - 1) : 1.0;
+  const double c = 0.5 * double(p - 1) * h;
+  const int lastInterior = ncp - p - 1;
+  double N[kMaxOrder];
+  for (int i = 0; i < n; ++i) {
+    const double u = parameterOf(i, n);
+    int j = ncp > 1 ? int(std::floor((u - c) / h)) : 0;
+    j = std::max(0, std::min(j, lastInterior));
+    const int span = p + j;
+    basisFunctions<double>(knots, span, u, N);
+    s.first[size_t(i)] = span - p;
+    for (int r = 0; r < w; ++r) s.weight[size_t(i) * size_t(w) + size_t(r)] = N[r];
+  }
+  buildColumns(s);
+}
+
+void factorNormal(AxisSystem& s) {
+  const int m = s.ncp, p = s.p, w = p + 1;
+  std::vector<double> normal(size_t(m) * size_t(w), 0.0);  // same band layout as `lower`
+  for (int i = 0; i < s.n; ++i) {
+    const double* wi = &s.weight[size_t(i) * size_t(w)];
+    const int f = s.first[size_t(i)];
+    for (int a = 0; a < w; ++a)
+      for (int b = 0; b <= a; ++b)  // row f+a, column f+b <= f+a
+        normal[size_t(f + a) * size_t(w) + size_t(b - a + p)] += wi[a] * wi[b];
+  }
+  s.lower.assign(normal.size(), 0.0);
+  s.invDiag.assign(size_t(m), 0.0);
+  for (int j = 0; j < m; ++j) {
+    const int k0 = std::max(0, j - p);
+    for (int k = k0; k <= j; ++k) {
+      double sum = normal[size_t(j) * size_t(w) + size_t(k - j + p)];
+      for (int l = k0; l < k; ++l) sum -= s.L(j, l) * s.L(k, l);
+      if (k < j) {
+        s.lower[size_t(j) * size_t(w) + size_t(k - j + p)] = sum * s.invDiag[size_t(k)];
+      } else {
+        const double diag = normal[size_t(j) * size_t(w) + size_t(p)];
+        if (!(sum > 1e-13 * diag)) {
+          std::ostringstream msg;
+          msg << "afam fit: normal matrix of the axis system (n=" << s.n << ", ncp=" << m
+              << ", p=" << p << ") is singular at pivot " << j << " (" << sum << " of " << diag
+              << ")";
+          throw NumericError(msg.str());
+        }
+        const double l = std::sqrt(sum);
+        s.lower[size_t(j) * size_t(w) + size_t(p)] = l;
+        s.invDiag[size_t(j)] = 1.0 / l;
+      }
+    }
+  }
+  s.factored = true;
+}
+
+// ---- Row kernels: one operation applied to `len` contiguous values of each row (vectorised) ----
+
+/// out rows [0, m) = A^T * in rows [0, n): out_j = sum_i A[i][j] in_i.
+template <typename In>
+void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, double* out,
+                        size_t outStride, size_t len) {
+  // Column by column, in blocks of kBlock values summed in registers over the column's samples
+  // (in sample order, from 0): each output is written once.
+  constexpr size_t kBlock = 8;
+  for (int j = 0; j < s.ncp; ++j) {
+    const int i0 = s.rowFirst[size_t(j)], i1 = s.rowLast[size_t(j)];
+    const double* wj = s.columnWeight.data() + s.columnOffset[size_t(j)];
+    double* __restrict dst = out + size_t(j) * outStride;
+    size_t c0 = 0;
+    for (; c0 + kBlock <= len; c0 += kBlock) {
+      double acc[kBlock] = {};
+      for (int i = i0; i <= i1; ++i) {
+        const In* __restrict src = in + size_t(i) * inStride + c0;
+        const double a = wj[i - i0];
+        for (size_t t = 0; t < kBlock; ++t) acc[t] += a * double(src[t]);
+      }
+      for (size_t t = 0; t < kBlock; ++t) dst[c0 + t] = acc[t];
+    }
+    for (; c0 < len; ++c0) {
+      double acc = 0;
+      for (int i = i0; i <= i1; ++i) acc += wj[i - i0] * double(in[size_t(i) * inStride + c0]);
+      dst[c0] = acc;
+    }
+  }
+}
+
+/// In place: rows [0, m) <- (L L^T)^{-1} rows.
+void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+  const int m = s.ncp, p = s.p;
+  for (int j = 0; j < m; ++j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    for (int k = std::max(0, j - p); k < j; ++k) {
+      const double l = s.L(j, k);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] -= l * xk[c];
+    }
+    const double d = s.invDiag[size_t(j)];
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+  }
+  for (int j = m - 1; j >= 0; --j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    for (int k = j + 1; k <= std::min(m - 1, j + p); ++k) {
+      const double l = s.L(k, j);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] -= l * xk[c];
+    }
+    const double d = s.invDiag[size_t(j)];
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+  }
+}
+
+/// In place: rows [0, m) <- L^T rows, so that the squared norm of the result is x^T (A^T A) x.
+void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+  const int m = s.ncp, p = s.p;
+  for (int j = 0; j < m; ++j) {
+    double* __restrict xj = x + size_t(j) * stride;
+    const double d = s.L(j, j);
+    for (size_t c = 0; c < len; ++c) xj[c] *= d;
+    for (int k = j + 1; k <= std::min(m - 1, j + p); ++k) {
+      const double l = s.L(k, j);
+      const double* __restrict xk = x + size_t(k) * stride;
+      for (size_t c = 0; c < len; ++c) xj[c] += l * xk[c];
+    }
+  }
+}
+
+/// Makes v hold at least n values, growing only: a buffer reused across shapes is not filled again.
+void grow(std::vector<double>& v, size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
+/// Sum of squares of n values, in four lanes (vectorised).
+template <typename T>
+double sumSquares(const T* v, size_t n) {
+  double lane[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4)
+    for (int l = 0; l < 4; ++l) lane[l] += double(v[i + size_t(l)]) * double(v[i + size_t(l)]);
+  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  for (; i < n; ++i) sum += double(v[i]) * double(v[i]);
+  return sum;
+}
+
+/// out rows [0, n) = A * in rows [0, m): the model on the sample parameters of this axis.
+template <typename In, typename Out>
+void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, size_t outStride,
+                  size_t len, double* scratch) {
+  const int w = s.p + 1;
+  for (int i = 0; i < s.n; ++i) {
+    const double* wi = &s.weight[size_t(i) * size_t(w)];
+    const int f = s.first[size_t(i)];
+    double* __restrict acc = std::is_same<Out, double>::value
+                                 ? reinterpret_cast<double*>(out + size_t(i) * outStride)
+                                 : scratch;
+    {
+      const In* __restrict src = in + size_t(f) * inStride;
+      const double a = wi[0];
+      for (size_t c = 0; c < len; ++c) acc[c] = a * double(src[c]);
+    }
+    for (int r = 1; r < w; ++r) {
+      const In* __restrict src = in + size_t(f + r) * inStride;
+      const double a = wi[r];
+      for (size_t c = 0; c < len; ++c) acc[c] += a * double(src[c]);
+    }
+    if (!std::is_same<Out, double>::value) {
+      Out* __restrict dst = out + size_t(i) * outStride;
+      for (size_t c = 0; c < len; ++c) dst[c] = Out(acc[c]);
+    }
+  }
+}
+
+/// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along x
+/// become the vectors of the row kernels.
+template <typename In, typename Out>
+void transpose(const In* __restrict src, size_t rows, size_t cols, Out* __restrict dst) {
+  constexpr size_t kTile = 16;
+  for (size_t r0 = 0; r0 < rows; r0 += kTile)
+    for (size_t c0 = 0; c0 < cols; c0 += kTile) {
+      const size_t r1 = std::min(rows, r0 + kTile), c1 = std::min(cols, c0 + kTile);
+      for (size_t r = r0; r < r1; ++r)
+        for (size_t c = c0; c < c1; ++c) dst[c * rows + r] = Out(src[r * cols + c]);
+    }
+}
+
+/// Throws NumericError naming the first non-finite sample. The scan is branch-free (vectorised);
+/// the slow search runs only when something is wrong.
+void checkFinite(const float* samples, const std::array<int, 3>& n) {
+  const size_t total = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  int bad = 0;
+  for (size_t i = 0; i < total; ++i) bad |= !(std::fabs(samples[i]) <= FLT_MAX);
+  if (!bad) return;
+  for (size_t i = 0; i < total; ++i) {
+    if (!std::isfinite(samples[i])) {
+      const size_t x = i % size_t(n[0]), y = (i / size_t(n[0])) % size_t(n[1]),
+                   z = i / (size_t(n[0]) * size_t(n[1]));
+      std::ostringstream msg;
+      msg << "afam fit: sample (" << x << ", " << y << ", " << z << ") (flat index " << i
+          << ") of the " << n[0] << " x " << n[1] << " x " << n[2] << " block is "
+          << (std::isnan(samples[i]) ? "NaN" : "infinite") << "; non-finite samples cannot be fitted";
+      throw NumericError(msg.str());
+    }
+  }
+}
+
+void validate(const std::array<int, 3>& n, const std::array<int, 3>& ncp,
+              const std::array<int, 3>& degrees) {
+  for (int a = 0; a < 3; ++a) {
+    if (ncp[a] < degrees[a] + 1 || ncp[a] > n[a]) {
+      std::ostringstream msg;
+      msg << "afam fit: NCP " << ncp[a] << " on axis " << kAxisName[a] << " is outside ["
+          << degrees[a] + 1 << ", " << n[a] << "] (" << n[a] << " samples, degree " << degrees[a]
+          << ")";
+      throw InvalidArgument(msg.str());
+    }
+  }
+}
+
+void validateSamples(const std::array<int, 3>& n) {
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 1) {
+      std::ostringstream msg;
+      msg << "afam fit: block has " << n[a] << " samples on axis " << kAxisName[a]
+          << " (at least 1 needed)";
+      throw InvalidArgument(msg.str());
+    }
+  }
+}
+
+}  // namespace
+
+double sumOfSquares(const float* samples, std::array<int, 3> n) {
+  return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+}
+
+struct BlockFitter::Impl {
+  std::vector<std::unique_ptr<AxisSystem>> cache;
+  std::vector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
+
+  /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
+  /// between them: clearing inside axis() destroyed the system the caller's earlier reference
+  /// pointed to (a segfault once an NCP search had used 64 shapes).
+  void trimCache() {
+    if (cache.size() + 3 > 64) cache.clear();  // encoders use a handful of shapes
+  }
+
+  const AxisSystem& axis(int n, int ncp, int p, bool needFactor) {
+    AxisSystem* found = nullptr;
+    for (auto& s : cache)
+      if (s->n == n && s->ncp == ncp && s->p == p) {
+        found = s.get();
+        break;
+      }
+    if (!found) {
+      cache.push_back(std::make_unique<AxisSystem>());
+      found = cache.back().get();
+      buildCollocation(*found, n, ncp, p);
+    }
+    if (needFactor && !found->factored) factorNormal(*found);
+    return *found;
+  }
+
+  /// The three axis systems of a fit, factored, after the checks on its arguments.
+  struct Axes {
+    const AxisSystem *x, *y, *z;
+  };
+  /// `checkSamples` false: the caller knows the samples are finite (their sum of squares is).
+  Axes prepareFit(const float* samples, const std::array<int, 3>& n, const std::array<int, 3>& ncp,
+                  int degree, bool checkSamples = true);
+
+  /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
+  /// (x fastest) and its float32 control points in `out`; returns max |control point|.
+  double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out);
+
+  /// c^T b = c^T (A^T A) c of the last solve().
+  double energy(const std::array<int, 3>& ncp) const;
+
+  /// e^T (A^T A) e for e = the difference of two models' control points (same shape).
+  double changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b);
+
+  /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
+  void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
+                ErrorStats* stats, float* gridOut);
+};
+
+BlockFitter::BlockFitter() : impl_(std::make_unique<Impl>()) {}
+BlockFitter::~BlockFitter() = default;
+BlockFitter::BlockFitter(BlockFitter&&) noexcept = default;
+BlockFitter& BlockFitter::operator=(BlockFitter&&) noexcept = default;
+
+FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                           int degree, bool computeError) {
+  FitResult out;
+  fitInto(samples, n, ncp, degree, computeError, out);
+  return out;
+}
+
+BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, const std::array<int, 3>& n,
+                                                       const std::array<int, 3>& ncp, int degree,
+                                                       bool checkSamples) {
+  validateSamples(n);
+  if (degree < 1 || degree > kMaxDegree) {
+    std::ostringstream msg;
+    msg << "afam fit: degree " << degree << " is outside [1, " << kMaxDegree << "]";
+    throw InvalidArgument(msg.str());
+  }
+  std::array<int, 3> p{};
+  for (int a = 0; a < 3; ++a) p[a] = effectiveDegree(degree, n[a]);
+  validate(n, ncp, p);
+  if (!samples) throw InvalidArgument("afam fit: null sample pointer");
+  if (checkSamples) checkFinite(samples, n);
+  trimCache();
+  Axes axes{};
+  axes.x = &axis(n[0], ncp[0], p[0], true);
+  axes.y = &axis(n[1], ncp[1], p[1], true);
+  axes.z = &axis(n[2], ncp[2], p[2], true);
+  return axes;
+}
+
+double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::array<int, 3>& n,
+                                FitResult& out) {
+  const AxisSystem &ax = *a.x, &ay = *a.y, &az = *a.z;
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]);
+  const size_t mx = size_t(ax.ncp), my = size_t(ay.ncp), mz = size_t(az.ncp);
+  const size_t planeSize = nx * ny, lines = my * mz, slab = mx * my;
+  constexpr size_t kChunk = 256;  // columns per chunk, so that a chunk's rows stay in cache
+
+  // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
+  // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
+  grow(bufZ, planeSize * mz);
+  for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
+    applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
+                       std::min(kChunk, planeSize - c0));
+  grow(bufY, nx * lines);
+  for (size_t k = 0; k < mz; ++k)
+    applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
+  grow(bufT, nx * lines);
+  transpose(bufY.data(), lines, nx, bufT.data());
+  grow(bufB, mx * lines);
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines, std::min(kChunk, lines - c0));
+
+  // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
+  // then z and y on the control-point layout (x fastest) in bufC.
+  grow(bufT, mx * lines);
+  std::copy_n(bufB.data(), mx * lines, bufT.data());
+  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
+    solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
+  grow(bufC, mx * lines);
+  transpose(bufT.data(), mx, lines, bufC.data());
+  for (size_t c0 = 0; c0 < slab; c0 += kChunk)
+    solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
+  for (size_t k = 0; k < mz; ++k) solveRows(ay, bufC.data() + k * slab, mx, mx);
+
+  out.ncp = {ax.ncp, ay.ncp, az.ncp};
+  out.degree = {ax.p, ay.p, az.p};
+  out.control.resize(mx * lines);
+  float* control = out.control.data();
+  float largest = 0;
+  for (size_t i = 0; i < mx * lines; ++i) {
+    control[i] = float(bufC[i]);
+    largest = std::max(largest, std::fabs(control[i]));
+  }
+  if (!(largest <= FLT_MAX)) {
+    std::ostringstream msg;
+    msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
+        << " block overflows float32 (samples too close to FLT_MAX)";
+    throw NumericError(msg.str());
+  }
+  out.error = ErrorStats{};
+  out.errorMeasured = false;
+  return double(largest);
+}
+
+double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
+  const size_t mx = size_t(ncp[0]), lines = size_t(ncp[1]) * size_t(ncp[2]);
+  double lane[4] = {0, 0, 0, 0};
+  for (size_t j = 0; j < mx; ++j) {
+    const double* __restrict b = bufB.data() + j * lines;
+    for (size_t l = 0; l < lines; ++l) lane[l % 4] += b[l] * bufC[l * mx + j];
+  }
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
+
+double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b) {
+  trimCache();
+  const AxisSystem& ax = axis(n[0], a.ncp[0], a.degree[0], true);
+  const AxisSystem& ay = axis(n[1], a.ncp[1], a.degree[1], true);
+  const AxisSystem& az = axis(n[2], a.ncp[2], a.degree[2], true);
+  const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
+  const size_t slab = mx * my, lines = my * mz;
+  grow(bufC, mx * lines);
+  for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
+  multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
+  for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
+  grow(bufT, mx * lines);
+  transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
+  multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
+  return sumSquares(bufT.data(), mx * lines);
+}
+
+void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                          int degree, bool computeError, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree);
+  im.solve(axes, samples, n, out);
+  if (computeError) measure(samples, n, out);
+}
+
+bool BlockFitter::decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n,
+                         FitResult& model) {
+  if (range.lo > bound || range.hi <= bound) {
+    model.error.rmse = range.lo > bound ? range.lo : range.hi;
+    return range.hi <= bound;
+  }
+  measure(samples, n, model);
+  return model.error.rmse <= bound;
+}
+
+bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+                            double bound, double sumOfSquares, FitResult& out) {
+  Impl& im = *impl_;
+  const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree, !std::isfinite(sumOfSquares));
+  const double largest = im.solve(axes, samples, n, out);
+  const RmseRange range =
+      rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  return decide(range, bound, samples, n, out);
+}
+
+bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
+                               FitResult& changed, double bound) {
+  if (!fitted.errorMeasured || changed.ncp != fitted.ncp || changed.degree != fitted.degree ||
+      changed.control.size() != fitted.control.size())
+    throw InvalidArgument("afam changeWithin: needs a measured fit and a model of the same shape");
+  validateSamples(n);
+  validate(n, fitted.ncp, fitted.degree);
+  float largest = 0;
+  for (size_t i = 0; i < fitted.control.size(); ++i)
+    largest = std::max({largest, std::fabs(fitted.control[i]), std::fabs(changed.control[i])});
+  const RmseRange range = changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
+                                           size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  changed.errorMeasured = false;
+  changed.error = ErrorStats{};
+  return decide(range, bound, samples, n, changed);
+}
+
+void BlockFitter::measure(const float* samples, std::array<int, 3> n, FitResult& model) {
+  if (model.errorMeasured) return;
+  model.error = error(samples, n, model);
+  model.errorMeasured = true;
+}
+
+void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3>& n,
+                                 const float* samples, ErrorStats* stats, float* gridOut) {
+  validateSamples(n);
+  for (int a = 0; a < 3; ++a) {
+    if (model.degree[a] < 0 || model.degree[a] > kMaxDegree) {
+      std::ostringstream msg;
+      msg << "afam: model degree " << model.degree[a] << " on axis " << kAxisName[a]
+          << " is outside [0, " << kMaxDegree << "]";
+      throw InvalidArgument(msg.str());
+    }
+  }
+  validate(n, model.ncp, model.degree);
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
+  const size_t mx = size_t(model.ncp[0]), my = size_t(model.ncp[1]), mz = size_t(model.ncp[2]);
+  if (model.control.size() != mx * my * mz) {
+    std::ostringstream msg;
+    msg << "afam: model has " << model.control.size() << " control points, expected "
+        << mx * my * mz;
+    throw InvalidArgument(msg.str());
+  }
+  trimCache();
+  const AxisSystem& ax = axis(n[0], model.ncp[0], model.degree[0], false);
+  const AxisSystem& ay = axis(n[1], model.ncp[1], model.degree[1], false);
+  const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
+  const size_t planeSize = nx * ny;
+
+  // x: control lines -> sample lines, transposed (line index fastest) so that lines are the vectors.
+  const size_t lines = my * mz;
+  grow(bufT, mx * lines);
+  transpose(model.control.data(), lines, mx, bufT.data());
+  grow(bufC, nx * lines);
+  evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
+  grow(bufX, nx * lines);
+  transpose(bufC.data(), nx, lines, bufX.data());
+  // y: per z-slab, x-rows.
+  grow(bufEY, planeSize * mz);
+  for (size_t k = 0; k < mz; ++k)
+    evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx,
+                 nullptr);
+  // z: whole planes; either written out or reduced against the samples plane by plane.
+  if (gridOut) {
+    grow(plane, planeSize);
+    evaluateRows(az, bufEY.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
+    return;
+  }
+  const int w = az.p + 1;
+  grow(plane, planeSize);
+  // Four lanes as two pairs of doubles (GCC/Clang vector types: the reduction is vectorised);
+  // lane l takes the values c = l mod 4, reduced in lane order at the end.
+  using Pair = double __attribute__((vector_size(16)));
+  const double inf = std::numeric_limits<double>::infinity();
+  Pair sumSq[2] = {{0, 0}, {0, 0}}, maxErr[2] = {{0, 0}, {0, 0}};
+  Pair lo[2] = {{inf, inf}, {inf, inf}}, hi[2] = {{-inf, -inf}, {-inf, -inf}};
+  double tailSum = 0, tailMax = 0, tailLo = inf, tailHi = -inf;
+  for (size_t i = 0; i < nz; ++i) {
+    const double* wi = &az.weight[i * size_t(w)];
+    const size_t f = size_t(az.first[i]);
+    double* __restrict v = plane.data();
+    {
+      const double* __restrict src = bufEY.data() + f * planeSize;
+      const double a = wi[0];
+      for (size_t c = 0; c < planeSize; ++c) v[c] = a * src[c];
+    }
+    for (int r = 1; r < w; ++r) {
+      const double* __restrict src = bufEY.data() + (f + size_t(r)) * planeSize;
+      const double a = wi[r];
+      for (size_t c = 0; c < planeSize; ++c) v[c] += a * src[c];
+    }
+    const float* __restrict sp = samples + i * planeSize;
+    size_t c = 0;
+    for (; c + 4 <= planeSize; c += 4)
+      for (size_t h = 0; h < 2; ++h) {
+        const size_t q = c + 2 * h;
+        const Pair value = {v[q], v[q + 1]};
+        const Pair d = value - Pair{double(sp[q]), double(sp[q + 1])};
+        sumSq[h] += d * d;
+        const Pair ad = d < 0 ? -d : d;
+        maxErr[h] = ad > maxErr[h] ? ad : maxErr[h];
+        lo[h] = value < lo[h] ? value : lo[h];
+        hi[h] = value > hi[h] ? value : hi[h];
+      }
+    for (; c < planeSize; ++c) {
+      const double value = v[c];
+      const double d = value - double(sp[c]);
+      tailSum += d * d;
+      tailMax = std::max(tailMax, std::fabs(d));
+      tailLo = std::min(tailLo, value);
+      tailHi = std::max(tailHi, value);
+    }
+  }
+  double sum = tailSum, me = tailMax, mn = tailLo, mxv = tailHi;
+  for (size_t l = 0; l < 4; ++l) {
+    sum += sumSq[l / 2][l % 2];
+    me = std::max(me, maxErr[l / 2][l % 2]);
+    mn = std::min(mn, lo[l / 2][l % 2]);
+    mxv = std::max(mxv, hi[l / 2][l % 2]);
+  }
+  const double count = double(nx * ny * nz);
+  stats->rmse = std::sqrt(sum / count);
+  stats->maxError = me;
+  stats->minValue = mn;
+  stats->maxValue = mxv;
+}
+
+ErrorStats BlockFitter::error(const float* samples, std::array<int, 3> n, const FitResult& model) {
+  if (!samples) throw InvalidArgument("afam error: null sample pointer");
+  ErrorStats stats;
+  impl_->evaluate(model, n, samples, &stats, nullptr);
+  return stats;
+}
+
+void BlockFitter::evaluateOnGrid(const FitResult& model, std::array<int, 3> n,
+                                 std::vector<float>& out) {
+  validateSamples(n);
+  out.resize(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  impl_->evaluate(model, n, nullptr, nullptr, out.data());
+}
+
+void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out) {
+  thread_local BlockFitter fitter;
+  fitter.evaluateOnGrid(model, n, out);
+}
+
+AxisConditioning axisConditioning(int n, int ncp, int degree) {
+  if (n < 1) throw InvalidArgument("afam conditioning: n must be >= 1");
+  if (degree < 1 || degree > kMaxDegree)
+    throw InvalidArgument("afam conditioning: degree must be in [1, 5]");
+  const int p = effectiveDegree(degree, n);
+  if (ncp < p + 1 || ncp > n) {
+    std::ostringstream msg;
+    msg << "afam conditioning: NCP " << ncp << " outside [" << p + 1 << ", " << n << "]";
+    throw InvalidArgument(msg.str());
+  }
+  AxisSystem s;
+  buildCollocation(s, n, ncp, p);
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, ncp);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r <= p; ++r) a(i, s.first[size_t(i)] + r) = s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);  // singular values only
+  const auto& sv = svd.singularValues();
+  AxisConditioning out;
+  const double smax = sv(0), smin = sv(sv.size() - 1);
+  out.collocation = smin > 0 ? smax / smin : std::numeric_limits<double>::infinity();
+  out.normal = out.collocation * out.collocation;
+  return out;
+}
+
+}  // namespace afam

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: BSD-3-Clause
-"""Trains the small next-pose LSTM that `afam` runs live in C++ (Core/src/predictors/lstm.cpp).
+"""Trains the small next-pose LSTM that `afam` runs live in C++ (Core/src/predict/lstm.cpp).
 
 Offline only; the weights are committed as data/lstm_pose_v1.bin, so neither CI nor the renderer
 needs Python or torch. Re-run with Debian's torch:

@@ -82,7 +82,7 @@ def value_range(afam, path):
 
 
 def preset_tf(lo, hi):
-    """Core's TransferFunction::preset(lo, hi) (Core/src/transfer_function.cpp) as ParaView
+    """Core's TransferFunction::preset(lo, hi) (Core/src/scene/transfer_function.cpp) as ParaView
     RGBPoints / opacity Points, and its reference distance (normalised units)."""
     at = lambda f: lo + f * (hi - lo)  # noqa: E731
     colors = [(0.0, 0.10, 0.20, 0.90), (0.25, 0.15, 0.45, 1.00), (0.5, 0.20, 0.90, 0.35),

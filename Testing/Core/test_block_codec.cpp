@@ -18,7 +18,7 @@ namespace {
 std::vector<float> field(Int3 n, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0, 0.05);
-  std::vector<float> v(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  std::vector<float> v(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]));
   size_t i = 0;
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)

@@ -32,9 +32,9 @@ constexpr uint64_t kAlign = 64;         // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
 
-// On-disk header, version 1: 1024 bytes, little-endian; each member's byte offset and size beside
-// it (@offset, size), checked by the static_asserts below.
-struct FileHeaderV1 {
+// On-disk header of versions 1 and 2 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
+// each member's byte offset and size beside it (@offset, size), checked by the static_asserts below.
+struct FileHeader {
   char magic[8];                  // @0, 8 B
   uint32_t version;               // @8, 4 B
   uint32_t endianTag;             // @12, 4 B
@@ -67,36 +67,36 @@ struct FileHeaderV1 {
   uint8_t reserved1[576];         // @444, 576 B
   uint32_t headerChecksum;        // @1020, 4 B; CRC32 of bytes [0, 1020)
 };
-static_assert(sizeof(FileHeaderV1) == 1024, "header size");
-static_assert(offsetof(FileHeaderV1, version) == 8, "layout");
-static_assert(offsetof(FileHeaderV1, endianTag) == 12, "layout");
-static_assert(offsetof(FileHeaderV1, headerSize) == 16, "layout");
-static_assert(offsetof(FileHeaderV1, entrySize) == 20, "layout");
-static_assert(offsetof(FileHeaderV1, dims) == 24, "layout");
-static_assert(offsetof(FileHeaderV1, origin) == 48, "layout");
-static_assert(offsetof(FileHeaderV1, spacing) == 72, "layout");
-static_assert(offsetof(FileHeaderV1, valueMin) == 96, "layout");
-static_assert(offsetof(FileHeaderV1, valueMax) == 104, "layout");
-static_assert(offsetof(FileHeaderV1, errorBound) == 112, "layout");
-static_assert(offsetof(FileHeaderV1, levels) == 120, "layout");
-static_assert(offsetof(FileHeaderV1, blocksPerAxis) == 124, "layout");
-static_assert(offsetof(FileHeaderV1, degree) == 128, "layout");
-static_assert(offsetof(FileHeaderV1, fixedNcp) == 132, "layout");
-static_assert(offsetof(FileHeaderV1, mode) == 136, "layout");
-static_assert(offsetof(FileHeaderV1, relativeBound) == 137, "layout");
-static_assert(offsetof(FileHeaderV1, levelSampling) == 138, "layout");
-static_assert(offsetof(FileHeaderV1, sourceBytesPerSample) == 139, "layout");
-static_assert(offsetof(FileHeaderV1, indexChecksum) == 140, "layout");
-static_assert(offsetof(FileHeaderV1, entryCount) == 144, "layout");
-static_assert(offsetof(FileHeaderV1, indexOffset) == 152, "layout");
-static_assert(offsetof(FileHeaderV1, payloadOffset) == 160, "layout");
-static_assert(offsetof(FileHeaderV1, fileSize) == 168, "layout");
-static_assert(offsetof(FileHeaderV1, scalarName) == 176, "layout");
-static_assert(offsetof(FileHeaderV1, levelBlocks) == 240, "layout");
-static_assert(offsetof(FileHeaderV1, totalPayloadBytes) == 432, "layout");
-static_assert(offsetof(FileHeaderV1, payloadAlignment) == 440, "layout");
-static_assert(offsetof(FileHeaderV1, reserved1) == 444, "layout");
-static_assert(offsetof(FileHeaderV1, headerChecksum) == 1020, "layout");
+static_assert(sizeof(FileHeader) == 1024, "header size");
+static_assert(offsetof(FileHeader, version) == 8, "layout");
+static_assert(offsetof(FileHeader, endianTag) == 12, "layout");
+static_assert(offsetof(FileHeader, headerSize) == 16, "layout");
+static_assert(offsetof(FileHeader, entrySize) == 20, "layout");
+static_assert(offsetof(FileHeader, dims) == 24, "layout");
+static_assert(offsetof(FileHeader, origin) == 48, "layout");
+static_assert(offsetof(FileHeader, spacing) == 72, "layout");
+static_assert(offsetof(FileHeader, valueMin) == 96, "layout");
+static_assert(offsetof(FileHeader, valueMax) == 104, "layout");
+static_assert(offsetof(FileHeader, errorBound) == 112, "layout");
+static_assert(offsetof(FileHeader, levels) == 120, "layout");
+static_assert(offsetof(FileHeader, blocksPerAxis) == 124, "layout");
+static_assert(offsetof(FileHeader, degree) == 128, "layout");
+static_assert(offsetof(FileHeader, fixedNcp) == 132, "layout");
+static_assert(offsetof(FileHeader, mode) == 136, "layout");
+static_assert(offsetof(FileHeader, relativeBound) == 137, "layout");
+static_assert(offsetof(FileHeader, levelSampling) == 138, "layout");
+static_assert(offsetof(FileHeader, sourceBytesPerSample) == 139, "layout");
+static_assert(offsetof(FileHeader, indexChecksum) == 140, "layout");
+static_assert(offsetof(FileHeader, entryCount) == 144, "layout");
+static_assert(offsetof(FileHeader, indexOffset) == 152, "layout");
+static_assert(offsetof(FileHeader, payloadOffset) == 160, "layout");
+static_assert(offsetof(FileHeader, fileSize) == 168, "layout");
+static_assert(offsetof(FileHeader, scalarName) == 176, "layout");
+static_assert(offsetof(FileHeader, levelBlocks) == 240, "layout");
+static_assert(offsetof(FileHeader, totalPayloadBytes) == 432, "layout");
+static_assert(offsetof(FileHeader, payloadAlignment) == 440, "layout");
+static_assert(offsetof(FileHeader, reserved1) == 444, "layout");
+static_assert(offsetof(FileHeader, headerChecksum) == 1020, "layout");
 
 // On-disk index entry, version 1: 40 bytes, each member's offset and size beside it. Level, block
 // ijk, samples and degree are implied by the entry's position (the index is complete and ordered)
@@ -273,7 +273,7 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
 }
 
 uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes) {
-  return sizeof(FileHeaderV1) + entries * sizeof(IndexEntryV1) + payloadBytes;
+  return sizeof(FileHeader) + entries * sizeof(IndexEntryV1) + payloadBytes;
 }
 
 uint64_t payloadBytes(const Int3& ncp) {
@@ -361,25 +361,25 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   f->identity_ = identityOfDescriptor(f->fd_);
   const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
 
-  if (f->fileSize_ < sizeof(FileHeaderV1)) {
+  if (f->fileSize_ < sizeof(FileHeader)) {
     if (f->fileSize_ >= 8) {
       char m[8];
       preadAll(f->fd_, m, 8, 0, path, "magic");
       if (std::memcmp(m, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
     }
     throw bad("truncated: " + std::to_string(f->fileSize_) + " bytes, the header alone needs " +
-              std::to_string(sizeof(FileHeaderV1)));
+              std::to_string(sizeof(FileHeader)));
   }
-  FileHeaderV1 h{};
+  FileHeader h{};
   preadAll(f->fd_, &h, sizeof h, 0, path, "header");
   if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
   if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
   if (h.version != 1 && h.version != kVersion)
     throw bad("unsupported format version " + std::to_string(h.version) + " (this reader knows versions 1 and " +
               std::to_string(kVersion) + ")");
-  if (crc32(&h, offsetof(FileHeaderV1, headerChecksum)) != h.headerChecksum)
+  if (crc32(&h, offsetof(FileHeader, headerChecksum)) != h.headerChecksum)
     throw bad("header checksum mismatch (header damaged)");
-  if (h.headerSize != sizeof(FileHeaderV1) || h.entrySize != sizeof(IndexEntryV1))
+  if (h.headerSize != sizeof(FileHeader) || h.entrySize != sizeof(IndexEntryV1))
     throw bad("header or index entry size does not match version " + std::to_string(h.version));
   if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 || (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
     throw bad("payload alignment " + std::to_string(h.payloadAlignment) + " is not a power of two in [4, 4096]");
@@ -433,7 +433,7 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   if (h.entryCount != expected)
     throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
               std::to_string(expected) + " blocks of the partition");
-  if (h.indexOffset != sizeof(FileHeaderV1)) throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
+  if (h.indexOffset != sizeof(FileHeader)) throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
   // Overflow-safe: the index must fit between its offset and the payload start, inside the file.
   if (h.entryCount > (f->fileSize_ - h.indexOffset) / sizeof(IndexEntryV1))
     throw bad("truncated: index of " + std::to_string(h.entryCount) + " entries runs past the end of the file");
@@ -564,7 +564,7 @@ AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
     levelStart_[static_cast<size_t>(l) + 1] = levelStart_[static_cast<size_t>(l)] + partition_.blockCount(l);
   entries_.resize(static_cast<size_t>(total));
   present_.assign(static_cast<size_t>(total), 0);
-  payloadOffset_ = alignUp(sizeof(FileHeaderV1) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
+  payloadOffset_ = alignUp(sizeof(FileHeader) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
   for (int a = 0; a < 3; ++a)
     if (partition_.extent(header.levels - 1, {0, 0, 0}).samples[a] > 65533 ||
         partition_.extent(0, {0, 0, 0}).samples[a] > 65533)
@@ -655,12 +655,12 @@ void AfamWriter::commit() {
   }
   const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
   const uint64_t fileSize = end_;
-  FileHeaderV1 h;
+  FileHeader h;
   std::memset(&h, 0, sizeof h);
   std::memcpy(h.magic, kMagic, 8);
   h.version = kVersion;
   h.endianTag = kEndianTag;
-  h.headerSize = sizeof(FileHeaderV1);
+  h.headerSize = sizeof(FileHeader);
   h.entrySize = sizeof(IndexEntryV1);
   for (int a = 0; a < 3; ++a) {
     h.dims[a] = header_.dims[a];
@@ -680,7 +680,7 @@ void AfamWriter::commit() {
   h.sourceBytesPerSample = static_cast<uint8_t>(std::min(header_.sourceBytesPerSample, 255));
   h.indexChecksum = crc32(raw.data(), indexBytes);
   h.entryCount = raw.size();
-  h.indexOffset = sizeof(FileHeaderV1);
+  h.indexOffset = sizeof(FileHeader);
   h.payloadOffset = payloadOffset_;
   h.fileSize = fileSize;
   std::strncpy(h.scalarName, header_.scalarName.c_str(), sizeof h.scalarName - 1);
@@ -690,11 +690,11 @@ void AfamWriter::commit() {
   }
   h.totalPayloadBytes = payloadSum;
   h.payloadAlignment = kPayloadAlign;
-  h.headerChecksum = crc32(&h, offsetof(FileHeaderV1, headerChecksum));
+  h.headerChecksum = crc32(&h, offsetof(FileHeader, headerChecksum));
   try {
     if (::ftruncate(fd_, static_cast<off_t>(fileSize)) != 0)
       throw IoError(tmpPath_ + ": cannot set file size: " + sysError());
-    pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeaderV1), tmpPath_);
+    pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeader), tmpPath_);
     pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
     if (::fsync(fd_) != 0) throw IoError(tmpPath_ + ": fsync failed: " + sysError());
     // Rename while the descriptor (and so the lock) is still held: a closed, unlocked temporary

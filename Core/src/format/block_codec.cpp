@@ -26,7 +26,7 @@ struct Lattice {
 /// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
 /// q[index] known when it returns.
 template <typename Fn>
-void lorenzo(const Lattice& L, const std::vector<double>& q, int s, Fn&& fn) {
+void lorenzo(const Lattice& L, const double* q, int s, Fn&& fn) {
   auto at = [&](int x, int y, int z) -> double { return x < 0 || y < 0 || z < 0 ? 0.0 : q[size_t(L.index(x, y, z))]; };
   for (int z = 0; z < L.n[2]; z += s)
     for (int y = 0; y < L.n[1]; y += s)
@@ -49,7 +49,7 @@ double interpolate(int c, int s, int len, V&& v) {
 }
 
 template <typename Fn>
-void interpolation(const Lattice& L, const std::vector<double>& q, Fn&& fn) {
+void interpolation(const Lattice& L, const double* q, Fn&& fn) {
   const int maxn = std::max({L.n[0], L.n[1], L.n[2]});
   int S = 1;
   while (2 * S <= maxn - 1) S *= 2;
@@ -72,7 +72,7 @@ void interpolation(const Lattice& L, const std::vector<double>& q, Fn&& fn) {
 }
 
 template <typename Fn>
-void visit(Predictor p, const Lattice& L, const std::vector<double>& q, Fn&& fn) {
+void visit(Predictor p, const Lattice& L, const double* q, Fn&& fn) {
   if (p == Predictor::Lorenzo)
     lorenzo(L, q, 1, fn);
   else
@@ -104,6 +104,18 @@ ZSTD_DCtx* threadDCtx() {
   return ctx.get();
 }
 
+/// A buffer of at least `count` T owned by the calling thread, its contents left as they were.
+template <typename T>
+T* threadBuffer(size_t count) {
+  thread_local std::unique_ptr<T[]> buffer;
+  thread_local size_t capacity = 0;
+  if (capacity < count) {
+    buffer.reset(new T[count]);
+    capacity = count;
+  }
+  return buffer.get();
+}
+
 /// Predicts every value from the values already reconstructed (in the predictor's order) and
 /// quantizes the prediction residual: code = round((v - prediction) / step), reconstruction =
 /// prediction + code * step, so each reconstructed value lies within step / 2 of its value.
@@ -115,7 +127,7 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
   codes.clear();
   codes.reserve(count);
   bool ok = true;
-  visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
+  visit(predictor, Lattice{n}, r.data(), [&](int64_t i, double pred) {
     const double q = std::nearbyint((double(values[i]) - pred) / step);
     if (!(std::fabs(q) <= kMaxCode)) {
       ok = false;
@@ -182,19 +194,29 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
   if (!(step > 0) || !std::isfinite(step)) throw bad("has an invalid quantization step");
   if (data[8] > uint8_t(Predictor::Interpolation)) throw bad("names unknown predictor " + std::to_string(data[8]));
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  std::vector<uint8_t> varints(count * 10);
-  const size_t got = ZSTD_decompressDCtx(threadDCtx(), varints.data(), varints.size(), data + kCodedHeaderBytes,
+  // The frame says how many varint bytes it holds (at most 10 a value); the buffers are the
+  // thread's, reused without being cleared: every value the predictors read is written first.
+  const unsigned long long framed = ZSTD_getFrameContentSize(data + kCodedHeaderBytes, bytes - kCodedHeaderBytes);
+  if (framed == ZSTD_CONTENTSIZE_ERROR) throw bad("does not decompress (not a zstd frame)");
+  const size_t capacity = framed == ZSTD_CONTENTSIZE_UNKNOWN ? count * 10 : size_t(std::min<unsigned long long>(framed, count * 10));
+  uint8_t* varints = threadBuffer<uint8_t>(capacity);
+  const size_t got = ZSTD_decompressDCtx(threadDCtx(), varints, capacity, data + kCodedHeaderBytes,
                                          bytes - kCodedHeaderBytes);
   if (ZSTD_isError(got)) throw bad(std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");
-  std::vector<double> r(count, 0.0);
+  double* r = threadBuffer<double>(count);
   size_t pos = 0;
   visit(Predictor(data[8]), Lattice{n}, r, [&](int64_t i, double pred) {
-    uint64_t u = 0;
-    for (int shift = 0;; shift += 7) {
-      if (pos >= got || shift > 63) throw bad("ends inside a residual");
-      const uint8_t b = varints[pos++];
-      u |= uint64_t(b & 0x7f) << shift;
-      if (!(b & 0x80)) break;
+    uint64_t u;
+    if (pos < got && varints[pos] < 0x80) {
+      u = varints[pos++];  // |code| < 64: one byte, the common case
+    } else {
+      u = 0;
+      for (int shift = 0;; shift += 7) {
+        if (pos >= got || shift > 63) throw bad("ends inside a residual");
+        const uint8_t b = varints[pos++];
+        u |= uint64_t(b & 0x7f) << shift;
+        if (!(b & 0x80)) break;
+      }
     }
     const int64_t code = int64_t(u >> 1) ^ -int64_t(u & 1);
     if (!(std::fabs(double(code)) <= kMaxCode)) throw bad("holds an absurd residual");

@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config git clang-format
   libeigen3-dev libgtest-dev libbenchmark-dev libpng-dev zlib1g-dev libzstd-dev gzip
   paraview paraview-dev python3-paraview python3-numpy python3-matplotlib
   xvfb xauth mesa-utils openmpi-bin libopenmpi-dev

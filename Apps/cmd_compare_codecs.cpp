@@ -87,10 +87,9 @@ std::vector<double> parseBounds(const std::string& list) {
 
 std::unique_ptr<RawFileSource> openNamedRaw(const std::string& path) {
   Index3 dims{};
-  ScalarType type = ScalarType::Float32;
+  SampleType type = SampleType::Float32;
   if (!parseRawName(path, dims, type))
-    throw InvalidArgument(path + ": not a raw volume named name_XxYxZ_type.raw (type float32, float64, uint8, "
-                                 "uint16 or int16)");
+    throw InvalidArgument(path + ": not a raw volume named name_XxYxZ_type.raw (type " + sampleTypeNames() + ")");
   return std::make_unique<RawFileSource>(path, dims, type);
 }
 
@@ -101,7 +100,7 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 CodecRow baseRow(const RawFileSource& src, double bound, const char* codec) {
   CodecRow r;
   r.volume = fs::path(src.path()).stem().string();
-  r.type = scalarTypeName(src.type());
+  r.type = sampleTypeName(src.type());
   r.codec = codec;
   r.dims = src.dims();
   r.bound = bound;

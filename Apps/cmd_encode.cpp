@@ -17,7 +17,7 @@ int runEncode(int argc, char** argv) {
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [--dims X,Y,Z]\n"
-      "       [--type float32|float64|uint8|uint16|int16]\n"
+      "       [--type int8|uint8|int16|uint16|int32|uint32|int64|uint64|float32|float64]\n"
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search fast|exhaustive]";
   if (args.help()) {

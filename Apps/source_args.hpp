@@ -30,12 +30,12 @@ inline std::array<double, 3> parseSpacing(const std::string& s) {
 
 inline std::unique_ptr<RawFileSource> openRaw(const std::string& path, const Args& args) {
   Index3 dims{};
-  ScalarType type = ScalarType::Float32;
+  SampleType type = SampleType::Float32;
   const bool named = parseRawName(path, dims, type);
   if (args.has("dims")) dims = Args::parseDims(args.str("dims"));
   else if (!named)
     throw InvalidArgument(path + ": give --dims X,Y,Z (the name does not follow name_XxYxZ_type.raw)");
-  if (args.has("type")) type = parseScalarType(args.str("type"));
+  if (args.has("type")) type = parseSampleType(args.str("type"));
   std::array<double, 3> spacing{1, 1, 1}, origin{0, 0, 0};
   if (args.has("spacing")) spacing = parseSpacing(args.str("spacing"));
   return std::make_unique<RawFileSource>(path, dims, type, origin, spacing);
@@ -52,14 +52,14 @@ struct InputVolume {
 inline InputVolume openInput(const std::string& path, const Args& args) {
   if (!hasVolumeHeaderExtension(path)) {
     auto raw = openRaw(path, args);
-    const std::string type = scalarTypeName(raw->type());
+    const std::string type = sampleTypeName(raw->type());
     return {std::move(raw), type};
   }
   if (args.has("dims") || args.has("type"))
     throw InvalidArgument(path + ": --dims and --type are for raw files; the header gives them");
   VolumeFileHeader header = readVolumeHeader(path);
   if (args.has("spacing")) header.spacing = parseSpacing(args.str("spacing"));
-  const std::string type = elementTypeName(header.type);
+  const std::string type = sampleTypeName(header.type);
   return {std::make_unique<HeaderVolumeSource>(std::move(header)), type};
 }
 

@@ -5,6 +5,7 @@
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkMultiProcessController.h"
+#include "vtkSetGet.h" // vtkTemplateMacro
 
 #ifdef AFAM_HAVE_MPI
 #include "vtkAFAMControllerTeam.h"
@@ -14,15 +15,38 @@
 
 #include <sstream>
 
-vtkSmartPointer<vtkFloatArray> vtkAFAMFloatValues(vtkDataArray* array)
+std::string vtkAFAMRefusedType(vtkAbstractArray* array)
 {
-  vtkSmartPointer<vtkFloatArray> values = vtkFloatArray::SafeDownCast(array);
-  if (!values)
+  return "array '" + std::string(array->GetName() ? array->GetName() : "") + "' holds " +
+    array->GetDataTypeAsString() + " values (" + array->GetClassName() +
+    "), which the encoder cannot take: it takes one-component arrays of " +
+    afam::sampleTypeNames() + " values";
+}
+
+bool vtkAFAMSampleTypeOf(int vtkType, afam::SampleType& type)
+{
+  switch (vtkType)
   {
-    values = vtkSmartPointer<vtkFloatArray>::New();
-    values->DeepCopy(array);
+    vtkTemplateMacro(type = afam::sampleTypeOf<VTK_TT>(); return true);
   }
-  return values;
+  return false;
+}
+
+bool vtkAFAMGetSamples(vtkDataArray* array, vtkAFAMArraySamples& samples, std::string& error)
+{
+  if (!vtkAFAMSampleTypeOf(array->GetDataType(), samples.Type))
+  {
+    error = vtkAFAMRefusedType(array);
+    return false;
+  }
+  samples.Copy = nullptr;
+  if (!array->HasStandardMemoryLayout())
+  {
+    samples.Copy = vtkSmartPointer<vtkDataArray>::Take(vtkDataArray::CreateDataArray(array->GetDataType()));
+    samples.Copy->DeepCopy(array);
+  }
+  samples.Data = (samples.Copy ? samples.Copy.Get() : array)->GetVoidPointer(0);
+  return true;
 }
 
 #ifdef AFAM_HAVE_MPI
@@ -46,16 +70,9 @@ void Agree(vtkAFAMControllerTeam& team, const std::string& error)
   }
 }
 
-/// The type in which `array`'s values are exposed to other ranks: its own where the piece source
-/// can (a plain array of a standard numeric type), else float32 (a converted copy).
-int ExposedType(vtkDataArray* array)
-{
-  const int type = array->GetDataType();
-  return array->HasStandardMemoryLayout() && vtkAFAMPieceSource::IsExposable(type) ? type : VTK_FLOAT;
-}
-
-/// What is wrong with this rank's piece and array ("" when nothing is).
-std::string CheckPiece(vtkImageData* piece, vtkDataArray* array, const std::string& arrayError)
+/// What is wrong with this rank's piece and array ("" when nothing is); `samples` gets the array's.
+std::string CheckPiece(
+  vtkImageData* piece, vtkDataArray* array, const std::string& arrayError, vtkAFAMArraySamples& samples)
 {
   if (!arrayError.empty())
   {
@@ -69,7 +86,9 @@ std::string CheckPiece(vtkImageData* piece, vtkDataArray* array, const std::stri
         << array->GetNumberOfTuples() << " values for the " << points << " points of this piece";
     return msg.str();
   }
-  return std::string();
+  std::string error;
+  vtkAFAMGetSamples(array, samples, error);
+  return error;
 }
 
 /// Origin and spacing of rank `first` (whose piece is not empty), on every rank: the file's origin
@@ -103,9 +122,10 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
     piece->GetExtent(mine.data());
   }
   const bool empty = vtkAFAMPieceSource::IsEmpty(mine);
+  vtkAFAMArraySamples samples;
   Agree(team, !communicator ? "the ranks are not connected by MPI (vtkMPICommunicator)"
       : empty               ? std::string()
-                            : CheckPiece(piece, array, arrayError));
+                            : CheckPiece(piece, array, arrayError, samples));
 
   const Extent whole{ wholeExtent[0], wholeExtent[1], wholeExtent[2], wholeExtent[3],
     wholeExtent[4], wholeExtent[5] };
@@ -127,8 +147,8 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   std::array<double, 3> origin{}, spacing{};
   AgreeOnGeometry(team, piece, first, wholeExtent, origin, spacing);
 
-  // Extents and scalar types of every piece (-1: an empty piece).
-  const int mineType = empty ? -1 : ExposedType(array);
+  // Extents and sample types of every piece (-1: an empty piece).
+  const int mineType = empty ? -1 : static_cast<int>(samples.Type);
   const int info[7] = { mine[0], mine[1], mine[2], mine[3], mine[4], mine[5], mineType };
   const std::vector<int> all = team.allGather(info, 7);
   std::vector<Extent> pieces(static_cast<size_t>(team.size()));
@@ -137,16 +157,23 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   {
     std::copy(&all[7 * r], &all[7 * r + 6], pieces[r].begin());
     const int other = all[7 * r + 6];
-    type = other < 0 ? type : type < 0 || type == other ? other : VTK_FLOAT;
+    type = other < 0 ? type
+      : type < 0 || type == other ? other
+                                  : static_cast<int>(afam::SampleType::Float32);
   }
   Agree(team, team.rank() == 0 ? vtkAFAMPieceSource::CheckCover(whole, pieces) : std::string());
 
-  // The values as they are where every piece has the same exposable type, else float32 copies.
-  const bool asTheyAre = !empty && type == array->GetDataType() && array->HasStandardMemoryLayout();
-  vtkSmartPointer<vtkFloatArray> copy = !empty && !asTheyAre ? vtkAFAMFloatValues(array) : nullptr;
-  const void* samples = empty ? nullptr : copy ? copy->GetVoidPointer(0) : array->GetVoidPointer(0);
+  // The values as they are where every piece has the same type, else this piece as float32.
+  const auto exposed = static_cast<afam::SampleType>(type);
+  std::vector<float> converted;
+  if (!empty && exposed != samples.Type)
+  {
+    converted.resize(static_cast<size_t>(array->GetNumberOfTuples()));
+    afam::samplesToFloat(samples.Type, samples.Data, converted.size(), converted.data());
+  }
+  const void* values = empty ? nullptr : converted.empty() ? samples.Data : converted.data();
   vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(), team.Lock(), whole,
-    std::move(pieces), samples, type, name, origin, spacing, bytes);
+    std::move(pieces), values, exposed, name, origin, spacing, bytes);
   vtkAFAMPiecesEncoded result;
   result.stats = afam::encodeVolume(source, options, path, team);
   std::copy(mine.begin(), mine.end(), result.pieceExtent);

@@ -13,27 +13,47 @@
 #define vtkAFAMDistributedEncode_h
 
 #include "afam/encode/encoder.hpp"
+#include "afam/volume/sample_type.hpp"
 
-#include "vtkFloatArray.h"
+#include "vtkDataArray.h"
 #include "vtkSmartPointer.h"
 
 #include <cstdint>
 #include <string>
 
-class vtkDataArray;
+class vtkAbstractArray;
 class vtkImageData;
 class vtkMultiProcessController;
 
-/// The values the encoder fits: `array` itself when it is float32, else a float32 copy (VTK's
-/// conversion of each value to float).
-vtkSmartPointer<vtkFloatArray> vtkAFAMFloatValues(vtkDataArray* array);
+/// A point array's values as the encoder reads them: in their own type, converted to float only
+/// as planes are read (afam::samplesToFloat, VTK's static_cast), never copied to float whole.
+struct vtkAFAMArraySamples
+{
+  const void* Data = nullptr; ///< the array's values, x fastest
+  afam::SampleType Type = afam::SampleType::Float32;
+  /// The same values in VTK's standard layout, where the array keeps them in another (an
+  /// implicit or structure-of-arrays array): a copy in their own type.
+  vtkSmartPointer<vtkDataArray> Copy;
+};
+
+/// The sample type of VTK scalar type `vtkType`; false for one afam::SampleType does not name
+/// (bits, strings, ...).
+bool vtkAFAMSampleTypeOf(int vtkType, afam::SampleType& type);
+
+/// The samples of a one-component `array`; false, with `error` naming the array and its type,
+/// for a type the encoder cannot take (vtkAFAMSampleTypeOf).
+bool vtkAFAMGetSamples(vtkDataArray* array, vtkAFAMArraySamples& samples, std::string& error);
+
+/// "array 'NAME' holds TYPE values (CLASS), which the encoder cannot take: ..." for an array of a
+/// type vtkAFAMGetSamples refuses, or of no numbers at all (strings, variants).
+std::string vtkAFAMRefusedType(vtkAbstractArray* array);
 
 /// What one rank did in a distributed encode.
 struct vtkAFAMPiecesEncoded
 {
   afam::EncodeStats stats;       ///< the whole volume's on rank 0 (encodeVolume with a team)
   int pieceExtent[6] = { 0, -1, 0, -1, 0, -1 }; ///< this rank's piece (empty: x1 < x0)
-  uint64_t remoteBytesRead = 0;  ///< samples read from other ranks' pieces, in bytes (float32)
+  uint64_t remoteBytesRead = 0;  ///< samples read from other ranks' pieces, in bytes
 };
 
 /// `array` is the chosen point array of `piece` (nullptr when `arrayError` says why none could be

@@ -10,7 +10,6 @@
 
 #include "vtkDataArray.h"
 #include "vtkDataSetAttributes.h"
-#include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -96,26 +95,35 @@ vtkDataArray* vtkAFAMEncoder::ChooseArray(
   {
     return array;
   }
-  std::string candidates;
+  std::string candidates; // the arrays the encoder could take
+  afam::SampleType type{};
   for (int i = 0; i < pd->GetNumberOfArrays(); ++i)
   {
     vtkDataArray* a = pd->GetArray(i);
-    if (a && a->GetNumberOfComponents() == 1)
+    if (a && a->GetNumberOfComponents() == 1 && vtkAFAMSampleTypeOf(a->GetDataType(), type))
     {
       candidates += std::string(candidates.empty() ? "" : ", ") + "'" +
         (a->GetName() ? a->GetName() : "(unnamed)") + "'";
     }
   }
   std::ostringstream msg;
-  if (name && *name && !array)
+  vtkAbstractArray* other = name && *name && !array ? pd->GetAbstractArray(name) : nullptr;
+  if (other && other->GetNumberOfComponents() == 1) // strings or variants: not numbers
+  {
+    msg << vtkAFAMRefusedType(other) << "; one-component point arrays it can take: "
+        << (candidates.empty() ? "none" : candidates);
+  }
+  else if (name && *name && !array && !other)
   {
     msg << "the input has no point-data array '" << name << "'; one-component point "
         << "arrays: " << (candidates.empty() ? "none" : candidates);
   }
-  else if (array)
+  else if (array || other)
   {
-    msg << "array '" << (array->GetName() ? array->GetName() : "") << "' has "
-        << array->GetNumberOfComponents() << " components; choose one of the "
+    vtkAbstractArray* chosen = array ? array : other;
+    msg << "array '" << (chosen->GetName() ? chosen->GetName() : "") << "' has "
+        << chosen->GetNumberOfComponents() << " components (of " << chosen->GetDataTypeAsString()
+        << " values); choose one of the "
         << "one-component point arrays: " << (candidates.empty() ? "none" : candidates);
   }
   else
@@ -273,7 +281,12 @@ bool vtkAFAMEncoder::EncodeWhole(
                   << "x" << dims[2] << " points");
     return false;
   }
-  vtkSmartPointer<vtkFloatArray> values = vtkAFAMFloatValues(array);
+  vtkAFAMArraySamples samples;
+  if (!vtkAFAMGetSamples(array, samples, error))
+  {
+    vtkErrorMacro(<< error);
+    return false;
+  }
   // The file's origin is the world position of the first sample that arrived: the image's origin
   // is that of index (0, 0, 0), and the extent (the whole extent's or a sub-extent's) may start
   // elsewhere, e.g. at -20 for ParaView's Wavelet.
@@ -290,10 +303,10 @@ bool vtkAFAMEncoder::EncodeWhole(
   {
     vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
   }
-  afam::ArraySource source(values->GetPointer(0), afam::Index3{ dims[0], dims[1], dims[2] },
+  // The array in its own type: the encoder converts the planes it reads, as VTK would (static_cast).
+  afam::ArraySource source(samples.Data, samples.Type, afam::Index3{ dims[0], dims[1], dims[2] },
     array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
     { spacing[0], spacing[1], spacing[2] });
-  source.setOriginalBytesPerVoxel(array->GetDataTypeSize());
   const std::string path = NewModelPath();
   this->KeepStatistics(afam::encodeVolume(source, this->MakeOptions(), path));
   this->BuildOutput(path, output);

@@ -4,9 +4,13 @@
  * @class   vtkAFAMEncoder
  * @brief   Encodes a vtkImageData scalar field into Adaptive-FAM micro-models.
  *
- * Input: vtkImageData with a point-data array of any scalar type (selected with
+ * Input: vtkImageData with a one-component point-data array of any numeric type afam::SampleType
+ * names (8- to 64-bit integers, float, double; selected with
  * SetInputArrayToProcess(0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, name); default: the
- * active scalars), converted to float32 for fitting. With no array selected (or an empty name, as
+ * active scalars). The encoder reads the array in its own type and converts only the planes it
+ * reads to float32 (static_cast, as VTK converts), with one process as with many: a uint8 image
+ * costs no float32 copy. Other arrays (bits, strings, several components) are refused with an error
+ * naming the array and its type. With no array selected (or an empty name, as
  * a ParaView proxy leaves it) the active point scalars are encoded, else the only one-component
  * point array; when none fits, the error lists the arrays that could be chosen. The encoding runs in Core (encodeVolume);
  * progress is reported and the abort flag (ParaView's abort button) cancels it.

@@ -4,9 +4,6 @@
 
 #include "afam/base/errors.hpp"
 
-#include "vtkSetGet.h" // vtkTemplateMacro
-#include "vtkType.h"
-
 #include <algorithm>
 #include <set>
 #include <sstream>
@@ -39,53 +36,33 @@ std::string Text(const Extent& e)
   return s.str();
 }
 
-/// The MPI type of a VTK scalar type (MPI_DATATYPE_NULL when there is none here).
-MPI_Datatype MpiType(int vtkType)
+/// The MPI type of a sample type.
+MPI_Datatype MpiType(afam::SampleType type)
 {
-  switch (vtkType)
+  switch (type)
   {
-    case VTK_FLOAT:
+    case afam::SampleType::Int8:
+      return MPI_INT8_T;
+    case afam::SampleType::UInt8:
+      return MPI_UINT8_T;
+    case afam::SampleType::Int16:
+      return MPI_INT16_T;
+    case afam::SampleType::UInt16:
+      return MPI_UINT16_T;
+    case afam::SampleType::Int32:
+      return MPI_INT32_T;
+    case afam::SampleType::UInt32:
+      return MPI_UINT32_T;
+    case afam::SampleType::Int64:
+      return MPI_INT64_T;
+    case afam::SampleType::UInt64:
+      return MPI_UINT64_T;
+    case afam::SampleType::Float32:
       return MPI_FLOAT;
-    case VTK_DOUBLE:
+    case afam::SampleType::Float64:
       return MPI_DOUBLE;
-    case VTK_UNSIGNED_CHAR:
-      return MPI_UNSIGNED_CHAR;
-    case VTK_SIGNED_CHAR:
-      return MPI_SIGNED_CHAR;
-    case VTK_SHORT:
-      return MPI_SHORT;
-    case VTK_UNSIGNED_SHORT:
-      return MPI_UNSIGNED_SHORT;
-    case VTK_INT:
-      return MPI_INT;
-    case VTK_UNSIGNED_INT:
-      return MPI_UNSIGNED;
-    case VTK_LONG_LONG:
-      return MPI_LONG_LONG;
-    case VTK_UNSIGNED_LONG_LONG:
-      return MPI_UNSIGNED_LONG_LONG;
-    default:
-      return MPI_DATATYPE_NULL;
   }
-}
-
-template <class T>
-void ToFloat(const unsigned char* raw, size_t count, float* out)
-{
-  const T* in = reinterpret_cast<const T*>(raw);
-  for (size_t i = 0; i < count; ++i)
-  {
-    out[i] = static_cast<float>(in[i]);
-  }
-}
-
-/// out[i] = float(value i of `raw`, of VTK type `vtkType`), as vtkFloatArray::DeepCopy converts.
-void Convert(int vtkType, const unsigned char* raw, size_t count, float* out)
-{
-  switch (vtkType)
-  {
-    vtkTemplateMacro(ToFloat<VTK_TT>(raw, count, out));
-  }
+  return MPI_DATATYPE_NULL;
 }
 
 /// An MPI subarray type (x fastest) of `sub` points starting at `start` in a box of `box` points.
@@ -133,11 +110,6 @@ bool FindUncovered(const Extent& whole, const std::vector<Extent>& pieces, std::
 }
 } // namespace
 
-bool vtkAFAMPieceSource::IsExposable(int vtkType)
-{
-  return MpiType(vtkType) != MPI_DATATYPE_NULL;
-}
-
 std::string vtkAFAMPieceSource::CheckCover(const Extent& whole, const std::vector<Extent>& pieces)
 {
   if (IsEmpty(whole))
@@ -172,11 +144,12 @@ std::string vtkAFAMPieceSource::CheckCover(const Extent& whole, const std::vecto
 }
 
 vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole,
-  std::vector<Extent> pieces, const void* samples, int vtkType, std::string name,
+  std::vector<Extent> pieces, const void* samples, afam::SampleType type, std::string name,
   std::array<double, 3> origin, std::array<double, 3> spacing, int bytesPerVoxel)
   : Comm(comm)
-  , Type(vtkType)
-  , Element(MpiType(vtkType))
+  , Type(type)
+  , Element(MpiType(type))
+  , ElementSize(afam::sampleTypeSize(type))
   , MpiLock(mpiLock)
   , Whole(whole)
   , Pieces(std::move(pieces))
@@ -190,7 +163,6 @@ vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const
   int threadLevel = MPI_THREAD_SINGLE;
   MPI_Query_thread(&threadLevel);
   this->CallingThreadOnly = threadLevel < MPI_THREAD_SERIALIZED;
-  MPI_Type_size(this->Element, &this->ElementSize);
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
   const MPI_Aint bytes = IsEmpty(mine) ? 0
                                        : static_cast<MPI_Aint>(this->ElementSize) * Points(mine, 0) *
@@ -246,7 +218,7 @@ void vtkAFAMPieceSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_
   wanted[5] = wanted[4] + static_cast<int>(zCount) - 1;
   const size_t count = static_cast<size_t>(Points(wanted, 0)) * static_cast<size_t>(Points(wanted, 1)) *
     static_cast<size_t>(zCount);
-  const bool direct = this->Type == VTK_FLOAT;
+  const bool direct = this->Type == afam::SampleType::Float32;
   if (!direct)
   {
     this->Raw.resize(count * static_cast<size_t>(this->ElementSize));
@@ -281,6 +253,6 @@ void vtkAFAMPieceSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_
   }
   if (!direct)
   {
-    Convert(this->Type, this->Raw.data(), count, out);
+    afam::samplesToFloat(this->Type, this->Raw.data(), count, out);
   }
 }

@@ -5,9 +5,9 @@
  * @brief   A volume spread over MPI ranks, read by whole z-planes (private to the module).
  *
  * Each rank holds the samples of its piece (a sub-extent of the whole extent, split along any axes;
- * neighbouring pieces may share their boundary points) in their own scalar type and exposes them in
- * an MPI window; what is read is converted to float32 as VTK converts values (static_cast), so a
- * uint8 piece costs one byte per sample, not five.
+ * neighbouring pieces may share their boundary points) in their own sample type and exposes them in
+ * an MPI window; what is read is converted to float32 by afam::samplesToFloat (static_cast, as VTK
+ * converts values), so a uint8 piece costs one byte per sample, not five.
  * readSlab assembles whole planes of the global volume with passive-target one-sided reads
  * (MPI_Get of the part of each piece inside the planes), so a rank reads only the planes of the
  * rows it fits, whenever it needs them, without the owners taking part. Construction and
@@ -30,14 +30,11 @@ class vtkAFAMPieceSource : public afam::VolumeSource
 public:
   using Extent = std::array<int, 6>; ///< x0 x1 y0 y1 z0 z1, inclusive; empty when x1 < x0 (any axis)
 
-  /// The VTK scalar types whose values are exposed as they are (others are copied to float32).
-  static bool IsExposable(int vtkType);
-
   /// `pieces[r]` is rank r's extent; `samples` holds this rank's piece, x fastest, as values of
-  /// `vtkType` (IsExposable, the same on every rank; the array must outlive the source). Every MPI
-  /// call takes `mpiLock`.
+  /// `type` (the same on every rank; the array must outlive the source). Every MPI call takes
+  /// `mpiLock`.
   vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole, std::vector<Extent> pieces,
-    const void* samples, int vtkType, std::string name, std::array<double, 3> origin,
+    const void* samples, afam::SampleType type, std::string name, std::array<double, 3> origin,
     std::array<double, 3> spacing, int bytesPerVoxel);
   ~vtkAFAMPieceSource() override;
   vtkAFAMPieceSource(const vtkAFAMPieceSource&) = delete;
@@ -69,7 +66,7 @@ private:
 
   MPI_Comm Comm;
   MPI_Win Window;
-  int Type;                   ///< VTK type of the exposed values
+  afam::SampleType Type;      ///< type of the exposed values
   MPI_Datatype Element;       ///< the same, for MPI
   int ElementSize;
   std::vector<unsigned char> Raw; ///< a slab in the exposed type, before conversion

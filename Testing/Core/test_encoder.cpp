@@ -31,7 +31,7 @@ const char* kCorpus[] = {
 };
 
 std::vector<float> loadRaw(const std::string& name, Index3& dims) {
-  ScalarType type;
+  SampleType type;
   EXPECT_TRUE(parseRawName(name, dims, type));
   RawFileSource src(kVolumes + name, dims, type);
   std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
@@ -90,12 +90,14 @@ void expectFastEqualsExhaustive(const std::vector<float>& v, Index3 dims, int le
 
 TEST(Encoder, ParseRawName) {
   Index3 d;
-  ScalarType t;
+  SampleType t;
   ASSERT_TRUE(parseRawName("/a/b/headsq_quarter_64x64x93_int16.raw", d, t));
   EXPECT_EQ(d, (Index3{64, 64, 93}));
-  EXPECT_EQ(t, ScalarType::Int16);
+  EXPECT_EQ(t, SampleType::Int16);
   EXPECT_FALSE(parseRawName("volume.raw", d, t));
-  EXPECT_THROW(parseScalarType("int64"), InvalidArgument);
+  EXPECT_THROW(parseSampleType("int128"), InvalidArgument);
+  ASSERT_TRUE(parseRawName("v_2x3x4_uint32.raw", d, t));  // every SampleType names a raw file
+  EXPECT_EQ(t, SampleType::UInt32);
 }
 
 TEST(Encoder, RawFileSourceConvertsTypes) {
@@ -103,18 +105,18 @@ TEST(Encoder, RawFileSourceConvertsTypes) {
   const std::vector<int16_t> i16 = {-5, 0, 7, 32767, -32768, 1, 2, 3, 4, 5, 6, 7};
   const std::string p = tmpPath("t_3x2x2_int16.raw");
   std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(i16.data()), std::streamsize(i16.size() * 2));
-  RawFileSource src(p, dims, ScalarType::Int16);
+  RawFileSource src(p, dims, SampleType::Int16);
   std::vector<float> out(6);
   src.readSlab(1, 1, out.data());
   for (int i = 0; i < 6; ++i) EXPECT_EQ(out[size_t(i)], float(i16[size_t(6 + i)]));
   const std::vector<double> f64 = {1.5, -2.25, 3, 4, 5, 6, 7, 8, 9, 10, 11, 1e300};
   const std::string q = tmpPath("d.raw");
   std::ofstream(q, std::ios::binary).write(reinterpret_cast<const char*>(f64.data()), std::streamsize(f64.size() * 8));
-  RawFileSource s2(q, dims, ScalarType::Float64);
+  RawFileSource s2(q, dims, SampleType::Float64);
   s2.readSlab(0, 1, out.data());
   EXPECT_EQ(out[1], -2.25f);
-  EXPECT_THROW(RawFileSource(q, {5, 5, 5}, ScalarType::Float64), InvalidArgument);  // size mismatch
-  EXPECT_THROW(RawFileSource(tmpPath("missing.raw"), dims, ScalarType::UInt8), IoError);
+  EXPECT_THROW(RawFileSource(q, {5, 5, 5}, SampleType::Float64), InvalidArgument);  // size mismatch
+  EXPECT_THROW(RawFileSource(tmpPath("missing.raw"), dims, SampleType::UInt8), IoError);
   std::remove(p.c_str());
   std::remove(q.c_str());
 }
@@ -345,7 +347,7 @@ TEST(Encoder, StreamingSourceEqualsInMemory) {
   EncoderOptions opt;
   opt.levels = 3;
   opt.blocksPerAxis = 4;
-  RawFileSource fileSrc(raw, {n, n, n}, ScalarType::Float32);
+  RawFileSource fileSrc(raw, {n, n, n}, SampleType::Float32);
   MarschnerLobbSource mlSrc({n, n, n});
   InMemoryModels a, b;
   encodeVolume(fileSrc, opt, a);

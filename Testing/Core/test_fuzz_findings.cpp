@@ -15,7 +15,7 @@ using namespace afam;
 TEST(FuzzFindings, RawNameWithAZeroDimensionIsNotAVolumeName) {
   // fuzz_raw_file, input "...c_0x3x4_int16.raw": parseRawName said yes with dims 0x3x4.
   Index3 dims{};
-  ScalarType type{};
+  SampleType type{};
   EXPECT_FALSE(parseRawName("a/b/c_0x3x4_int16.raw", dims, type));
   EXPECT_FALSE(parseRawName("c_3x0x4_int16.raw", dims, type));
   EXPECT_TRUE(parseRawName("c_2x3x4_int16.raw", dims, type));
@@ -25,7 +25,7 @@ TEST(FuzzFindings, RawNameWithAZeroDimensionIsNotAVolumeName) {
 TEST(FuzzFindings, RawNameWithAHugeDimensionIsNotAVolumeNameAndThrowsNothing) {
   // Twenty digits made std::stoll throw std::out_of_range (the CLI printed "stoll").
   Index3 dims{};
-  ScalarType type{};
+  SampleType type{};
   EXPECT_NO_THROW(EXPECT_FALSE(parseRawName("v_99999999999999999999x1x1_uint8.raw", dims, type)));
   EXPECT_FALSE(parseRawName("v_2147483648x1x1_uint8.raw", dims, type));  // above 2^31 - 1
   EXPECT_TRUE(parseRawName("v_2147483647x1x1_uint8.raw", dims, type));
@@ -36,7 +36,7 @@ TEST(FuzzFindings, RawSizeThatOverflowsIsRefusedNotMatchedByAnEmptyFile) {
   const std::string path = afam_test::scratchPath("empty_1073741824x1073741824x16_uint8.raw");
   std::ofstream(path).close();
   try {
-    RawFileSource source(path, {1073741824, 1073741824, 16}, ScalarType::UInt8);
+    RawFileSource source(path, {1073741824, 1073741824, 16}, SampleType::UInt8);
     FAIL() << "an empty file was accepted as a 2^64-byte volume";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("more than 2^64 bytes"), std::string::npos) << e.what();

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -103,7 +104,7 @@ std::string errorOf(F f) {
 
 TEST(VolumeFormats, EveryLayoutReadsTheRawSamples) {
   const std::string raw = slurp(kVolumes + kHead);
-  RawFileSource reference(kVolumes + kHead, {64, 64, 93}, ScalarType::Int16);
+  RawFileSource reference(kVolumes + kHead, {64, 64, 93}, SampleType::Int16);
   const std::vector<float> want = samples(reference);
   const std::string sizes = "64 64 93";
   spit(work("head_attached.nrrd"),
@@ -153,7 +154,7 @@ TEST(VolumeFormats, EncodingIsByteIdenticalToTheRawCopy) {
   const std::string raw = slurp(kVolumes + kBucky);
   spit(work("bucky.nrrd"), nrrdHeader("uint8", "32 32 32", "encoding: gzip\n\n") + gzipped(raw, true));
   spit(work("bucky.mha"), "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + raw);
-  RawFileSource rawSource(kVolumes + kBucky, {32, 32, 32}, ScalarType::UInt8);
+  RawFileSource rawSource(kVolumes + kBucky, {32, 32, 32}, SampleType::UInt8);
   const std::string want = encodeToBytes(rawSource, work("bucky_raw.afam"));
   ASSERT_GT(want.size(), 1000u);
   for (const char* name : {"bucky.nrrd", "bucky.mha"}) {
@@ -162,6 +163,32 @@ TEST(VolumeFormats, EncodingIsByteIdenticalToTheRawCopy) {
     const std::string got = encodeToBytes(*src, work(std::string(name) + ".afam"));
     EXPECT_EQ(got.size(), want.size());
     EXPECT_TRUE(got == want);
+  }
+}
+
+// 64-bit integers, little- and big-endian, read as raw files of the same type read them.
+TEST(VolumeFormats, SixtyFourBitIntegersReadAsTheirRawFile) {
+  std::vector<int64_t> values(2 * 3 * 4);
+  for (size_t i = 0; i < values.size(); ++i) values[i] = (int64_t(1) << 40) * int64_t(i) - 7;
+  std::string little(values.size() * 8, '\0');
+  std::memcpy(&little[0], values.data(), little.size());
+  std::string big = little;
+  for (size_t i = 0; i < big.size(); i += 8) std::reverse(big.begin() + std::ptrdiff_t(i), big.begin() + std::ptrdiff_t(i + 8));
+  spit(work("long_2x3x4_int64.raw"), little);
+  spit(work("long.nrrd"), nrrdHeader("long long", "2 3 4", "encoding: raw\nendian: big\n\n") + big);
+  spit(work("long.mha"), "NDims = 3\nDimSize = 2 3 4\nElementType = MET_LONG_LONG\nElementDataFile = LOCAL\n" + little);
+  Index3 dims{};
+  SampleType type{};
+  ASSERT_TRUE(parseRawName(work("long_2x3x4_int64.raw"), dims, type));
+  RawFileSource raw(work("long_2x3x4_int64.raw"), dims, type);
+  const std::vector<float> want = samples(raw);
+  for (size_t i = 0; i < values.size(); ++i) ASSERT_EQ(want[i], static_cast<float>(values[i]));
+  for (const char* name : {"long.nrrd", "long.mha"}) {
+    SCOPED_TRACE(name);
+    auto src = openHeaderVolume(work(name));
+    EXPECT_EQ(src->header().type, SampleType::Int64);
+    EXPECT_EQ(src->bytesPerVoxel(), 8);
+    EXPECT_TRUE(samples(*src) == want);
   }
 }
 

@@ -16,44 +16,16 @@
 
 namespace afam {
 
-int elementTypeSize(ElementType type) {
-  switch (type) {
-    case ElementType::Int8:
-    case ElementType::UInt8: return 1;
-    case ElementType::Int16:
-    case ElementType::UInt16: return 2;
-    case ElementType::Int32:
-    case ElementType::UInt32:
-    case ElementType::Float32: return 4;
-    case ElementType::Float64: return 8;
-  }
-  return 1;
-}
-
-const char* elementTypeName(ElementType type) {
-  switch (type) {
-    case ElementType::Int8: return "int8";
-    case ElementType::UInt8: return "uint8";
-    case ElementType::Int16: return "int16";
-    case ElementType::UInt16: return "uint16";
-    case ElementType::Int32: return "int32";
-    case ElementType::UInt32: return "uint32";
-    case ElementType::Float32: return "float32";
-    case ElementType::Float64: return "float64";
-  }
-  return "unknown";
-}
-
 namespace {
 
 uint64_t expectedBytes(const VolumeFileHeader& h) {
-  return uint64_t(h.dims[0]) * uint64_t(h.dims[1]) * uint64_t(h.dims[2]) * uint64_t(elementTypeSize(h.type));
+  return uint64_t(h.dims[0]) * uint64_t(h.dims[1]) * uint64_t(h.dims[2]) * uint64_t(sampleTypeSize(h.type));
 }
 
 /// "the header's sizes 32 32 32 and type uint8 (fields 'sizes', 'type' of H) need N bytes"
 std::string headerNeeds(const VolumeFileHeader& h) {
   return "the sizes " + std::to_string(h.dims[0]) + " " + std::to_string(h.dims[1]) + " " +
-         std::to_string(h.dims[2]) + " and type " + elementTypeName(h.type) + " (fields '" + h.sizesField +
+         std::to_string(h.dims[2]) + " and type " + sampleTypeName(h.type) + " (fields '" + h.sizesField +
          "', '" + h.typeField + "' of " + h.headerPath + ") need " + std::to_string(expectedBytes(h)) + " bytes";
 }
 
@@ -106,31 +78,6 @@ uint64_t payloadStart(const VolumeFileHeader& h, int fd, uint64_t fileSize) {
     return fileSize - expectedBytes(h);
   }
   return offset + uint64_t(h.byteSkip);
-}
-
-template <typename T>
-void convert(const unsigned char* src, uint64_t count, bool swap, float* out) {
-  unsigned char b[sizeof(T)];
-  for (uint64_t i = 0; i < count; ++i) {
-    std::memcpy(b, src + i * sizeof(T), sizeof(T));
-    if (swap) std::reverse(b, b + sizeof(T));
-    T v;
-    std::memcpy(&v, b, sizeof(T));
-    out[i] = static_cast<float>(v);
-  }
-}
-
-void convertSamples(ElementType type, const unsigned char* src, uint64_t count, bool swap, float* out) {
-  switch (type) {
-    case ElementType::Int8: return convert<int8_t>(src, count, false, out);
-    case ElementType::UInt8: return convert<uint8_t>(src, count, false, out);
-    case ElementType::Int16: return convert<int16_t>(src, count, swap, out);
-    case ElementType::UInt16: return convert<uint16_t>(src, count, swap, out);
-    case ElementType::Int32: return convert<int32_t>(src, count, swap, out);
-    case ElementType::UInt32: return convert<uint32_t>(src, count, swap, out);
-    case ElementType::Float32: return convert<float>(src, count, swap, out);
-    case ElementType::Float64: return convert<double>(src, count, swap, out);
-  }
 }
 
 // Big-endian payloads are swapped; little-endian ones are read as they are.
@@ -229,14 +176,14 @@ std::string HeaderVolumeSource::name() const {
 void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   if (z0 < 0 || zCount < 0 || z0 + zCount > header_.dims[2])
     throw InvalidArgument(header_.headerPath + ": planes outside the volume");
-  const uint64_t es = uint64_t(elementTypeSize(header_.type));
+  const uint64_t es = uint64_t(sampleTypeSize(header_.type));
   const uint64_t count = uint64_t(header_.dims[0]) * uint64_t(header_.dims[1]) * uint64_t(zCount);
   const uint64_t offset = uint64_t(z0) * uint64_t(header_.dims[0]) * uint64_t(header_.dims[1]) * es;
   const bool swap = header_.bigEndian;
-  if (!inflated_.empty()) return convertSamples(header_.type, inflated_.data() + offset, count, swap, out);
+  if (!inflated_.empty()) return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
   buffer_.resize(count * es);
   readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), buffer_.size());
-  convertSamples(header_.type, buffer_.data(), count, swap, out);
+  samplesToFloat(header_.type, buffer_.data(), count, out, swap);
 }
 
 bool hasVolumeHeaderExtension(const std::string& path) {

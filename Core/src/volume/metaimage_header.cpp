@@ -13,19 +13,20 @@ using namespace header_text;
 
 namespace {
 
-ElementType metaType(const std::string& path, const std::string& value) {
-  static const std::map<std::string, ElementType> kTypes = {
-      {"MET_CHAR", ElementType::Int8},    {"MET_UCHAR", ElementType::UInt8},
-      {"MET_SHORT", ElementType::Int16},  {"MET_USHORT", ElementType::UInt16},
-      {"MET_INT", ElementType::Int32},    {"MET_UINT", ElementType::UInt32},
-      {"MET_LONG", ElementType::Int32},   {"MET_ULONG", ElementType::UInt32},
-      {"MET_FLOAT", ElementType::Float32}, {"MET_DOUBLE", ElementType::Float64},
+SampleType metaType(const std::string& path, const std::string& value) {
+  static const std::map<std::string, SampleType> kTypes = {
+      {"MET_CHAR", SampleType::Int8},    {"MET_UCHAR", SampleType::UInt8},
+      {"MET_SHORT", SampleType::Int16},  {"MET_USHORT", SampleType::UInt16},
+      {"MET_INT", SampleType::Int32},    {"MET_UINT", SampleType::UInt32},
+      {"MET_LONG", SampleType::Int32},   {"MET_ULONG", SampleType::UInt32},
+      {"MET_LONG_LONG", SampleType::Int64}, {"MET_ULONG_LONG", SampleType::UInt64},
+      {"MET_FLOAT", SampleType::Float32}, {"MET_DOUBLE", SampleType::Float64},
   };
   const auto it = kTypes.find(value);
   if (it == kTypes.end())
     fieldError(path, "ElementType", "unknown or unsupported type '" + value +
                                         "' (MET_CHAR, MET_UCHAR, MET_SHORT, MET_USHORT, MET_INT, MET_UINT, "
-                                        "MET_FLOAT, MET_DOUBLE are read)");
+                                        "MET_LONG_LONG, MET_ULONG_LONG, MET_FLOAT, MET_DOUBLE are read)");
   return it->second;
 }
 

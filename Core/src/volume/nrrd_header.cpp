@@ -13,27 +13,33 @@ using namespace header_text;
 
 namespace {
 
-ElementType nrrdType(const std::string& path, const std::string& value) {
-  static const std::map<std::string, ElementType> kTypes = {
-      {"signed char", ElementType::Int8},       {"int8", ElementType::Int8},
-      {"int8_t", ElementType::Int8},            {"uchar", ElementType::UInt8},
-      {"unsigned char", ElementType::UInt8},    {"uint8", ElementType::UInt8},
-      {"uint8_t", ElementType::UInt8},          {"short", ElementType::Int16},
-      {"short int", ElementType::Int16},        {"signed short", ElementType::Int16},
-      {"signed short int", ElementType::Int16}, {"int16", ElementType::Int16},
-      {"int16_t", ElementType::Int16},          {"ushort", ElementType::UInt16},
-      {"unsigned short", ElementType::UInt16},  {"unsigned short int", ElementType::UInt16},
-      {"uint16", ElementType::UInt16},          {"uint16_t", ElementType::UInt16},
-      {"int", ElementType::Int32},              {"signed int", ElementType::Int32},
-      {"int32", ElementType::Int32},            {"int32_t", ElementType::Int32},
-      {"uint", ElementType::UInt32},            {"unsigned int", ElementType::UInt32},
-      {"uint32", ElementType::UInt32},          {"uint32_t", ElementType::UInt32},
-      {"float", ElementType::Float32},          {"double", ElementType::Float64},
+SampleType nrrdType(const std::string& path, const std::string& value) {
+  static const std::map<std::string, SampleType> kTypes = {
+      {"signed char", SampleType::Int8},       {"int8", SampleType::Int8},
+      {"int8_t", SampleType::Int8},            {"uchar", SampleType::UInt8},
+      {"unsigned char", SampleType::UInt8},    {"uint8", SampleType::UInt8},
+      {"uint8_t", SampleType::UInt8},          {"short", SampleType::Int16},
+      {"short int", SampleType::Int16},        {"signed short", SampleType::Int16},
+      {"signed short int", SampleType::Int16}, {"int16", SampleType::Int16},
+      {"int16_t", SampleType::Int16},          {"ushort", SampleType::UInt16},
+      {"unsigned short", SampleType::UInt16},  {"unsigned short int", SampleType::UInt16},
+      {"uint16", SampleType::UInt16},          {"uint16_t", SampleType::UInt16},
+      {"int", SampleType::Int32},              {"signed int", SampleType::Int32},
+      {"int32", SampleType::Int32},            {"int32_t", SampleType::Int32},
+      {"uint", SampleType::UInt32},            {"unsigned int", SampleType::UInt32},
+      {"uint32", SampleType::UInt32},          {"uint32_t", SampleType::UInt32},
+      {"longlong", SampleType::Int64},          {"long long", SampleType::Int64},
+      {"long long int", SampleType::Int64},     {"signed long long", SampleType::Int64},
+      {"signed long long int", SampleType::Int64}, {"int64", SampleType::Int64},
+      {"int64_t", SampleType::Int64},           {"ulonglong", SampleType::UInt64},
+      {"unsigned long long", SampleType::UInt64}, {"unsigned long long int", SampleType::UInt64},
+      {"uint64", SampleType::UInt64},           {"uint64_t", SampleType::UInt64},
+      {"float", SampleType::Float32},          {"double", SampleType::Float64},
   };
   const auto it = kTypes.find(lowercase(value));
   if (it == kTypes.end())
     fieldError(path, "type", "unknown or unsupported type '" + value +
-                                 "' (8-, 16- and 32-bit integers, float and double are read)");
+                                 "' (8- to 64-bit integers, float and double are read)");
   return it->second;
 }
 
@@ -157,7 +163,7 @@ VolumeFileHeader readNrrdHeader(const std::string& path) {
   }
   for (const char* required : {"dimension", "type", "sizes", "encoding"})
     if (!seen[required]) fieldError(path, required, "missing");
-  if (elementTypeSize(h.type) > 1 && !seen["endian"]) fieldError(path, "endian", "missing (needed for multi-byte types)");
+  if (sampleTypeSize(h.type) > 1 && !seen["endian"]) fieldError(path, "endian", "missing (needed for multi-byte types)");
   if (h.dataPath.empty()) {
     if (!blank) fieldError(path, "data file", "missing, and no data follow the header");
     h.dataPath = path;

@@ -2,7 +2,7 @@
 // Volumes described by a text header: NRRD (.nrrd with attached data, .nhdr with a detached data
 // file) and MetaImage (.mha attached, .mhd detached), read as a streaming VolumeSource.
 //
-// Supported: 3-D scalar volumes of int8, uint8, int16, uint16, int32, uint32, float32 or float64,
+// Supported: 3-D scalar volumes of any SampleType (8- to 64-bit integers, float32, float64),
 // little or big endian, raw or compressed (NRRD `encoding: gzip`, MetaImage `CompressedData =
 // True`, both inflated by zlib), one data file (NRRD `data file`, MetaImage `ElementDataFile`),
 // with NRRD `byte skip` (-1: the data are the file's last bytes) and `line skip`, MetaImage
@@ -24,6 +24,7 @@
 //
 // Memory: a raw payload is read plane by plane (pread) as the encoder asks; a compressed one is
 // inflated once, when the source is opened, and held in its original type (1-8 bytes a voxel).
+// Samples become floats through samplesToFloat, as the encoder reads them.
 #pragma once
 
 #include <array>
@@ -36,17 +37,13 @@
 
 namespace afam {
 
-enum class ElementType : uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
-int elementTypeSize(ElementType type);
-const char* elementTypeName(ElementType type);
-
 /// What a NRRD or MetaImage header says about its volume and where the samples are.
 struct VolumeFileHeader {
   std::string format;       ///< "NRRD" or "MetaImage"
   std::string headerPath;   ///< the file the header was read from
   std::string dataPath;     ///< the file holding the samples (headerPath when attached)
   Index3 dims{};
-  ElementType type = ElementType::UInt8;
+  SampleType type = SampleType::UInt8;
   bool bigEndian = false;
   bool compressed = false;  ///< gzip or zlib stream (inflate detects which)
   uint64_t dataOffset = 0;  ///< attached: the first byte after the header
@@ -77,7 +74,7 @@ class HeaderVolumeSource : public VolumeSource {
   /// The header file's name up to its first '_' or '.', as RawFileSource names a raw file.
   std::string name() const override;
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
-  int bytesPerVoxel() const override { return elementTypeSize(header_.type); }
+  int bytesPerVoxel() const override { return sampleTypeSize(header_.type); }
   const VolumeFileHeader& header() const { return header_; }
 
  private:

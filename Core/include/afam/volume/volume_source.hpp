@@ -1,14 +1,17 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Where the encoder's samples come from: a scalar volume read by whole z-planes, converted to
-// float32. Sources: a caller's array, a headerless raw file, the Marschner-Lobb function.
+// float32 as they are read. Sources: a caller's array of any SampleType, a headerless raw file, the
+// Marschner-Lobb function.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "afam/format/partition.hpp"
+#include "afam/volume/sample_type.hpp"
 
 namespace afam {
 
@@ -41,41 +44,44 @@ class VolumeSource {
   virtual bool readsOnCallingThread() const { return false; }
 };
 
-/// Over a caller-owned float array (x fastest). The array must outlive the source.
+/// Over a caller-owned array of samples of any SampleType (x fastest, in this host's byte order),
+/// converted to float (samplesToFloat) only where the encoder reads: the planes of readSlab, the
+/// rows of readRows. The array must outlive the source.
 class ArraySource : public VolumeSource {
  public:
-  ArraySource(const float* data, Index3 dims, std::string name = "scalars",
+  ArraySource(const void* data, SampleType type, Index3 dims, std::string name = "scalars",
               std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
+  /// The float32 case.
+  ArraySource(const float* data, Index3 dims, std::string name = "scalars",
+              std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1})
+      : ArraySource(data, SampleType::Float32, dims, std::move(name), origin, spacing) {}
   Index3 dims() const override { return dims_; }
   std::array<double, 3> origin() const override { return origin_; }
   std::array<double, 3> spacing() const override { return spacing_; }
   std::string name() const override { return name_; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
-  /// Bytes a sample had before it was converted to these floats (for the ratio; default 4).
-  void setOriginalBytesPerVoxel(int bytes) { originalBytes_ = bytes; }
-  int bytesPerVoxel() const override { return originalBytes_; }
+  /// Converts only the rows asked for.
+  void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
+  int bytesPerVoxel() const override { return sampleTypeSize(type_); }
+  SampleType type() const { return type_; }
 
  private:
-  const float* data_;
+  const unsigned char* data_;
+  SampleType type_;
   Index3 dims_;
   std::string name_;
   std::array<double, 3> origin_, spacing_;
-  int originalBytes_ = 4;
 };
 
-enum class ScalarType : uint8_t { Float32, Float64, UInt8, UInt16, Int16 };
-const char* scalarTypeName(ScalarType t);
-ScalarType parseScalarType(const std::string& name);  ///< float32|float64|uint8|uint16|int16
-int scalarTypeSize(ScalarType t);
-
-/// Parses name_XxYxZ_type.raw (the convention of shared/data/volumes); false if it does not match.
-bool parseRawName(const std::string& path, Index3& dims, ScalarType& type);
+/// Parses name_XxYxZ_type.raw (the convention of shared/data/volumes; type a sampleTypeName, or
+/// float or double); false if it does not match.
+bool parseRawName(const std::string& path, Index3& dims, SampleType& type);
 
 /// Over a raw little-endian file, converted to float32; reads only the planes asked for.
 class RawFileSource : public VolumeSource {
  public:
   /// Throws IoError if the file cannot be opened, InvalidArgument if its size is not dims * type.
-  RawFileSource(const std::string& path, Index3 dims, ScalarType type,
+  RawFileSource(const std::string& path, Index3 dims, SampleType type,
                 std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
   ~RawFileSource() override;
   Index3 dims() const override { return dims_; }
@@ -83,15 +89,15 @@ class RawFileSource : public VolumeSource {
   std::array<double, 3> spacing() const override { return spacing_; }
   std::string name() const override;
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
-  int bytesPerVoxel() const override { return scalarTypeSize(type_); }
-  ScalarType type() const { return type_; }
+  int bytesPerVoxel() const override { return sampleTypeSize(type_); }
+  SampleType type() const { return type_; }
   const std::string& path() const { return path_; }
 
  private:
   std::string path_;
   int fd_ = -1;
   Index3 dims_;
-  ScalarType type_;
+  SampleType type_;
   std::array<double, 3> origin_, spacing_;
   std::vector<unsigned char> buffer_;
 };

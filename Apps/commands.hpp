@@ -10,6 +10,7 @@ int runEncode(int argc, char** argv);  // afam encode IN.raw OUT.afam [...]
 int runInfo(int argc, char** argv);    // afam info FILE.afam
 int runVerify(int argc, char** argv);  // afam verify FILE.afam [--against IN.raw]
 int runDecode(int argc, char** argv);  // afam decode FILE.afam --level K OUT.raw
+int runEnlarge(int argc, char** argv);  // afam enlarge IN OUT.raw --dims X,Y,Z
 int runTrajectory(int argc, char** argv);  // afam trajectory OUT.dat [--kind orbit|dolly|walk]
 
 }  // namespace afam::cli

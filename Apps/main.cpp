@@ -23,6 +23,7 @@ const Command kCommands[] = {
     {"info", afam::cli::runInfo, "levels, NCP histograms, sizes and compression of an .afam file"},
     {"verify", afam::cli::runVerify, "check checksums; with --against IN.raw print rmse= and max_error="},
     {"decode", afam::cli::runDecode, "decode one level to a float32 raw volume"},
+    {"enlarge", afam::cli::runEnlarge, "a real scan made large: resampled with noise at the new resolution"},
     {"trajectory", afam::cli::runTrajectory, "write a generated camera path (orbit, dolly, exploration walk)"},
 #ifdef AFAM_HAVE_CMD_CONDITION
     {"condition", runCondition, "conditioning of the fitting systems"},

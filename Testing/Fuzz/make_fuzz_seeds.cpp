@@ -141,7 +141,7 @@ void putF32(Bytes& b, float f) {
   putU32(b, u);
 }
 
-// A valid weights file with hidden size H (layout of Core/src/predictors/lstm.cpp).
+// A valid weights file with hidden size H (layout of Core/src/predict/lstm.cpp).
 Bytes tinyLstm(uint32_t hidden, uint32_t steps) {
   Bytes b = {'A', 'F', 'L', 'S', 'T', 'M', 0, 0};
   putU32(b, 1);

@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <cmath>
 #include <iterator>
+#include <limits>
+#include <type_traits>
 
 #include "afam/base/errors.hpp"
 
@@ -33,6 +36,27 @@ template <class T>
 void toFloat(const unsigned char* src, uint64_t count, float* out, bool swap) {
   if (swap && sizeof(T) > 1) toFloat<T, true>(src, count, out);
   else toFloat<T, false>(src, count, out);
+}
+
+template <class T>
+void fromFloat(const float* values, uint64_t count, unsigned char* dst) {
+  for (uint64_t i = 0; i < count; ++i) {
+    T v;
+    if constexpr (std::is_floating_point_v<T>) {
+      v = static_cast<T>(values[i]);
+    } else {
+      const double r = std::nearbyint(double(values[i]));
+      const double lo = double(std::numeric_limits<T>::lowest()), hi = double(std::numeric_limits<T>::max());
+      v = r <= lo ? std::numeric_limits<T>::lowest() : r >= hi ? std::numeric_limits<T>::max() : static_cast<T>(r);
+    }
+    std::memcpy(dst + i * sizeof(T), &v, sizeof(T));
+  }
+}
+
+template <class T>
+void rangeOf(double& lo, double& hi) {
+  lo = double(std::numeric_limits<T>::lowest());
+  hi = double(std::numeric_limits<T>::max());
 }
 
 }  // namespace
@@ -119,6 +143,35 @@ void samplesToFloat(SampleType type, const void* samples, uint64_t count, float*
       return toFloat<float>(src, count, out, true);
     case SampleType::Float64: return toFloat<double>(src, count, out, swapBytes);
   }
+}
+
+namespace {
+
+/// One switch over the types, calling fn with a value of the type (its tag).
+template <class Fn>
+void withType(SampleType type, Fn&& fn) {
+  switch (type) {
+    case SampleType::Int8: return fn(int8_t{});
+    case SampleType::UInt8: return fn(uint8_t{});
+    case SampleType::Int16: return fn(int16_t{});
+    case SampleType::UInt16: return fn(uint16_t{});
+    case SampleType::Int32: return fn(int32_t{});
+    case SampleType::UInt32: return fn(uint32_t{});
+    case SampleType::Int64: return fn(int64_t{});
+    case SampleType::UInt64: return fn(uint64_t{});
+    case SampleType::Float32: return fn(float{});
+    case SampleType::Float64: return fn(double{});
+  }
+}
+
+}  // namespace
+
+void sampleTypeRange(SampleType type, double& lo, double& hi) {
+  withType(type, [&](auto tag) { rangeOf<decltype(tag)>(lo, hi); });
+}
+
+void floatToSamples(SampleType type, const float* values, uint64_t count, void* samples) {
+  withType(type, [&](auto tag) { fromFloat<decltype(tag)>(values, count, static_cast<unsigned char*>(samples)); });
 }
 
 }  // namespace afam

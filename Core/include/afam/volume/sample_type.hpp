@@ -48,4 +48,12 @@ constexpr SampleType sampleTypeOf() {
 /// alignment); `swapBytes` reverses each sample's bytes first (big-endian data on this host).
 void samplesToFloat(SampleType type, const void* samples, uint64_t count, float* out, bool swapBytes = false);
 
+/// The values a sample of `type` can hold (integers: exactly; floats: +-their largest finite value).
+void sampleTypeRange(SampleType type, double& lo, double& hi);
+
+/// The inverse, for volumes written in a type (generated scans): each value rounded to the
+/// nearest integer and clamped to the type's range for integer types, converted for float types,
+/// stored little-endian at `samples`.
+void floatToSamples(SampleType type, const float* values, uint64_t count, void* samples);
+
 }  // namespace afam

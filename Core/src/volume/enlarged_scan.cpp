@@ -1,0 +1,139 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/volume/enlarged_scan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "afam/base/errors.hpp"
+
+namespace afam {
+
+namespace {
+
+uint64_t mix(uint64_t x) {  // splitmix64's finaliser: a counter-based generator
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+/// Approximately standard normal, from four 16-bit uniforms of one hash (Irwin-Hall, |g| < 3.47).
+float gaussianAt(uint64_t index, uint64_t seed) {
+  const uint64_t h = mix(index ^ mix(seed));
+  const float sum = float(h & 0xffff) + float((h >> 16) & 0xffff) + float((h >> 32) & 0xffff) + float(h >> 48);
+  constexpr float kScale = 1.0f / 65536.0f;
+  constexpr float kInvStd = 1.7320508f;  // 1 / sqrt(4 / 12)
+  return (sum * kScale - 2.0f) * kInvStd;
+}
+
+}  // namespace
+
+double estimateScanNoise(const std::vector<float>& samples, const Index3& dims) {
+  std::vector<float> diffs;
+  for (int64_t row = 0; row < dims[1] * dims[2]; ++row)
+    for (int64_t x = 0; x + 1 < dims[0]; ++x)
+      diffs.push_back(std::fabs(samples[size_t(row * dims[0] + x + 1)] - samples[size_t(row * dims[0] + x)]));
+  if (diffs.empty()) return 0;
+  std::nth_element(diffs.begin(), diffs.begin() + std::ptrdiff_t(diffs.size() / 2), diffs.end());
+  return double(diffs[diffs.size() / 2]) / (0.6745 * std::sqrt(2.0));
+}
+
+EnlargedScanSource::EnlargedScanSource(std::vector<float> samples, Index3 dims, Index3 target,
+                                       double noiseSigma, uint64_t seed, double clampLo, double clampHi)
+    : source_(std::move(samples)), dims_(dims), target_(target), sigma_(noiseSigma), seed_(seed),
+      lo_(clampLo), hi_(clampHi) {
+  for (int a = 0; a < 3; ++a) {
+    if (dims_[a] < 1) throw InvalidArgument("the volume to enlarge is empty");
+    if (target_[a] < 2) throw InvalidArgument("an enlarged volume needs at least 2 samples per axis");
+  }
+  if (source_.size() != size_t(dims_[0] * dims_[1] * dims_[2]))
+    throw InvalidArgument("the volume to enlarge has " + std::to_string(source_.size()) +
+                          " samples, not the product of its dimensions");
+  if (!(sigma_ >= 0) || !std::isfinite(sigma_)) throw InvalidArgument("the noise must be finite and >= 0");
+  tx_ = taps(dims_[0], target_[0]);
+  ty_ = taps(dims_[1], target_[1]);
+  tz_ = taps(dims_[2], target_[2]);
+}
+
+std::vector<EnlargedScanSource::Taps> EnlargedScanSource::taps(int64_t from, int64_t to) {
+  std::vector<Taps> out(static_cast<size_t>(to));
+  for (int64_t i = 0; i < to; ++i) {
+    const double u = double(i) * double(from - 1) / double(to - 1);
+    int64_t k = std::min<int64_t>(int64_t(std::floor(u)), std::max<int64_t>(from - 2, 0));
+    const float t = float(u - double(k));
+    Taps& tp = out[size_t(i)];
+    float w[4] = {0.5f * (-t * t * t + 2 * t * t - t), 0.5f * (3 * t * t * t - 5 * t * t + 2),
+                  0.5f * (-3 * t * t * t + 4 * t * t + t), 0.5f * (t * t * t - t * t)};
+    // Ghost samples beyond the edges continue the edge linearly (p[-1] = 2 p[0] - p[1]), so that
+    // a linear field stays linear up to the faces; a one-sample axis is constant.
+    if (from == 1) {
+      w[0] = 1;
+      w[1] = w[2] = w[3] = 0;
+    } else {
+      if (k - 1 < 0) {  // tap 0 is p[-1]; taps 1 and 2 are p[0] and p[1]
+        w[1] += 2 * w[0];
+        w[2] -= w[0];
+        w[0] = 0;
+      }
+      if (k + 2 > from - 1) {  // tap 3 is p[from]; taps 2 and 1 are p[from - 1] and p[from - 2]
+        w[2] += 2 * w[3];
+        w[1] -= w[3];
+        w[3] = 0;
+      }
+    }
+    for (int j = 0; j < 4; ++j) {
+      tp.first[j] = std::clamp<int64_t>(k - 1 + j, 0, from - 1);
+      tp.weight[j] = w[j];
+    }
+  }
+  return out;
+}
+
+const std::vector<float>& EnlargedScanSource::plane(int64_t z) {
+  for (auto& p : planes_)
+    if (p.first == z) return p.second;
+  if (planes_.size() >= 4) planes_.erase(planes_.begin());  // planes are asked for in z order
+  const int64_t nx = target_[0], ny = target_[1], sx = dims_[0], sy = dims_[1];
+  std::vector<float> rows(size_t(nx * sy));  // x resampled, source rows
+  const float* src = source_.data() + size_t(z * sx * sy);
+  for (int64_t y = 0; y < sy; ++y)
+    for (int64_t x = 0; x < nx; ++x) {
+      const Taps& t = tx_[size_t(x)];
+      float v = 0;
+      for (int j = 0; j < 4; ++j) v += t.weight[j] * src[size_t(y * sx + t.first[j])];
+      rows[size_t(y * nx + x)] = v;
+    }
+  std::vector<float> out(size_t(nx * ny), 0.f);
+  for (int64_t y = 0; y < ny; ++y) {
+    const Taps& t = ty_[size_t(y)];
+    float* line = out.data() + size_t(y * nx);
+    for (int j = 0; j < 4; ++j) {
+      const float* r = rows.data() + size_t(t.first[j] * nx);
+      for (int64_t x = 0; x < nx; ++x) line[x] += t.weight[j] * r[x];
+    }
+  }
+  planes_.emplace_back(z, std::move(out));
+  return planes_.back().second;
+}
+
+void EnlargedScanSource::readSlab(int64_t z0, int64_t zCount, float* out) {
+  const int64_t nxy = target_[0] * target_[1];
+  const float sigma = float(sigma_), lo = float(lo_), hi = float(hi_);
+  for (int64_t z = z0; z < z0 + zCount; ++z) {
+    const Taps& t = tz_[size_t(z)];
+    float* dst = out + size_t((z - z0) * nxy);
+    std::fill(dst, dst + nxy, 0.f);
+    for (int j = 0; j < 4; ++j) {
+      const std::vector<float>& p = plane(t.first[j]);
+      for (int64_t i = 0; i < nxy; ++i) dst[i] += t.weight[j] * p[size_t(i)];
+    }
+    const uint64_t base = uint64_t(z * nxy);
+    for (int64_t i = 0; i < nxy; ++i) {
+      const float v = sigma > 0 ? dst[i] + sigma * gaussianAt(base + uint64_t(i), seed_) : dst[i];
+      dst[i] = std::clamp(v, lo, hi);
+    }
+  }
+}
+
+}  // namespace afam

@@ -13,7 +13,7 @@
 #include "afam/render/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "gpu_device.hpp"
+#include "device_option.hpp"
 #include "render_args.hpp"
 
 using namespace afam;
@@ -58,6 +58,7 @@ int runRender(int argc, char** argv) {
   const Camera camera = Camera::fromPose(poses[size_t(view)], size.first, size.second);
   FrameStats st;
   const ImageRGBA image = renderer.renderFrame(camera, st);
+  printDeviceMessages(st);
   for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
   const ImageRGB8 rgb = toRGB8(image);
   writePng(args.str("out"), rgb);

@@ -16,7 +16,7 @@
 #include "afam/render/renderer.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
-#include "gpu_device.hpp"
+#include "device_option.hpp"
 #include "render_args.hpp"
 
 using namespace afam;
@@ -85,6 +85,7 @@ int runReplay(int argc, char** argv) {
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
+    printDeviceMessages(st);
     for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
     lat.push_back(st.latencyMs);
     cach.push_back(st.cachingMs);

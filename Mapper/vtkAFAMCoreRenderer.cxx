@@ -2,12 +2,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMCoreRenderer.h"
 
+#include "afam/cuda/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
 #include "afam/format/afam_file.hpp"
 #include "afam/render/renderer.hpp"
-#if defined(AFAM_HAVE_CUDA)
-#include "afam/cuda/gpu_caster.hpp" // plain C++: the CUDA renderer behind Core's caster hook
-#include "afam/cuda/gpu_renderer.hpp" // plain C++: the pool's upload count
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -21,104 +18,29 @@ struct vtkAFAMCoreRenderer::Internals
   bool GpuWanted = false;
   // The last settings that could be drawn: unusable requested settings fall back to these.
   afam::FrameSettings LastGood;
-  // GPU: the renderer kept alive while Renderer casts through it, and (once the GPU proved
-  // unusable) why, so it is not probed again.
-#if defined(AFAM_HAVE_CUDA)
-  std::shared_ptr<afam::GpuRenderer> Gpu;
-  std::shared_ptr<afam::GpuImageTarget> Target; // the caster's: where GPU frames leave the image
-  std::shared_ptr<bool> Failed;                  // the caster's: the GPU failed in a frame
-#else
-  std::shared_ptr<void> Gpu;
-#endif
-  float* DeviceImage = nullptr; // SetDeviceImage and SetDeviceDepth, handed to every new caster
-  size_t DeviceImageFloats = 0;
-  const float* DeviceDepth = nullptr;
-  afam::DepthToRay DepthToRay;
-
-  void PassTargets()
-  {
-#if defined(AFAM_HAVE_CUDA)
-    if (this->Target)
-    {
-      this->Target->deviceRgba = this->DeviceImage;
-      this->Target->capacityFloats = this->DeviceImageFloats;
-      this->Target->depth.depth = this->DeviceDepth;
-      this->Target->depth.toRay = this->DepthToRay;
-    }
-#endif
-  }
+  // The Renderer's GPU caster while it casts on the GPU (the Renderer owns it); nullptr: the CPU.
+  // Once the GPU proved unusable, why, so it is not probed again.
+  afam::FrameCaster* Gpu = nullptr;
   std::string GpuUnusable;
   // The open file's damaged blocks, kept across renderer rebuilds: each is reported once per file.
   std::shared_ptr<afam::DamageLog> Damage;
-  std::vector<std::string> Messages; // filled by the GPU caster, drained into each frame's stats
+  std::vector<std::string> Messages; // the GPU's set-up notes, handed to the frame that made it
 
-  void DropGpu()
+  void InstallGpu(double budgetMB, int threads)
   {
-    this->Gpu.reset();
-#if defined(AFAM_HAVE_CUDA)
-    this->Target.reset();
-    this->Failed.reset();
-#endif
-  }
-
-  int64_t GpuUploads() const
-  {
-#if defined(AFAM_HAVE_CUDA)
-    return this->Gpu ? static_cast<int64_t>(this->Gpu->pool().stats().uploads) : -1;
-#else
-    return -1;
-#endif
-  }
-
-  // The CUDA events' times of the frame just cast, when it was cast on the GPU.
-  void GpuTimes(vtkAFAMFrameStats& stats) const
-  {
-#if defined(AFAM_HAVE_CUDA)
-    if (this->Gpu && this->Gpu->lastTimes().totalMs > 0)
-    {
-      const afam::GpuFrameTimes& t = this->Gpu->lastTimes();
-      stats.GpuUploadSeconds = t.uploadMs * 1e-3;
-      stats.GpuKernelSeconds = t.kernelMs * 1e-3;
-      stats.GpuDownloadSeconds = t.downloadMs * 1e-3;
-    }
-#else
-    (void)stats;
-#endif
-  }
-
-  // After a frame: a GPU that failed (not for memory) is given up for the file's life; the
-  // caster already draws on the CPU, and no later renderer probes it again.
-  void GiveUpFailedGpu()
-  {
-#if defined(AFAM_HAVE_CUDA)
-    if (this->Gpu && this->Failed && *this->Failed)
-    {
-      this->GpuUnusable = "the GPU failed during a frame";
-      this->Gpu.reset();
-      this->Target.reset();
-    }
-#endif
-  }
-
-  void InstallGpu(double budgetMB)
-  {
-    this->DropGpu();
-#if defined(AFAM_HAVE_CUDA)
+    this->Gpu = nullptr;
     if (!this->GpuUnusable.empty())
     {
       return; // known unusable: not probed again (Render reports GpuUnusable)
     }
-    std::string notes;
-    Internals* self = this; // outlives the caster, which the Renderer below owns
-    afam::GpuCaster gpu = afam::installGpuCaster(*this->Renderer,
-      static_cast<size_t>(std::max(16.0, budgetMB) * 1e6),
-      [self](const std::string& message) { self->Messages.push_back(message); });
+    std::vector<std::string>& notes = this->Messages;
+    std::unique_ptr<afam::FrameCaster> gpu =
+      afam::makeGpuCaster(static_cast<size_t>(std::max(16.0, budgetMB) * 1e6), threads,
+        [&notes](const std::string& message) { notes.push_back(message); });
     if (gpu)
     {
-      this->Gpu = gpu.gpu;
-      this->Target = gpu.target;
-      this->Failed = gpu.failed;
-      this->PassTargets();
+      this->Gpu = gpu.get();
+      this->Renderer->setCaster(std::move(gpu));
       return;
     }
     for (const std::string& m : this->Messages)
@@ -130,10 +52,17 @@ struct vtkAFAMCoreRenderer::Internals
     {
       this->GpuUnusable = "the GPU could not be set up";
     }
-#else
-    (void)budgetMB;
-    this->GpuUnusable = "this build has no CUDA renderer (built without nvcc)";
-#endif
+  }
+
+  // After a frame: a GPU that failed (not for memory) is given up for the file's life; its caster
+  // already draws on the CPU, and no later renderer probes it again.
+  void GiveUpFailedGpu()
+  {
+    if (this->Gpu && !this->Gpu->castsOnGpu())
+    {
+      this->GpuUnusable = "the GPU failed during a frame";
+      this->Gpu = nullptr;
+    }
   }
 };
 
@@ -168,7 +97,7 @@ void vtkAFAMCoreRenderer::Open(const std::string& path)
 
 void vtkAFAMCoreRenderer::Close()
 {
-  this->Impl->DropGpu();
+  this->Impl->Gpu = nullptr;
   this->Impl->Renderer.reset(); // its prefetch thread stops before the file goes
   this->Impl->File.reset();
   this->Impl->Damage.reset();
@@ -226,23 +155,22 @@ void vtkAFAMCoreRenderer::Render(
   stats.RendererBuilt = false;
   if (this->NeedsBuild(request))
   {
-    m.DropGpu();
-    m.Renderer.reset(); // the old cache and prefetch thread go before the new ones come
+    m.Gpu = nullptr;
+    m.Renderer.reset(); // the old cache, prefetch thread and GPU pool go before the new ones come
     m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);
     m.Resources = resources;
     m.GpuWanted = wantGpu;
     stats.RendererBuilt = true;
     if (wantGpu)
     {
-      m.InstallGpu(request.CacheBudgetMB);
+      m.InstallGpu(request.CacheBudgetMB, resources.threads);
     }
   }
   m.LastGood = settings;
-  const int64_t uploadsBefore = m.GpuUploads();
   afam::FrameStats frame;
   try
   {
-    image = m.Renderer->renderFrame(request.Camera, settings, frame, request.MaxDistance);
+    image = m.Renderer->renderFrame(request.Camera, settings, frame, request.Targets);
   }
   catch (const afam::FileChangedError&)
   {
@@ -260,10 +188,20 @@ void vtkAFAMCoreRenderer::Render(
   stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
   stats.DamageReports = std::move(frame.damageReports);
   m.GiveUpFailedGpu();
+  const afam::CastResult& cast = frame.cast;
   stats.UsedGpu = m.Gpu != nullptr;
-  stats.GpuModelsUploaded = m.Gpu ? m.GpuUploads() - uploadsBefore : -1;
-  m.GpuTimes(stats);
-  stats.DeviceMessages.swap(m.Messages); // what happened in this frame (e.g. a pool too small)
+  stats.GpuModelsUploaded = m.Gpu ? cast.modelsUploaded : -1;
+  if (cast.onGpu && cast.gpuUploadMs >= 0) // the CUDA events' times
+  {
+    stats.GpuUploadSeconds = cast.gpuUploadMs * 1e-3;
+    stats.GpuKernelSeconds = cast.gpuKernelMs * 1e-3;
+    stats.GpuDownloadSeconds = cast.gpuDownloadMs * 1e-3;
+  }
+  stats.ImageOnDevice = cast.imageOnDevice;
+  stats.DeviceDepthLimited = m.Gpu ? cast.depthLimitedPixels : -1;
+  // What happened in this frame: the GPU's set-up, then the caster's (e.g. a pool too small).
+  stats.DeviceMessages.swap(m.Messages);
+  stats.DeviceMessages.insert(stats.DeviceMessages.end(), cast.messages.begin(), cast.messages.end());
   if (wantGpu && !m.Gpu)
   {
     stats.DeviceMessages.push_back(m.GpuUnusable); // every CPU frame says why
@@ -272,52 +210,10 @@ void vtkAFAMCoreRenderer::Render(
 
 void* vtkAFAMCoreRenderer::GpuStream() const
 {
-#if defined(AFAM_HAVE_CUDA)
-  return this->Impl->Gpu ? this->Impl->Gpu->pool().stream() : nullptr;
-#else
-  return nullptr;
-#endif
-}
-
-void vtkAFAMCoreRenderer::SetDeviceImage(float* deviceRgba, size_t floats)
-{
-  Internals& m = *this->Impl;
-  m.DeviceImage = deviceRgba;
-  m.DeviceImageFloats = deviceRgba ? floats : 0;
-  m.PassTargets();
-}
-
-void vtkAFAMCoreRenderer::SetDeviceDepth(const float* depth, const afam::DepthToRay& toRay)
-{
-  Internals& m = *this->Impl;
-  m.DeviceDepth = depth;
-  m.DepthToRay = toRay;
-  m.PassTargets();
-}
-
-int64_t vtkAFAMCoreRenderer::DeviceDepthLimited() const
-{
-#if defined(AFAM_HAVE_CUDA)
-  return this->Impl->Gpu && this->Impl->Target ? this->Impl->Target->lastDepthLimited : -1;
-#else
-  return -1;
-#endif
-}
-
-bool vtkAFAMCoreRenderer::ImageOnDevice() const
-{
-#if defined(AFAM_HAVE_CUDA)
-  return this->Impl->Gpu && this->Impl->Target && this->Impl->Target->lastOnDevice;
-#else
-  return false;
-#endif
+  return this->Impl->Gpu ? this->Impl->Gpu->deviceStream() : nullptr;
 }
 
 bool vtkAFAMCoreRenderer::HasCuda()
 {
-#if defined(AFAM_HAVE_CUDA)
-  return true;
-#else
-  return false;
-#endif
+  return afam::gpuCasterBuilt();
 }

@@ -2,18 +2,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Private helper of vtkAFAMVolumeMapper (not wrapped, not installed): the one place where the
 // mapper calls Core's out-of-core renderer. It keeps one afam::Renderer (RAM cache, prefetch
-// thread, GPU model pool) for as long as the file and the resources stay the same, and hands each
-// frame its own settings. Everything VTK-specific (reading the camera, the transfer functions,
-// compositing) stays in the mapper; everything numeric stays in Core.
+// thread, and the GPU caster with its model pool, from afam::makeGpuCaster) for as long as the
+// file and the resources stay the same, and hands each frame its own settings and targets.
+// Everything VTK-specific (reading the camera, the transfer functions, compositing) stays in the
+// mapper; everything numeric stays in Core. No CUDA here: the GPU sits behind afam::FrameCaster.
 #ifndef vtkAFAMCoreRenderer_h
 #define vtkAFAMCoreRenderer_h
 
 #include "afam/scene/camera.hpp"
-#include "afam/scene/depth_limits.hpp"
+#include "afam/render/frame_caster.hpp"
 #include "afam/render/frame_settings.hpp"
 #include "afam/render/image.hpp"
 
-#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -31,9 +31,13 @@ struct vtkAFAMFrameRequest
   int Prefetcher = 0; ///< 0 none, 1 linear
   int Device = 0;     ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
   int Threads = 0;
-  /// Optional per-pixel ray length limit from opaque geometry (normalised-frame distance from the
-  /// eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
-  const float* MaxDistance = nullptr;
+  /// Where this frame's image goes and what stops its rays (this frame only):
+  /// maxDistance: per-pixel ray length limit from opaque geometry on the host (normalised-frame
+  /// distance from the eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
+  /// deviceRgba: device memory for a frame cast on the GPU (e.g. an OpenGL buffer mapped into
+  /// CUDA on GpuStream()); nullptr: the host. deviceDepth: a depth buffer in device memory whose
+  /// opaque geometry stops the rays of a frame cast on the GPU (in place of maxDistance).
+  afam::FrameTargets Targets;
 };
 
 struct vtkAFAMFrameStats
@@ -50,6 +54,11 @@ struct vtkAFAMFrameStats
   /// The GPU's own times for the frame (CUDA events), in seconds: model upload, ray casting, and
   /// the image's copy back to the host; -1 when the frame was not cast on the GPU.
   double GpuUploadSeconds = -1, GpuKernelSeconds = -1, GpuDownloadSeconds = -1;
+  /// True when the image was left at the request's Targets.deviceRgba: the ImageRGBA then holds
+  /// the size only (rgba empty).
+  bool ImageOnDevice = false;
+  /// Pixels the request's Targets.deviceDepth limited; -1 when the frame used none.
+  int64_t DeviceDepthLimited = -1;
   /// Why the GPU is not (or not always) used, in words, from the frame that found out (e.g. "no
   /// usable GPU: CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)"); empty
   /// otherwise. Only set when the GPU was asked for (Device 0 or 2).
@@ -74,7 +83,7 @@ public:
   const std::string& Path() const { return this->OpenPath; }
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
-  /// True when this build has the CUDA renderer (afam_cuda linked in).
+  /// True when this build has the CUDA renderer (built with nvcc: afam::gpuCasterBuilt).
   static bool HasCuda();
   /// Renders one frame (premultiplied RGBA, row 0 = top). Throws afam::Error; after an
   /// afam::FileChangedError (the file changed on disk) the file is closed, and the next Open reads
@@ -85,23 +94,9 @@ public:
   /// usable GPU, the GPU asked for) and the request keeps that renderer. A frame that builds a
   /// new renderer (the first, or after a change of device, cache, prefetcher or threads) says no.
   bool WillCastOnGpu(const vtkAFAMFrameRequest& request) const;
-  /// The cudaStream_t the GPU renderer casts on (nullptr without one): where buffers shared with
+  /// The cudaStream_t the GPU caster casts on (nullptr without one): where buffers shared with
   /// OpenGL are mapped, so that CUDA's and OpenGL's uses of them are ordered without host waits.
   void* GpuStream() const;
-  /// Where frames cast on the GPU leave their image: `deviceRgba` (device memory of `floats`
-  /// floats, premultiplied RGBA, row 0 = top; e.g. an OpenGL buffer mapped into CUDA) instead of
-  /// the host; nullptr: the host (default). Kept until changed; the caller keeps it valid during
-  /// Render.
-  void SetDeviceImage(float* deviceRgba, size_t floats);
-  /// True when the last Render left its image at the device image: its ImageRGBA then holds the
-  /// size only (rgba empty).
-  bool ImageOnDevice() const;
-  /// A depth buffer in device memory (`depth`: toRay.tileWidth * toRay.tileHeight floats, row 0 at
-  /// the bottom; nullptr: none) whose opaque geometry stops the rays of frames cast on the GPU,
-  /// the limits computed there (in place of the request's MaxDistance). Kept until changed.
-  void SetDeviceDepth(const float* depth, const afam::DepthToRay& toRay);
-  /// Pixels the device depth limited in the last frame; -1 when it had none.
-  int64_t DeviceDepthLimited() const;
 
 private:
   /// True when Render(request) builds a new renderer (new cache, prefetch thread, GPU pool).

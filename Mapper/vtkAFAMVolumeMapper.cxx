@@ -229,9 +229,9 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     ? this->Draw->MapDeviceImage(
         frame.CastWidth, frame.CastHeight, this->Core->GpuStream(), deviceFloats)
     : nullptr;
-  this->Core->SetDeviceImage(deviceImage, deviceFloats);
+  frame.Request.Targets.deviceRgba = deviceImage;
+  frame.Request.Targets.deviceRgbaFloats = deviceImage ? deviceFloats : 0;
   frame.DepthOnGpu = deviceImage != nullptr;
-  this->Core->SetDeviceDepth(nullptr, afam::DepthToRay{});
   const auto depthStart = std::chrono::steady_clock::now();
   const bool depthRead = this->ReadDepthLimits(ren, frame);
   const auto depthEnd = depthRead ? std::chrono::steady_clock::now() : depthStart;
@@ -239,11 +239,11 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   vtkAFAMFrameStats stats;
   const bool cast = this->RenderCore(frame, image, stats);
   this->DepthBuffer->Unmap();
-  if (frame.DepthOnGpu && this->Core->DeviceDepthLimited() >= 0)
+  if (frame.DepthOnGpu && stats.DeviceDepthLimited >= 0)
   {
-    this->LastDepthLimitedPixels = this->Core->DeviceDepthLimited();
+    this->LastDepthLimitedPixels = stats.DeviceDepthLimited;
   }
-  this->LastImageOnDevice = cast && this->Core->ImageOnDevice();
+  this->LastImageOnDevice = cast && stats.ImageOnDevice;
   if (!this->LastImageOnDevice)
   {
     this->Draw->UnmapDeviceImage();
@@ -464,7 +464,7 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
     depth.data(), w, h, ndcToWorld, frame.Map, frame.Request.Camera, frame.Limits);
   if (limited > 0)
   {
-    frame.Request.MaxDistance = frame.Limits.data();
+    frame.Request.Targets.maxDistance = frame.Limits.data();
     this->LastDepthLimitedPixels = limited;
   }
   return true;
@@ -491,8 +491,8 @@ bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w
   }
   try
   {
-    this->Core->SetDeviceDepth(
-      depth, afam::depthToRay(w, h, ndcToWorld, frame.Map, frame.Request.Camera));
+    frame.Request.Targets.deviceDepth = afam::DeviceDepth{
+      depth, afam::depthToRay(w, h, ndcToWorld, frame.Map, frame.Request.Camera) };
   }
   catch (const std::exception& e)
   {

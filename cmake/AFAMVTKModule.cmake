@@ -52,11 +52,9 @@ if (TARGET VTK::ParallelMPI)
 endif ()
 # Core is VTK-free and static (PIC): linked into the module, nothing of it is exported.
 vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)
-# The CUDA renderer only when the project builds it (AFAM_ENABLE_CUDA): afam_cuda is static, PIC,
-# links cudart statically and brings AFAM_HAVE_CUDA=1 (its PUBLIC definition) to the module's
-# sources. The module includes its plain C++ headers (afam/cuda/gpu_caster.hpp); of CUDA's own,
-# only the runtime and OpenGL-interop headers, in Mapper/vtkAFAMCudaGLBuffer.cxx (through
-# cudart's include directories).
-if (TARGET afam_cuda)
-  vtk_module_link(AFAM::vtkAFAM PRIVATE afam_cuda)
-endif ()
+# The GPU caster's factory (afam_gpu_caster, in every build): with nvcc (AFAM_ENABLE_CUDA) it is
+# afam_cuda, static, PIC, linking cudart statically and bringing AFAM_HAVE_CUDA=1 (its PUBLIC
+# definition) for the one file that talks to CUDA itself (Mapper/vtkAFAMCudaGLBuffer.cxx: CUDA's
+# runtime and OpenGL-interop headers, through cudart's include directories); without nvcc, a stub
+# that says so. The module includes only its plain C++ header (afam/cuda/make_gpu_caster.hpp).
+vtk_module_link(AFAM::vtkAFAM PRIVATE afam_gpu_caster)

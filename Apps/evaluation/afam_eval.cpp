@@ -41,7 +41,7 @@
 #include "afam/volume/marschner_lobb.hpp"
 #include "afam/eval/png_io.hpp"
 #include "afam/render/renderer.hpp"
-#include "gpu_device.hpp"
+#include "device_option.hpp"
 #include "zfp_codec.hpp"
 
 #ifdef AFAM_EVAL_HAVE_FPZIP
@@ -164,11 +164,13 @@ int runQuality(const Opts& o) {
       const cli::DeviceChoice dev = cli::useDevice(r, device, 4096);
       FrameStats st;
       ImageRGBA img = r.renderFrame(cam, st);  // cold: loads the models
+      cli::printDeviceMessages(st);
       const double caching = st.cachingMs;
       double best = std::numeric_limits<double>::infinity();
       for (int k = 0; k < repeats; ++k) {
         FrameStats s2;
         img = r.renderFrame(cam, s2);
+        cli::printDeviceMessages(s2);
         best = std::min(best, s2.renderMs);
       }
       const ImageRGB8 rgb = toRGB8(img);

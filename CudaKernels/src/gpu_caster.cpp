@@ -5,91 +5,110 @@
 
 #include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/device_selection.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/render/renderer.hpp"
 
 namespace afam {
 
-GpuCaster installGpuCaster(Renderer& renderer, size_t budgetBytes,
-                           const std::function<void(const std::string&)>& report) {
-  GpuCaster result;
+std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads, const GpuReport& report) {
   std::string why;
   if (!gpuAvailable(&why)) {
     report("no usable GPU: " + why);
-    return result;
+    return nullptr;
   }
   // One GPU per MPI rank on a node with several (device_selection.hpp).
   const int device = selectGpuDevice(gpuDeviceCount());
-  std::shared_ptr<GpuRenderer> gpu;
+  std::unique_ptr<GpuRenderer> gpu;
   const size_t minBudget = size_t(16) << 20;
   for (size_t budget = budgetBytes; !gpu && budget >= minBudget; budget /= 2) {
     try {
-      gpu = std::make_shared<GpuRenderer>(budget, device);
+      gpu = std::make_unique<GpuRenderer>(budget, device);
     } catch (const GpuOutOfMemory& e) {
       report("GPU pool of " + std::to_string(budget >> 20) + " MiB: " + e.what() + "; trying half");
     } catch (const GpuError& e) {
       report(std::string("GPU unusable: ") + e.what());
-      return result;
+      return nullptr;
     }
   }
   if (!gpu) {
     report("no GPU memory for a model pool");
+    return nullptr;
+  }
+  return std::unique_ptr<GpuCaster>(new GpuCaster(std::move(gpu), threads));
+}
+
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report) {
+  return GpuCaster::create(budgetBytes, threads, report);
+}
+
+bool gpuCasterBuilt() { return true; }
+
+GpuCaster::GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads)
+    : gpu_(std::move(gpu)), threads_(threads), description_(gpuDescription(gpu_->pool().device())) {}
+
+GpuCaster::~GpuCaster() = default;
+
+void* GpuCaster::stream() const { return gpu_->pool().stream(); }
+
+const PoolStats& GpuCaster::poolStats() const { return gpu_->pool().stats(); }
+
+const GpuFrameTimes& GpuCaster::lastTimes() const { return gpu_->lastTimes(); }
+
+CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) {
+  CastResult result;
+  const int w = frame.view.camera.width, h = frame.view.camera.height;
+  const size_t floats = size_t(w) * size_t(h) * 4;
+  FrameView view = frame.view;
+  view.maxDistance = targets.maxDistance;
+  if (failed_) {  // known to fail: not tried again, and the device depth is not read
+    image.resize(w, h);
+    renderCpu(view, image, threads_);
     return result;
   }
-  const int threads = renderer.resources().threads;
-  auto warned = std::make_shared<bool>(false);
-  std::shared_ptr<GpuImageTarget> target = result.target;
-  std::shared_ptr<bool> failed = result.failed;
-  renderer.setRayCaster([gpu, threads, warned, report, target, failed](const PreparedFrame& frame,
-                                                                       ImageRGBA& image) {
-    const int w = frame.view.camera.width, h = frame.view.camera.height;
-    const size_t floats = size_t(w) * size_t(h) * 4;
-    std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
-    const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
-    const bool onDevice = target->deviceRgba && floats <= target->capacityFloats;
-    const DeviceDepth* depth = target->depth.depth ? &target->depth : nullptr;
-    target->lastOnDevice = false;
-    target->lastDepthLimited = -1;
-    FrameView view = frame.view;
-    std::vector<float> hostLimits;
-    auto limitsOnHost = [&] {  // a frame whose image goes through the host
-      if (!depth || *failed) return;  // a failed GPU: this one frame ignores the device depth
-      target->lastDepthLimited = gpu->depthLimitsToHost(*depth, hostLimits);
-      view.maxDistance = hostLimits.data();
-    };
-    if (*failed) {  // known to fail: not tried again
+  std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
+  const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
+  const bool onDevice = targets.deviceRgba && floats <= targets.deviceRgbaFloats;
+  const DeviceDepth* depth = targets.deviceDepth.depth ? &targets.deviceDepth : nullptr;
+  const uint64_t uploadsBefore = poolStats().uploads;
+  std::vector<float> hostLimits;
+  auto limitsOnHost = [&] {  // a frame whose image goes through the host
+    if (!depth) return;
+    result.depthLimitedPixels = gpu_->depthLimitsToHost(*depth, hostLimits);
+    view.maxDistance = hostLimits.data();
+  };
+  try {
+    if (onDevice) {
+      gpu_->renderToDevice(view, slotKeys, targets.deviceRgba, nullptr, depth);
+      result.depthLimitedPixels = gpu_->lastTimes().depthLimitedPixels;
+      image.width = w;
+      image.height = h;
+      image.rgba.clear();
+      result.imageOnDevice = true;
+    } else {
+      limitsOnHost();
       image.resize(w, h);
-      renderCpu(view, image, threads);
-      return;
+      gpu_->render(view, slotKeys, image.rgba.data());
     }
-    try {
-      if (onDevice) {
-        gpu->renderToDevice(view, slotKeys, target->deviceRgba, nullptr, depth);
-        target->lastDepthLimited = gpu->lastTimes().depthLimitedPixels;
-        image.width = w;
-        image.height = h;
-        image.rgba.clear();
-        target->lastOnDevice = true;
-      } else {
-        limitsOnHost();
-        image.resize(w, h);
-        gpu->render(view, slotKeys, image.rgba.data());
-      }
-    } catch (const GpuOutOfMemory& e) {
-      if (!*warned) report(std::string(e.what()) + "; this frame on the CPU");
-      *warned = true;
-      if (hostLimits.empty()) limitsOnHost();
-      image.resize(w, h);
-      renderCpu(view, image, threads);
-    } catch (const GpuError& e) {
-      *failed = true;
-      report(std::string("the GPU failed (") + e.what() + "); this frame and the next ones on the CPU");
-      target->lastOnDevice = false;
-      image.resize(w, h);
-      renderCpu(view, image, threads);
+    result.onGpu = true;
+    const GpuFrameTimes& t = gpu_->lastTimes();
+    if (t.totalMs > 0) {
+      result.gpuUploadMs = t.uploadMs;
+      result.gpuKernelMs = t.kernelMs;
+      result.gpuDownloadMs = t.downloadMs;
     }
-  });
-  result.gpu = gpu;
-  result.description = gpuDescription(gpu->pool().device());
+  } catch (const GpuOutOfMemory& e) {
+    if (!warned_) result.messages.push_back(std::string(e.what()) + "; this frame on the CPU");
+    warned_ = true;
+    if (hostLimits.empty()) limitsOnHost();
+    image.resize(w, h);
+    renderCpu(view, image, threads_);
+  } catch (const GpuError& e) {
+    failed_ = true;
+    result.messages.push_back(std::string("the GPU failed (") + e.what() +
+                              "); this frame and the next ones on the CPU");
+    image.resize(w, h);
+    renderCpu(view, image, threads_);
+  }
+  if (!failed_) result.modelsUploaded = int64_t(poolStats().uploads - uploadsBefore);
   return result;
 }
 

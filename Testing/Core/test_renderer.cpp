@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "afam/render/cpu_raycaster.hpp"
 #include "afam/base/errors.hpp"
@@ -293,4 +296,68 @@ TEST(Renderer, MaximumIntensityProjectionMatchesTheAnalyticOneAndCullsNothingByO
   EXPECT_GT(alpha, 0.2 * c.width * c.height);  // the projection covers much of the view
   o.blendMode = 7;
   EXPECT_THROW(Renderer(file, o), InvalidArgument);
+}
+
+namespace {
+/// A caster that casts on the CPU and keeps what each frame handed it (the GPU caster's seat).
+class RecordingCaster : public CpuCaster {
+ public:
+  RecordingCaster() : CpuCaster(2) {}
+  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) override {
+    seen.push_back(targets);
+    CastResult result = CpuCaster::cast(frame, targets, image);
+    result.messages.push_back("frame " + std::to_string(seen.size()));
+    return result;
+  }
+  std::vector<FrameTargets> seen;
+};
+}  // namespace
+
+TEST(Renderer, TargetsGoWithEachFrameAndTheCastersResultIntoItsStats) {
+  // Where a frame's image goes is that frame's argument: a device buffer given to one frame is
+  // not seen by the next, and the host limits reach the caster as given. The caster's result
+  // (here its messages) lands in the frame's stats; the CPU's caster gives the same image.
+  auto file = afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-3);
+  const int n = 24;
+  const Camera cam = testCamera(n);
+  Renderer cpu(file, testOptions()), recorded(file, testOptions());
+  EXPECT_FALSE(cpu.caster().castsOnGpu());
+  EXPECT_EQ(cpu.caster().deviceStream(), nullptr);
+  auto owned = std::make_unique<RecordingCaster>();
+  RecordingCaster& caster = *owned;
+  recorded.setCaster(std::move(owned));
+  FrameStats st;
+  const ImageRGBA reference = cpu.renderFrame(cam, st);
+  EXPECT_FALSE(st.cast.onGpu);
+  EXPECT_FALSE(st.cast.imageOnDevice);
+  EXPECT_EQ(st.cast.modelsUploaded, -1);
+  EXPECT_EQ(st.cast.depthLimitedPixels, -1);
+  EXPECT_TRUE(st.cast.messages.empty());
+
+  float notTouched = 0;  // a CPU caster never writes a device buffer
+  std::vector<float> limit(size_t(n) * n, INFINITY);
+  FrameTargets targets;
+  targets.deviceRgba = &notTouched;
+  targets.deviceRgbaFloats = 1;
+  targets.maxDistance = limit.data();
+  const ImageRGBA first = recorded.renderFrame(cam, st, targets);
+  EXPECT_EQ(first.rgba, reference.rgba);
+  ASSERT_EQ(st.cast.messages.size(), 1u);
+  EXPECT_EQ(st.cast.messages[0], "frame 1");
+  const ImageRGBA second = recorded.renderFrame(cam, st);
+  EXPECT_EQ(second.rgba, reference.rgba);
+  ASSERT_EQ(st.cast.messages.size(), 1u);
+  EXPECT_EQ(st.cast.messages[0], "frame 2");
+  ASSERT_EQ(caster.seen.size(), 2u);
+  EXPECT_EQ(caster.seen[0].deviceRgba, &notTouched);
+  EXPECT_EQ(caster.seen[0].maxDistance, limit.data());
+  EXPECT_EQ(caster.seen[1].deviceRgba, nullptr);  // nothing carried into the next frame
+  EXPECT_EQ(caster.seen[1].deviceRgbaFloats, 0u);
+  EXPECT_EQ(caster.seen[1].maxDistance, nullptr);
+  EXPECT_EQ(notTouched, 0.f);
+
+  recorded.setCaster(nullptr);  // back to the CPU's
+  EXPECT_EQ(recorded.caster().description(), "CPU");
+  EXPECT_EQ(recorded.renderFrame(cam, st).rgba, reference.rgba);
+  EXPECT_TRUE(st.cast.messages.empty());
 }

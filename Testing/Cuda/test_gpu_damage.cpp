@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// A file with damaged micro-models cast on the GPU (Renderer + installGpuCaster) gives the CPU's
+// A file with damaged micro-models cast on the GPU (Renderer + GpuCaster) gives the CPU's
 // image: the stand-in models are chosen in Core while the frame is prepared, for both casters.
 #include <gtest/gtest.h>
 
@@ -30,13 +30,15 @@ TEST(GpuDamage, DamagedFileCastOnTheGpuMatchesTheCpu) {
     o.cache = CacheBudget{};
     o.lod.forceLevel = level;
     Renderer cpu(file, o), gpu(file, o);
-    GpuCaster caster = installGpuCaster(gpu, size_t(256) << 20, [](const std::string& m) {
+    std::unique_ptr<FrameCaster> caster = makeGpuCaster(size_t(256) << 20, o.threads, [](const std::string& m) {
       std::printf("gpu: %s\n", m.c_str());
     });
     ASSERT_TRUE(caster);
+    gpu.setCaster(std::move(caster));
     const Camera c = Camera::lookAt({1.6, 1.9, 1.3}, {0, 0, 0}, {0, 0, 1}, 60, 128, 128);
     FrameStats sc, sg;
     const ImageRGBA ic = cpu.renderFrame(c, sc), ig = gpu.renderFrame(c, sg);
+    EXPECT_TRUE(sg.cast.onGpu);
     double worst = 0, alpha = 0;
     for (size_t i = 0; i < ic.rgba.size(); ++i) {
       worst = std::max(worst, double(std::fabs(ic.rgba[i] - ig.rgba[i])));

@@ -6,7 +6,6 @@
 #include <cstring>
 #include <unordered_map>
 
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/predict/predictor_factory.hpp"
 
@@ -37,6 +36,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   tfLo_ = h.valueMin;
   tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
   setFrameSettings(settings);
+  caster_ = std::make_unique<CpuCaster>(resources_.threads);
   cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
   prefetcher_ = std::make_unique<Prefetcher>();
@@ -231,6 +231,16 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.cachingMs = msSince(t0);
 }
 
+void Renderer::setCaster(std::unique_ptr<FrameCaster> caster) {
+  caster_ = caster ? std::move(caster) : std::make_unique<CpuCaster>(resources_.threads);
+}
+
+ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& st,
+                                const FrameTargets& targets) {
+  setFrameSettings(settings);
+  return renderFrame(camera, st, targets);
+}
+
 ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& st,
                                 const float* maxDistance) {
   setFrameSettings(settings);
@@ -238,13 +248,18 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, const FrameSettings& setti
 }
 
 ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const float* maxDistance) {
+  FrameTargets targets;
+  targets.maxDistance = maxDistance;
+  return renderFrame(camera, st, targets);
+}
+
+ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const FrameTargets& targets) {
   st = FrameStats{};
   cache_->takePeakResidentBytes();  // the frame's peak starts here
   if (resources_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
   prepare(camera, fr, st);
-  fr.view.maxDistance = maxDistance;
   history_.push_back(camera);
   if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
   // Prefetch the predicted next view while this one renders. The prediction itself runs in the
@@ -270,10 +285,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const floa
   }
   const auto t0 = Clock::now();
   ImageRGBA image;
-  if (caster_)
-    caster_(fr, image);
-  else
-    renderCpu(fr.view, image, resources_.threads);
+  st.cast = caster_->cast(fr, targets, image);
   st.renderMs = msSince(t0);
   prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
   cache_->clearPinned();

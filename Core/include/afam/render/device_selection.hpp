@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Which GPU a process renders on when several MPI ranks share a node with several GPUs: one GPU per
 // rank, by the node-local rank the MPI launcher exports. Pure logic (no CUDA), so it is tested on
-// machines without a GPU; CudaKernels applies it (installGpuCaster).
+// machines without a GPU; CudaKernels applies it (GpuCaster::create, behind makeGpuCaster).
 #pragma once
 
 #include <functional>

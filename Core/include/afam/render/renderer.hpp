@@ -2,14 +2,16 @@
 // The out-of-core multi-resolution renderer of one .afam file (the paper's Algorithms 2-4).
 //
 // A Renderer is built from what owns memory and threads (RendererResources: the RAM cache, the
-// prefetch thread, ray-casting threads); what a person edits while looking (FrameSettings: transfer
-// function, shading, blend mode, sample distance, LOD) goes with each frame, so an edit keeps the
-// cache, the prefetcher's history and an installed GPU caster's model pool.
+// prefetch thread, ray-casting threads; and its FrameCaster, setCaster); what a person edits while
+// looking (FrameSettings: transfer function, shading, blend mode, sample distance, LOD) goes with
+// each frame, so an edit keeps the cache, the prefetcher's history and a GPU caster's model pool.
+// Where a frame's image goes and what stops its rays (FrameTargets) go with each frame too.
 //
 // One frame:  prepare()  = LOD cut -> frustum and TF culling -> cache lookups (misses read from the
 //                          file) -> FrameView + float pool of the visible models     ("caching")
-//             then the ray caster (the CPU's, or one installed with setRayCaster such as the CUDA
-//                          path) while the prefetch thread loads the predicted next view ("rendering")
+//             then the FrameCaster (the CPU's, or the CUDA path's GpuCaster) casts it into the
+//                          frame's targets while the prefetch thread loads the predicted next
+//                          view                                                     ("rendering")
 //             latency = caching + rendering.
 // A PreparedFrame owns every array its FrameView points to (host memory); a GPU caster copies them
 // and re-points the view.
@@ -17,7 +19,6 @@
 #pragma once
 
 #include <array>
-#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@
 #include "afam/render/cache.hpp"
 #include "afam/scene/camera.hpp"
 #include "afam/render/damage.hpp"
+#include "afam/render/frame_caster.hpp"
 #include "afam/render/frame_settings.hpp"
 #include "afam/render/image.hpp"
 #include "afam/scene/lod.hpp"
@@ -66,6 +68,9 @@ struct FrameStats {
   /// frame (by its loads or its prefetching), one sentence each, each handed out once.
   int64_t damagedBlocks = 0, emptyDamagedBlocks = 0, knownDamagedBlocks = 0;
   std::vector<std::string> damageReports;
+  /// What the caster did: GPU or CPU, image left on the device, pixels the device depth limited,
+  /// models uploaded, the GPU's own times, and its messages (frame_caster.hpp).
+  CastResult cast;
 };
 
 /// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if
@@ -106,7 +111,7 @@ class Renderer {
   double tfHi() const { return tfHi_; }
 
   /// Settings for the frames from now on: the transfer-function table, LOD and culling follow at
-  /// once; the cache, the prefetcher and an installed ray caster are kept. Throws InvalidArgument
+  /// once; the cache, the prefetcher and the caster are kept. Throws InvalidArgument
   /// (and changes nothing) for a sample distance that is not > 0, an unknown blend mode or a
   /// transfer function with non-finite points (frame_settings.hpp checks these for front ends that
   /// warn and keep the last good value instead). Not while a frame renders.
@@ -121,20 +126,28 @@ class Renderer {
   /// file changed on disk since it was opened (checked first, and by every read): the renderer
   /// is then done, and a new one on the file opened again draws its new contents.
   void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
-  /// One full frame on the CPU: [drop OS cache if cold] prepare, start prefetch of the predicted
-  /// next view, cast rays, stop prefetch. Appends the camera to the prediction history.
+  /// One full frame: [drop OS cache if cold] prepare, start prefetch of the predicted next view,
+  /// cast rays with the caster into `targets` (this frame's only), stop prefetch. Appends the
+  /// camera to the prediction history; stats.cast says what the caster did. The image is on the
+  /// host unless stats.cast.imageOnDevice (then it holds the size only).
+  ImageRGBA renderFrame(const Camera& camera, FrameStats& stats, const FrameTargets& targets);
   /// maxDistance (optional, caller-owned, width * height floats, row 0 = top): per-pixel ray
-  /// length limit from opaque geometry (FrameView::maxDistance); the installed caster sees it too.
+  /// length limit from opaque geometry (FrameTargets::maxDistance); the image on the host.
   ImageRGBA renderFrame(const Camera& camera, FrameStats& stats,
                         const float* maxDistance = nullptr);
   /// setFrameSettings(settings), then renderFrame.
   ImageRGBA renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& stats,
+                        const FrameTargets& targets);
+  ImageRGBA renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& stats,
                         const float* maxDistance = nullptr);
 
-  /// Replaces renderFrame's CPU ray casting (the CUDA path of `--device gpu` plugs in here): the
-  /// caster fills `image` (premultiplied RGBA of frame.view's size) from the prepared frame.
-  using RayCaster = std::function<void(const PreparedFrame& frame, ImageRGBA& image)>;
-  void setRayCaster(RayCaster caster) { caster_ = std::move(caster); }
+  /// Casts the frames from now on with `caster` (the CUDA path's makeGpuCaster plugs in here);
+  /// nullptr: the CPU's (CpuCaster on resources().threads, the default). The renderer owns it: a
+  /// GPU caster's model pool then holds this file's models only.
+  void setCaster(std::unique_ptr<FrameCaster> caster);
+  /// The caster frames are cast with (never null).
+  FrameCaster& caster() { return *caster_; }
+  const FrameCaster& caster() const { return *caster_; }
 
  private:
   std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
@@ -152,7 +165,7 @@ class Renderer {
   std::vector<float> tf_;
   double tfLo_ = 0, tfHi_ = 1;
   std::array<std::vector<float>, 3> bounds_;
-  RayCaster caster_;  ///< empty: renderCpu
+  std::unique_ptr<FrameCaster> caster_;
 };
 
 }  // namespace afam

@@ -15,7 +15,7 @@
 
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/gpu_model_pool.hpp"
-#include "afam/scene/depth_limits.hpp"
+#include "afam/render/frame_caster.hpp"  // DeviceDepth
 #include "afam/render/raycast.hpp"
 
 namespace afam {
@@ -29,13 +29,6 @@ struct GpuFrameTimes {
   uint64_t modelsUploaded = 0;
   uint64_t bytesUploaded = 0;
   int64_t depthLimitedPixels = -1;  ///< pixels a DeviceDepth limited; -1: none given
-};
-
-/// A depth buffer already in device memory (e.g. OpenGL's, copied into a pixel buffer mapped into
-/// CUDA) and how its depths become ray lengths (depthToRay in view_mapping.hpp).
-struct DeviceDepth {
-  const float* depth = nullptr;  ///< toRay.tileWidth * toRay.tileHeight floats, row 0 at the bottom
-  DepthToRay toRay;
 };
 
 enum class GpuKernelKind {

@@ -1,0 +1,16 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/render/frame_caster.hpp"
+
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/render/renderer.hpp"
+
+namespace afam {
+
+CastResult CpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) {
+  FrameView view = frame.view;
+  view.maxDistance = targets.maxDistance;
+  renderCpu(view, image, threads_);
+  return CastResult{};
+}
+
+}  // namespace afam

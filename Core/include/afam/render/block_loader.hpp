@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Loads micro-models into the RAM cache on a pool of threads, so that a frame's misses are read
+// and decoded by every core at once rather than one after another on the frame's critical path,
+// and a load the frame does not wait for goes on after the frame (the next frames find it
+// resident: progressive refinement).
+//
+// Frame requests are served before prefetch requests, each in the order given (most important
+// first); an entry already queued or loading is not queued twice, and a frame request for an
+// entry queued for prefetching moves it up. A load goes through LruCache (getIntact for frames:
+// a damaged payload is recorded in the cache's DamageLog, not thrown; prefetch for prefetching,
+// which never evicts pinned blocks). Any other error of a load (I/O, a file changed on disk) is
+// kept and handed out once by takeErrors(); its entry counts as done, not resident.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_set>
+#include <vector>
+
+#include "afam/render/cache.hpp"
+
+namespace afam {
+
+struct BlockLoaderStats {
+  uint64_t frameLoads = 0, prefetchLoads = 0, failed = 0;
+};
+
+class BlockLoader {
+ public:
+  using Clock = std::chrono::steady_clock;
+  /// threads < 1: one per core. The cache must outlive the loader.
+  BlockLoader(LruCache& cache, int threads);
+  ~BlockLoader();  ///< drops what is queued, waits for the loads under way
+  BlockLoader(const BlockLoader&) = delete;
+  BlockLoader& operator=(const BlockLoader&) = delete;
+
+  /// Queues the entries not already resident, queued or loading.
+  void request(const std::vector<int64_t>& entries, LruCache::Purpose purpose);
+  /// Waits until none of `entries` is queued or loading, or until `deadline`. Returns how many
+  /// still are.
+  size_t waitFor(const std::vector<int64_t>& entries, Clock::time_point deadline);
+  /// True while the entry is queued or being loaded.
+  bool pending(int64_t entry) const;
+  /// Drops the prefetch requests not started yet.
+  void cancelPrefetch();
+  /// Messages of loads that failed (other than damage), each handed out once.
+  std::vector<std::string> takeErrors();
+  BlockLoaderStats stats() const;
+  int threads() const { return int(workers_.size()); }
+
+ private:
+  void run();
+  size_t pendingOf(const std::vector<int64_t>& entries) const;  // under the lock
+
+  LruCache& cache_;
+  mutable std::mutex mutex_;
+  std::condition_variable work_, done_;
+  std::deque<int64_t> frameQueue_, prefetchQueue_;
+  std::unordered_set<int64_t> queued_, loading_;
+  std::vector<std::string> errors_;
+  BlockLoaderStats stats_;
+  bool quit_ = false;
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace afam

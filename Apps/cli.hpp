@@ -20,7 +20,8 @@ namespace afam::cli {
 /// Unknown options are an error (InvalidArgument naming the option).
 class Args {
  public:
-  Args(int argc, char** argv, const std::set<std::string>& valueOptions, const std::set<std::string>& flags) {
+  Args(int argc, char** argv, const std::set<std::string>& valueOptions,
+       const std::set<std::string>& flags) {
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       if (a == "-h" || a == "--help") {
@@ -100,7 +101,8 @@ class Args {
     size_t start = 0;
     for (int a = 0; a < 3; ++a) {
       const size_t comma = t.find(',', start);
-      if ((a < 2) != (comma != std::string::npos)) throw InvalidArgument("--dims: '" + s + "' is not X,Y,Z");
+      if ((a < 2) != (comma != std::string::npos))
+        throw InvalidArgument("--dims: '" + s + "' is not X,Y,Z");
       d[a] = parseInt(t.substr(start, a < 2 ? comma - start : std::string::npos), "--dims");
       if (d[a] < 1) throw InvalidArgument("--dims: every dimension must be >= 1");
       start = comma + 1;
@@ -118,7 +120,9 @@ class Args {
 class ProgressBar {
  public:
   ProgressBar(std::string label, bool force = false)
-      : label_(std::move(label)), enabled_(force || ::isatty(2)), t0_(std::chrono::steady_clock::now()) {}
+      : label_(std::move(label)),
+        enabled_(force || ::isatty(2)),
+        t0_(std::chrono::steady_clock::now()) {}
   ~ProgressBar() { finish(); }
   bool operator()(double f) {
     if (!enabled_) return true;
@@ -127,7 +131,8 @@ class ProgressBar {
     last_ = now;
     const int width = 40, filled = int(f * width + 0.5);
     const double s = std::chrono::duration<double>(now - t0_).count();
-    std::fprintf(stderr, "\r%s [%s%s] %5.1f%% %6.1fs", label_.c_str(), std::string(size_t(filled), '#').c_str(),
+    std::fprintf(stderr, "\r%s [%s%s] %5.1f%% %6.1fs", label_.c_str(),
+                 std::string(size_t(filled), '#').c_str(),
                  std::string(size_t(width - filled), ' ').c_str(), 100.0 * f, s);
     std::fflush(stderr);
     drawn_ = true;

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam compare TEST.png REFERENCE.png : image error of one PNG against another with Core's metrics
 // (image_metrics.hpp: 8-bit RGB, PSNR with peak 255, SSIM 11x11 Gaussian). Prints
-// psnr=<x> ssim=<y> mse=<z>, the same numbers `afam render --ground-truth-ml` prints, so images made
-// elsewhere (the ParaView plugin, ParaView's own volume mapper) are scored the same way.
+// psnr=<x> ssim=<y> mse=<z>, the same numbers `afam render --ground-truth-ml` prints, so images
+// made elsewhere (the ParaView plugin, ParaView's own volume mapper) are scored the same way.
 #include <cstdio>
 
 #include "afam/eval/image_metrics.hpp"

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "level_error.hpp"
@@ -31,25 +31,28 @@ namespace {
 struct CodecRow {
   std::string volume, type, codec, setting;
   Index3 dims{};
-  double bound = 0;          ///< relative RMSE bound asked for
+  double bound = 0;  ///< relative RMSE bound asked for
   uint64_t rawBytes = 0, compressedBytes = 0;
   double rmse = 0, maxError = 0, valueRange = 0;
-  double targetRmse = 0;     ///< Adaptive-FAM: its absolute bound; ZFP: Adaptive-FAM's achieved RMSE
-  double seconds = 0;        ///< encode (Adaptive-FAM) or compress at the chosen tolerance (ZFP)
+  double targetRmse = 0;  ///< Adaptive-FAM: its absolute bound; ZFP: Adaptive-FAM's achieved RMSE
+  double seconds = 0;     ///< encode (Adaptive-FAM) or compress at the chosen tolerance (ZFP)
   int threads = 1;
   double ratio() const { return double(rawBytes) / double(compressedBytes); }
 };
 
 const char* kCsvHeader =
-    "volume,dims,type,bound,codec,raw_bytes,compressed_bytes,ratio,rmse,rmse_relative,max_error,target_rmse,"
+    "volume,dims,type,bound,codec,raw_bytes,compressed_bytes,ratio,rmse,rmse_relative,max_error,"
+    "target_rmse,"
     "seconds,threads,setting";
 
-/// A folder made with mkdtemp under `parent`, removed with everything in it when it goes out of scope.
+/// A folder made with mkdtemp under `parent`, removed with everything in it when it goes out of
+/// scope.
 class TemporaryFolder {
  public:
   explicit TemporaryFolder(const fs::path& parent) {
     std::string pattern = (parent / "afam-compare-codecs-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw IoError(parent.string() + ": cannot create a temporary folder there");
+    if (!::mkdtemp(pattern.data()))
+      throw IoError(parent.string() + ": cannot create a temporary folder there");
     path_ = pattern;
   }
   ~TemporaryFolder() {
@@ -78,7 +81,8 @@ std::vector<double> parseBounds(const std::string& list) {
     } catch (...) {
       throw InvalidArgument("--bounds: '" + s + "' is not a number");
     }
-    if (!(v > 0) || !std::isfinite(v)) throw InvalidArgument("--bounds: every bound must be > 0, got " + s);
+    if (!(v > 0) || !std::isfinite(v))
+      throw InvalidArgument("--bounds: every bound must be > 0, got " + s);
     bounds.push_back(v);
     start = comma + 1;
   }
@@ -89,7 +93,8 @@ std::unique_ptr<RawFileSource> openNamedRaw(const std::string& path) {
   Index3 dims{};
   SampleType type = SampleType::Float32;
   if (!parseRawName(path, dims, type))
-    throw InvalidArgument(path + ": not a raw volume named name_XxYxZ_type.raw (type " + sampleTypeNames() + ")");
+    throw InvalidArgument(path + ": not a raw volume named name_XxYxZ_type.raw (type " +
+                          sampleTypeNames() + ")");
   return std::make_unique<RawFileSource>(path, dims, type);
 }
 
@@ -108,7 +113,8 @@ CodecRow baseRow(const RawFileSource& src, double bound, const char* codec) {
   return r;
 }
 
-CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound, const fs::path& folder) {
+CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound,
+                        const fs::path& folder) {
   options.errorBound = bound;
   options.relativeBound = true;
   const fs::path out = folder / (fs::path(src.path()).stem().string() + ".afam");
@@ -123,7 +129,8 @@ CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound
   r.targetRmse = s.bound;
   r.seconds = s.seconds;
   r.threads = s.threads;
-  r.setting = "levels=" + std::to_string(options.levels) + " blocks=" + std::to_string(options.blocksPerAxis) +
+  r.setting = "levels=" + std::to_string(options.levels) +
+              " blocks=" + std::to_string(options.blocksPerAxis) +
               " degree=" + std::to_string(options.degree);
   fs::remove(out);
   return r;
@@ -136,12 +143,13 @@ struct ZfpTrial {
   ErrorAccumulator error;
 };
 
-ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent, std::vector<float>& decoded) {
+ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent,
+                  std::vector<float>& decoded) {
   ZfpTrial t;
   t.exponent = exponent;
   decoded.resize(volume.size());
-  t.trip = zfpRoundTrip(ZfpMode::FixedAccuracy, std::ldexp(1.0, exponent), volume.data(), size_t(dims[0]),
-                        size_t(dims[1]), size_t(dims[2]), decoded.data());
+  t.trip = zfpRoundTrip(ZfpMode::FixedAccuracy, std::ldexp(1.0, exponent), volume.data(),
+                        size_t(dims[0]), size_t(dims[1]), size_t(dims[2]), decoded.data());
   t.error.add(decoded.data(), volume.data(), int64_t(volume.size()));
   return t;
 }
@@ -150,15 +158,19 @@ ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent, s
 /// mode applies the power of two at or below the tolerance asked for, so the search runs over that
 /// exponent: from a passing exponent (2^e <= target bounds every error by target) and a failing one
 /// found by doubling steps upwards, down to two neighbours; the passing one is returned.
-ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, double valueRange, int& trials) {
-  if (!(target > 0)) throw Error("Adaptive-FAM reached RMSE 0: there is no ZFP tolerance to tune to it");
+ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, double valueRange,
+                 int& trials) {
+  if (!(target > 0))
+    throw Error("Adaptive-FAM reached RMSE 0: there is no ZFP tolerance to tune to it");
   std::vector<float> decoded;
   int lo = int(std::floor(std::log2(target)));
   ZfpTrial best = zfpTrial(volume, dims, lo, decoded);
   trials = 1;
-  for (int k = 0; !(best.error.rmse() <= target); ++k, ++trials) {  // ZFP's bound is on the max error
-    if (k == 64) throw Error("ZFP does not reach RMSE " + std::to_string(target) + " at tolerance 2^" +
-                             std::to_string(lo));
+  for (int k = 0; !(best.error.rmse() <= target);
+       ++k, ++trials) {  // ZFP's bound is on the max error
+    if (k == 64)
+      throw Error("ZFP does not reach RMSE " + std::to_string(target) + " at tolerance 2^" +
+                  std::to_string(lo));
     best = zfpTrial(volume, dims, --lo, decoded);
   }
   // Above 2^(top) every tolerance is larger than the whole value range: ZFP keeps next to nothing.
@@ -205,8 +217,9 @@ CodecRow runZfp(RawFileSource& src, const CodecRow& afam, double target) {
   r.targetRmse = target;
   r.seconds = t.trip.compressSeconds;
   char setting[160];
-  std::snprintf(setting, sizeof setting, "accuracy tolerance=2^%d=%.6g tuning_trials=%d tuning_s=%.3f",
-                t.exponent, t.trip.effectiveParameter, trials, tuning);
+  std::snprintf(setting, sizeof setting,
+                "accuracy tolerance=2^%d=%.6g tuning_trials=%d tuning_s=%.3f", t.exponent,
+                t.trip.effectiveParameter, trials, tuning);
   r.setting = setting;
   return r;
 }
@@ -216,12 +229,12 @@ std::string dimsText(const Index3& d) {
 }
 
 void printTable(const std::vector<CodecRow>& rows) {
-  std::printf("%-28s %-8s %-13s %9s %12s %11s %12s %12s %9s  %s\n", "volume", "bound", "codec", "ratio", "rmse",
-              "rmse/range", "max_error", "target_rmse", "seconds", "setting");
+  std::printf("%-28s %-8s %-13s %9s %12s %11s %12s %12s %9s  %s\n", "volume", "bound", "codec",
+              "ratio", "rmse", "rmse/range", "max_error", "target_rmse", "seconds", "setting");
   for (const CodecRow& r : rows)
-    std::printf("%-28s %-8g %-13s %9.3f %12.6g %11.4g %12.6g %12.6g %9.3f  %s\n", r.volume.c_str(), r.bound,
-                r.codec.c_str(), r.ratio(), r.rmse, r.rmse / r.valueRange, r.maxError, r.targetRmse, r.seconds,
-                r.setting.c_str());
+    std::printf("%-28s %-8g %-13s %9.3f %12.6g %11.4g %12.6g %12.6g %9.3f  %s\n", r.volume.c_str(),
+                r.bound, r.codec.c_str(), r.ratio(), r.rmse, r.rmse / r.valueRange, r.maxError,
+                r.targetRmse, r.seconds, r.setting.c_str());
 }
 
 /// Writes the CSV next to `path` and renames it into place, so a failed run leaves no partial file.
@@ -231,10 +244,11 @@ void writeCsv(const std::string& path, const std::vector<CodecRow>& rows) {
   if (!f) throw IoError(path + ": cannot write");
   std::fprintf(f, "%s\n", kCsvHeader);
   for (const CodecRow& r : rows)
-    std::fprintf(f, "%s,%s,%s,%g,%s,%llu,%llu,%.6g,%.9g,%.9g,%.9g,%.9g,%.6g,%d,%s\n", r.volume.c_str(),
-                 dimsText(r.dims).c_str(), r.type.c_str(), r.bound, r.codec.c_str(),
-                 (unsigned long long)r.rawBytes, (unsigned long long)r.compressedBytes, r.ratio(), r.rmse,
-                 r.rmse / r.valueRange, r.maxError, r.targetRmse, r.seconds, r.threads, r.setting.c_str());
+    std::fprintf(f, "%s,%s,%s,%g,%s,%llu,%llu,%.6g,%.9g,%.9g,%.9g,%.9g,%.6g,%d,%s\n",
+                 r.volume.c_str(), dimsText(r.dims).c_str(), r.type.c_str(), r.bound,
+                 r.codec.c_str(), (unsigned long long)r.rawBytes,
+                 (unsigned long long)r.compressedBytes, r.ratio(), r.rmse, r.rmse / r.valueRange,
+                 r.maxError, r.targetRmse, r.seconds, r.threads, r.setting.c_str());
   const bool ok = std::fflush(f) == 0 && !std::ferror(f);
   std::fclose(f);
   std::error_code ec;
@@ -257,44 +271,58 @@ EncoderOptions encoderOptions(const Args& args) {
 }  // namespace
 
 int runCompareCodecs(int argc, char** argv) {
-  Args args(argc, argv, {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target"}, {});
+  Args args(argc, argv,
+            {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target"}, {});
   const char* usage =
-      "afam compare-codecs IN.raw... [--bounds E1,E2,...] [--csv OUT.csv] [--levels L] [--blocks B]\n"
+      "afam compare-codecs IN.raw... [--bounds E1,E2,...] [--csv OUT.csv] [--levels L] [--blocks "
+      "B]\n"
       "       [--degree P] [--threads T] [--work DIR] [--zfp-target reached|bound]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
         "For each raw volume (name_XxYxZ_type.raw) and each relative RMSE bound E:\n"
-        "  adaptive-fam  `afam encode IN OUT --error-bound E --relative` (all levels stored) into a\n"
-        "                temporary folder, removed afterwards; ratio = raw file bytes / .afam bytes;\n"
-        "                rmse and max_error of the finest level against IN, as `afam verify --against`;\n"
+        "  adaptive-fam  `afam encode IN OUT --error-bound E --relative` (all levels stored) into "
+        "a\n"
+        "                temporary folder, removed afterwards; ratio = raw file bytes / .afam "
+        "bytes;\n"
+        "                rmse and max_error of the finest level against IN, as `afam verify "
+        "--against`;\n"
         "                seconds = encode wall time.\n"
-        "  zfp           ZFP fixed-accuracy mode on the same float32 volume, its tolerance bisected so\n"
-        "                that its RMSE is <= the RMSE adaptive-fam reached, as close below as ZFP's\n"
-        "                power-of-two tolerances allow; ratio = raw file bytes / ZFP stream bytes;\n"
+        "  zfp           ZFP fixed-accuracy mode on the same float32 volume, its tolerance "
+        "bisected so\n"
+        "                that its RMSE is <= the RMSE adaptive-fam reached, as close below as "
+        "ZFP's\n"
+        "                power-of-two tolerances allow; ratio = raw file bytes / ZFP stream "
+        "bytes;\n"
         "                seconds = compression time at that tolerance (serial).\n"
         "Prints a table; --csv writes one row per (volume, bound, codec).\n\n"
         "  --bounds E,...  relative RMSE bounds, each > 0 (default 1e-2)\n"
         "  --levels, --blocks, --degree, --threads  passed to the encoder (default: its defaults)\n"
-        "  --work DIR      where the temporary folder goes (default: the system's temporary folder)\n"
-        "  --zfp-target T  reached (default): ZFP's RMSE <= the RMSE adaptive-fam reached; bound: <= the\n"
-        "                  bound E * (max - min) itself (looser for ZFP when adaptive-fam lands below it)\n",
+        "  --work DIR      where the temporary folder goes (default: the system's temporary "
+        "folder)\n"
+        "  --zfp-target T  reached (default): ZFP's RMSE <= the RMSE adaptive-fam reached; bound: "
+        "<= the\n"
+        "                  bound E * (max - min) itself (looser for ZFP when adaptive-fam lands "
+        "below it)\n",
         usage);
     return 0;
   }
-  if (args.positional().empty()) throw InvalidArgument("no raw volume given (afam compare-codecs --help)");
+  if (args.positional().empty())
+    throw InvalidArgument("no raw volume given (afam compare-codecs --help)");
   const std::vector<double> bounds = parseBounds(args.str("bounds", "1e-2"));
   const EncoderOptions options = encoderOptions(args);
   const std::string zfpTarget = args.str("zfp-target", "reached");
   if (zfpTarget != "reached" && zfpTarget != "bound")
     throw InvalidArgument("--zfp-target must be reached or bound, not '" + zfpTarget + "'");
-  if (!zfpAvailable()) throw Error("this afam was built without ZFP (install libzfp-dev and configure again)");
+  if (!zfpAvailable())
+    throw Error("this afam was built without ZFP (install libzfp-dev and configure again)");
   const fs::path csvFolder = fs::path(args.str("csv")).parent_path();
   if (args.has("csv") && !csvFolder.empty() && !fs::is_directory(csvFolder))
     throw IoError(args.str("csv") + ": its folder does not exist");
   std::vector<std::unique_ptr<RawFileSource>> sources;
   for (const std::string& path : args.positional()) sources.push_back(openNamedRaw(path));
-  const TemporaryFolder folder(args.has("work") ? fs::path(args.str("work")) : fs::temp_directory_path());
+  const TemporaryFolder folder(args.has("work") ? fs::path(args.str("work"))
+                                                : fs::temp_directory_path());
   std::vector<CodecRow> rows;
   for (auto& src : sources)
     for (double bound : bounds) {

@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "afam/render/level_decode.hpp"
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 
@@ -33,7 +33,8 @@ int runDecode(int argc, char** argv) {
   const Partition& part = f->partition();
   const int level = int(args.integer("level", h.levels - 1));
   if (level < 0 || level >= h.levels)
-    throw InvalidArgument("--level " + std::to_string(level) + " outside [0, " + std::to_string(h.levels - 1) + "]");
+    throw InvalidArgument("--level " + std::to_string(level) + " outside [0, " +
+                          std::to_string(h.levels - 1) + "]");
   const Int3 nb = part.blocksPerAxis(level);
   // Output grid: per axis the blocks' samples joined on shared boundaries.
   const LevelGrid grid = levelGrid(part, level);
@@ -48,7 +49,8 @@ int runDecode(int argc, char** argv) {
     for (int kz = 0; kz < nb[2]; ++kz) {
       const int nz = part.extent(level, {0, 0, kz}).samples[2];
       const int64_t z0 = start[2][size_t(kz)];
-      const int64_t planes = kz + 1 < nb[2] ? nz - 1 : nz;  // the shared plane goes with the next row
+      const int64_t planes =
+          kz + 1 < nb[2] ? nz - 1 : nz;  // the shared plane goes with the next row
       slab.resize(size_t(od[0] * od[1] * planes));
       decodeLevelBox(*f, level, {0, 0, z0}, {od[0] - 1, od[1] - 1, z0 + planes - 1}, slab.data());
       const size_t bytes = size_t(planes * od[0] * od[1]) * sizeof(float);
@@ -63,8 +65,10 @@ int runDecode(int argc, char** argv) {
       }
       bar(double(kz + 1) / double(nb[2]));
     }
-    if (::fsync(fd) != 0 || ::close(fd) != 0) throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0) throw IoError(out + ": cannot rename: " + std::strerror(errno));
+    if (::fsync(fd) != 0 || ::close(fd) != 0)
+      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
+    if (::rename(tmp.c_str(), out.c_str()) != 0)
+      throw IoError(out + ": cannot rename: " + std::strerror(errno));
   } catch (...) {
     ::close(fd);
     ::unlink(tmp.c_str());

@@ -12,38 +12,47 @@ namespace afam::cli {
 
 int runEncode(int argc, char** argv) {
   Args args(argc, argv,
-            {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads", "search",
-             "spacing", "window"},
+            {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
+             "search", "spacing", "window"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [--dims X,Y,Z]\n"
       "       [--type int8|uint8|int16|uint16|int32|uint32|int64|uint64|float32|float64]\n"
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
-      "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search fast|exhaustive]";
+      "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
+      "fast|exhaustive]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Encodes a volume into Adaptive-FAM micro-models (paper, Algorithm 1), streaming: only the\n"
+        "Encodes a volume into Adaptive-FAM micro-models (paper, Algorithm 1), streaming: only "
+        "the\n"
         "z-planes the current blocks need are in memory. Inputs: a raw little-endian volume (x\n"
-        "fastest; dims and type default to what a name like name_64x64x93_int16.raw says), or NRRD\n"
-        "(.nrrd, .nhdr) and MetaImage (.mha, .mhd), raw or gzip/zlib-compressed, whose header gives\n"
+        "fastest; dims and type default to what a name like name_64x64x93_int16.raw says), or "
+        "NRRD\n"
+        "(.nrrd, .nhdr) and MetaImage (.mha, .mhd), raw or gzip/zlib-compressed, whose header "
+        "gives\n"
         "dims, type, spacing and origin (stored in the .afam header).\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
-        "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest of a\n"
+        "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
+        "of a\n"
         "                    constant, a coded spline and coded samples per block\n"
-        "  --isotropic-ncp   one NCP for all three axes (the paper's); by default blocks much smoother\n"
+        "  --isotropic-ncp   one NCP for all three axes (the paper's); by default blocks much "
+        "smoother\n"
         "                    along some axes get fewer control points there\n"
-        "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks along\n"
+        "  --levels L        levels of detail (default: from the dimensions, down to 2 blocks "
+        "along\n"
         "                    the longest axis; level 0 is the coarsest)\n"
-        "  --blocks B        blocks per axis at the finest level (default: about 64 samples a block, the paper's 16 at 1024^3)\n"
+        "  --blocks B        blocks per axis at the finest level (default: about 64 samples a "
+        "block, the paper's 16 at 1024^3)\n"
         "  --degree P        B-spline degree (default 2)\n"
         "  --mode M          adaptive (default), inlevel (search every block), fixed (NCP = n or\n"
         "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"
         "  --ncp K           NCP per axis for --mode fixed (default n)\n"
         "  --threads T       worker threads (default: all cores)\n"
         "  --search S        fast (default) or exhaustive (the paper's loop over every NCP)\n"
-        "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1, or the input header's)\n"
+        "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1, or the input "
+        "header's)\n"
         "  --progress        draw the progress bar even when stderr is not a terminal\n"
         "  --quiet           print nothing on success\n",
         usage);
@@ -62,13 +71,17 @@ int runEncode(int argc, char** argv) {
   opt.perAxisNcp = !args.has("isotropic-ncp");
   opt.mode = parseMode(args.str("mode", "adaptive"));
   opt.fixedNcp = int(args.integer("ncp", 0));
-  if (args.has("ncp") && opt.mode != EncodingMode::Fixed) throw InvalidArgument("--ncp needs --mode fixed");
+  if (args.has("ncp") && opt.mode != EncodingMode::Fixed)
+    throw InvalidArgument("--ncp needs --mode fixed");
   opt.threads = int(args.integer("threads", 0));
   opt.fastWindow = int(args.integer("window", 3));
   const std::string search = args.str("search", "fast");
-  if (search == "fast") opt.search = SearchMethod::Fast;
-  else if (search == "exhaustive") opt.search = SearchMethod::Exhaustive;
-  else throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
+  if (search == "fast")
+    opt.search = SearchMethod::Fast;
+  else if (search == "exhaustive")
+    opt.search = SearchMethod::Exhaustive;
+  else
+    throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
   ProgressBar bar("encode", args.has("progress"));
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
@@ -77,33 +90,40 @@ int runEncode(int argc, char** argv) {
   for (const LevelStats& ls : s.levels) reduced += ls.reducedDegree;
   if (reduced > 0)
     std::fprintf(stderr,
-                 "afam encode: notice: %lld blocks have an axis of fewer than %d samples; the degree is lowered "
+                 "afam encode: notice: %lld blocks have an axis of fewer than %d samples; the "
+                 "degree is lowered "
                  "there (fewer --blocks or --levels give larger blocks)\n",
                  (long long)reduced, opt.degree + 1);
   if (args.has("quiet")) return 0;
   const Index3 d = source->dims();
   std::printf("encoded %s -> %s\n", args.positional()[0].c_str(), args.positional()[1].c_str());
-  std::printf("dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
-              (long long)d[0], (long long)d[1], (long long)d[2], input.typeName.c_str(),
-              modeName(opt.mode), search.c_str(), s.levelsUsed, s.blocksPerAxisUsed, opt.degree, s.bound,
-              opt.relativeBound ? " (relative)" : "");
-  std::printf("seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
-              "fits=%lld blocks=%lld\n",
-              s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
-              (long long)s.fits, (long long)s.blocks);
-  std::printf("bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
-              (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
-              double(s.bytesIn) / double(s.bytesOut), double(s.inputVoxels) * 4.0 / double(s.bytesOut),
-              (unsigned long long)s.paperBytes);
-  std::printf("max_block_rmse=%.6g max_block_error=%.6g bound=%.6g value_range=[%.6g, %.6g]\n", s.maxRmse,
-              s.maxError, s.bound, s.valueMin, s.valueMax);
+  std::printf(
+      "dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
+      (long long)d[0], (long long)d[1], (long long)d[2], input.typeName.c_str(), modeName(opt.mode),
+      search.c_str(), s.levelsUsed, s.blocksPerAxisUsed, opt.degree, s.bound,
+      opt.relativeBound ? " (relative)" : "");
+  std::printf(
+      "seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
+      "fits=%lld blocks=%lld\n",
+      s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
+      (long long)s.fits, (long long)s.blocks);
+  std::printf(
+      "bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
+      (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
+      double(s.bytesIn) / double(s.bytesOut), double(s.inputVoxels) * 4.0 / double(s.bytesOut),
+      (unsigned long long)s.paperBytes);
+  std::printf("max_block_rmse=%.6g max_block_error=%.6g bound=%.6g value_range=[%.6g, %.6g]\n",
+              s.maxRmse, s.maxError, s.bound, s.valueMin, s.valueMax);
   for (size_t l = 0; l < s.levels.size(); ++l) {
     const LevelStats& ls = s.levels[l];
-    std::printf("level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld bytes=%llu "
-                "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f ncp:",
-                l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.refits,
-                (long long)ls.exact, (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse,
-                ls.maxError, s.bound, ls.seconds, ls.sampleSeconds);
+    std::printf(
+        "level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld "
+        "bytes=%llu "
+        "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f ncp:",
+        l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex,
+        (long long)ls.refits, (long long)ls.exact, (long long)ls.fits,
+        (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound, ls.seconds,
+        ls.sampleSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

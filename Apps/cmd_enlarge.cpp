@@ -36,18 +36,24 @@ void writeAll(int fd, const std::string& path, const void* data, size_t bytes) {
 
 int runEnlarge(int argc, char** argv) {
   Args args(argc, argv, {"dims", "noise", "seed", "threads"}, {"progress"});
-  const char* usage = "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--seed N] [--threads T]";
+  const char* usage =
+      "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--seed N] [--threads T]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "A real scan made large, for benchmarks whose blocks must cost what a real scan's cost: IN\n"
-        "(any volume `afam encode` reads; small, it is held in memory) resampled to X x Y x Z samples\n"
-        "spanning the same box (Catmull-Rom, linear beyond the faces), plus Gaussian noise at the new\n"
+        "A real scan made large, for benchmarks whose blocks must cost what a real scan's cost: "
+        "IN\n"
+        "(any volume `afam encode` reads; small, it is held in memory) resampled to X x Y x Z "
+        "samples\n"
+        "spanning the same box (Catmull-Rom, linear beyond the faces), plus Gaussian noise at the "
+        "new\n"
         "resolution, written in IN's sample type (rounded and clamped) as little-endian raw, x\n"
-        "fastest, slab by slab on every core; name OUT name_XxYxZ_type.raw to encode it by its name.\n"
+        "fastest, slab by slab on every core; name OUT name_XxYxZ_type.raw to encode it by its "
+        "name.\n"
         "The same arguments give the same bytes. Written to OUT.tmp and renamed.\n\n"
         "  --dims X,Y,Z    samples per axis of the large volume (each >= 2)\n"
-        "  --noise auto|S  noise standard deviation in IN's units; auto (default): IN's own, from its\n"
+        "  --noise auto|S  noise standard deviation in IN's units; auto (default): IN's own, from "
+        "its\n"
         "                  finest differences along x (median absolute difference / 0.954)\n"
         "  --seed N        noise seed (default 1)\n"
         "  --threads T     threads (default: all cores)\n"
@@ -56,21 +62,25 @@ int runEnlarge(int argc, char** argv) {
     return 0;
   }
   args.expectPositional(2, usage);
-  if (!args.has("dims")) throw InvalidArgument("--dims X,Y,Z is required; usage: " + std::string(usage));
+  if (!args.has("dims"))
+    throw InvalidArgument("--dims X,Y,Z is required; usage: " + std::string(usage));
   const Index3 target = Args::parseDims(args.str("dims"));
   const std::string in = args.positional()[0], out = args.positional()[1];
-  InputVolume input = openInput(in, Args(1, argv, {}, {}));  // dims and type from its name or header
+  InputVolume input =
+      openInput(in, Args(1, argv, {}, {}));  // dims and type from its name or header
   const SampleType type = parseSampleType(input.typeName);
   const Index3 dims = input.source->dims();
   std::vector<float> samples(size_t(dims[0] * dims[1] * dims[2]));
   input.source->readSlab(0, dims[2], samples.data());
   const std::string noiseArg = args.has("noise") ? args.str("noise") : "auto";
-  const double sigma = noiseArg == "auto" ? estimateScanNoise(samples, dims) : args.real("noise", 0);
+  const double sigma =
+      noiseArg == "auto" ? estimateScanNoise(samples, dims) : args.real("noise", 0);
   double lo, hi;
   sampleTypeRange(type, lo, hi);
   const uint64_t seed = uint64_t(args.integer("seed", 1));
-  const int threads = int(args.integer("threads", 0)) > 0 ? int(args.integer("threads", 0))
-                                                         : int(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = int(args.integer("threads", 0)) > 0
+                          ? int(args.integer("threads", 0))
+                          : int(std::max(1u, std::thread::hardware_concurrency()));
   const int64_t plane = target[0] * target[1];
   const int64_t chunk = std::max<int64_t>(1, (int64_t(8) << 20) / std::max<int64_t>(plane, 1));
   const std::string tmp = out + ".tmp";
@@ -79,10 +89,12 @@ int runEnlarge(int argc, char** argv) {
   try {
     // Each thread owns a source (its own cache of resampled planes) and one slab of a round.
     std::vector<EnlargedScanSource> sources;
-    for (int t = 0; t < threads; ++t) sources.emplace_back(samples, dims, target, sigma, seed, lo, hi);
+    for (int t = 0; t < threads; ++t)
+      sources.emplace_back(samples, dims, target, sigma, seed, lo, hi);
     const size_t slabBytes = size_t(plane * chunk) * size_t(sampleTypeSize(type));
     std::vector<std::vector<float>> values(static_cast<size_t>(threads));
-    std::vector<std::vector<unsigned char>> bytes(static_cast<size_t>(threads), std::vector<unsigned char>(slabBytes));
+    std::vector<std::vector<unsigned char>> bytes(static_cast<size_t>(threads),
+                                                  std::vector<unsigned char>(slabBytes));
     ProgressBar bar("enlarge", args.has("progress"));
     for (int64_t z = 0; z < target[2]; z += chunk * threads) {
       std::vector<std::thread> pool;
@@ -92,25 +104,31 @@ int runEnlarge(int argc, char** argv) {
           if (nz <= 0) return;
           values[size_t(t)].resize(size_t(plane * nz));
           sources[size_t(t)].readSlab(z0, nz, values[size_t(t)].data());
-          floatToSamples(type, values[size_t(t)].data(), uint64_t(plane * nz), bytes[size_t(t)].data());
+          floatToSamples(type, values[size_t(t)].data(), uint64_t(plane * nz),
+                         bytes[size_t(t)].data());
         });
       for (std::thread& th : pool) th.join();
       for (int t = 0; t < threads; ++t) {
         const int64_t z0 = z + t * chunk, nz = std::min(chunk, target[2] - z0);
-        if (nz > 0) writeAll(fd, tmp, bytes[size_t(t)].data(), size_t(plane * nz) * size_t(sampleTypeSize(type)));
+        if (nz > 0)
+          writeAll(fd, tmp, bytes[size_t(t)].data(),
+                   size_t(plane * nz) * size_t(sampleTypeSize(type)));
       }
       bar(double(std::min(target[2], z + chunk * threads)) / double(target[2]));
     }
-    if (::fsync(fd) != 0 || ::close(fd) != 0) throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0) throw IoError(out + ": cannot rename: " + std::strerror(errno));
+    if (::fsync(fd) != 0 || ::close(fd) != 0)
+      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
+    if (::rename(tmp.c_str(), out.c_str()) != 0)
+      throw IoError(out + ": cannot rename: " + std::strerror(errno));
   } catch (...) {
     ::close(fd);
     ::unlink(tmp.c_str());
     throw;
   }
-  std::printf("wrote %s: %lldx%lldx%lld %s from %s (%lldx%lldx%lld), noise sigma %.4g\n", out.c_str(),
-              (long long)target[0], (long long)target[1], (long long)target[2], sampleTypeName(type), in.c_str(),
-              (long long)dims[0], (long long)dims[1], (long long)dims[2], sigma);
+  std::printf("wrote %s: %lldx%lldx%lld %s from %s (%lldx%lldx%lld), noise sigma %.4g\n",
+              out.c_str(), (long long)target[0], (long long)target[1], (long long)target[2],
+              sampleTypeName(type), in.c_str(), (long long)dims[0], (long long)dims[1],
+              (long long)dims[2], sigma);
   return 0;
 }
 

@@ -31,10 +31,11 @@ int runInfo(int argc, char** argv) {
   const Partition& part = f->partition();
   std::printf("file=%s version=%u bytes=%llu\n", f->path().c_str(), f->version(),
               (unsigned long long)f->fileSize());
-  std::printf("dims=%lldx%lldx%lld scalar=%s range=[%.9g, %.9g]\n", (long long)h.dims[0], (long long)h.dims[1],
-              (long long)h.dims[2], h.scalarName.c_str(), h.valueMin, h.valueMax);
-  std::printf("origin=%g,%g,%g spacing=%g,%g,%g\n", h.origin[0], h.origin[1], h.origin[2], h.spacing[0],
-              h.spacing[1], h.spacing[2]);
+  std::printf("dims=%lldx%lldx%lld scalar=%s range=[%.9g, %.9g]\n", (long long)h.dims[0],
+              (long long)h.dims[1], (long long)h.dims[2], h.scalarName.c_str(), h.valueMin,
+              h.valueMax);
+  std::printf("origin=%g,%g,%g spacing=%g,%g,%g\n", h.origin[0], h.origin[1], h.origin[2],
+              h.spacing[0], h.spacing[1], h.spacing[2]);
   std::printf("mode=%s levels=%d blocks=%d degree=%d error_bound=%g%s", modeName(h.mode), h.levels,
               h.blocksPerAxis, h.degree, h.errorBound, h.relativeBound ? " (relative)" : "");
   if (h.mode == EncodingMode::Fixed) std::printf(" ncp=%d", h.fixedNcp);
@@ -66,20 +67,24 @@ int runInfo(int argc, char** argv) {
       if (h.mode != EncodingMode::Downsampled && k > std::min(h.degree + 1, nmax)) ++complexCount;
     }
     const BlockExtent e0 = part.extent(l, {0, 0, 0});
-    std::printf("level %d: blocks=%dx%dx%d samples=%dx%dx%d complex=%lld bytes=%llu max_rmse=%.4g max_error=%.4g ncp:",
-                l, b[0], b[1], b[2], e0.samples[0], e0.samples[1], e0.samples[2], (long long)complexCount,
-                (unsigned long long)bytes, maxRmse, maxErr);
+    std::printf(
+        "level %d: blocks=%dx%dx%d samples=%dx%dx%d complex=%lld bytes=%llu max_rmse=%.4g "
+        "max_error=%.4g ncp:",
+        l, b[0], b[1], b[2], e0.samples[0], e0.samples[1], e0.samples[2], (long long)complexCount,
+        (unsigned long long)bytes, maxRmse, maxErr);
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
-    std::printf("\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld bits_per_coded_value=%.3f\n",
-                (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3], (long long)coded,
-                codedValues > 0 ? codedBits / codedValues : 0.0);
+    std::printf(
+        "\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld "
+        "bits_per_coded_value=%.3f\n",
+        (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3],
+        (long long)coded, codedValues > 0 ? codedBits / codedValues : 0.0);
     payload += bytes;
     paper += paperL;
   }
   const double raw = double(h.dims[0]) * double(h.dims[1]) * double(h.dims[2]) * 4.0;
   std::printf("payload_bytes=%llu file_bytes=%llu paper_layout_bytes=%llu (file/paper=%.4f)\n",
-              (unsigned long long)payload, (unsigned long long)f->fileSize(), (unsigned long long)paper,
-              double(f->fileSize()) / double(paper));
+              (unsigned long long)payload, (unsigned long long)f->fileSize(),
+              (unsigned long long)paper, double(f->fileSize()) / double(paper));
   std::printf("float32_bytes=%.0f compression_ratio=%.2f", raw, raw / double(f->fileSize()));
   if (h.sourceBytesPerSample > 0)
     std::printf(" raw_bytes=%.0f ratio_raw=%.2f", raw / 4 * h.sourceBytesPerSample,

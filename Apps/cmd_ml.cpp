@@ -21,8 +21,10 @@ int runMl(int argc, char** argv) {
     std::printf(
         "usage: %s\n\n"
         "Writes the Marschner-Lobb function (alpha 0.25, fM 6) sampled on N^3 points spanning\n"
-        "[-1, 1]^3 as little-endian float32, x fastest, generated and written slab by slab (memory\n"
-        "stays a few planes). Value range [0, 1]. The file is written to OUT.raw.tmp and renamed.\n\n"
+        "[-1, 1]^3 as little-endian float32, x fastest, generated and written slab by slab "
+        "(memory\n"
+        "stays a few planes). Value range [0, 1]. The file is written to OUT.raw.tmp and "
+        "renamed.\n\n"
         "  --size N        samples per axis\n"
         "  --dims X,Y,Z    anisotropic sizes instead of --size\n"
         "  --progress      draw the progress bar even when stderr is not a terminal\n",
@@ -34,7 +36,8 @@ int runMl(int argc, char** argv) {
   if (args.has("dims")) {
     dims = Args::parseDims(args.str("dims"));
   } else {
-    if (!args.has("size")) throw InvalidArgument("--size N is required; usage: " + std::string(usage));
+    if (!args.has("size"))
+      throw InvalidArgument("--size N is required; usage: " + std::string(usage));
     const long long n = args.integer("size", 0);
     if (n < 1 || n > 100000) throw InvalidArgument("--size must be in [1, 100000]");
     dims = {n, n, n};
@@ -64,15 +67,17 @@ int runMl(int argc, char** argv) {
       }
       bar(double(z + nz) / double(dims[2]));
     }
-    if (::fsync(fd) != 0 || ::close(fd) != 0) throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0) throw IoError(out + ": cannot rename: " + std::strerror(errno));
+    if (::fsync(fd) != 0 || ::close(fd) != 0)
+      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
+    if (::rename(tmp.c_str(), out.c_str()) != 0)
+      throw IoError(out + ": cannot rename: " + std::strerror(errno));
   } catch (...) {
     ::close(fd);
     ::unlink(tmp.c_str());
     throw;
   }
-  std::printf("wrote %s: %lldx%lldx%lld float32\n", out.c_str(), (long long)dims[0], (long long)dims[1],
-              (long long)dims[2]);
+  std::printf("wrote %s: %lldx%lldx%lld float32\n", out.c_str(), (long long)dims[0],
+              (long long)dims[1], (long long)dims[2]);
   return 0;
 }
 

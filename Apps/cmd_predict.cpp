@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "afam/format/afam_file.hpp"
-#include "afam/scene/camera.hpp"
 #include "afam/predict/lstm.hpp"
 #include "afam/predict/predictor_factory.hpp"
+#include "afam/scene/camera.hpp"
 #include "afam/scene/transfer_function.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
@@ -45,8 +45,9 @@ void printAppaReport(const AppaBuildReport& rep) {
 
 int runPredict(int argc, char** argv) {
   cli::Args args(argc, argv, {"predictor", "out", "file", "lstm-weights"}, {});
-  const char* usage = "afam predict T.dat --predictor none|linear|appa|forecache|lstm --out PRED.dat "
-                      "[--file F.afam] [--lstm-weights W.bin]";
+  const char* usage =
+      "afam predict T.dat --predictor none|linear|appa|forecache|lstm --out PRED.dat "
+      "[--file F.afam] [--lstm-weights W.bin]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -67,7 +68,8 @@ int runPredict(int argc, char** argv) {
     return 0;
   }
   args.expectPositional(1, usage);
-  if (!args.has("predictor")) throw InvalidArgument(std::string("--predictor is required; usage: ") + usage);
+  if (!args.has("predictor"))
+    throw InvalidArgument(std::string("--predictor is required; usage: ") + usage);
   if (!args.has("out")) throw InvalidArgument(std::string("--out is required; usage: ") + usage);
   const std::string name = args.str("predictor");
   const std::vector<Pose> poses = loadTrajectory(args.positional()[0]);
@@ -94,9 +96,11 @@ int runPredict(int argc, char** argv) {
   }
   writeTrajectory(args.str("out"), pred);
   if (name == "forecache")
-    std::printf("phases foraging=%d navigation=%d sensemaking=%d\n", phases[0], phases[1], phases[2]);
+    std::printf("phases foraging=%d navigation=%d sensemaking=%d\n", phases[0], phases[1],
+                phases[2]);
   std::printf("predictor=%s views=%zu mean_inference_us=%.2f\n", name.c_str(), poses.size(),
               poses.empty() ? 0.0 : us / double(poses.size()));
-  std::printf("mean_position_error=%.6f\n", poses.size() > 1 ? err / double(poses.size() - 1) : 0.0);
+  std::printf("mean_position_error=%.6f\n",
+              poses.size() > 1 ? err / double(poses.size() - 1) : 0.0);
   return 0;
 }

@@ -5,12 +5,12 @@
 // --ground-truth-ml, psnr=<x> ssim=<y> against the analytic Marschner-Lobb ray cast.
 #include <cstdio>
 
-#include "afam/scene/camera.hpp"
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/eval/ground_truth.hpp"
 #include "afam/eval/image_metrics.hpp"
 #include "afam/eval/png_io.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/scene/camera.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "device_option.hpp"
@@ -28,7 +28,8 @@ int runRender(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Renders point of view I (0-based) of a trajectory file (recorded, or from `afam trajectory`;\n"
+        "Renders point of view I (0-based) of a trajectory file (recorded, or from `afam "
+        "trajectory`;\n"
         "the authors' camera) from FILE (.afam of any mode: adaptive, inlevel and fixed\n"
         "render the B-spline micro-models, ds the raw blocks with trilinear interpolation) with\n"
         "the CPU ray caster, writes IMG.png and prints render_ms=<x> (plus caching statistics).\n\n"
@@ -42,7 +43,8 @@ int runRender(int argc, char** argv) {
     return 0;
   }
   args.expectPositional(1, usage);
-  if (!args.has("trajectory")) throw InvalidArgument("--trajectory is required; usage: " + std::string(usage));
+  if (!args.has("trajectory"))
+    throw InvalidArgument("--trajectory is required; usage: " + std::string(usage));
   if (!args.has("out")) throw InvalidArgument("--out is required; usage: " + std::string(usage));
   const auto size = parseSize(args.str("size", "256,256"));
   const RenderOptions opts = parseRenderOptions(args);
@@ -62,12 +64,12 @@ int runRender(int argc, char** argv) {
   for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
   const ImageRGB8 rgb = toRGB8(image);
   writePng(args.str("out"), rgb);
-  std::printf("method=%s blocks=%lld bytes=%llu caching_ms=%.3f hits=%llu misses=%llu "
-              "frustum_culled=%lld tf_culled=%lld\n",
-              modeName(file->header().mode), (long long)st.slots,
-              (unsigned long long)st.poolBytes, st.cachingMs, (unsigned long long)st.hits,
-              (unsigned long long)st.misses, (long long)st.culled.frustumBlocks,
-              (long long)st.culled.tfBlocks);
+  std::printf(
+      "method=%s blocks=%lld bytes=%llu caching_ms=%.3f hits=%llu misses=%llu "
+      "frustum_culled=%lld tf_culled=%lld\n",
+      modeName(file->header().mode), (long long)st.slots, (unsigned long long)st.poolBytes,
+      st.cachingMs, (unsigned long long)st.hits, (unsigned long long)st.misses,
+      (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks);
   std::printf("device=%s%s%s\n", device.used.c_str(), device.description.empty() ? "" : " ",
               device.description.c_str());
   std::printf("render_ms=%.3f\n", st.renderMs);

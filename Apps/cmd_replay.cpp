@@ -11,9 +11,9 @@
 #include <fstream>
 #include <vector>
 
-#include "afam/scene/camera.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/scene/camera.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "device_option.hpp"
@@ -41,16 +41,21 @@ int runReplay(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Replays every point of view of a trajectory file (recorded, or from `afam trajectory`) through\n"
+        "Replays every point of view of a trajectory file (recorded, or from `afam trajectory`) "
+        "through\n"
         "the out-of-core renderer on the CPU: LOD cut, culling, LRU cache, prefetch while the\n"
         "frame renders. The method follows FILE's mode (adaptive/inlevel = Adaptive-FAM,\n"
-        "fixed = FAM, ds = downsampling). Caching time = LOD selection + cache lookups and reads +\n"
+        "fixed = FAM, ds = downsampling). Caching time = LOD selection + cache lookups and reads "
+        "+\n"
         "copying the frame's models; rendering time = ray casting; latency = their sum.\n"
-        "--storage-mbps is an EMULATION of a slower storage tier (the paper used a 5400 rpm disk):\n"
+        "--storage-mbps is an EMULATION of a slower storage tier (the paper used a 5400 rpm "
+        "disk):\n"
         "reads are followed by a sleep so that bytes/time never exceed the cap.\n\n"
         "  --trajectory T.dat     trajectory file (required)\n"
-        "  --csv OUT.csv          per point of view: pov,caching_ms,render_ms,latency_ms,hits,misses,\n"
-        "                         bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks,\n"
+        "  --csv OUT.csv          per point of view: "
+        "pov,caching_ms,render_ms,latency_ms,hits,misses,\n"
+        "                         "
+        "bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks,\n"
         "                         cache_bytes,cache_peak_bytes (resident in the cache at the end\n"
         "                         of the frame / at most during it; never above --cache-bytes)\n"
         "  --frames N             replay only the first N points of view\n"
@@ -59,7 +64,8 @@ int runReplay(int argc, char** argv) {
     return 0;
   }
   args.expectPositional(1, usage);
-  if (!args.has("trajectory")) throw InvalidArgument("--trajectory is required; usage: " + std::string(usage));
+  if (!args.has("trajectory"))
+    throw InvalidArgument("--trajectory is required; usage: " + std::string(usage));
   const auto size = parseSize(args.str("size", "256,256"));
   const RenderOptions opts = parseRenderOptions(args);
   auto poses = loadTrajectory(args.str("trajectory"));
@@ -98,23 +104,24 @@ int runReplay(int argc, char** argv) {
     if (csv.is_open())
       csv << i << ',' << st.cachingMs << ',' << st.renderMs << ',' << st.latencyMs << ',' << st.hits
           << ',' << st.misses << ',' << st.bytesRead << ',' << st.slots << ','
-          << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks << ','
-          << st.cacheBytes << ',' << st.cachePeakBytes << '\n';
+          << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks
+          << ',' << st.cacheBytes << ',' << st.cachePeakBytes << '\n';
     if (!quiet)
-      std::printf("pov=%zu caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu misses=%llu "
-                  "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld\n",
-                  i, st.cachingMs, st.renderMs, st.latencyMs, (unsigned long long)st.hits,
-                  (unsigned long long)st.misses, (unsigned long long)st.bytesRead,
-                  (long long)st.slots, (long long)st.culled.frustumBlocks,
-                  (long long)st.culled.tfBlocks);
+      std::printf(
+          "pov=%zu caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu misses=%llu "
+          "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld\n",
+          i, st.cachingMs, st.renderMs, st.latencyMs, (unsigned long long)st.hits,
+          (unsigned long long)st.misses, (unsigned long long)st.bytesRead, (long long)st.slots,
+          (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks);
   }
   if (csv.is_open() && !csv.good()) throw IoError("replay: writing " + args.str("csv") + " failed");
   const double missRate = hits + misses ? double(misses) / double(hits + misses) : 0.0;
-  std::printf("\nmethod=%s povs=%zu image=%dx%d cache_blocks=%llu cache_bytes=%llu prefetch=%s "
-              "cold=%d storage_mbps=%g\n",
-              modeName(file->header().mode), poses.size(), size.first, size.second,
-              (unsigned long long)opts.cache.blocks, (unsigned long long)opts.cache.bytes,
-              opts.prefetch.c_str(), opts.cold ? 1 : 0, opts.storageMBps);
+  std::printf(
+      "\nmethod=%s povs=%zu image=%dx%d cache_blocks=%llu cache_bytes=%llu prefetch=%s "
+      "cold=%d storage_mbps=%g\n",
+      modeName(file->header().mode), poses.size(), size.first, size.second,
+      (unsigned long long)opts.cache.blocks, (unsigned long long)opts.cache.bytes,
+      opts.prefetch.c_str(), opts.cold ? 1 : 0, opts.storageMBps);
   std::printf("device=%s%s%s\n", device.used.c_str(), device.description.empty() ? "" : " ",
               device.description.c_str());
   std::printf("%-12s %10s\n", "median", "ms");
@@ -122,12 +129,13 @@ int runReplay(int argc, char** argv) {
               median(cach), "rendering", median(rend));
   std::printf("hits=%llu misses=%llu bytes_read=%llu\n", (unsigned long long)hits,
               (unsigned long long)misses, (unsigned long long)bytes);
-  std::printf("median_latency_ms=%.3f median_caching_ms=%.3f median_render_ms=%.3f miss_rate=%.4f\n",
-              median(lat), median(cach), median(rend), missRate);
+  std::printf(
+      "median_latency_ms=%.3f median_caching_ms=%.3f median_render_ms=%.3f miss_rate=%.4f\n",
+      median(lat), median(cach), median(rend), missRate);
   rusage self{};
   ::getrusage(RUSAGE_SELF, &self);
-  std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n", (unsigned long long)cachePeak,
-              (unsigned long long)poolPeak, self.ru_maxrss);
+  std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n",
+              (unsigned long long)cachePeak, (unsigned long long)poolPeak, self.ru_maxrss);
   std::fflush(stdout);
   return 0;
 }

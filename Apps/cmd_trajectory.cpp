@@ -37,8 +37,8 @@ TrajectoryOptions trajectoryOptions(const Args& args) {
 
 int runTrajectory(int argc, char** argv) {
   Args args(argc, argv,
-            {"kind", "views", "seed", "distance", "theta", "phi", "turns", "from", "to", "min-distance",
-             "max-distance"},
+            {"kind", "views", "seed", "distance", "theta", "phi", "turns", "from", "to",
+             "min-distance", "max-distance"},
             {"quiet"});
   const char* usage =
       "afam trajectory OUT.dat [--kind orbit|dolly|walk] [--views N] [--seed S]\n"
@@ -49,7 +49,8 @@ int runTrajectory(int argc, char** argv) {
         "usage: %s\n\n"
         "Writes a generated camera path in the trajectory format that `afam render`, `replay` and\n"
         "`predict` read: 3 N little-endian float32 (N distances, N theta, N phi in degrees); the\n"
-        "camera sits at distance * (sin t cos p, sin t sin p, cos t) with the volume in [-1, 1]^3,\n"
+        "camera sits at distance * (sin t cos p, sin t sin p, cos t) with the volume in [-1, "
+        "1]^3,\n"
         "looking at the origin. The file is written to OUT.dat.tmp and renamed.\n\n"
         "  --kind K          walk (default): a seeded exploration with the statistics of recorded\n"
         "                    human paths (distances in [A, B], smooth theta/phi steps, pauses);\n"
@@ -80,8 +81,8 @@ int runTrajectory(int argc, char** argv) {
     dMin = std::min(dMin, p.distance);
     dMax = std::max(dMax, p.distance);
   }
-  std::printf("wrote %s: %s, %d views, distance %.4g-%.4g\n", out.c_str(), trajectoryKindName(o.kind), o.views,
-              dMin, dMax);
+  std::printf("wrote %s: %s, %d views, distance %.4g-%.4g\n", out.c_str(),
+              trajectoryKindName(o.kind), o.views, dMin, dMax);
   return 0;
 }
 

@@ -2,9 +2,9 @@
 // afam verify FILE.afam [--against IN.raw] [--level K]
 #include <cstdio>
 
-#include "afam/format/afam_file.hpp"
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "level_error.hpp"
@@ -14,11 +14,14 @@ namespace afam::cli {
 
 int runVerify(int argc, char** argv) {
   Args args(argc, argv, {"against", "dims", "type", "level", "max-rmse"}, {"progress"});
-  const char* usage = "afam verify FILE.afam [--against IN.raw [--dims X,Y,Z] [--type T] [--level K] [--max-rmse E]]";
+  const char* usage =
+      "afam verify FILE.afam [--against IN.raw [--dims X,Y,Z] [--type T] [--level K] [--max-rmse "
+      "E]]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Reads every micro-model and checks its CRC32. With --against, also decodes the finest level\n"
+        "Reads every micro-model and checks its CRC32. With --against, also decodes the finest "
+        "level\n"
         "(or --level K) on its sample grid and compares it with the raw volume at the same sample\n"
         "positions, each sample once, streaming; prints rmse=<number> and max_error=<number>.\n"
         "IN may be raw (name_XxYxZ_type.raw or --dims/--type), NRRD or MetaImage, as for encode.\n"
@@ -56,10 +59,12 @@ int runVerify(int argc, char** argv) {
     throw InvalidArgument(args.str("against") + ": dims differ from the .afam file's");
   const int level = int(args.integer("level", h.levels - 1));
   if (level < 0 || level >= h.levels) throw InvalidArgument("--level out of range");
-  const ErrorAccumulator e = measureLevelError(*f, *src, level, [&](double x) { bar(0.5 + 0.5 * x); });
+  const ErrorAccumulator e =
+      measureLevelError(*f, *src, level, [&](double x) { bar(0.5 + 0.5 * x); });
   bar.finish();
   const double rmse = e.rmse();
-  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)e.count, rmse, e.maxError);
+  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)e.count, rmse,
+              e.maxError);
   if (args.has("max-rmse") && !(rmse <= args.real("max-rmse", 0)))
     throw Error("rmse " + std::to_string(rmse) + " is above --max-rmse " + args.str("max-rmse"));
   return 0;

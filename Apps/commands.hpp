@@ -5,20 +5,20 @@
 
 namespace afam::cli {
 
-int runMl(int argc, char** argv);      // afam ml --size N OUT.raw
-int runEncode(int argc, char** argv);  // afam encode IN.raw OUT.afam [...]
-int runInfo(int argc, char** argv);    // afam info FILE.afam
-int runVerify(int argc, char** argv);  // afam verify FILE.afam [--against IN.raw]
-int runDecode(int argc, char** argv);  // afam decode FILE.afam --level K OUT.raw
-int runEnlarge(int argc, char** argv);  // afam enlarge IN OUT.raw --dims X,Y,Z
+int runMl(int argc, char** argv);          // afam ml --size N OUT.raw
+int runEncode(int argc, char** argv);      // afam encode IN.raw OUT.afam [...]
+int runInfo(int argc, char** argv);        // afam info FILE.afam
+int runVerify(int argc, char** argv);      // afam verify FILE.afam [--against IN.raw]
+int runDecode(int argc, char** argv);      // afam decode FILE.afam --level K OUT.raw
+int runEnlarge(int argc, char** argv);     // afam enlarge IN OUT.raw --dims X,Y,Z
 int runTrajectory(int argc, char** argv);  // afam trajectory OUT.dat [--kind orbit|dolly|walk]
 
 }  // namespace afam::cli
 
 // Optional commands, each defined in its own Apps/cmd_*.cpp (compiled when the file exists).
-int runCondition(int argc, char** argv);  // Apps/cmd_condition.cpp
-int runRender(int argc, char** argv);     // Apps/cmd_render.cpp
-int runReplay(int argc, char** argv);     // Apps/cmd_replay.cpp
-int runPredict(int argc, char** argv);    // Apps/cmd_predict.cpp
-int runCompare(int argc, char** argv);    // Apps/cmd_compare.cpp
+int runCondition(int argc, char** argv);      // Apps/cmd_condition.cpp
+int runRender(int argc, char** argv);         // Apps/cmd_render.cpp
+int runReplay(int argc, char** argv);         // Apps/cmd_replay.cpp
+int runPredict(int argc, char** argv);        // Apps/cmd_predict.cpp
+int runCompare(int argc, char** argv);        // Apps/cmd_compare.cpp
 int runCompareCodecs(int argc, char** argv);  // Apps/cmd_compare_codecs.cpp

@@ -33,8 +33,8 @@ inline DeviceChoice useDevice(Renderer& renderer, const std::string& device, lon
   if (device == "cpu") return choice;
   if (device != "gpu") throw InvalidArgument("--device must be cpu or gpu, not '" + device + "'");
   if (budgetMiB < 16) throw InvalidArgument("--gpu-budget-mb must be >= 16");
-  std::unique_ptr<FrameCaster> gpu =
-      makeGpuCaster(size_t(budgetMiB) << 20, renderer.resources().threads, [](const std::string& why) {
+  std::unique_ptr<FrameCaster> gpu = makeGpuCaster(
+      size_t(budgetMiB) << 20, renderer.resources().threads, [](const std::string& why) {
         std::fprintf(stderr, "afam: --device gpu: %s\n", why.c_str());
       });
   if (!gpu) {
@@ -49,7 +49,8 @@ inline DeviceChoice useDevice(Renderer& renderer, const std::string& device, lon
 
 /// What the caster said during a frame (e.g. a pool too small for it), on stderr.
 inline void printDeviceMessages(const FrameStats& stats) {
-  for (const std::string& m : stats.cast.messages) std::fprintf(stderr, "afam: --device gpu: %s\n", m.c_str());
+  for (const std::string& m : stats.cast.messages)
+    std::fprintf(stderr, "afam: --device gpu: %s\n", m.c_str());
 }
 
 }  // namespace afam::cli

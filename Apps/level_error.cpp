@@ -11,8 +11,8 @@ namespace {
 // Compares the samples that block (i, j, kz) owns on the level grid (a shared boundary sample
 // belongs to the later block, as in decodeLevelBox) with the original's samples of that block.
 void addBlock(const AfamFile& file, const LevelGrid& grid, int level, Int3 ijk, const Int3& samples,
-              const std::vector<float>& original, std::vector<float>& decoded, std::vector<float>& reference,
-              ErrorAccumulator& acc) {
+              const std::vector<float>& original, std::vector<float>& decoded,
+              std::vector<float>& reference, ErrorAccumulator& acc) {
   Index3 lo{}, hi{};
   for (int a = 0; a < 3; ++a) {
     const auto& start = grid.start[size_t(a)];
@@ -39,7 +39,8 @@ ErrorAccumulator measureLevelError(const AfamFile& file, VolumeSource& original,
   if (original.dims() != file.header().dims)
     throw InvalidArgument("the original volume's dims differ from the .afam file's");
   if (level < 0 || level >= part.levels())
-    throw InvalidArgument("level " + std::to_string(level) + " outside [0, " + std::to_string(part.levels() - 1) + "]");
+    throw InvalidArgument("level " + std::to_string(level) + " outside [0, " +
+                          std::to_string(part.levels() - 1) + "]");
   const LevelGrid grid = levelGrid(part, level);
   const Int3 nb = part.blocksPerAxis(level);
   BlockRowReader reader(original, part);
@@ -51,8 +52,8 @@ ErrorAccumulator measureLevelError(const AfamFile& file, VolumeSource& original,
     for (int j = 0; j < nb[1]; ++j)
       for (int i = 0; i < nb[0]; ++i) {
         const Int3 ijk{i, j, kz};
-        addBlock(file, grid, level, ijk, part.extent(level, ijk).samples, row[size_t(j) * size_t(nb[0]) + size_t(i)],
-                 decoded, reference, acc);
+        addBlock(file, grid, level, ijk, part.extent(level, ijk).samples,
+                 row[size_t(j) * size_t(nb[0]) + size_t(i)], decoded, reference, acc);
       }
     if (progress) progress(double(kz + 1) / double(nb[2]));
   }

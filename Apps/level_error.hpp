@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <functional>
 
-#include "afam/render/level_decode.hpp"
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
 
 namespace afam::cli {
 

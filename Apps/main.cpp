@@ -21,10 +21,13 @@ const Command kCommands[] = {
     {"ml", afam::cli::runMl, "write a float32 Marschner-Lobb volume: afam ml --size N OUT.raw"},
     {"encode", afam::cli::runEncode, "encode a raw volume into an .afam file"},
     {"info", afam::cli::runInfo, "levels, NCP histograms, sizes and compression of an .afam file"},
-    {"verify", afam::cli::runVerify, "check checksums; with --against IN.raw print rmse= and max_error="},
+    {"verify", afam::cli::runVerify,
+     "check checksums; with --against IN.raw print rmse= and max_error="},
     {"decode", afam::cli::runDecode, "decode one level to a float32 raw volume"},
-    {"enlarge", afam::cli::runEnlarge, "a real scan made large: resampled with noise at the new resolution"},
-    {"trajectory", afam::cli::runTrajectory, "write a generated camera path (orbit, dolly, exploration walk)"},
+    {"enlarge", afam::cli::runEnlarge,
+     "a real scan made large: resampled with noise at the new resolution"},
+    {"trajectory", afam::cli::runTrajectory,
+     "write a generated camera path (orbit, dolly, exploration walk)"},
 #ifdef AFAM_HAVE_CMD_CONDITION
     {"condition", runCondition, "conditioning of the fitting systems"},
 #endif
@@ -38,7 +41,8 @@ const Command kCommands[] = {
     {"compare", runCompare, "psnr/ssim of one PNG against another: afam compare TEST.png REF.png"},
 #endif
 #ifdef AFAM_HAVE_CMD_COMPARE_CODECS
-    {"compare-codecs", runCompareCodecs, "Adaptive-FAM against ZFP at the same RMSE on raw volumes"},
+    {"compare-codecs", runCompareCodecs,
+     "Adaptive-FAM against ZFP at the same RMSE on raw volumes"},
 #endif
 #ifdef AFAM_HAVE_CMD_PREDICT
     {"predict", runPredict, "predict the next pose along a trajectory (prefetch predictors)"},
@@ -46,7 +50,8 @@ const Command kCommands[] = {
 };
 
 void usage(std::FILE* out) {
-  std::fprintf(out, "usage: afam <command> [options]   (afam <command> --help for details)\n\ncommands:\n");
+  std::fprintf(
+      out, "usage: afam <command> [options]   (afam <command> --help for details)\n\ncommands:\n");
   for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
 }
 

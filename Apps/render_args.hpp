@@ -15,11 +15,14 @@ namespace afam::cli {
 inline const char* renderOptionsHelp() {
   return "  --size W,H             image size (or N for N x N; default 256,256)\n"
          "  --cache-blocks N       RAM cache budget in micro-models (default 200, the paper's)\n"
-         "  --cache-bytes B        RAM cache budget in bytes (instead of, or with, --cache-blocks)\n"
+         "  --cache-bytes B        RAM cache budget in bytes (instead of, or with, "
+         "--cache-blocks)\n"
          "  --prefetch P           none | linear | appa | forecache | lstm\n"
-         "  --cold                 evict the file from the OS page cache before each point of view\n"
+         "  --cold                 evict the file from the OS page cache before each point of "
+         "view\n"
          "  --storage-mbps R       emulate storage of R MB/s (1 MB = 1e6 B; sleeps after reads)\n"
-         "  --sample-distance D    ray sample spacing in the normalised [-1,1]^3 frame (default 0.005)\n"
+         "  --sample-distance D    ray sample spacing in the normalised [-1,1]^3 frame (default "
+         "0.005)\n"
          "  --shading on|off       Phong shading from the model's gradient (default on)\n"
          "  --lod distance|screen  the paper's distance bands (default) or projected sample size\n"
          "  --pixel-budget P       screen policy: allowed projected sample spacing in pixels (1)\n"
@@ -28,9 +31,9 @@ inline const char* renderOptionsHelp() {
 }
 
 inline const std::set<std::string>& renderValueOptions() {
-  static const std::set<std::string> s = {"size", "cache-blocks", "cache-bytes", "prefetch",
-                                          "storage-mbps", "sample-distance", "shading", "lod",
-                                          "pixel-budget", "threads", "trajectory"};
+  static const std::set<std::string> s = {
+      "size",    "cache-blocks", "cache-bytes",  "prefetch", "storage-mbps", "sample-distance",
+      "shading", "lod",          "pixel-budget", "threads",  "trajectory"};
   return s;
 }
 
@@ -53,9 +56,12 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   if (sh != "on" && sh != "off") throw InvalidArgument("--shading must be on or off");
   o.shading = sh == "on";
   const std::string lod = a.str("lod", "distance");
-  if (lod == "distance") o.lod.policy = LodPolicy::Distance;
-  else if (lod == "screen") o.lod.policy = LodPolicy::Screen;
-  else throw InvalidArgument("--lod must be distance or screen");
+  if (lod == "distance")
+    o.lod.policy = LodPolicy::Distance;
+  else if (lod == "screen")
+    o.lod.policy = LodPolicy::Screen;
+  else
+    throw InvalidArgument("--lod must be distance or screen");
   o.lod.pixelBudget = a.real("pixel-budget", 1.0);
   if (!(o.lod.pixelBudget > 0)) throw InvalidArgument("--pixel-budget must be > 0");
   if (a.has("no-culling")) o.lod.frustumCulling = o.lod.tfCulling = false;

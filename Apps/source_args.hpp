@@ -18,11 +18,13 @@ inline std::array<double, 3> parseSpacing(const std::string& s) {
   for (int a = 0; a < 3; ++a) {
     const size_t c = s.find(',', start);
     try {
-      spacing[a] = std::stod(s.substr(start, c == std::string::npos ? std::string::npos : c - start));
+      spacing[a] =
+          std::stod(s.substr(start, c == std::string::npos ? std::string::npos : c - start));
     } catch (...) {
       throw InvalidArgument("--spacing: '" + s + "' is not SX,SY,SZ");
     }
-    if (c == std::string::npos && a < 2) throw InvalidArgument("--spacing: '" + s + "' is not SX,SY,SZ");
+    if (c == std::string::npos && a < 2)
+      throw InvalidArgument("--spacing: '" + s + "' is not SX,SY,SZ");
     start = c + 1;
   }
   return spacing;
@@ -32,9 +34,11 @@ inline std::unique_ptr<RawFileSource> openRaw(const std::string& path, const Arg
   Index3 dims{};
   SampleType type = SampleType::Float32;
   const bool named = parseRawName(path, dims, type);
-  if (args.has("dims")) dims = Args::parseDims(args.str("dims"));
+  if (args.has("dims"))
+    dims = Args::parseDims(args.str("dims"));
   else if (!named)
-    throw InvalidArgument(path + ": give --dims X,Y,Z (the name does not follow name_XxYxZ_type.raw)");
+    throw InvalidArgument(path +
+                          ": give --dims X,Y,Z (the name does not follow name_XxYxZ_type.raw)");
   if (args.has("type")) type = parseSampleType(args.str("type"));
   std::array<double, 3> spacing{1, 1, 1}, origin{0, 0, 0};
   if (args.has("spacing")) spacing = parseSpacing(args.str("spacing"));

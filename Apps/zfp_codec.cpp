@@ -38,9 +38,11 @@ struct ZfpHandles {
 
 bool zfpAvailable() { return true; }
 
-ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_t nx, size_t ny, size_t nz,
-                          float* out) {
-  if (!(parameter > 0)) throw InvalidArgument("zfp: the rate or tolerance must be > 0, not " + std::to_string(parameter));
+ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_t nx, size_t ny,
+                          size_t nz, float* out) {
+  if (!(parameter > 0))
+    throw InvalidArgument("zfp: the rate or tolerance must be > 0, not " +
+                          std::to_string(parameter));
   if (nx == 0 || ny == 0 || nz == 0) throw InvalidArgument("zfp: empty array");
   ZfpRoundTrip r;
   ZfpHandles h;
@@ -49,9 +51,10 @@ ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_
   h.decoded = zfp_field_3d(out, zfp_type_float, nx, ny, nz);
   h.stream = zfp_stream_open(nullptr);
   if (!h.field || !h.decoded || !h.stream) throw Error("zfp: cannot allocate the stream");
-  r.effectiveParameter = mode == ZfpMode::FixedRate
-                             ? zfp_stream_set_rate(h.stream, parameter, zfp_type_float, 3, zfp_false)
-                             : zfp_stream_set_accuracy(h.stream, parameter);
+  r.effectiveParameter =
+      mode == ZfpMode::FixedRate
+          ? zfp_stream_set_rate(h.stream, parameter, zfp_type_float, 3, zfp_false)
+          : zfp_stream_set_accuracy(h.stream, parameter);
   std::vector<unsigned char> buffer(zfp_stream_maximum_size(h.stream, h.field));
   h.bits = stream_open(buffer.data(), buffer.size());
   zfp_stream_set_bit_stream(h.stream, h.bits);

@@ -33,8 +33,8 @@ void vtkAFAMControllerTeam::mergeFlags(std::vector<uint8_t>& flags)
 {
   std::lock_guard<std::mutex> lock(this->Mutex);
   std::vector<uint8_t> merged(flags.size());
-  this->Controller->AllReduce(flags.data(), merged.data(), static_cast<vtkIdType>(flags.size()),
-    vtkCommunicator::MAX_OP);
+  this->Controller->AllReduce(
+    flags.data(), merged.data(), static_cast<vtkIdType>(flags.size()), vtkCommunicator::MAX_OP);
   flags.swap(merged);
 }
 
@@ -52,8 +52,12 @@ std::vector<std::vector<uint8_t>> vtkAFAMControllerTeam::gatherToFirst(
   }
   std::vector<uint8_t> all(this->rank() == 0 ? static_cast<size_t>(offsets.back()) : 0);
   uint8_t dummy = 0;
-  this->Controller->GatherV(bytes.empty() ? &dummy : bytes.data(), all.empty() ? &dummy : all.data(),
-    mine, lengths.data(), offsets.data(), 0);
+  this->Controller->GatherV(bytes.empty() ? &dummy : bytes.data(),
+    all.empty() ? &dummy : all.data(),
+    mine,
+    lengths.data(),
+    offsets.data(),
+    0);
   std::vector<std::vector<uint8_t>> parts;
   if (this->rank() == 0)
   {

@@ -4,11 +4,12 @@
  * @class   vtkAFAMControllerTeam
  * @brief   Core's EncodeTeam over a vtkMultiProcessController (private to the module).
  *
- * The ranks of the controller encode one volume together (afam/encode/encode_team.hpp). Every call runs
- * under `Lock()`, which the piece source (vtkAFAMPieceSource) also takes around its one-sided reads,
- * so that MPI is entered by one thread at a time where MPI allows other threads than the main one
- * (MPI_THREAD_SERIALIZED or more): the encoder then samples on a thread of its own while its calling
- * thread runs these collectives. Below that level every MPI call stays on the calling thread.
+ * The ranks of the controller encode one volume together (afam/encode/encode_team.hpp). Every call
+ * runs under `Lock()`, which the piece source (vtkAFAMPieceSource) also takes around its one-sided
+ * reads, so that MPI is entered by one thread at a time where MPI allows other threads than the
+ * main one (MPI_THREAD_SERIALIZED or more): the encoder then samples on a thread of its own while
+ * its calling thread runs these collectives. Below that level every MPI call stays on the calling
+ * thread.
  */
 #ifndef vtkAFAMControllerTeam_h
 #define vtkAFAMControllerTeam_h
@@ -39,7 +40,10 @@ public:
   /// Collective: every rank's `count` ints, rank after rank.
   std::vector<int> allGather(const int* values, int count);
   /// The lock every MPI call of an encode takes.
-  std::mutex& Lock() { return this->Mutex; }
+  std::mutex& Lock()
+  {
+    return this->Mutex;
+  }
 
 private:
   vtkMultiProcessController* Controller;

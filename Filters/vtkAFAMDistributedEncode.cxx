@@ -42,7 +42,8 @@ bool vtkAFAMGetSamples(vtkDataArray* array, vtkAFAMArraySamples& samples, std::s
   samples.Copy = nullptr;
   if (!array->HasStandardMemoryLayout())
   {
-    samples.Copy = vtkSmartPointer<vtkDataArray>::Take(vtkDataArray::CreateDataArray(array->GetDataType()));
+    samples.Copy =
+      vtkSmartPointer<vtkDataArray>::Take(vtkDataArray::CreateDataArray(array->GetDataType()));
     samples.Copy->DeepCopy(array);
   }
   samples.Data = (samples.Copy ? samples.Copy.Get() : array)->GetVoidPointer(0);
@@ -71,8 +72,10 @@ void Agree(vtkAFAMControllerTeam& team, const std::string& error)
 }
 
 /// What is wrong with this rank's piece and array ("" when nothing is); `samples` gets the array's.
-std::string CheckPiece(
-  vtkImageData* piece, vtkDataArray* array, const std::string& arrayError, vtkAFAMArraySamples& samples)
+std::string CheckPiece(vtkImageData* piece,
+  vtkDataArray* array,
+  const std::string& arrayError,
+  vtkAFAMArraySamples& samples)
 {
   if (!arrayError.empty())
   {
@@ -93,8 +96,12 @@ std::string CheckPiece(
 
 /// Origin and spacing of rank `first` (whose piece is not empty), on every rank: the file's origin
 /// is the world position of the whole extent's first point.
-void AgreeOnGeometry(vtkAFAMControllerTeam& team, vtkImageData* piece, int first, const int whole[6],
-  std::array<double, 3>& origin, std::array<double, 3>& spacing)
+void AgreeOnGeometry(vtkAFAMControllerTeam& team,
+  vtkImageData* piece,
+  int first,
+  const int whole[6],
+  std::array<double, 3>& origin,
+  std::array<double, 3>& spacing)
 {
   std::ostringstream text;
   text.precision(17);
@@ -110,9 +117,13 @@ void AgreeOnGeometry(vtkAFAMControllerTeam& team, vtkImageData* piece, int first
 }
 } // namespace
 
-vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, vtkImageData* piece,
-  vtkDataArray* array, const std::string& arrayError, const int wholeExtent[6],
-  const afam::EncoderOptions& options, const std::string& path)
+vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
+  vtkImageData* piece,
+  vtkDataArray* array,
+  const std::string& arrayError,
+  const int wholeExtent[6],
+  const afam::EncoderOptions& options,
+  const std::string& path)
 {
   vtkAFAMControllerTeam team(controller);
   auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
@@ -123,12 +134,14 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   }
   const bool empty = vtkAFAMPieceSource::IsEmpty(mine);
   vtkAFAMArraySamples samples;
-  Agree(team, !communicator ? "the ranks are not connected by MPI (vtkMPICommunicator)"
-      : empty               ? std::string()
-                            : CheckPiece(piece, array, arrayError, samples));
+  Agree(team,
+    !communicator ? "the ranks are not connected by MPI (vtkMPICommunicator)"
+      : empty     ? std::string()
+                  : CheckPiece(piece, array, arrayError, samples));
 
-  const Extent whole{ wholeExtent[0], wholeExtent[1], wholeExtent[2], wholeExtent[3],
-    wholeExtent[4], wholeExtent[5] };
+  const Extent whole{
+    wholeExtent[0], wholeExtent[1], wholeExtent[2], wholeExtent[3], wholeExtent[4], wholeExtent[5]
+  };
   const int first = team.reduceMin(empty ? team.size() : team.rank());
   if (first == team.size())
   {
@@ -141,8 +154,9 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   const std::string name = team.broadcast(mineName, first);
   const int bytes =
     std::stoi(team.broadcast(empty ? "4" : std::to_string(array->GetDataTypeSize()), first));
-  Agree(team, empty || mineName == name ? std::string()
-                                        : "this piece's array is '" + mineName + "', rank " +
+  Agree(team,
+    empty || mineName == name ? std::string()
+                              : "this piece's array is '" + mineName + "', rank " +
         std::to_string(first) + "'s is '" + name + "': every rank must encode the same array");
   std::array<double, 3> origin{}, spacing{};
   AgreeOnGeometry(team, piece, first, wholeExtent, origin, spacing);
@@ -157,7 +171,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
   {
     std::copy(&all[7 * r], &all[7 * r + 6], pieces[r].begin());
     const int other = all[7 * r + 6];
-    type = other < 0 ? type
+    type = other < 0              ? type
       : type < 0 || type == other ? other
                                   : static_cast<int>(afam::SampleType::Float32);
   }
@@ -172,8 +186,16 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, 
     afam::samplesToFloat(samples.Type, samples.Data, converted.size(), converted.data());
   }
   const void* values = empty ? nullptr : converted.empty() ? samples.Data : converted.data();
-  vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(), team.Lock(), whole,
-    std::move(pieces), values, exposed, name, origin, spacing, bytes);
+  vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(),
+    team.Lock(),
+    whole,
+    std::move(pieces),
+    values,
+    exposed,
+    name,
+    origin,
+    spacing,
+    bytes);
   vtkAFAMPiecesEncoded result;
   result.stats = afam::encodeVolume(source, options, path, team);
   std::copy(mine.begin(), mine.end(), result.pieceExtent);
@@ -188,8 +210,13 @@ bool vtkAFAMCanEncodePieces()
   return false;
 }
 
-vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController*, vtkImageData*, vtkDataArray*,
-  const std::string&, const int*, const afam::EncoderOptions&, const std::string&)
+vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController*,
+  vtkImageData*,
+  vtkDataArray*,
+  const std::string&,
+  const int*,
+  const afam::EncoderOptions&,
+  const std::string&)
 {
   throw afam::Error("encode: this build of the plugin has no MPI (VTK::ParallelMPI): encoding "
                     "runs on one process");

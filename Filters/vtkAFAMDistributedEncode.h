@@ -4,10 +4,11 @@
  * @brief   Encoding an image spread over MPI ranks (private to the module; vtkAFAMEncoder).
  *
  * Every rank of the controller calls vtkAFAMEncodePieces with its piece of the image. The ranks
- * agree on the array and the geometry, share the pieces' extents, expose their pieces to one another
- * (vtkAFAMPieceSource) and run Core's encoder as one team (vtkAFAMControllerTeam): each fits a
- * share of every level's rows of blocks, and rank 0 alone writes `path`. The models are those of a
- * one-process encode of the whole image. Any error, on any rank, is thrown on every rank.
+ * agree on the array and the geometry, share the pieces' extents, expose their pieces to one
+ * another (vtkAFAMPieceSource) and run Core's encoder as one team (vtkAFAMControllerTeam): each
+ * fits a share of every level's rows of blocks, and rank 0 alone writes `path`. The models are
+ * those of a one-process encode of the whole image. Any error, on any rank, is thrown on every
+ * rank.
  */
 #ifndef vtkAFAMDistributedEncode_h
 #define vtkAFAMDistributedEncode_h
@@ -51,17 +52,21 @@ std::string vtkAFAMRefusedType(vtkAbstractArray* array);
 /// What one rank did in a distributed encode.
 struct vtkAFAMPiecesEncoded
 {
-  afam::EncodeStats stats;       ///< the whole volume's on rank 0 (encodeVolume with a team)
+  afam::EncodeStats stats; ///< the whole volume's on rank 0 (encodeVolume with a team)
   int pieceExtent[6] = { 0, -1, 0, -1, 0, -1 }; ///< this rank's piece (empty: x1 < x0)
-  uint64_t remoteBytesRead = 0;  ///< samples read from other ranks' pieces, in bytes
+  uint64_t remoteBytesRead = 0;                 ///< samples read from other ranks' pieces, in bytes
 };
 
 /// `array` is the chosen point array of `piece` (nullptr when `arrayError` says why none could be
 /// chosen; both unused where the piece is empty); `wholeExtent` is the pipeline's whole extent.
 /// Throws std::exception (afam::Error or afam::Cancelled) with the same message on every rank.
-vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller, vtkImageData* piece,
-  vtkDataArray* array, const std::string& arrayError, const int wholeExtent[6],
-  const afam::EncoderOptions& options, const std::string& path);
+vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
+  vtkImageData* piece,
+  vtkDataArray* array,
+  const std::string& arrayError,
+  const int wholeExtent[6],
+  const afam::EncoderOptions& options,
+  const std::string& path);
 
 /// Whether this build can encode across ranks (the module was built with VTK::ParallelMPI).
 bool vtkAFAMCanEncodePieces();

@@ -61,8 +61,9 @@ int vtkAFAMEncoder::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
-vtkDataArray* vtkAFAMEncoder::ChooseArray(
-  vtkImageData* input, vtkInformationVector** inputVector, std::string& error)
+vtkDataArray* vtkAFAMEncoder::ChooseArray(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  std::string& error)
 {
   vtkInformation* selection = this->GetInputArrayInformation(0);
   const char* name = selection && selection->Has(vtkDataObject::FIELD_NAME())
@@ -151,7 +152,8 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
   options.mode = static_cast<afam::EncodingMode>(this->Mode);
   options.fixedNcp = this->FixedNcp;
   options.threads = this->NumberOfThreads;
-  options.progress = [this](double f) {
+  options.progress = [this](double f)
+  {
     this->UpdateProgress(0.95 * f);
     return !this->CheckAbort();
   };
@@ -210,20 +212,28 @@ void vtkAFAMEncoder::KeepStatistics(const afam::EncodeStats& stats)
   }
   this->LastLevelReport = report.str();
   vtkDebugMacro(<< "encoded within the bound " << stats.bound << ":\n" << this->LastLevelReport);
-  this->LastCompressionRatio =
-    stats.bytesOut > 0 ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut) : 0;
+  this->LastCompressionRatio = stats.bytesOut > 0
+    ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut)
+    : 0;
 }
 
 void vtkAFAMEncoder::BuildOutput(const std::string& path, vtkMultiBlockDataSet* output)
 {
   this->ModelFile = path;
   auto file = afam::AfamFile::open(path);
-  vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), 0, 1,
-    output, [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
+  vtkAFAMModelTree::Build(file->header(),
+    file->partition(),
+    file->entries(),
+    file->path(),
+    0,
+    1,
+    output,
+    [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
 }
 
-int vtkAFAMEncoder::RequestData(
-  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int vtkAFAMEncoder::RequestData(vtkInformation*,
+  vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
 {
   vtkImageData* input = vtkImageData::GetData(inputVector[0], 0);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
@@ -262,8 +272,9 @@ int vtkAFAMEncoder::RequestData(
   return 1;
 }
 
-bool vtkAFAMEncoder::EncodeWhole(
-  vtkImageData* input, vtkInformationVector** inputVector, vtkMultiBlockDataSet* output)
+bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiBlockDataSet* output)
 {
   std::string error;
   vtkDataArray* array = this->ChooseArray(input, inputVector, error);
@@ -303,9 +314,13 @@ bool vtkAFAMEncoder::EncodeWhole(
   {
     vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
   }
-  // The array in its own type: the encoder converts the planes it reads, as VTK would (static_cast).
-  afam::ArraySource source(samples.Data, samples.Type, afam::Index3{ dims[0], dims[1], dims[2] },
-    array->GetName() ? array->GetName() : "scalars", { origin[0], origin[1], origin[2] },
+  // The array in its own type: the encoder converts the planes it reads, as VTK would
+  // (static_cast).
+  afam::ArraySource source(samples.Data,
+    samples.Type,
+    afam::Index3{ dims[0], dims[1], dims[2] },
+    array->GetName() ? array->GetName() : "scalars",
+    { origin[0], origin[1], origin[2] },
     { spacing[0], spacing[1], spacing[2] });
   const std::string path = NewModelPath();
   this->KeepStatistics(afam::encodeVolume(source, this->MakeOptions(), path));
@@ -313,8 +328,10 @@ bool vtkAFAMEncoder::EncodeWhole(
   return true;
 }
 
-bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller, vtkImageData* input,
-  vtkInformationVector** inputVector, vtkMultiBlockDataSet* output)
+bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,
+  vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiBlockDataSet* output)
 {
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
   int whole[6];

@@ -12,12 +12,14 @@
  * costs no float32 copy. Other arrays (bits, strings, several components) are refused with an error
  * naming the array and its type. With no array selected (or an empty name, as
  * a ParaView proxy leaves it) the active point scalars are encoded, else the only one-component
- * point array; when none fits, the error lists the arrays that could be chosen. The encoding runs in Core (encodeVolume);
- * progress is reported and the abort flag (ParaView's abort button) cancels it.
+ * point array; when none fits, the error lists the arrays that could be chosen. The encoding runs
+ * in Core (encodeVolume); progress is reported and the abort flag (ParaView's abort button) cancels
+ * it.
  *
  * Under MPI (several ranks, e.g. `mpirun -np N pvbatch`), each rank gets its piece of the image
  * from the pipeline and fits a share of the blocks; rank 0 writes the one file and alone outputs
- * the models, which are those of a one-process encode of the whole image (vtkAFAMDistributedEncode).
+ * the models, which are those of a one-process encode of the whole image
+ * (vtkAFAMDistributedEncode).
  *
  * Output: the same metadata multiblock as vtkAFAMReader (one leaf per level, one field-data row
  * per micro-model). The models are stored in a temporary .afam file owned by this filter (removed
@@ -61,7 +63,8 @@ public:
 
   ///@{
   /// Levels of detail, [1, 16]; finest blocks per axis, [1, 4096]. 0 (the default) for each: from
-  /// the image's dimensions (blocks of about 64 samples, levels down to 2 blocks along the longest axis).
+  /// the image's dimensions (blocks of about 64 samples, levels down to 2 blocks along the longest
+  /// axis).
   vtkSetClampMacro(Levels, int, 0, 16);
   vtkGetMacro(Levels, int);
   vtkSetClampMacro(BlocksPerAxis, int, 0, 4096);
@@ -87,10 +90,22 @@ public:
   /// FixedNcp: NCP per axis for MODE_FIXED_NCP (0 = the block's sample count n).
   vtkSetClampMacro(Mode, int, MODE_ADAPTIVE, MODE_DOWNSAMPLED);
   vtkGetMacro(Mode, int);
-  void SetModeToAdaptive() { this->SetMode(MODE_ADAPTIVE); }
-  void SetModeToInLevel() { this->SetMode(MODE_IN_LEVEL); }
-  void SetModeToFixedNcp() { this->SetMode(MODE_FIXED_NCP); }
-  void SetModeToDownsampled() { this->SetMode(MODE_DOWNSAMPLED); }
+  void SetModeToAdaptive()
+  {
+    this->SetMode(MODE_ADAPTIVE);
+  }
+  void SetModeToInLevel()
+  {
+    this->SetMode(MODE_IN_LEVEL);
+  }
+  void SetModeToFixedNcp()
+  {
+    this->SetMode(MODE_FIXED_NCP);
+  }
+  void SetModeToDownsampled()
+  {
+    this->SetMode(MODE_DOWNSAMPLED);
+  }
   vtkSetClampMacro(FixedNcp, int, 0, 4096);
   vtkGetMacro(FixedNcp, int);
   ///@}
@@ -102,17 +117,24 @@ public:
   ///@}
 
   /// The temporary .afam file holding the last encoding (empty before the first execution).
-  const char* GetModelFileName() { return this->ModelFile.c_str(); }
+  const char* GetModelFileName()
+  {
+    return this->ModelFile.c_str();
+  }
 
   ///@{
-  /// Statistics of the last encoding: the largest block RMSE and absolute error (each block's on its
-  /// own samples) beside the absolute RMSE bound every block met, and one line per level with the same.
+  /// Statistics of the last encoding: the largest block RMSE and absolute error (each block's on
+  /// its own samples) beside the absolute RMSE bound every block met, and one line per level with
+  /// the same.
   vtkGetMacro(LastEncodeSeconds, double);
   vtkGetMacro(LastMaxRmse, double);
   vtkGetMacro(LastMaxError, double);
   vtkGetMacro(LastBound, double);
   vtkGetMacro(LastCompressionRatio, double);
-  const char* GetLastLevelReport() { return this->LastLevelReport.c_str(); }
+  const char* GetLastLevelReport()
+  {
+    return this->LastLevelReport.c_str();
+  }
   ///@}
 
   ///@{
@@ -131,15 +153,19 @@ protected:
   void RemoveModelFile();
   /// The array to encode (see the class documentation); nullptr with `error` naming the
   /// candidates.
-  vtkDataArray* ChooseArray(
-    vtkImageData* input, vtkInformationVector** inputVector, std::string& error);
+  vtkDataArray* ChooseArray(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    std::string& error);
   /// One process: the input is the whole image.
-  bool EncodeWhole(
-    vtkImageData* input, vtkInformationVector** inputVector, vtkMultiBlockDataSet* output);
+  bool EncodeWhole(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkMultiBlockDataSet* output);
   /// Several ranks, each with its piece of the image: one file, written by rank 0, whose output
   /// holds the models (the other ranks' outputs are empty).
-  bool EncodePieces(vtkMultiProcessController* controller, vtkImageData* input,
-    vtkInformationVector** inputVector, vtkMultiBlockDataSet* output);
+  bool EncodePieces(vtkMultiProcessController* controller,
+    vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkMultiBlockDataSet* output);
   afam::EncoderOptions MakeOptions();
   void KeepStatistics(const afam::EncodeStats& stats);
   void BuildOutput(const std::string& path, vtkMultiBlockDataSet* output);
@@ -153,7 +179,8 @@ protected:
   int Mode = MODE_ADAPTIVE;
   int FixedNcp = 0;
   int NumberOfThreads = 0;
-  double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0, LastCompressionRatio = 0;
+  double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0,
+         LastCompressionRatio = 0;
   std::string LastLevelReport;
   int LastPieceExtent[6] = { 0, -1, 0, -1, 0, -1 };
   double LastRemoteBytesRead = 0;

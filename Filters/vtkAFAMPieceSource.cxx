@@ -75,7 +75,9 @@ MPI_Datatype Subarray(MPI_Datatype element, const int box[3], const int sub[3], 
 }
 
 /// The points of `whole` (grid of the pieces' boundaries) that no piece covers: the first found.
-bool FindUncovered(const Extent& whole, const std::vector<Extent>& pieces, std::array<int, 3>& where)
+bool FindUncovered(const Extent& whole,
+  const std::vector<Extent>& pieces,
+  std::array<int, 3>& where)
 {
   std::array<std::vector<int>, 3> cuts; // the first point of each interval between boundaries
   for (int a = 0; a < 3; ++a)
@@ -97,9 +99,10 @@ bool FindUncovered(const Extent& whole, const std::vector<Extent>& pieces, std::
     for (int y : cuts[1])
       for (int x : cuts[0])
       {
-        const bool covered = std::any_of(pieces.begin(), pieces.end(), [&](const Extent& p) {
-          return x >= p[0] && x <= p[1] && y >= p[2] && y <= p[3] && z >= p[4] && z <= p[5];
-        });
+        const bool covered = std::any_of(pieces.begin(),
+          pieces.end(),
+          [&](const Extent& p)
+          { return x >= p[0] && x <= p[1] && y >= p[2] && y <= p[3] && z >= p[4] && z <= p[5]; });
         if (!covered)
         {
           where = { x, y, z };
@@ -143,9 +146,16 @@ std::string vtkAFAMPieceSource::CheckCover(const Extent& whole, const std::vecto
   return std::string();
 }
 
-vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole,
-  std::vector<Extent> pieces, const void* samples, afam::SampleType type, std::string name,
-  std::array<double, 3> origin, std::array<double, 3> spacing, int bytesPerVoxel)
+vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm,
+  std::mutex& mpiLock,
+  const Extent& whole,
+  std::vector<Extent> pieces,
+  const void* samples,
+  afam::SampleType type,
+  std::string name,
+  std::array<double, 3> origin,
+  std::array<double, 3> spacing,
+  int bytesPerVoxel)
   : Comm(comm)
   , Type(type)
   , Element(MpiType(type))
@@ -165,11 +175,15 @@ vtkAFAMPieceSource::vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const
   this->CallingThreadOnly = threadLevel < MPI_THREAD_SERIALIZED;
   const Extent& mine = this->Pieces[static_cast<size_t>(this->Rank)];
   const MPI_Aint bytes = IsEmpty(mine) ? 0
-                                       : static_cast<MPI_Aint>(this->ElementSize) * Points(mine, 0) *
-      Points(mine, 1) * Points(mine, 2);
+                                       : static_cast<MPI_Aint>(this->ElementSize) *
+      Points(mine, 0) * Points(mine, 1) * Points(mine, 2);
   static double nothing = 0;
-  MPI_Win_create(const_cast<void*>(bytes ? samples : &nothing), bytes, this->ElementSize,
-    MPI_INFO_NULL, comm, &this->Window);
+  MPI_Win_create(const_cast<void*>(bytes ? samples : &nothing),
+    bytes,
+    this->ElementSize,
+    MPI_INFO_NULL,
+    comm,
+    &this->Window);
 }
 
 vtkAFAMPieceSource::~vtkAFAMPieceSource()
@@ -209,15 +223,19 @@ void vtkAFAMPieceSource::readSlab(int64_t z0, int64_t zCount, float* out)
   this->readRows(z0, zCount, 0, Points(this->Whole, 1), out);
 }
 
-void vtkAFAMPieceSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out)
+void vtkAFAMPieceSource::readRows(int64_t z0,
+  int64_t zCount,
+  int64_t y0,
+  int64_t yCount,
+  float* out)
 {
   Extent wanted = this->Whole;
   wanted[2] = this->Whole[2] + static_cast<int>(y0);
   wanted[3] = wanted[2] + static_cast<int>(yCount) - 1;
   wanted[4] = this->Whole[4] + static_cast<int>(z0);
   wanted[5] = wanted[4] + static_cast<int>(zCount) - 1;
-  const size_t count = static_cast<size_t>(Points(wanted, 0)) * static_cast<size_t>(Points(wanted, 1)) *
-    static_cast<size_t>(zCount);
+  const size_t count = static_cast<size_t>(Points(wanted, 0)) *
+    static_cast<size_t>(Points(wanted, 1)) * static_cast<size_t>(zCount);
   const bool direct = this->Type == afam::SampleType::Float32;
   if (!direct)
   {

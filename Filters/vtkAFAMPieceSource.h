@@ -28,34 +28,63 @@
 class vtkAFAMPieceSource : public afam::VolumeSource
 {
 public:
-  using Extent = std::array<int, 6>; ///< x0 x1 y0 y1 z0 z1, inclusive; empty when x1 < x0 (any axis)
+  using Extent =
+    std::array<int, 6>; ///< x0 x1 y0 y1 z0 z1, inclusive; empty when x1 < x0 (any axis)
 
   /// `pieces[r]` is rank r's extent; `samples` holds this rank's piece, x fastest, as values of
   /// `type` (the same on every rank; the array must outlive the source). Every MPI call takes
   /// `mpiLock`.
-  vtkAFAMPieceSource(MPI_Comm comm, std::mutex& mpiLock, const Extent& whole, std::vector<Extent> pieces,
-    const void* samples, afam::SampleType type, std::string name, std::array<double, 3> origin,
-    std::array<double, 3> spacing, int bytesPerVoxel);
+  vtkAFAMPieceSource(MPI_Comm comm,
+    std::mutex& mpiLock,
+    const Extent& whole,
+    std::vector<Extent> pieces,
+    const void* samples,
+    afam::SampleType type,
+    std::string name,
+    std::array<double, 3> origin,
+    std::array<double, 3> spacing,
+    int bytesPerVoxel);
   ~vtkAFAMPieceSource() override;
   vtkAFAMPieceSource(const vtkAFAMPieceSource&) = delete;
   vtkAFAMPieceSource& operator=(const vtkAFAMPieceSource&) = delete;
 
   afam::Index3 dims() const override;
-  std::array<double, 3> origin() const override { return this->Origin; }
-  std::array<double, 3> spacing() const override { return this->Spacing; }
-  std::string name() const override { return this->Name; }
-  int bytesPerVoxel() const override { return this->BytesPerVoxel; }
+  std::array<double, 3> origin() const override
+  {
+    return this->Origin;
+  }
+  std::array<double, 3> spacing() const override
+  {
+    return this->Spacing;
+  }
+  std::string name() const override
+  {
+    return this->Name;
+  }
+  int bytesPerVoxel() const override
+  {
+    return this->BytesPerVoxel;
+  }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   /// Only the rows asked for travel (a rank fitting some lines of blocks reads their rows).
   void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
   /// Under an MPI initialised below MPI_THREAD_SERIALIZED (pvbatch initialises it single-threaded),
   /// reads stay on the encoder's calling thread.
-  bool readsOnCallingThread() const override { return this->CallingThreadOnly; }
+  bool readsOnCallingThread() const override
+  {
+    return this->CallingThreadOnly;
+  }
 
   /// Bytes this rank has read from other ranks' pieces so far.
-  uint64_t remoteBytesRead() const { return this->RemoteBytes; }
+  uint64_t remoteBytesRead() const
+  {
+    return this->RemoteBytes;
+  }
 
-  static bool IsEmpty(const Extent& e) { return e[1] < e[0] || e[3] < e[2] || e[5] < e[4]; }
+  static bool IsEmpty(const Extent& e)
+  {
+    return e[1] < e[0] || e[3] < e[2] || e[5] < e[4];
+  }
   /// "" when the non-empty pieces lie inside `whole` and together cover it, else what is wrong.
   static std::string CheckCover(const Extent& whole, const std::vector<Extent>& pieces);
 
@@ -66,8 +95,8 @@ private:
 
   MPI_Comm Comm;
   MPI_Win Window;
-  afam::SampleType Type;      ///< type of the exposed values
-  MPI_Datatype Element;       ///< the same, for MPI
+  afam::SampleType Type; ///< type of the exposed values
+  MPI_Datatype Element;  ///< the same, for MPI
   int ElementSize;
   std::vector<unsigned char> Raw; ///< a slab in the exposed type, before conversion
   std::mutex& MpiLock;

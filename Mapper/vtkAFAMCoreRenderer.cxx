@@ -35,7 +35,8 @@ struct vtkAFAMCoreRenderer::Internals
     }
     std::vector<std::string>& notes = this->Messages;
     std::unique_ptr<afam::FrameCaster> gpu =
-      afam::makeGpuCaster(static_cast<size_t>(std::max(16.0, budgetMB) * 1e6), threads,
+      afam::makeGpuCaster(static_cast<size_t>(std::max(16.0, budgetMB) * 1e6),
+        threads,
         [&notes](const std::string& message) { notes.push_back(message); });
     if (gpu)
     {
@@ -104,8 +105,10 @@ void vtkAFAMCoreRenderer::Close()
   this->OpenPath.clear();
 }
 
-void vtkAFAMCoreRenderer::Volume(
-  int64_t dims[3], double origin[3], double spacing[3], double range[2]) const
+void vtkAFAMCoreRenderer::Volume(int64_t dims[3],
+  double origin[3],
+  double spacing[3],
+  double range[2]) const
 {
   const afam::VolumeHeader& h = this->Impl->File->header();
   for (int a = 0; a < 3; ++a)
@@ -142,8 +145,9 @@ bool vtkAFAMCoreRenderer::WillCastOnGpu(const vtkAFAMFrameRequest& request) cons
   return this->Impl->Gpu && !this->NeedsBuild(request);
 }
 
-void vtkAFAMCoreRenderer::Render(
-  const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats)
+void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
+  afam::ImageRGBA& image,
+  vtkAFAMFrameStats& stats)
 {
   const afam::RendererResources resources = ResourcesFor(request);
   const bool wantGpu = request.Device != 1;
@@ -201,7 +205,8 @@ void vtkAFAMCoreRenderer::Render(
   stats.DeviceDepthLimited = m.Gpu ? cast.depthLimitedPixels : -1;
   // What happened in this frame: the GPU's set-up, then the caster's (e.g. a pool too small).
   stats.DeviceMessages.swap(m.Messages);
-  stats.DeviceMessages.insert(stats.DeviceMessages.end(), cast.messages.begin(), cast.messages.end());
+  stats.DeviceMessages.insert(
+    stats.DeviceMessages.end(), cast.messages.begin(), cast.messages.end());
   if (wantGpu && !m.Gpu)
   {
     stats.DeviceMessages.push_back(m.GpuUnusable); // every CPU frame says why

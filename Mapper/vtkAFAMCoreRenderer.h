@@ -80,7 +80,10 @@ public:
   void Open(const std::string& path);
   /// Forgets the open file, its renderer (cache, prefetch thread, GPU pool) and damage log.
   void Close();
-  const std::string& Path() const { return this->OpenPath; }
+  const std::string& Path() const
+  {
+    return this->OpenPath;
+  }
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
   /// True when this build has the CUDA renderer (built with nvcc: afam::gpuCasterBuilt).

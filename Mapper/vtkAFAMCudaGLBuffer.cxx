@@ -15,8 +15,7 @@ namespace
 std::string CudaProblem(const char* step, cudaError_t e)
 {
   (void)cudaGetLastError(); // cleared: the host path that follows must not trip over it
-  return std::string(step) + " failed: " + cudaGetErrorString(e) + " (" + cudaGetErrorName(e) +
-    ")";
+  return std::string(step) + " failed: " + cudaGetErrorString(e) + " (" + cudaGetErrorName(e) + ")";
 }
 #endif
 }
@@ -72,7 +71,8 @@ bool vtkAFAMCudaGLBuffer::Reserve(size_t bytes)
   }
   this->Bytes = bytes;
   cudaGraphicsResource* resource = nullptr;
-  const cudaError_t e = cudaGraphicsGLRegisterBuffer(&resource, this->Buffer,
+  const cudaError_t e = cudaGraphicsGLRegisterBuffer(&resource,
+    this->Buffer,
     this->Dir == CUDA_WRITES ? cudaGraphicsRegisterFlagsWriteDiscard
                              : cudaGraphicsRegisterFlagsReadOnly);
   if (e != cudaSuccess)

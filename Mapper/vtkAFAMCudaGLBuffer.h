@@ -32,12 +32,19 @@ public:
   /// (a cudaStream_t) is where CUDA uses it: OpenGL's earlier work on the buffer is ordered before
   /// that stream's later work, without the host waiting.
   void* Map(void* stream);
-  /// Gives it back to OpenGL (no-op when not mapped): CUDA's earlier work on the stream comes first.
+  /// Gives it back to OpenGL (no-op when not mapped): CUDA's earlier work on the stream comes
+  /// first.
   void Unmap();
   /// Unregisters and deletes the buffer, and forgets a Problem (a new context may do better).
   void Free();
-  unsigned int Name() const { return this->Buffer; }
-  const std::string& Problem() const { return this->Failure; }
+  unsigned int Name() const
+  {
+    return this->Buffer;
+  }
+  const std::string& Problem() const
+  {
+    return this->Failure;
+  }
 
 private:
   void Fail(const std::string& why);

@@ -66,8 +66,10 @@ void vtkAFAMImageDraw::DrawDeviceImage(vtkOpenGLRenderWindow* window, int width,
   this->DrawTexture(window);
 }
 
-void vtkAFAMImageDraw::DrawHostImage(
-  vtkOpenGLRenderWindow* window, int width, int height, const float* rgba)
+void vtkAFAMImageDraw::DrawHostImage(vtkOpenGLRenderWindow* window,
+  int width,
+  int height,
+  const float* rgba)
 {
   this->PrepareTexture(window, width, height);
   this->Texture->Activate();

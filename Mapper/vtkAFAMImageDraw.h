@@ -41,7 +41,10 @@ public:
   void DrawHostImage(vtkOpenGLRenderWindow* window, int width, int height, const float* rgba);
 
   /// Why interop is unavailable; empty while it is (or while it has not been tried).
-  const std::string& Problem() const { return this->ImageBuffer.Problem(); }
+  const std::string& Problem() const
+  {
+    return this->ImageBuffer.Problem();
+  }
   /// Frees the texture, the pixel buffer and its CUDA registration (the window's context goes).
   void ReleaseGraphicsResources(vtkWindow* window);
 

@@ -73,7 +73,8 @@ std::string vtkAFAMVolumeMapper::ResolveFileName()
   {
     this->UpdateInformation();
     this->GetInputAlgorithm()->Update();
-    return vtkAFAMModelTree::FileName(vtkMultiBlockDataSet::SafeDownCast(this->GetInputDataObject(0, 0)));
+    return vtkAFAMModelTree::FileName(
+      vtkMultiBlockDataSet::SafeDownCast(this->GetInputDataObject(0, 0)));
   }
   return {};
 }
@@ -83,7 +84,8 @@ bool vtkAFAMVolumeMapper::EnsureOpen()
   const std::string path = this->ResolveFileName();
   if (path.empty())
   {
-    vtkErrorMacro(<< "No .afam file: set FileName or connect the output of vtkAFAMReader/vtkAFAMEncoder.");
+    vtkErrorMacro(
+      << "No .afam file: set FileName or connect the output of vtkAFAMReader/vtkAFAMEncoder.");
     return false;
   }
   try
@@ -253,7 +255,8 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   if (image.width != frame.CastWidth || image.height != frame.CastHeight ||
-    (!this->LastImageOnDevice && image.rgba.size() != 4 * static_cast<size_t>(image.width) * image.height))
+    (!this->LastImageOnDevice &&
+      image.rgba.size() != 4 * static_cast<size_t>(image.width) * image.height))
   {
     vtkErrorMacro(<< "Core returned a " << image.width << "x" << image.height << " image for a "
                   << frame.CastWidth << "x" << frame.CastHeight << " request");
@@ -470,8 +473,13 @@ bool vtkAFAMVolumeMapper::ReadDepthLimits(vtkRenderer* ren, Frame& frame)
   return true;
 }
 
-bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w, int h,
-  const std::array<double, 16>& ndcToWorld, Frame& frame)
+bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren,
+  int x0,
+  int y0,
+  int w,
+  int h,
+  const std::array<double, 16>& ndcToWorld,
+  Frame& frame)
 {
   // The z-buffer is packed into a buffer that CUDA then reads: glReadPixels with a pixel-pack
   // buffer bound writes into it (VTK's GetZbufferData binds the right framebuffer and resolves
@@ -484,15 +492,17 @@ bool vtkAFAMVolumeMapper::ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w
   const int read = ren->GetRenderWindow()->GetZbufferData(
     x0, y0, x0 + w - 1, y0 + h - 1, static_cast<float*>(nullptr));
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-  const float* depth = read == VTK_OK ? static_cast<const float*>(this->DepthBuffer->Map(this->Core->GpuStream())) : nullptr;
+  const float* depth = read == VTK_OK
+    ? static_cast<const float*>(this->DepthBuffer->Map(this->Core->GpuStream()))
+    : nullptr;
   if (!depth)
   {
     return false;
   }
   try
   {
-    frame.Request.Targets.deviceDepth = afam::DeviceDepth{
-      depth, afam::depthToRay(w, h, ndcToWorld, frame.Map, frame.Request.Camera) };
+    frame.Request.Targets.deviceDepth = afam::DeviceDepth{ depth,
+      afam::depthToRay(w, h, ndcToWorld, frame.Map, frame.Request.Camera) };
   }
   catch (const std::exception& e)
   {
@@ -521,8 +531,7 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   // Time per cast pixel, for the next interactive frame's scale: the latest still frame sets it,
   // interactive frames blend in (they are smaller, so fixed costs weigh more there).
   const double frameSeconds = stats.RenderSeconds + stats.CachingSeconds;
-  const double perPixel =
-    frameSeconds / (static_cast<double>(frame.CastWidth) * frame.CastHeight);
+  const double perPixel = frameSeconds / (static_cast<double>(frame.CastWidth) * frame.CastHeight);
   this->SecondsPerPixel = (this->SecondsPerPixel > 0 && frame.Scale < 1.0)
     ? 0.5 * (this->SecondsPerPixel + perPixel)
     : perPixel;
@@ -582,8 +591,9 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
     }
     else
     {
-      vtkLog(INFO, "Adaptive-FAM: " << this->LastDeviceMessage
-                                    << (stats.UsedGpu ? "" : "; rendering with the CPU ray caster"));
+      vtkLog(INFO,
+        "Adaptive-FAM: " << this->LastDeviceMessage
+                         << (stats.UsedGpu ? "" : "; rendering with the CPU ray caster"));
     }
   }
 }

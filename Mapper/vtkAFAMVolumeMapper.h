@@ -85,8 +85,14 @@ public:
   /// draw the samples) or LOD_DISTANCE_BANDS (the paper's benchmarks).
   vtkSetClampMacro(LodPolicy, int, LOD_DISTANCE_BANDS, LOD_SCREEN_SPACE);
   vtkGetMacro(LodPolicy, int);
-  void SetLodPolicyToDistanceBands() { this->SetLodPolicy(LOD_DISTANCE_BANDS); }
-  void SetLodPolicyToScreenSpace() { this->SetLodPolicy(LOD_SCREEN_SPACE); }
+  void SetLodPolicyToDistanceBands()
+  {
+    this->SetLodPolicy(LOD_DISTANCE_BANDS);
+  }
+  void SetLodPolicyToScreenSpace()
+  {
+    this->SetLodPolicy(LOD_SCREEN_SPACE);
+  }
   ///@}
 
   ///@{
@@ -113,8 +119,14 @@ public:
   /// Prefetcher: PREFETCH_NONE (default) or PREFETCH_LINEAR.
   vtkSetClampMacro(Prefetcher, int, PREFETCH_NONE, PREFETCH_LINEAR);
   vtkGetMacro(Prefetcher, int);
-  void SetPrefetcherToNone() { this->SetPrefetcher(PREFETCH_NONE); }
-  void SetPrefetcherToLinear() { this->SetPrefetcher(PREFETCH_LINEAR); }
+  void SetPrefetcherToNone()
+  {
+    this->SetPrefetcher(PREFETCH_NONE);
+  }
+  void SetPrefetcherToLinear()
+  {
+    this->SetPrefetcher(PREFETCH_LINEAR);
+  }
   ///@}
 
   enum RenderDevices
@@ -128,11 +140,23 @@ public:
   /// Ray caster: DEVICE_AUTO (default), DEVICE_CPU or DEVICE_GPU (see above).
   void SetRenderDevice(int device);
   vtkGetMacro(RenderDevice, int);
-  void SetRenderDeviceToAuto() { this->SetRenderDevice(DEVICE_AUTO); }
-  void SetRenderDeviceToCPU() { this->SetRenderDevice(DEVICE_CPU); }
-  void SetRenderDeviceToGPU() { this->SetRenderDevice(DEVICE_GPU); }
+  void SetRenderDeviceToAuto()
+  {
+    this->SetRenderDevice(DEVICE_AUTO);
+  }
+  void SetRenderDeviceToCPU()
+  {
+    this->SetRenderDevice(DEVICE_CPU);
+  }
+  void SetRenderDeviceToGPU()
+  {
+    this->SetRenderDevice(DEVICE_GPU);
+  }
   /// The device that cast the last frame: DEVICE_CPU or DEVICE_GPU.
-  int GetLastUsedRenderDevice() { return this->LastUsedGpu ? DEVICE_GPU : DEVICE_CPU; }
+  int GetLastUsedRenderDevice()
+  {
+    return this->LastUsedGpu ? DEVICE_GPU : DEVICE_CPU;
+  }
   ///@}
 
   /// The blend mode the last frame was drawn with (composite for modes this mapper lacks).
@@ -201,7 +225,10 @@ public:
   /// with CUDA (e.g. Mesa): GetLastInteropProblem says why, found once, not tried again until the
   /// window's graphics resources are released.
   vtkGetMacro(LastImageOnDevice, bool);
-  const char* GetLastInteropProblem() { return this->LastInteropProblem.c_str(); }
+  const char* GetLastInteropProblem()
+  {
+    return this->LastInteropProblem.c_str();
+  }
   /// The GPU's own times for the last frame (CUDA events), in seconds: uploading the models not
   /// yet resident, ray casting, and copying the image back to the host (part of LastRenderTime);
   /// -1 when the frame was cast on the CPU.
@@ -222,7 +249,10 @@ public:
   /// Editing the transfer functions, shading, blend mode, sample distance or LOD policy does not.
   vtkGetMacro(NumberOfRendererBuilds, vtkTypeInt64);
   /// What was wrong with the last frame's settings and what was kept instead (empty: nothing).
-  const char* GetLastSettingWarning() { return this->LastSettingWarning.c_str(); }
+  const char* GetLastSettingWarning()
+  {
+    return this->LastSettingWarning.c_str();
+  }
   /// Damaged micro-models (checksum mismatch) in the last frame's selection, drawn from the nearest
   /// intact level instead; and all the blocks of the file found damaged so far. Each is reported
   /// once with a vtkWarning naming the file, level and block, and never read again.
@@ -234,7 +264,10 @@ public:
   vtkGetMacro(LastImageScale, double);
   vtkGetMacro(NumberOfFrames, vtkTypeInt64);
   /// Why the GPU was not used (empty when it was, or when the CPU was asked for).
-  const char* GetLastDeviceMessage() { return this->LastDeviceMessage.c_str(); }
+  const char* GetLastDeviceMessage()
+  {
+    return this->LastDeviceMessage.c_str();
+  }
   ///@}
 
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
@@ -266,8 +299,13 @@ protected:
   /// The GPU's way (CUDA-OpenGL interop, frames whose image goes to CUDA's buffer): the z-buffer
   /// copied on the GPU into a buffer CUDA reads, limits computed there. False: not possible here
   /// (the host path follows).
-  bool ReadDepthOnGpu(vtkRenderer* ren, int x0, int y0, int w, int h,
-    const std::array<double, 16>& ndcToWorld, Frame& frame);
+  bool ReadDepthOnGpu(vtkRenderer* ren,
+    int x0,
+    int y0,
+    int w,
+    int h,
+    const std::array<double, 16>& ndcToWorld,
+    Frame& frame);
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;

@@ -24,7 +24,7 @@
 
 namespace
 {
-template <typename ArrayT, typename T>
+template<typename ArrayT, typename T>
 void AddTuple(vtkFieldData* fd, const char* name, std::initializer_list<T> values)
 {
   vtkNew<ArrayT> a;
@@ -48,8 +48,12 @@ void AddString(vtkFieldData* fd, const char* name, const std::string& value)
 }
 
 /// A field-data column of `rows` tuples of `components`, filled by value(row, component).
-template <typename ArrayT, typename Fn>
-void AddColumn(vtkFieldData* fd, const char* name, int components, const std::vector<int64_t>& rows, Fn value)
+template<typename ArrayT, typename Fn>
+void AddColumn(vtkFieldData* fd,
+  const char* name,
+  int components,
+  const std::vector<int64_t>& rows,
+  Fn value)
 {
   vtkNew<ArrayT> a;
   a->SetName(name);
@@ -68,7 +72,8 @@ void AddColumn(vtkFieldData* fd, const char* name, int components, const std::ve
 /// The leaf of one level: an image covering its models' blocks (no samples) whose field data has
 /// one row per model.
 vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
-  const afam::Partition& partition, const std::vector<afam::ModelEntry>& entries,
+  const afam::Partition& partition,
+  const std::vector<afam::ModelEntry>& entries,
   const std::vector<int64_t>& rows)
 {
   int extent[6] = { INT_MAX, INT_MIN, INT_MAX, INT_MIN, INT_MAX, INT_MIN };
@@ -87,29 +92,55 @@ vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
   leaf->SetOrigin(header.origin.data());
   leaf->SetSpacing(header.spacing.data());
   vtkFieldData* fd = leaf->GetFieldData();
-  auto entry = [&](int64_t r) -> const afam::ModelEntry& { return entries[static_cast<size_t>(r)]; };
-  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::LevelArray, 1, rows, [&](int64_t r, int) { return entry(r).level; });
-  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::BlockArray, 3, rows, [&](int64_t r, int c) { return entry(r).block[c]; });
-  AddColumn<vtkIntArray>(fd, vtkAFAMModelTree::NcpArray, 3, rows, [&](int64_t r, int c) { return entry(r).ncp[c]; });
+  auto entry = [&](int64_t r) -> const afam::ModelEntry&
+  { return entries[static_cast<size_t>(r)]; };
   AddColumn<vtkIntArray>(
-    fd, vtkAFAMModelTree::DegreeArray, 3, rows, [&](int64_t r, int c) { return entry(r).degree[c]; });
-  AddColumn<vtkDoubleArray>(fd, vtkAFAMModelTree::ValueRangeArray, 2, rows,
+    fd, vtkAFAMModelTree::LevelArray, 1, rows, [&](int64_t r, int) { return entry(r).level; });
+  AddColumn<vtkIntArray>(
+    fd, vtkAFAMModelTree::BlockArray, 3, rows, [&](int64_t r, int c) { return entry(r).block[c]; });
+  AddColumn<vtkIntArray>(
+    fd, vtkAFAMModelTree::NcpArray, 3, rows, [&](int64_t r, int c) { return entry(r).ncp[c]; });
+  AddColumn<vtkIntArray>(fd,
+    vtkAFAMModelTree::DegreeArray,
+    3,
+    rows,
+    [&](int64_t r, int c) { return entry(r).degree[c]; });
+  AddColumn<vtkDoubleArray>(fd,
+    vtkAFAMModelTree::ValueRangeArray,
+    2,
+    rows,
     [&](int64_t r, int c) { return c == 0 ? entry(r).minValue : entry(r).maxValue; });
-  AddColumn<vtkDoubleArray>(fd, vtkAFAMModelTree::RmseArray, 1, rows, [&](int64_t r, int) { return entry(r).rmse; });
   AddColumn<vtkDoubleArray>(
-    fd, vtkAFAMModelTree::MaxErrorArray, 1, rows, [&](int64_t r, int) { return entry(r).maxError; });
-  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::EntryArray, 1, rows, [](int64_t r, int) { return r; });
-  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::PayloadBytesArray, 1, rows,
+    fd, vtkAFAMModelTree::RmseArray, 1, rows, [&](int64_t r, int) { return entry(r).rmse; });
+  AddColumn<vtkDoubleArray>(fd,
+    vtkAFAMModelTree::MaxErrorArray,
+    1,
+    rows,
+    [&](int64_t r, int) { return entry(r).maxError; });
+  AddColumn<vtkTypeInt64Array>(
+    fd, vtkAFAMModelTree::EntryArray, 1, rows, [](int64_t r, int) { return r; });
+  AddColumn<vtkTypeInt64Array>(fd,
+    vtkAFAMModelTree::PayloadBytesArray,
+    1,
+    rows,
     [&](int64_t r, int) { return static_cast<vtkTypeInt64>(entry(r).size); });
-  AddColumn<vtkTypeInt64Array>(fd, vtkAFAMModelTree::StoredBytesArray, 1, rows,
+  AddColumn<vtkTypeInt64Array>(fd,
+    vtkAFAMModelTree::StoredBytesArray,
+    1,
+    rows,
     [&](int64_t r, int) { return static_cast<vtkTypeInt64>(entry(r).storedSize); });
   return leaf;
 }
 }
 
-void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Partition& partition,
-  const std::vector<afam::ModelEntry>& entries, const std::string& path, int piece, int numPieces,
-  vtkMultiBlockDataSet* out, const std::function<void(double)>& progress)
+void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
+  const afam::Partition& partition,
+  const std::vector<afam::ModelEntry>& entries,
+  const std::string& path,
+  int piece,
+  int numPieces,
+  vtkMultiBlockDataSet* out,
+  const std::function<void(double)>& progress)
 {
   out->Initialize();
   const int levels = partition.levels();
@@ -166,7 +197,8 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header, const afam::Parti
     double spacing[3];
     for (int a = 0; a < 3; ++a)
     {
-      spacing[a] = header.spacing[a] * static_cast<double>(std::max<int64_t>(1, header.dims[a] - 1));
+      spacing[a] =
+        header.spacing[a] * static_cast<double>(std::max<int64_t>(1, header.dims[a] - 1));
     }
     probe->SetSpacing(spacing);
     vtkNew<vtkDoubleArray> range;

@@ -22,28 +22,33 @@ class Partition;
 namespace vtkAFAMModelTree
 {
 /// Field-data array names on the level leaves (one tuple per model) and on the root.
-constexpr const char* FileNameArray = "AFAM_FileName";     // root: the .afam path
-constexpr const char* LevelArray = "AFAM_Level";           // leaves: 0 = coarsest
-constexpr const char* BlockArray = "AFAM_Block";           // leaves: block i, j, k
-constexpr const char* NcpArray = "AFAM_NCP";               // leaves: control points per axis
-constexpr const char* DegreeArray = "AFAM_Degree";         // leaves: effective degree per axis
-constexpr const char* ValueRangeArray = "AFAM_ValueRange"; // leaves: model min, max
-constexpr const char* RmseArray = "AFAM_RMSE";             // leaves: achieved RMSE
-constexpr const char* MaxErrorArray = "AFAM_MaxError";     // leaves: achieved max abs error
-constexpr const char* EntryArray = "AFAM_EntryIndex";      // leaves: index entry in the file
+constexpr const char* FileNameArray = "AFAM_FileName";         // root: the .afam path
+constexpr const char* LevelArray = "AFAM_Level";               // leaves: 0 = coarsest
+constexpr const char* BlockArray = "AFAM_Block";               // leaves: block i, j, k
+constexpr const char* NcpArray = "AFAM_NCP";                   // leaves: control points per axis
+constexpr const char* DegreeArray = "AFAM_Degree";             // leaves: effective degree per axis
+constexpr const char* ValueRangeArray = "AFAM_ValueRange";     // leaves: model min, max
+constexpr const char* RmseArray = "AFAM_RMSE";                 // leaves: achieved RMSE
+constexpr const char* MaxErrorArray = "AFAM_MaxError";         // leaves: achieved max abs error
+constexpr const char* EntryArray = "AFAM_EntryIndex";          // leaves: index entry in the file
 constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves: decoded control points
 constexpr const char* StoredBytesArray = "AFAM_StoredBytes";   // leaves: bytes in the file
-constexpr const char* DimensionsArray = "AFAM_Dimensions"; // root: volume samples per axis
+constexpr const char* DimensionsArray = "AFAM_Dimensions";     // root: volume samples per axis
 
-/// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A level's
-/// leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays hold one
-/// tuple per model, in file order. Piece `piece` of `numPieces` keeps the models whose
+/// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A
+/// level's leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays
+/// hold one tuple per model, in file order. Piece `piece` of `numPieces` keeps the models whose
 /// coarsest-level ancestor lies in its contiguous range of coarsest blocks (z-major slabs:
 /// spatially coherent); a level with none of them is a null block, so every rank has the same
 /// structure. `progress` gets fractions in [0, 1].
-void Build(const afam::VolumeHeader& header, const afam::Partition& partition,
-  const std::vector<afam::ModelEntry>& entries, const std::string& path, int piece, int numPieces,
-  vtkMultiBlockDataSet* out, const std::function<void(double)>& progress);
+void Build(const afam::VolumeHeader& header,
+  const afam::Partition& partition,
+  const std::vector<afam::ModelEntry>& entries,
+  const std::string& path,
+  int piece,
+  int numPieces,
+  vtkMultiBlockDataSet* out,
+  const std::function<void(double)>& progress);
 
 /// The .afam path stored in a multiblock built by Build (empty when there is none).
 std::string FileName(vtkMultiBlockDataSet* tree);

@@ -31,7 +31,9 @@ vtkStandardNewMacro(vtkAFAMReader);
 namespace
 {
 /// Origin and spacing of a level's decoded grid: it spans the volume's bounds.
-void LevelGeometry(const afam::VolumeHeader& h, const afam::Index3& dims, double origin[3],
+void LevelGeometry(const afam::VolumeHeader& h,
+  const afam::Index3& dims,
+  double origin[3],
   double spacing[3])
 {
   for (int a = 0; a < 3; ++a)
@@ -87,8 +89,9 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   return afamName ? 1 : 0;
 }
 
-int vtkAFAMReader::RequestInformation(
-  vtkInformation*, vtkInformationVector**, vtkInformationVector* outV)
+int vtkAFAMReader::RequestInformation(vtkInformation*,
+  vtkInformationVector**,
+  vtkInformationVector* outV)
 {
   if (!this->FileName || !*this->FileName)
   {
@@ -147,8 +150,14 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
     auto file = afam::AfamFile::open(this->FileName);
     const bool decode = this->DecodeLevel >= 0;
     const double treeShare = decode ? 0.1 : 1.0; // progress: the index is cheap, decoding is not
-    vtkAFAMModelTree::Build(file->header(), file->partition(), file->entries(), file->path(), piece,
-      numPieces, output, [this, treeShare](double f) { this->UpdateProgress(treeShare * f); });
+    vtkAFAMModelTree::Build(file->header(),
+      file->partition(),
+      file->entries(),
+      file->path(),
+      piece,
+      numPieces,
+      output,
+      [this, treeShare](double f) { this->UpdateProgress(treeShare * f); });
     vtkImageData* image = vtkImageData::GetData(outV, 1);
     if (image)
     {
@@ -171,8 +180,12 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
         values->SetName(name.empty() ? "scalars" : name.c_str());
         values->SetNumberOfTuples(image->GetNumberOfPoints());
         std::vector<std::string> damaged;
-        afam::decodeLevelBox(*file, this->DecodeLevel, { ext[0], ext[2], ext[4] },
-          { ext[1], ext[3], ext[5] }, values->GetPointer(0),
+        afam::decodeLevelBox(
+          *file,
+          this->DecodeLevel,
+          { ext[0], ext[2], ext[4] },
+          { ext[1], ext[3], ext[5] },
+          values->GetPointer(0),
           [this, treeShare](double f) { this->UpdateProgress(treeShare + (1 - treeShare) * f); },
           &damaged);
         image->GetPointData()->SetScalars(values);
@@ -193,8 +206,8 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
   return 1;
 }
 
-void vtkAFAMReader::ReportDamagedBlocks(
-  const std::vector<std::string>& damaged, const std::string& path)
+void vtkAFAMReader::ReportDamagedBlocks(const std::vector<std::string>& damaged,
+  const std::string& path)
 {
   if (damaged.empty())
   {

@@ -31,8 +31,9 @@ int vtkAFAMWriter::FillInputPortInformation(int, vtkInformation* info)
   return 1;
 }
 
-vtkTypeBool vtkAFAMWriter::ProcessRequest(
-  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+vtkTypeBool vtkAFAMWriter::ProcessRequest(vtkInformation* request,
+  vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
 {
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   if (request->Has(vtkStreamingDemandDrivenPipeline::REQUEST_UPDATE_EXTENT()) && controller &&
@@ -41,7 +42,8 @@ vtkTypeBool vtkAFAMWriter::ProcessRequest(
     // Each rank asks for its own piece, so that an encoder upstream encodes pieces of the image
     // (the default, piece 0 of 1, would give every rank the whole image).
     vtkInformation* in = inputVector[0]->GetInformationObject(0);
-    in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), controller->GetLocalProcessId());
+    in->Set(
+      vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), controller->GetLocalProcessId());
     in->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(),
       controller->GetNumberOfProcesses());
     return 1;
@@ -83,7 +85,8 @@ void vtkAFAMWriter::WriteData()
     {
       scratch.resize(file->entries()[i].size / sizeof(float) + 1);
       file->readPayload(static_cast<int64_t>(i), scratch.data());
-      this->UpdateProgress(0.8 * static_cast<double>(i) / static_cast<double>(file->entries().size()));
+      this->UpdateProgress(
+        0.8 * static_cast<double>(i) / static_cast<double>(file->entries().size()));
     }
     if (fs::equivalent(source, this->FileName, ec))
     {

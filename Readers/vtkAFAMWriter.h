@@ -2,7 +2,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class   vtkAFAMWriter
- * @brief   Saves Adaptive-FAM micro-models (the output of vtkAFAMEncoder or vtkAFAMReader) to .afam.
+ * @brief   Saves Adaptive-FAM micro-models (the output of vtkAFAMEncoder or vtkAFAMReader) to
+ * .afam.
  *
  * The input multiblock names the .afam file that holds its models (field data); the writer
  * validates that file through Core (header, index and every payload's checksum) and copies it to
@@ -34,7 +35,8 @@ protected:
   ~vtkAFAMWriter() override;
   int FillInputPortInformation(int port, vtkInformation* info) override;
   /// Under MPI, asks for this rank's piece (see the class documentation).
-  vtkTypeBool ProcessRequest(vtkInformation* request, vtkInformationVector** inputVector,
+  vtkTypeBool ProcessRequest(vtkInformation* request,
+    vtkInformationVector** inputVector,
     vtkInformationVector* outputVector) override;
   void WriteData() override;
 

@@ -30,17 +30,17 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
-#include "afam/scene/camera.hpp"
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/encode/encoder.hpp"
-#include "afam/spline/evaluate.hpp"
-#include "afam/spline/fit.hpp"
 #include "afam/eval/ground_truth.hpp"
 #include "afam/eval/image_metrics.hpp"
-#include "afam/volume/marschner_lobb.hpp"
 #include "afam/eval/png_io.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/spline/evaluate.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "device_option.hpp"
 #include "zfp_codec.hpp"
 
@@ -134,7 +134,8 @@ int runQuality(const Opts& o) {
   std::FILE* csv = std::fopen(o.str("csv").c_str(), "w");
   if (!csv) throw std::runtime_error("cannot write " + o.str("csv"));
   std::fprintf(csv,
-               "label,file,mode,view,levels_visible,sample_distance,blocks,payload_bytes,file_payload_bytes,raw_block_bytes,ratio,"
+               "label,file,mode,view,levels_visible,sample_distance,blocks,payload_bytes,file_"
+               "payload_bytes,raw_block_bytes,ratio,"
                "caching_ms,render_ms,mse,psnr,ssim,device\n");
   const std::string imgDir = o.str("images");
   for (double sd : sds) {
@@ -174,17 +175,20 @@ int runQuality(const Opts& o) {
         best = std::min(best, s2.renderMs);
       }
       const ImageRGB8 rgb = toRGB8(img);
-      if (!imgDir.empty()) writePng(imgDir + "/" + lf.first + "_sd" + std::to_string(sd) + ".png", rgb);
+      if (!imgDir.empty())
+        writePng(imgDir + "/" + lf.first + "_sd" + std::to_string(sd) + ".png", rgb);
       const ImageErrors e = compare(rgb, gtRgb);
       const int lv = levelsVisible(r.select(cam), file->header().levels);
-      std::fprintf(csv, "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%llu,%.4f,%.4f,%.4f,%.8g,%.6f,%.6f,%s\n", lf.first.c_str(),
-                   lf.second.c_str(), modeName(file->header().mode), view, lv, sd, (long long)st.slots,
-                   (unsigned long long)st.poolBytes, (unsigned long long)filePayload,
-                   (unsigned long long)rawBlocks, double(rawBlocks) / double(std::max<uint64_t>(filePayload, 1)), caching, best, e.mse,
-                   e.psnr, e.ssim, dev.used.c_str());
+      std::fprintf(csv,
+                   "%s,%s,%s,%d,%d,%.8g,%lld,%llu,%llu,%llu,%.4f,%.4f,%.4f,%.8g,%.6f,%.6f,%s\n",
+                   lf.first.c_str(), lf.second.c_str(), modeName(file->header().mode), view, lv, sd,
+                   (long long)st.slots, (unsigned long long)st.poolBytes,
+                   (unsigned long long)filePayload, (unsigned long long)rawBlocks,
+                   double(rawBlocks) / double(std::max<uint64_t>(filePayload, 1)), caching, best,
+                   e.mse, e.psnr, e.ssim, dev.used.c_str());
       std::fflush(csv);
-      std::printf("%s sd=%g view=%d levels=%d render_ms=%.2f psnr=%.3f ssim=%.4f\n", lf.first.c_str(), sd,
-                  view, lv, best, e.psnr, e.ssim);
+      std::printf("%s sd=%g view=%d levels=%d render_ms=%.2f psnr=%.3f ssim=%.4f\n",
+                  lf.first.c_str(), sd, view, lv, best, e.psnr, e.ssim);
     }
   }
   std::fclose(csv);
@@ -203,7 +207,8 @@ void interiorOf(const ModelEntry& m, const std::vector<float>& payload, std::vec
         out[(size_t(z) * ny + y) * nx + x] = payload[(size_t(z + 1) * py + (y + 1)) * px + (x + 1)];
 }
 
-void withClampedGhost(const ModelEntry& m, const std::vector<float>& in, std::vector<float>& payload) {
+void withClampedGhost(const ModelEntry& m, const std::vector<float>& in,
+                      std::vector<float>& payload) {
   const int nx = m.samples[0], ny = m.samples[1], nz = m.samples[2];
   const int px = m.ncp[0], py = m.ncp[1], pz = m.ncp[2];
   payload.resize(size_t(px) * py * pz);
@@ -218,12 +223,12 @@ void withClampedGhost(const ModelEntry& m, const std::vector<float>& in, std::ve
 
 // Compresses `in` (nx*ny*nz floats), returns compressed bytes; `out` gets the decompressed data,
 // decompression time is added to decMs.
-size_t codecRoundTrip(const std::string& codec, double param, const std::vector<float>& in, int nx, int ny,
-                      int nz, std::vector<float>& out, double& decMs) {
+size_t codecRoundTrip(const std::string& codec, double param, const std::vector<float>& in, int nx,
+                      int ny, int nz, std::vector<float>& out, double& decMs) {
   out.assign(in.size(), 0.f);
   if (codec == "zfp") {
-    const ZfpRoundTrip z = zfpRoundTrip(ZfpMode::FixedRate, param, in.data(), size_t(nx), size_t(ny), size_t(nz),
-                                        out.data());
+    const ZfpRoundTrip z = zfpRoundTrip(ZfpMode::FixedRate, param, in.data(), size_t(nx),
+                                        size_t(ny), size_t(nz), out.data());
     decMs += 1000.0 * z.decompressSeconds;
     return z.bytes;
   }
@@ -250,8 +255,13 @@ size_t codecRoundTrip(const std::string& codec, double param, const std::vector<
     return bytes;
   }
 #endif
-  (void)param; (void)nx; (void)ny; (void)nz; (void)decMs;
-  throw std::runtime_error("codec '" + codec + "' not built in (zfp/fpzip need libzfp-dev/libfpzip-dev)");
+  (void)param;
+  (void)nx;
+  (void)ny;
+  (void)nz;
+  (void)decMs;
+  throw std::runtime_error("codec '" + codec +
+                           "' not built in (zfp/fpzip need libzfp-dev/libfpzip-dev)");
 }
 
 int runCompress(const Opts& o) {
@@ -259,7 +269,8 @@ int runCompress(const Opts& o) {
   const std::string codec = o.str("codec", "zfp");
   const double param = std::atof(o.str("param", "1.6").c_str());
   auto f = AfamFile::open(o.pos[0]);
-  if (f->header().mode != EncodingMode::Downsampled) throw std::runtime_error("compress: input must be a ds file");
+  if (f->header().mode != EncodingMode::Downsampled)
+    throw std::runtime_error("compress: input must be a ds file");
   AfamWriter w(o.pos[1], f->header());
   size_t rawBytes = 0, compBytes = 0;
   double decMs = 0, sumSq = 0;
@@ -269,7 +280,8 @@ int runCompress(const Opts& o) {
     ModelEntry m = f->entries()[size_t(i)];
     const std::vector<float> p = f->readPayload(i);
     interiorOf(m, p, interior);
-    compBytes += codecRoundTrip(codec, param, interior, m.samples[0], m.samples[1], m.samples[2], dec, decMs);
+    compBytes += codecRoundTrip(codec, param, interior, m.samples[0], m.samples[1], m.samples[2],
+                                dec, decMs);
     rawBytes += interior.size() * sizeof(float);
     float mn = std::numeric_limits<float>::infinity(), mx = -mn;
     double bs = 0, be = 0;
@@ -291,10 +303,12 @@ int runCompress(const Opts& o) {
   }
   w.commit();
   const size_t blocks = f->entries().size();
-  std::printf("codec=%s param=%g blocks=%zu raw_bytes=%zu compressed_bytes=%zu ratio=%.4f rmse=%.6g "
-              "decompress_ms_total=%.4f decompress_us_per_block=%.4f\n",
-              codec.c_str(), param, blocks, rawBytes, compBytes, double(rawBytes) / double(compBytes),
-              std::sqrt(sumSq / double(std::max<size_t>(count, 1))), decMs, 1000.0 * decMs / double(blocks));
+  std::printf(
+      "codec=%s param=%g blocks=%zu raw_bytes=%zu compressed_bytes=%zu ratio=%.4f rmse=%.6g "
+      "decompress_ms_total=%.4f decompress_us_per_block=%.4f\n",
+      codec.c_str(), param, blocks, rawBytes, compBytes, double(rawBytes) / double(compBytes),
+      std::sqrt(sumSq / double(std::max<size_t>(count, 1))), decMs,
+      1000.0 * decMs / double(blocks));
   return 0;
 }
 
@@ -334,7 +348,8 @@ void stabilityRow(std::FILE* csv, BlockFitter& fitter, const Case& c) {
       for (int y = 0; y < my; ++y)
         for (int x = 0; x < mx; ++x, ++idx) {
           if (idx % step) continue;
-          const float u = mx > 1 ? float(x) / float(mx - 1) : 0.f, v = my > 1 ? float(y) / float(my - 1) : 0.f,
+          const float u = mx > 1 ? float(x) / float(mx - 1) : 0.f,
+                      v = my > 1 ? float(y) / float(my - 1) : 0.f,
                       w = mz > 1 ? float(z) / float(mz - 1) : 0.f;
           const float val = evaluateModel<false>(mv, u, v, w, nullptr);
           if (!std::isfinite(val)) {
@@ -350,13 +365,14 @@ void stabilityRow(std::FILE* csv, BlockFitter& fitter, const Case& c) {
       if (ch == ',' || ch == '\n') ch = ';';
   }
   double cond = 0;
-  for (int a = 0; a < 3; ++a) cond = std::max(cond, axisConditioning(c.n[a], ncp[a], c.degree).normal);
+  for (int a = 0; a < 3; ++a)
+    cond = std::max(cond, axisConditioning(c.n[a], ncp[a], c.degree).normal);
   const double scale = amax > 0 ? amax : 1;
-  std::fprintf(csv, "%s,%dx%dx%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%lld,%s\n", c.name.c_str(), c.n[0], c.n[1],
-               c.n[2], ncp[0], c.degree, amax, maxErr, maxErr / scale, rmse, overshoot, cond, nans,
-               status.c_str());
-  std::printf("%-28s max_err=%.3g rel=%.3g overshoot=%.3g cond=%.3g nan=%lld %s\n", c.name.c_str(), maxErr,
-              maxErr / scale, overshoot, cond, nans, status.c_str());
+  std::fprintf(csv, "%s,%dx%dx%d,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%lld,%s\n", c.name.c_str(),
+               c.n[0], c.n[1], c.n[2], ncp[0], c.degree, amax, maxErr, maxErr / scale, rmse,
+               overshoot, cond, nans, status.c_str());
+  std::printf("%-28s max_err=%.3g rel=%.3g overshoot=%.3g cond=%.3g nan=%lld %s\n", c.name.c_str(),
+              maxErr, maxErr / scale, overshoot, cond, nans, status.c_str());
 }
 
 std::vector<float> mlBlock(std::array<int, 3> n, double scale, double offset) {
@@ -365,9 +381,11 @@ std::vector<float> mlBlock(std::array<int, 3> n, double scale, double offset) {
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)
       for (int x = 0; x < n[0]; ++x) {
-        const double px = -1 + 2.0 * x / std::max(1, n[0] - 1), py = -1 + 2.0 * y / std::max(1, n[1] - 1),
+        const double px = -1 + 2.0 * x / std::max(1, n[0] - 1),
+                     py = -1 + 2.0 * y / std::max(1, n[1] - 1),
                      pz = -1 + 2.0 * z / std::max(1, n[2] - 1);
-        d[(size_t(z) * n[1] + y) * n[0] + x] = float(offset + scale * ml.valueT<double>(px, py, pz));
+        d[(size_t(z) * n[1] + y) * n[0] + x] =
+            float(offset + scale * ml.valueT<double>(px, py, pz));
       }
   return d;
 }
@@ -375,11 +393,14 @@ std::vector<float> mlBlock(std::array<int, 3> n, double scale, double offset) {
 int runStability(const Opts& o) {
   std::FILE* csv = std::fopen(o.str("csv").c_str(), "w");
   if (!csv) throw std::runtime_error("cannot write " + o.str("csv"));
-  std::fprintf(csv, "case,n,ncp,degree,max_abs_value,max_error,rel_max_error,rmse,overshoot,cond_normal,nan_count,status\n");
+  std::fprintf(csv,
+               "case,n,ncp,degree,max_abs_value,max_error,rel_max_error,rmse,overshoot,cond_normal,"
+               "nan_count,status\n");
   BlockFitter fitter;
   std::vector<Case> cases;
   const std::array<int, 3> line{128, 8, 8};
-  for (int p = 1; p <= 3; ++p) cases.push_back({"ncp_eq_n_n128_p" + std::to_string(p), line, 128, p, mlBlock(line, 1, 0)});
+  for (int p = 1; p <= 3; ++p)
+    cases.push_back({"ncp_eq_n_n128_p" + std::to_string(p), line, 128, p, mlBlock(line, 1, 0)});
   const std::array<int, 3> b{32, 32, 32};
   const size_t nb = size_t(32) * 32 * 32;
   {
@@ -417,7 +438,8 @@ int runStability(const Opts& o) {
     if (!in) throw std::runtime_error("stability: cannot open --chi file " + chi);
     in.read(reinterpret_cast<char*>(d.data()), std::streamsize(d.size() * 4));
     if (!in)
-      throw std::runtime_error("stability: --chi file " + chi + " holds fewer than 50^3 float32 values");
+      throw std::runtime_error("stability: --chi file " + chi +
+                               " holds fewer than 50^3 float32 values");
     cases.push_back({"chi_field_ncp25", {50, 50, 50}, 25, 2, d});
     cases.push_back({"chi_field_ncp_eq_n", {50, 50, 50}, 50, 2, d});
     cases.push_back({"chi_field_ncp_eq_n_p3", {50, 50, 50}, 50, 3, d});
@@ -446,7 +468,8 @@ float evalAt(const Decoded& d, const Partition& p, const double pos[3], Encoding
     uvw[a] = std::clamp(uvw[a], 0.f, 1.f);
   }
   (void)p;
-  if (mode != EncodingMode::Downsampled) return evaluateModel<false>(d.view, uvw[0], uvw[1], uvw[2], nullptr);
+  if (mode != EncodingMode::Downsampled)
+    return evaluateModel<false>(d.view, uvw[0], uvw[1], uvw[2], nullptr);
   // DS: trilinear on the interior samples (payload has a ghost layer).
   const ModelEntry& m = d.entry;
   float g[3];
@@ -458,7 +481,9 @@ float evalAt(const Decoded& d, const Partition& p, const double pos[3], Encoding
     t[a] = m.samples[a] > 1 ? g[a] - float(i0[a]) : 0.f;
   }
   auto at = [&](int x, int y, int z) {
-    x = std::min(x, m.samples[0] - 1); y = std::min(y, m.samples[1] - 1); z = std::min(z, m.samples[2] - 1);
+    x = std::min(x, m.samples[0] - 1);
+    y = std::min(y, m.samples[1] - 1);
+    z = std::min(z, m.samples[2] - 1);
     return d.control[(size_t(z + 1) * m.ncp[1] + (y + 1)) * m.ncp[0] + (x + 1)];
   };
   float v = 0;
@@ -473,7 +498,9 @@ float evalAt(const Decoded& d, const Partition& p, const double pos[3], Encoding
 int runSeams(const Opts& o) {
   std::FILE* csv = std::fopen(o.str("csv").c_str(), "w");
   if (!csv) throw std::runtime_error("cannot write " + o.str("csv"));
-  std::fprintf(csv, "label,mode,value_range,same_level_max_jump,same_level_rel,cross_level_max_jump,cross_level_rel,faces_same,faces_cross\n");
+  std::fprintf(csv,
+               "label,mode,value_range,same_level_max_jump,same_level_rel,cross_level_max_jump,"
+               "cross_level_rel,faces_same,faces_cross\n");
   for (const auto& arg : o.pos) {
     const auto lf = labelled(arg);
     auto f = AfamFile::open(lf.second);
@@ -509,7 +536,8 @@ int runSeams(const Opts& o) {
               pos[a] = double(A.ext.hi[a]);
               pos[b1] = p.samplePosition(A.ext, b1, s1);
               pos[b2] = p.samplePosition(A.ext, b2, s2);
-              same = std::max(same, double(std::fabs(evalAt(A, p, pos, mode) - evalAt(B, p, pos, mode))));
+              same = std::max(same,
+                              double(std::fabs(evalAt(A, p, pos, mode) - evalAt(B, p, pos, mode))));
             }
           // Cross level: A against the finer children of B that touch the face.
           if (l + 1 < p.levels()) {
@@ -523,7 +551,8 @@ int runSeams(const Opts& o) {
                   pos[a] = double(F.ext.lo[a]);
                   pos[b1] = p.samplePosition(F.ext, b1, s1);
                   pos[b2] = p.samplePosition(F.ext, b2, s2);
-                  cross = std::max(cross, double(std::fabs(evalAt(A, p, pos, mode) - evalAt(F, p, pos, mode))));
+                  cross = std::max(
+                      cross, double(std::fabs(evalAt(A, p, pos, mode) - evalAt(F, p, pos, mode))));
                 }
             }
           }
@@ -531,10 +560,10 @@ int runSeams(const Opts& o) {
       }
     }
     const double range = std::max(1e-300, f->header().valueMax - f->header().valueMin);
-    std::fprintf(csv, "%s,%s,%.8g,%.6g,%.6g,%.6g,%.6g,%lld,%lld\n", lf.first.c_str(), modeName(mode), range, same,
-                 same / range, cross, cross / range, nSame, nCross);
-    std::printf("%s same=%.4g (%.3g of range) cross=%.4g (%.3g of range)\n", lf.first.c_str(), same, same / range,
-                cross, cross / range);
+    std::fprintf(csv, "%s,%s,%.8g,%.6g,%.6g,%.6g,%.6g,%lld,%lld\n", lf.first.c_str(),
+                 modeName(mode), range, same, same / range, cross, cross / range, nSame, nCross);
+    std::printf("%s same=%.4g (%.3g of range) cross=%.4g (%.3g of range)\n", lf.first.c_str(), same,
+                same / range, cross, cross / range);
   }
   std::fclose(csv);
   return 0;
@@ -544,13 +573,14 @@ int runSeams(const Opts& o) {
 
 int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
-    std::printf("usage: afam_eval quality|compress|stability|seams [options]  (see the header of "
-                "Apps/evaluation/afam_eval.cpp)\ncodecs:%s%s\n",
-                zfpAvailable() ? " zfp" : "",
+    std::printf(
+        "usage: afam_eval quality|compress|stability|seams [options]  (see the header of "
+        "Apps/evaluation/afam_eval.cpp)\ncodecs:%s%s\n",
+        zfpAvailable() ? " zfp" : "",
 #ifdef AFAM_EVAL_HAVE_FPZIP
-                " fpzip"
+        " fpzip"
 #else
-                ""
+        ""
 #endif
     );
     return argc < 2 ? 2 : 0;

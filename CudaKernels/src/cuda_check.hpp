@@ -26,11 +26,11 @@ namespace afam::cuda_detail {
 
 }  // namespace afam::cuda_detail
 
-#define AFAM_CUDA_CHECK(call)                                                    \
-  do {                                                                           \
-    const cudaError_t afamStatus_ = (call);                                      \
-    if (afamStatus_ != cudaSuccess) {                                            \
+#define AFAM_CUDA_CHECK(call)                                                      \
+  do {                                                                             \
+    const cudaError_t afamStatus_ = (call);                                        \
+    if (afamStatus_ != cudaSuccess) {                                              \
       (void)cudaGetLastError(); /* clear a sticky-free error so later calls run */ \
       ::afam::cuda_detail::throwCudaError(afamStatus_, #call, __FILE__, __LINE__); \
-    }                                                                            \
+    }                                                                              \
   } while (0)

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Ray length limits from a depth buffer in device memory, one thread per image pixel, with the
-// CPU's math (afam/scene/depth_limits.hpp). Compiled with -fmad=false: the same roundings as the CPU's
-// rayLengthsFromDepth, so GPU and CPU frames stop their rays at the same samples.
+// CPU's math (afam/scene/depth_limits.hpp). Compiled with -fmad=false: the same roundings as the
+// CPU's rayLengthsFromDepth, so GPU and CPU frames stop their rays at the same samples.
 #include "afam/scene/depth_limits.hpp"
 #include "kernel_launch.hpp"
 

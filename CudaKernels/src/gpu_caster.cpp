@@ -9,7 +9,8 @@
 
 namespace afam {
 
-std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads, const GpuReport& report) {
+std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
+                                             const GpuReport& report) {
   std::string why;
   if (!gpuAvailable(&why)) {
     report("no usable GPU: " + why);
@@ -36,14 +37,17 @@ std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads, co
   return std::unique_ptr<GpuCaster>(new GpuCaster(std::move(gpu), threads));
 }
 
-std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report) {
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads,
+                                           const GpuReport& report) {
   return GpuCaster::create(budgetBytes, threads, report);
 }
 
 bool gpuCasterBuilt() { return true; }
 
 GpuCaster::GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads)
-    : gpu_(std::move(gpu)), threads_(threads), description_(gpuDescription(gpu_->pool().device())) {}
+    : gpu_(std::move(gpu)),
+      threads_(threads),
+      description_(gpuDescription(gpu_->pool().device())) {}
 
 GpuCaster::~GpuCaster() = default;
 
@@ -53,7 +57,8 @@ const PoolStats& GpuCaster::poolStats() const { return gpu_->pool().stats(); }
 
 const GpuFrameTimes& GpuCaster::lastTimes() const { return gpu_->lastTimes(); }
 
-CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) {
+CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets,
+                           ImageRGBA& image) {
   CastResult result;
   const int w = frame.view.camera.width, h = frame.view.camera.height;
   const size_t floats = size_t(w) * size_t(h) * 4;

@@ -31,8 +31,8 @@ bool gpuAvailable(std::string* why) {
       else if (status == cudaErrorNoDevice)
         *why = "no CUDA device (" + name + ", " + std::to_string(int(status)) + ")";
       else
-        *why = "CUDA is not usable: " + name + " (" + std::to_string(int(status)) + "): " +
-               cudaGetErrorString(status);
+        *why = "CUDA is not usable: " + name + " (" + std::to_string(int(status)) +
+               "): " + cudaGetErrorString(status);
     }
     return false;
   }
@@ -49,8 +49,8 @@ bool gpuAvailable(std::string* why) {
   if (touch != cudaSuccess) {
     (void)cudaGetLastError();
     if (why)
-      *why = "CUDA device " + std::to_string(device) + " is not usable: " + cudaGetErrorName(touch) + " (" +
-             std::to_string(int(touch)) + ")";
+      *why = "CUDA device " + std::to_string(device) +
+             " is not usable: " + cudaGetErrorName(touch) + " (" + std::to_string(int(touch)) + ")";
     return false;
   }
   if (why) why->clear();

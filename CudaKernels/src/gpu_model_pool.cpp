@@ -87,8 +87,7 @@ GpuModelPool::GpuModelPool(size_t budgetBytes, int device)
                                                   : 256));
     AFAM_CUDA_CHECK(cudaStreamCreateWithFlags(&impl_->stream, cudaStreamNonBlocking));
     AFAM_CUDA_CHECK(cudaEventCreateWithFlags(&impl_->copiesDone, cudaEventDisableTiming));
-    AFAM_CUDA_CHECK(
-        cudaMallocHost(reinterpret_cast<void**>(&impl_->staging), kInitialStaging));
+    AFAM_CUDA_CHECK(cudaMallocHost(reinterpret_cast<void**>(&impl_->staging), kInitialStaging));
     impl_->stagingCapacity = kInitialStaging;
     AFAM_CUDA_CHECK(cudaEventRecord(impl_->copiesDone, impl_->stream));
   } catch (...) {

@@ -198,15 +198,14 @@ struct GpuRenderer::Impl {
       auto it = textures.find(key);
       if (it == textures.end()) {
         Texture t;
-        const cudaExtent extent = make_cudaExtent(size_t(slot.knots[0].ncp),
-                                                  size_t(slot.knots[1].ncp),
-                                                  size_t(slot.knots[2].ncp));
+        const cudaExtent extent = make_cudaExtent(
+            size_t(slot.knots[0].ncp), size_t(slot.knots[1].ncp), size_t(slot.knots[2].ncp));
         const cudaChannelFormatDesc desc = cudaCreateChannelDesc<float>();
         AFAM_CUDA_CHECK(cudaMalloc3DArray(&t.array, &desc, extent));
         cudaMemcpy3DParms copy{};
-        copy.srcPtr = make_cudaPitchedPtr(const_cast<float*>(v.pool + slot.offset),
-                                          extent.width * sizeof(float), extent.width,
-                                          extent.height);
+        copy.srcPtr =
+            make_cudaPitchedPtr(const_cast<float*>(v.pool + slot.offset),
+                                extent.width * sizeof(float), extent.width, extent.height);
         copy.dstArray = t.array;
         copy.extent = extent;
         copy.kind = cudaMemcpyHostToDevice;
@@ -266,8 +265,7 @@ struct GpuRenderer::Impl {
     if (v.cellSlot) std::memcpy(hostTables + cellOffset, v.cellSlot, sizeof(int32_t) * cells);
     if (v.tf && v.tfSize > 0)
       std::memcpy(hostTables + tfOffset, v.tf, sizeof(float) * 4 * size_t(v.tfSize));
-    if (v.maxDistance)
-      std::memcpy(hostTables + depthOffset, v.maxDistance, sizeof(float) * pixels);
+    if (v.maxDistance) std::memcpy(hostTables + depthOffset, v.maxDistance, sizeof(float) * pixels);
     auto* slots = reinterpret_cast<FrameSlot*>(hostTables + slotOffset);
     for (int32_t s = 0; s < v.slotCount; ++s) {
       FrameSlot slot = v.slots[s];
@@ -307,23 +305,30 @@ std::string launchFull(GpuFloatMode m, bool shaded, int p, const FrameView& d, f
       return kernels_fma::launchFull(shaded, p, d, image, s, describe, minBlocks);
     case GpuFloatMode::Fast:
       return kernels_fast::launchFull(shaded, p, d, image, s, describe, minBlocks);
-    default: return kernels_exact::launchFull(shaded, p, d, image, s, describe, minBlocks);
+    default:
+      return kernels_exact::launchFull(shaded, p, d, image, s, describe, minBlocks);
   }
 }
 void launchCount(GpuFloatMode m, bool shaded, int p, const FrameView& d, unsigned long long* total,
                  cudaStream_t s) {
   switch (m) {
-    case GpuFloatMode::Fma: return kernels_fma::launchCount(shaded, p, d, total, s);
-    case GpuFloatMode::Fast: return kernels_fast::launchCount(shaded, p, d, total, s);
-    default: return kernels_exact::launchCount(shaded, p, d, total, s);
+    case GpuFloatMode::Fma:
+      return kernels_fma::launchCount(shaded, p, d, total, s);
+    case GpuFloatMode::Fast:
+      return kernels_fast::launchCount(shaded, p, d, total, s);
+    default:
+      return kernels_exact::launchCount(shaded, p, d, total, s);
   }
 }
 std::string launchBare(GpuFloatMode m, int p, const FrameView& d, float* sink,
                        unsigned long long* total, cudaStream_t s, bool describe) {
   switch (m) {
-    case GpuFloatMode::Fma: return kernels_fma::launchBare(p, d, sink, total, s, describe);
-    case GpuFloatMode::Fast: return kernels_fast::launchBare(p, d, sink, total, s, describe);
-    default: return kernels_exact::launchBare(p, d, sink, total, s, describe);
+    case GpuFloatMode::Fma:
+      return kernels_fma::launchBare(p, d, sink, total, s, describe);
+    case GpuFloatMode::Fast:
+      return kernels_fast::launchBare(p, d, sink, total, s, describe);
+    default:
+      return kernels_exact::launchBare(p, d, sink, total, s, describe);
   }
 }
 
@@ -348,9 +353,8 @@ void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float*
   cast(view, slotKeys, nullptr, rgba, times, nullptr);
 }
 
-void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys,
-                                 float* deviceRgba, GpuFrameTimes* times,
-                                 const DeviceDepth* depth) {
+void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
+                                 GpuFrameTimes* times, const DeviceDepth* depth) {
   if (!deviceRgba) throw InvalidArgument("renderToDevice: no device image");
   cast(view, slotKeys, deviceRgba, nullptr, times, depth && depth->depth ? depth : nullptr);
 }
@@ -362,8 +366,8 @@ void checkDepthSize(const DeviceDepth& depth, int width, int height) {
     throw InvalidArgument("GpuRenderer: depth limits for a " + std::to_string(t.width) + " x " +
                           std::to_string(t.height) + " image from a " +
                           std::to_string(t.tileWidth) + " x " + std::to_string(t.tileHeight) +
-                          " tile, for a " + std::to_string(width) + " x " +
-                          std::to_string(height) + " frame");
+                          " tile, for a " + std::to_string(width) + " x " + std::to_string(height) +
+                          " frame");
 }
 }  // namespace
 
@@ -400,9 +404,8 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   if (poison_) AFAM_CUDA_CHECK(cudaMemsetAsync(target, 0xFF, pixels * sizeof(float4), m.stream));
   const int p = specialise_ ? uniformDegree(view) : -1;
   if (dsTextures_ && view.blendMode == kBlendComposite)  // the texture kernel composites only
-    kernelInfo_ = kernels_texture::launchDsTexture(view.shading != 0, d,
-                                                   m.textureHandles(view, slotKeys), target,
-                                                   nullptr, m.stream, true);
+    kernelInfo_ = kernels_texture::launchDsTexture(
+        view.shading != 0, d, m.textureHandles(view, slotKeys), target, nullptr, m.stream, true);
   else
     kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, target, m.stream, true, minBlocks_);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[2], m.stream));
@@ -449,11 +452,11 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   for (int r = -1; r < repetitions; ++r) {  // r = -1: warm-up
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
     const std::string info =
-        handles ? kernels_texture::launchDsTexture(shaded, d, handles, sink, nullptr, m.stream,
-                                                   r == -1)
+        handles
+            ? kernels_texture::launchDsTexture(shaded, d, handles, sink, nullptr, m.stream, r == -1)
         : kind == GpuKernelKind::Full
-                                 ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_)
-                                 : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1);
+            ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_)
+            : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1);
     if (r == -1) kernelInfo_ = info;
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[1], m.stream));
     AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[1]));

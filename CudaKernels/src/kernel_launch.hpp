@@ -10,22 +10,22 @@
 
 #include <string>
 
-#include "afam/scene/depth_limits.hpp"
 #include "afam/render/raycast.hpp"
+#include "afam/scene/depth_limits.hpp"
 
 #define AFAM_DECLARE_KERNEL_SET(NS)                                                            \
-  namespace afam::NS {                                                                        \
-  /* Full ray caster (castRayWith<Shaded>), specialised on degree p in 1..5 (else generic).  \
-     Returns the kernel's register / local-memory use when describe is set. minBlocks = 8     \
-     picks the variant limited to 64 registers (degree 2 only), anything else the default. */ \
+  namespace afam::NS {                                                                         \
+  /* Full ray caster (castRayWith<Shaded>), specialised on degree p in 1..5 (else generic).    \
+     Returns the kernel's register / local-memory use when describe is set. minBlocks = 8      \
+     picks the variant limited to 64 registers (degree 2 only), anything else the default. */  \
   std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cudaStream_t s, \
-                         bool describe, int minBlocks);                                       \
-  /* Untimed launch that counts evaluated samples into *total. */                             \
+                         bool describe, int minBlocks);                                        \
+  /* Untimed launch that counts evaluated samples into *total. */                              \
   void launchCount(bool shaded, int p, const FrameView& d, unsigned long long* total,          \
-                   cudaStream_t s);                                                           \
-  /* Bare value+gradient baseline along the same rays; counts samples when total != null. */  \
+                   cudaStream_t s);                                                            \
+  /* Bare value+gradient baseline along the same rays; counts samples when total != null. */   \
   std::string launchBare(int p, const FrameView& d, float* sink, unsigned long long* total,    \
-                         cudaStream_t s, bool describe);                                      \
+                         cudaStream_t s, bool describe);                                       \
   }
 
 AFAM_DECLARE_KERNEL_SET(kernels_exact)

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Internal: the kernels and their launchers, compiled three times with different floating-point
 // contracts (see kernel_launch.hpp): each .cu that includes this defines AFAM_KERNEL_NS first.
-// The kernels call the shared afam::castRay / castRayWith (Core/include/afam/render/raycast.hpp); nothing
-// of the ray's math is written here.
+// The kernels call the shared afam::castRay / castRayWith (Core/include/afam/render/raycast.hpp);
+// nothing of the ray's math is written here.
 #include <cuda_runtime.h>
 
 #include <string>
@@ -25,7 +25,7 @@ template <int P>
 using SamplerFor = ModelSamplerT<P>;
 
 template <bool Shaded, int P, int MinBlocks = 0>
-__global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
+__global__ void __launch_bounds__(kTileX* kTileY, MinBlocks)
     fullKernel(const FrameView f, float4* __restrict__ image) {
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
@@ -36,7 +36,7 @@ __global__ void __launch_bounds__(kTileX * kTileY, MinBlocks)
 
 /// Maximum / minimum / average intensity projection (FrameView::blendMode 1-3).
 template <int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
+__global__ void __launch_bounds__(kTileX* kTileY)
     projectionKernel(const FrameView f, float4* __restrict__ image) {
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
@@ -46,7 +46,7 @@ __global__ void __launch_bounds__(kTileX * kTileY)
 }
 
 template <bool Shaded, int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
+__global__ void __launch_bounds__(kTileX* kTileY)
     countingKernel(const FrameView f, unsigned long long* total) {
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
@@ -60,7 +60,7 @@ __global__ void __launch_bounds__(kTileX * kTileY)
 /// Baseline: the same rays and sample positions as castRayWith, but every sample in the box is
 /// only looked up and evaluated (value + gradient); no TF, shading, compositing or early exit.
 template <int P>
-__global__ void __launch_bounds__(kTileX * kTileY)
+__global__ void __launch_bounds__(kTileX* kTileY)
     bareKernel(const FrameView f, float* __restrict__ sink, unsigned long long* total) {
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
   const int py = int(blockIdx.y) * kTileY + int(threadIdx.y);
@@ -110,14 +110,15 @@ std::string launchFullT(const FrameView& d, float* image, cudaStream_t stream, b
       <<<c.grid, c.block, 0, stream>>>(d, reinterpret_cast<float4*>(image));
   AFAM_CUDA_CHECK(cudaGetLastError());
   if (!describeIt) return {};
-  const std::string name = std::string("full<") + (Shaded ? "shaded" : "unshaded") + ",p=" +
-                           (P < 0 ? std::string("any") : std::to_string(P)) +
+  const std::string name = std::string("full<") + (Shaded ? "shaded" : "unshaded") +
+                           ",p=" + (P < 0 ? std::string("any") : std::to_string(P)) +
                            (MinBlocks > 1 ? ",minBlocks=" + std::to_string(MinBlocks) : "") + ">";
   return describe(fullKernel<Shaded, P, MinBlocks>, name.c_str());
 }
 
 template <int P>
-std::string launchProjectionT(const FrameView& d, float* image, cudaStream_t stream, bool describeIt) {
+std::string launchProjectionT(const FrameView& d, float* image, cudaStream_t stream,
+                              bool describeIt) {
   const LaunchConfig c = config(d);
   projectionKernel<P><<<c.grid, c.block, 0, stream>>>(d, reinterpret_cast<float4*>(image));
   AFAM_CUDA_CHECK(cudaGetLastError());
@@ -149,10 +150,14 @@ std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cud
                        bool describeIt, int minBlocks) {
   if (d.blendMode != kBlendComposite) {  // projections: no shading, one kernel per degree
     switch (p) {
-      case 1: return launchProjectionT<1>(d, image, s, describeIt);
-      case 2: return launchProjectionT<2>(d, image, s, describeIt);
-      case 3: return launchProjectionT<3>(d, image, s, describeIt);
-      default: return launchProjectionT<-1>(d, image, s, describeIt);
+      case 1:
+        return launchProjectionT<1>(d, image, s, describeIt);
+      case 2:
+        return launchProjectionT<2>(d, image, s, describeIt);
+      case 3:
+        return launchProjectionT<3>(d, image, s, describeIt);
+      default:
+        return launchProjectionT<-1>(d, image, s, describeIt);
     }
   }
   // Occupancy variant (8 blocks of 128 threads per SM: at most 64 registers), degree 2 only.
@@ -161,21 +166,33 @@ std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cud
                   : launchFullT<false, 2, 8>(d, image, s, describeIt);
   if (shaded) {
     switch (p) {
-      case 1: return launchFullT<true, 1>(d, image, s, describeIt);
-      case 2: return launchFullT<true, 2>(d, image, s, describeIt);
-      case 3: return launchFullT<true, 3>(d, image, s, describeIt);
-      case 4: return launchFullT<true, 4>(d, image, s, describeIt);
-      case 5: return launchFullT<true, 5>(d, image, s, describeIt);
-      default: return launchFullT<true, -1>(d, image, s, describeIt);
+      case 1:
+        return launchFullT<true, 1>(d, image, s, describeIt);
+      case 2:
+        return launchFullT<true, 2>(d, image, s, describeIt);
+      case 3:
+        return launchFullT<true, 3>(d, image, s, describeIt);
+      case 4:
+        return launchFullT<true, 4>(d, image, s, describeIt);
+      case 5:
+        return launchFullT<true, 5>(d, image, s, describeIt);
+      default:
+        return launchFullT<true, -1>(d, image, s, describeIt);
     }
   }
   switch (p) {
-    case 1: return launchFullT<false, 1>(d, image, s, describeIt);
-    case 2: return launchFullT<false, 2>(d, image, s, describeIt);
-    case 3: return launchFullT<false, 3>(d, image, s, describeIt);
-    case 4: return launchFullT<false, 4>(d, image, s, describeIt);
-    case 5: return launchFullT<false, 5>(d, image, s, describeIt);
-    default: return launchFullT<false, -1>(d, image, s, describeIt);
+    case 1:
+      return launchFullT<false, 1>(d, image, s, describeIt);
+    case 2:
+      return launchFullT<false, 2>(d, image, s, describeIt);
+    case 3:
+      return launchFullT<false, 3>(d, image, s, describeIt);
+    case 4:
+      return launchFullT<false, 4>(d, image, s, describeIt);
+    case 5:
+      return launchFullT<false, 5>(d, image, s, describeIt);
+    default:
+      return launchFullT<false, -1>(d, image, s, describeIt);
   }
 }
 

@@ -39,12 +39,18 @@ struct TextureDsSampler {
     const cudaTextureObject_t tex = textures[slot];
     value = tex3D<float>(tex, t[0], t[1], t[2]);
     if (WithGradient) {
-      const float gv[3] = {0.5f * (tex3D<float>(tex, t[0] + 1.f, t[1], t[2]) -
-                                   tex3D<float>(tex, t[0] - 1.f, t[1], t[2])) * perVoxel[0],
-                           0.5f * (tex3D<float>(tex, t[0], t[1] + 1.f, t[2]) -
-                                   tex3D<float>(tex, t[0], t[1] - 1.f, t[2])) * perVoxel[1],
-                           0.5f * (tex3D<float>(tex, t[0], t[1], t[2] + 1.f) -
-                                   tex3D<float>(tex, t[0], t[1], t[2] - 1.f)) * perVoxel[2]};
+      const float gv[3] = {0.5f *
+                               (tex3D<float>(tex, t[0] + 1.f, t[1], t[2]) -
+                                tex3D<float>(tex, t[0] - 1.f, t[1], t[2])) *
+                               perVoxel[0],
+                           0.5f *
+                               (tex3D<float>(tex, t[0], t[1] + 1.f, t[2]) -
+                                tex3D<float>(tex, t[0], t[1] - 1.f, t[2])) *
+                               perVoxel[1],
+                           0.5f *
+                               (tex3D<float>(tex, t[0], t[1], t[2] + 1.f) -
+                                tex3D<float>(tex, t[0], t[1], t[2] - 1.f)) *
+                               perVoxel[2]};
       voxelToNormalisedGradient(f, gv, gradient);
     }
     return true;
@@ -52,7 +58,7 @@ struct TextureDsSampler {
 };
 
 template <bool Shaded>
-__global__ void __launch_bounds__(kTileX * kTileY)
+__global__ void __launch_bounds__(kTileX* kTileY)
     textureKernel(const FrameView f, const cudaTextureObject_t* __restrict__ textures,
                   float4* __restrict__ image, unsigned long long* total) {
   const int px = int(blockIdx.x) * kTileX + int(threadIdx.x);
@@ -91,8 +97,8 @@ std::string launchDsTexture(bool shaded, const FrameView& d, const unsigned long
     (void)cudaGetLastError();
     return "ds-texture";
   }
-  return std::string("ds-texture<") + (shaded ? "shaded" : "unshaded") + ">: " +
-         std::to_string(a.numRegs) + " registers, " + std::to_string(a.localSizeBytes) +
+  return std::string("ds-texture<") + (shaded ? "shaded" : "unshaded") +
+         ">: " + std::to_string(a.numRegs) + " registers, " + std::to_string(a.localSizeBytes) +
          " bytes local";
 }
 

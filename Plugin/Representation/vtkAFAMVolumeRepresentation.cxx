@@ -42,8 +42,9 @@ int vtkAFAMVolumeRepresentation::FillInputPortInformation(int, vtkInformation* i
   return 1;
 }
 
-int vtkAFAMVolumeRepresentation::RequestData(
-  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+int vtkAFAMVolumeRepresentation::RequestData(vtkInformation* request,
+  vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
 {
   vtkMath::UninitializeBounds(this->DataBounds);
   this->FileName.clear();
@@ -87,8 +88,9 @@ int vtkAFAMVolumeRepresentation::RequestData(
   return this->Superclass::RequestData(request, inputVector, outputVector);
 }
 
-int vtkAFAMVolumeRepresentation::ProcessViewRequest(
-  vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo)
+int vtkAFAMVolumeRepresentation::ProcessViewRequest(vtkInformationRequestKey* request_type,
+  vtkInformation* inInfo,
+  vtkInformation* outInfo)
 {
   if (!this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo))
   {
@@ -170,38 +172,134 @@ bool vtkAFAMVolumeRepresentation::RemoveFromView(vtkView* view)
   return false;
 }
 
-void vtkAFAMVolumeRepresentation::SetShade(bool v) { this->Property->SetShade(v); }
-void vtkAFAMVolumeRepresentation::SetAmbient(double v) { this->Property->SetAmbient(v); }
-void vtkAFAMVolumeRepresentation::SetDiffuse(double v) { this->Property->SetDiffuse(v); }
-void vtkAFAMVolumeRepresentation::SetSpecular(double v) { this->Property->SetSpecular(v); }
-void vtkAFAMVolumeRepresentation::SetSpecularPower(double v) { this->Property->SetSpecularPower(v); }
-void vtkAFAMVolumeRepresentation::SetLodPolicy(int v) { this->Mapper->SetLodPolicy(v); }
-void vtkAFAMVolumeRepresentation::SetLodPixelBudget(double v) { this->Mapper->SetLodPixelBudget(v); }
-void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v) { this->Mapper->SetCacheBudgetMB(v); }
-void vtkAFAMVolumeRepresentation::SetPrefetcher(int v) { this->Mapper->SetPrefetcher(v); }
-void vtkAFAMVolumeRepresentation::SetRenderDevice(int v) { this->Mapper->SetRenderDevice(v); }
-void vtkAFAMVolumeRepresentation::SetDepthCompositing(bool v) { this->Mapper->SetDepthCompositing(v); }
-void vtkAFAMVolumeRepresentation::SetSampleDistance(double v) { this->Mapper->SetSampleDistance(v); }
-void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v) { this->Mapper->SetNumberOfThreads(v); }
-void vtkAFAMVolumeRepresentation::SetAutoAdjustImageScale(bool v) { this->Mapper->SetAutoAdjustImageScale(v); }
-void vtkAFAMVolumeRepresentation::SetMinimumImageScale(double v) { this->Mapper->SetMinimumImageScale(v); }
-void vtkAFAMVolumeRepresentation::SetBlendMode(int v) { this->Mapper->SetBlendMode(v); }
-double vtkAFAMVolumeRepresentation::GetLastImageScale() { return this->Mapper->GetLastImageScale(); }
-double vtkAFAMVolumeRepresentation::GetLastCachingTime() { return this->Mapper->GetLastCachingTime(); }
-double vtkAFAMVolumeRepresentation::GetLastRenderTime() { return this->Mapper->GetLastRenderTime(); }
-double vtkAFAMVolumeRepresentation::GetLastTotalTime() { return this->Mapper->GetLastTotalTime(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheHits() { return this->Mapper->GetLastCacheHits(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheMisses() { return this->Mapper->GetLastCacheMisses(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBytesRead() { return this->Mapper->GetLastBytesRead(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks() { return this->Mapper->GetLastCulledBlocks(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastVisibleBlocks() { return this->Mapper->GetLastVisibleBlocks(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames() { return this->Mapper->GetNumberOfFrames(); }
-int vtkAFAMVolumeRepresentation::GetLastUsedGpu() { return this->Mapper->GetLastUsedGpu() ? 1 : 0; }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastDepthLimitedPixels() { return this->Mapper->GetLastDepthLimitedPixels(); }
-const char* vtkAFAMVolumeRepresentation::GetLastDeviceMessage() { return this->Mapper->GetLastDeviceMessage(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastGpuModelsUploaded() { return this->Mapper->GetLastGpuModelsUploaded(); }
-vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfRendererBuilds() { return this->Mapper->GetNumberOfRendererBuilds(); }
-const char* vtkAFAMVolumeRepresentation::GetLastSettingWarning() { return this->Mapper->GetLastSettingWarning(); }
+void vtkAFAMVolumeRepresentation::SetShade(bool v)
+{
+  this->Property->SetShade(v);
+}
+void vtkAFAMVolumeRepresentation::SetAmbient(double v)
+{
+  this->Property->SetAmbient(v);
+}
+void vtkAFAMVolumeRepresentation::SetDiffuse(double v)
+{
+  this->Property->SetDiffuse(v);
+}
+void vtkAFAMVolumeRepresentation::SetSpecular(double v)
+{
+  this->Property->SetSpecular(v);
+}
+void vtkAFAMVolumeRepresentation::SetSpecularPower(double v)
+{
+  this->Property->SetSpecularPower(v);
+}
+void vtkAFAMVolumeRepresentation::SetLodPolicy(int v)
+{
+  this->Mapper->SetLodPolicy(v);
+}
+void vtkAFAMVolumeRepresentation::SetLodPixelBudget(double v)
+{
+  this->Mapper->SetLodPixelBudget(v);
+}
+void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v)
+{
+  this->Mapper->SetCacheBudgetMB(v);
+}
+void vtkAFAMVolumeRepresentation::SetPrefetcher(int v)
+{
+  this->Mapper->SetPrefetcher(v);
+}
+void vtkAFAMVolumeRepresentation::SetRenderDevice(int v)
+{
+  this->Mapper->SetRenderDevice(v);
+}
+void vtkAFAMVolumeRepresentation::SetDepthCompositing(bool v)
+{
+  this->Mapper->SetDepthCompositing(v);
+}
+void vtkAFAMVolumeRepresentation::SetSampleDistance(double v)
+{
+  this->Mapper->SetSampleDistance(v);
+}
+void vtkAFAMVolumeRepresentation::SetNumberOfThreads(int v)
+{
+  this->Mapper->SetNumberOfThreads(v);
+}
+void vtkAFAMVolumeRepresentation::SetAutoAdjustImageScale(bool v)
+{
+  this->Mapper->SetAutoAdjustImageScale(v);
+}
+void vtkAFAMVolumeRepresentation::SetMinimumImageScale(double v)
+{
+  this->Mapper->SetMinimumImageScale(v);
+}
+void vtkAFAMVolumeRepresentation::SetBlendMode(int v)
+{
+  this->Mapper->SetBlendMode(v);
+}
+double vtkAFAMVolumeRepresentation::GetLastImageScale()
+{
+  return this->Mapper->GetLastImageScale();
+}
+double vtkAFAMVolumeRepresentation::GetLastCachingTime()
+{
+  return this->Mapper->GetLastCachingTime();
+}
+double vtkAFAMVolumeRepresentation::GetLastRenderTime()
+{
+  return this->Mapper->GetLastRenderTime();
+}
+double vtkAFAMVolumeRepresentation::GetLastTotalTime()
+{
+  return this->Mapper->GetLastTotalTime();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheHits()
+{
+  return this->Mapper->GetLastCacheHits();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheMisses()
+{
+  return this->Mapper->GetLastCacheMisses();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBytesRead()
+{
+  return this->Mapper->GetLastBytesRead();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks()
+{
+  return this->Mapper->GetLastCulledBlocks();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastVisibleBlocks()
+{
+  return this->Mapper->GetLastVisibleBlocks();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfFrames()
+{
+  return this->Mapper->GetNumberOfFrames();
+}
+int vtkAFAMVolumeRepresentation::GetLastUsedGpu()
+{
+  return this->Mapper->GetLastUsedGpu() ? 1 : 0;
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastDepthLimitedPixels()
+{
+  return this->Mapper->GetLastDepthLimitedPixels();
+}
+const char* vtkAFAMVolumeRepresentation::GetLastDeviceMessage()
+{
+  return this->Mapper->GetLastDeviceMessage();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastGpuModelsUploaded()
+{
+  return this->Mapper->GetLastGpuModelsUploaded();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfRendererBuilds()
+{
+  return this->Mapper->GetNumberOfRendererBuilds();
+}
+const char* vtkAFAMVolumeRepresentation::GetLastSettingWarning()
+{
+  return this->Mapper->GetLastSettingWarning();
+}
 
 void vtkAFAMVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {

@@ -20,8 +20,8 @@
 #define vtkAFAMVolumeRepresentation_h
 
 #include "vtkAFAMParaViewModule.h" // for export macro
-#include "vtkImageData.h"  // for vtkNew<vtkImageData>
-#include "vtkNew.h"        // for vtkNew
+#include "vtkImageData.h"          // for vtkNew<vtkImageData>
+#include "vtkNew.h"                // for vtkNew
 #include "vtkVolumeRepresentation.h"
 
 #include <string> // for std::string
@@ -37,7 +37,8 @@ public:
   vtkTypeMacro(vtkAFAMVolumeRepresentation, vtkVolumeRepresentation);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
-  int ProcessViewRequest(vtkInformationRequestKey* request_type, vtkInformation* inInfo,
+  int ProcessViewRequest(vtkInformationRequestKey* request_type,
+    vtkInformation* inInfo,
     vtkInformation* outInfo) override;
 
   /// Shows or hides the volume (hidden on ranks other than 0, see above).
@@ -87,7 +88,10 @@ public:
   const char* GetLastSettingWarning();
   ///@}
 
-  vtkAFAMVolumeMapper* GetVolumeMapper() { return this->Mapper; }
+  vtkAFAMVolumeMapper* GetVolumeMapper()
+  {
+    return this->Mapper;
+  }
 
 protected:
   vtkAFAMVolumeRepresentation();

@@ -29,7 +29,8 @@ std::vector<Stored> readStored(const afam::AfamFile& file) {
   std::vector<Stored> out;
   for (const afam::ModelEntry& e : file.entries()) {
     Stored s{e, std::vector<uint8_t>(e.storedSize)};
-    if (pread(file.nativeHandle(), s.bytes.data(), e.storedSize, off_t(e.offset)) != ssize_t(e.storedSize))
+    if (pread(file.nativeHandle(), s.bytes.data(), e.storedSize, off_t(e.offset)) !=
+        ssize_t(e.storedSize))
       throw afam::IoError(file.path() + ": short read");
     out.push_back(std::move(s));
   }
@@ -81,7 +82,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_decode [--rounds R] FILE.afam [FILE.afam ...]\n");
     return 2;
   }
-  std::printf("| file | kind | models | decoded MB | stored MB | median s | GB/s decoded | M values/s |\n");
+  std::printf(
+      "| file | kind | models | decoded MB | stored MB | median s | GB/s decoded | M values/s |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   try {
     for (const std::string& path : files) {
@@ -101,8 +103,8 @@ int main(int argc, char** argv) {
         uint64_t bytes = 0;
         const double s = median(time(stored, kind, rounds, bytes));
         std::printf("| %s | %s | %d | %.2f | %.3f | %.5f | %.3f | %.1f |\n", name.c_str(),
-                    kind.empty() ? "all" : kind.c_str(), count.first, bytes / 1e6, count.second / 1e6, s,
-                    bytes / s / 1e9, bytes / 4.0 / s / 1e6);
+                    kind.empty() ? "all" : kind.c_str(), count.first, bytes / 1e6,
+                    count.second / 1e6, s, bytes / s / 1e9, bytes / 4.0 / s / 1e6);
       }
     }
   } catch (const afam::Error& e) {

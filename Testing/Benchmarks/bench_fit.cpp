@@ -4,8 +4,10 @@
 //   BM_FitBanded/ncp/p      our separable banded fit of a 64^3 Marschner-Lobb block, with the
 //                           error on all 262,144 samples (the bar: NCP 32, p 2 <= 6 ms)
 //   BM_FitBandedNoError     the same without the error pass (MFA's 0.056 s is without error)
-//   BM_FitDenseBaseline     baseline: per axis a dense A (n x ncp), dense LLT of A^T A, and per line
-//                           a dense A^T d and a dense solve; dense per-axis evaluation for the error
+//   BM_FitDenseBaseline     baseline: per axis a dense A (n x ncp), dense LLT of A^T A, and per
+//   line
+//                           a dense A^T d and a dense solve; dense per-axis evaluation for the
+//                           error
 //   BM_Evaluate / BM_EvaluateGradient   evaluateModel at random points, one thread (items/s)
 //   BM_EvaluateBatch / BM_EvaluateGradientBatch   the same points through evaluateModelBatch,
 //                           4 lanes (SSE2) and 8 lanes (AVX2, the default where the CPU has it)

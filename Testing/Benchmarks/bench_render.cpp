@@ -12,16 +12,16 @@
 // The encoding is written once to $TMPDIR (or /tmp).
 #include <benchmark/benchmark.h>
 
+#include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/encode/encoder.hpp"
-#include "afam/volume/marschner_lobb.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 using namespace afam;
 
@@ -73,7 +73,8 @@ struct LinearScanSampler {
     int32_t slot = -1;
     for (size_t s = 0; s < boxes->size(); ++s) {
       const auto& b = (*boxes)[s];
-      if (x[0] >= b[0] && x[0] <= b[3] && x[1] >= b[1] && x[1] <= b[4] && x[2] >= b[2] && x[2] <= b[5]) {
+      if (x[0] >= b[0] && x[0] <= b[3] && x[1] >= b[1] && x[1] <= b[4] && x[2] >= b[2] &&
+          x[2] <= b[5]) {
         slot = int32_t(s);
         break;
       }
@@ -100,7 +101,12 @@ void BM_LookupVisibleBlocks(benchmark::State& state) {
   }
   state.counters["visible_blocks"] = double(st.slots);
 }
-BENCHMARK(BM_LookupVisibleBlocks)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LookupVisibleBlocks)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_LinearScanReference(benchmark::State& state) {
   Renderer r(lookupFile(), lookupOptions(int(state.range(0))));
@@ -123,7 +129,12 @@ void BM_LinearScanReference(benchmark::State& state) {
   }
   state.counters["visible_blocks"] = double(st.slots);
 }
-BENCHMARK(BM_LinearScanReference)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LinearScanReference)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

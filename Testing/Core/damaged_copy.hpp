@@ -8,14 +8,15 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/format/afam_file.hpp"
 
 namespace afam_test {
 
 /// A copy of `src` at `path` with 8 bytes inverted in the middle of each listed entry's payload
 /// (entries must store at least 8 bytes), opened.
-inline std::shared_ptr<const afam::AfamFile> damagedCopy(const afam::AfamFile& src, const std::string& path,
+inline std::shared_ptr<const afam::AfamFile> damagedCopy(const afam::AfamFile& src,
+                                                         const std::string& path,
                                                          const std::vector<int64_t>& entries) {
   std::ifstream in(src.path(), std::ios::binary);
   std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -2,28 +2,27 @@
 // Helpers of the renderer tests: small Marschner-Lobb encodings written to temporary files.
 #pragma once
 
+#include <unistd.h>
 #include <cstdio>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
-#include "afam/volume/marschner_lobb.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/scene/transfer_function.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 #include "scratch_dir.hpp"
 
 namespace afam_test {
 
-inline std::string tempPath(const std::string& stem) {
-  return scratchPath(stem + ".afam");
-}
+inline std::string tempPath(const std::string& stem) { return scratchPath(stem + ".afam"); }
 
 /// ML (default parameters, [-1, 1]^3) sampled on n^3, encoded with the given mode; cached per
 /// process so several tests share one encoding.
-inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode mode, int levels = 3,
-                                                      int blocks = 4, double bound = 1e-3,
-                                                      int fixedNcp = 0, int degree = 2) {
+inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode mode,
+                                                      int levels = 3, int blocks = 4,
+                                                      double bound = 1e-3, int fixedNcp = 0,
+                                                      int degree = 2) {
   const std::string path = tempPath(std::to_string(n) + "_" + afam::modeName(mode) + "_" +
                                     std::to_string(levels) + "_" + std::to_string(blocks) + "_" +
                                     std::to_string(fixedNcp) + "_p" + std::to_string(degree));

@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/format/afam_file.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;
@@ -88,7 +88,8 @@ Models makeModels(const VolumeHeader& h) {
   return m;
 }
 
-std::string writeFile(const std::string& name, const VolumeHeader& h, const Models& m, bool reverse = false) {
+std::string writeFile(const std::string& name, const VolumeHeader& h, const Models& m,
+                      bool reverse = false) {
   const std::string path = tempDir() + "/" + name;
   AfamWriter w(path, h);
   for (size_t k = 0; k < m.entries.size(); ++k) {
@@ -151,11 +152,13 @@ TEST(AfamFile, PaperLayoutSize) {
 }
 
 TEST(AfamFile, RoundTripAnyOrder) {
-  for (EncodingMode mode : {EncodingMode::Adaptive, EncodingMode::Fixed, EncodingMode::Downsampled}) {
+  for (EncodingMode mode :
+       {EncodingMode::Adaptive, EncodingMode::Fixed, EncodingMode::Downsampled}) {
     const VolumeHeader h = smallHeader(mode);
     const Models m = makeModels(h);
     for (bool reverse : {false, true}) {
-      const std::string path = writeFile(std::string("rt_") + modeName(mode) + (reverse ? "_rev" : "") + ".afam", h, m, reverse);
+      const std::string path = writeFile(
+          std::string("rt_") + modeName(mode) + (reverse ? "_rev" : "") + ".afam", h, m, reverse);
       auto f = AfamFile::open(path);
       EXPECT_EQ(f->path(), path);
       const VolumeHeader& g = f->header();
@@ -260,7 +263,8 @@ class CorruptFile : public testing::Test {
 };
 
 TEST_F(CorruptFile, TruncationAtManyOffsets) {
-  std::vector<size_t> cuts = {0, 1, 7, 8, 100, 1019, 1023, 1024, 1025, 1064, 2000, size_ / 2, size_ - 64, size_ - 4, size_ - 1};
+  std::vector<size_t> cuts = {0,    1,    7,    8,         100,        1019,      1023,     1024,
+                              1025, 1064, 2000, size_ / 2, size_ - 64, size_ - 4, size_ - 1};
   for (size_t c = 1024; c < size_; c += 997) cuts.push_back(c);
   for (size_t cut : cuts) {
     if (cut >= size_) continue;
@@ -310,7 +314,8 @@ TEST_F(CorruptFile, IndexChecksum) {
 TEST_F(CorruptFile, PayloadChecksumNamesTheBlock) {
   auto f = AfamFile::open(path_);
   const ModelEntry e = f->entries()[7];
-  const std::string w = expectFormatError(path_, [&](std::vector<char>& b) { b[e.offset + 5] ^= 0x40; });
+  const std::string w =
+      expectFormatError(path_, [&](std::vector<char>& b) { b[e.offset + 5] ^= 0x40; });
   EXPECT_NE(w.find("payload checksum"), std::string::npos) << w;
   EXPECT_NE(w.find(Partition::blockName(e.level, e.block)), std::string::npos) << w;
 }
@@ -342,7 +347,8 @@ TEST_F(CorruptFile, AbsurdCountsAndSizes) {
   const int32_t blocks = 1 << 30;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 124, &blocks, 4); });
   const uint64_t count = uint64_t(1) << 60;
-  const std::string w = expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 144, &count, 8); });
+  const std::string w =
+      expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 144, &count, 8); });
   EXPECT_NE(w.find("count"), std::string::npos) << w;
   // A consistent but enormous partition (65535 blocks per axis on 2^31 dims): rejected before
   // any allocation because the index cannot fit in the file.
@@ -361,13 +367,15 @@ TEST_F(CorruptFile, AbsurdCountsAndSizes) {
   const uint64_t fileSize = uint64_t(size_) + 4096;
   expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 168, &fileSize, 8); });
   const uint32_t tag = 0x04030201;
-  const std::string e = expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 12, &tag, 4); });
+  const std::string e =
+      expectFormatError(path_, [&](std::vector<char>& b) { patchHeader(b, 12, &tag, 4); });
   EXPECT_NE(e.find("byte order"), std::string::npos);
 }
 
 TEST_F(CorruptFile, OffsetsPastTheEnd) {
   const uint64_t past = uint64_t(size_) + 64;
-  const std::string w = expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &past, 8); });
+  const std::string w =
+      expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &past, 8); });
   EXPECT_NE(w.find("outside"), std::string::npos) << w;
   const uint64_t wrap = ~uint64_t(0) - 63;
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &wrap, 8); });
@@ -378,12 +386,15 @@ TEST_F(CorruptFile, OffsetsPastTheEnd) {
   const uint64_t before = payloadOffset - 64;  // inside the index
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 0, 0, &before, 8); });
   const uint16_t hugeNcp[3] = {65535, 65535, 65535};
-  const std::string n = expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, hugeNcp, 6); });
+  const std::string n =
+      expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, hugeNcp, 6); });
   EXPECT_NE(n.find("NCP 65535"), std::string::npos) << n;
   const uint16_t zeroNcp[3] = {0, 1, 1};
   expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, zeroNcp, 6); });
-  for (const uint16_t flags : {uint16_t(0x200), uint16_t(3), uint16_t(0x102)}) {  // unknown bit, kind, coded constant
-    const std::string f = expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
+  for (const uint16_t flags :
+       {uint16_t(0x200), uint16_t(3), uint16_t(0x102)}) {  // unknown bit, kind, coded constant
+    const std::string f =
+        expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
     EXPECT_NE(f.find("index entry 2"), std::string::npos) << f;
   }
   const uint32_t alignment = 3;
@@ -407,7 +418,8 @@ TEST_F(CorruptFile, RandomByteFlipsNeverCrash) {
     try {
       auto f = AfamFile::open(bad);
       for (size_t i = 0; i < f->entries().size(); ++i)
-        ASSERT_EQ(f->readPayload(int64_t(i)), models_.payloads[i]) << "undetected change at byte " << off;
+        ASSERT_EQ(f->readPayload(int64_t(i)), models_.payloads[i])
+            << "undetected change at byte " << off;
     } catch (const FormatError&) {
       ++detected;
     }

@@ -13,8 +13,8 @@
 
 namespace {
 
-using afam::Knots;
 using afam::kMaxOrder;
+using afam::Knots;
 
 TEST(Knots, ClampedDeBoorAveragedInteriorKnots) {
   for (int p = 1; p <= 5; ++p)
@@ -133,8 +133,10 @@ TEST(Basis, DerivativeMatchesCentralDifferences) {
         }
         double d;
         spline1d(k, c, u, &d);
-        const double fd = (spline1d(k, c, u + h, nullptr) - spline1d(k, c, u - h, nullptr)) / (2 * h);
-        EXPECT_NEAR(d, fd, 1e-6 * (1 + std::fabs(d)) * ncp) << "p=" << p << " ncp=" << ncp << " u=" << u;
+        const double fd =
+            (spline1d(k, c, u + h, nullptr) - spline1d(k, c, u - h, nullptr)) / (2 * h);
+        EXPECT_NEAR(d, fd, 1e-6 * (1 + std::fabs(d)) * ncp)
+            << "p=" << p << " ncp=" << ncp << " u=" << u;
       }
     }
 }

@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include "afam/format/block_codec.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/format/block_codec.hpp"
 
 using namespace afam;
 
@@ -22,7 +22,8 @@ std::vector<float> field(Int3 n, unsigned seed) {
   size_t i = 0;
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)
-      for (int x = 0; x < n[0]; ++x) v[i++] = float(100 + 20 * std::sin(0.3 * x) * std::cos(0.2 * (y - z)) + g(rng));
+      for (int x = 0; x < n[0]; ++x)
+        v[i++] = float(100 + 20 * std::sin(0.3 * x) * std::cos(0.2 * (y - z)) + g(rng));
   return v;
 }
 
@@ -33,8 +34,9 @@ TEST(BlockCodec, ReconstructionWithinHalfAStepAndDecodedBitForBit) {
   for (const Int3& n : sizes)
     for (const Predictor p : {Predictor::Lorenzo, Predictor::Interpolation})
       for (const double step : {1e-3, 0.05, 3.0}) {
-        SCOPED_TRACE(std::to_string(n[0]) + "x" + std::to_string(n[1]) + "x" + std::to_string(n[2]) + " p" +
-                     std::to_string(int(p)) + " step " + std::to_string(step));
+        SCOPED_TRACE(std::to_string(n[0]) + "x" + std::to_string(n[1]) + "x" +
+                     std::to_string(n[2]) + " p" + std::to_string(int(p)) + " step " +
+                     std::to_string(step));
         const std::vector<float> v = field(n, unsigned(n[0] * 7 + n[2]));
         std::vector<uint8_t> bytes;
         std::vector<float> recon, viaQuantize, decoded(v.size());
@@ -42,7 +44,8 @@ TEST(BlockCodec, ReconstructionWithinHalfAStepAndDecodedBitForBit) {
         ASSERT_TRUE(quantizeValues(v.data(), n, step, p, viaQuantize));
         EXPECT_EQ(recon, viaQuantize);
         double worst = 0;
-        for (size_t i = 0; i < v.size(); ++i) worst = std::max(worst, std::fabs(double(recon[i]) - double(v[i])));
+        for (size_t i = 0; i < v.size(); ++i)
+          worst = std::max(worst, std::fabs(double(recon[i]) - double(v[i])));
         EXPECT_LE(worst, 0.5 * step * (1 + 1e-6) + 1e-4) << "float rounding of ~100 adds 1e-5";
         decodeValues(bytes.data(), bytes.size(), n, decoded.data(), "test");
         EXPECT_EQ(decoded, recon);
@@ -66,7 +69,8 @@ TEST(BlockCodec, AbsurdStepsAndDamagedBytesAreRefused) {
   std::vector<uint8_t> bytes;
   std::vector<float> recon, out(v.size());
   EXPECT_FALSE(encodeValues(v.data(), n, 0.0, Predictor::Lorenzo, 3, bytes, recon));
-  EXPECT_FALSE(encodeValues(v.data(), n, 1e-30, Predictor::Lorenzo, 3, bytes, recon)) << "codes beyond 2^50";
+  EXPECT_FALSE(encodeValues(v.data(), n, 1e-30, Predictor::Lorenzo, 3, bytes, recon))
+      << "codes beyond 2^50";
   ASSERT_TRUE(encodeValues(v.data(), n, 0.01, Predictor::Interpolation, 3, bytes, recon));
   std::vector<uint8_t> b = bytes;
   b[8] = 7;
@@ -76,7 +80,8 @@ TEST(BlockCodec, AbsurdStepsAndDamagedBytesAreRefused) {
   std::memcpy(b.data(), &nan, 8);
   EXPECT_THROW(decodeValues(b.data(), b.size(), n, out.data(), "x"), FormatError);
   EXPECT_THROW(decodeValues(bytes.data(), 5, n, out.data(), "x"), FormatError);
-  EXPECT_THROW(decodeValues(bytes.data(), bytes.size(), Int3{9, 9, 10}, out.data(), "x"), FormatError);
+  EXPECT_THROW(decodeValues(bytes.data(), bytes.size(), Int3{9, 9, 10}, out.data(), "x"),
+               FormatError);
   std::mt19937 rng(1);
   int refused = 0;
   for (int trial = 0; trial < 2000; ++trial) {
@@ -90,5 +95,6 @@ TEST(BlockCodec, AbsurdStepsAndDamagedBytesAreRefused) {
       ++refused;
     }
   }
-  EXPECT_GT(refused, 1000) << "zstd's frame checks catch most damage; the checksum in the file catches the rest";
+  EXPECT_GT(refused, 1000)
+      << "zstd's frame checks catch most damage; the checksum in the file catches the rest";
 }

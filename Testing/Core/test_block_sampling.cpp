@@ -44,8 +44,9 @@ TEST(BlockSampling, QuarterBudgetChunksHoldAQuarterOfTheRowOrOneSamplesPlanes) {
     for (int l = 0; l < part.levels(); ++l) {
       const Int3 nb = part.blocksPerAxis(l);
       for (int kz = 0; kz < nb[2]; ++kz) {
-        SCOPED_TRACE(testing::Message() << "level " << l << " z-row " << kz << " box "
-                                        << (rc.sampling == LevelSampling::Box) << " ghost " << rc.ghost);
+        SCOPED_TRACE(testing::Message()
+                     << "level " << l << " z-row " << kz << " box "
+                     << (rc.sampling == LevelSampling::Box) << " ghost " << rc.ghost);
         CountingSource src(v.data(), dims);
         PlaneReader planes(src, dims);
         std::vector<Int3> row;
@@ -55,16 +56,19 @@ TEST(BlockSampling, QuarterBudgetChunksHoldAQuarterOfTheRowOrOneSamplesPlanes) {
         std::vector<std::vector<float>*> outs;
         size_t rowFloats = 0;
         for (auto& s : samples) outs.push_back(&s);
-        sampleBlockRow(part, planes, l, row, rc.ghost, rc.sampling, outs, {}, ChunkBudget::QuarterOfSamples);
+        sampleBlockRow(part, planes, l, row, rc.ghost, rc.sampling, outs, {},
+                       ChunkBudget::QuarterOfSamples);
         for (const auto& s : samples) rowFloats += s.size();
-        // One z-sample's planes: a box of width stride + the ghost's step, whole rows of the volume.
+        // One z-sample's planes: a box of width stride + the ghost's step, whole rows of the
+        // volume.
         const size_t oneSample = size_t(part.stride(l) + 2) * size_t(dims[0] * dims[1]);
         EXPECT_LE(src.largest, std::max(rowFloats / 4, oneSample));
         EXPECT_EQ(planes.bufferBytes() % (sizeof(float) * size_t(dims[0])), 0u);
         EXPECT_LE(planes.bufferBytes(), sizeof(float) * std::max(rowFloats / 4, oneSample));
         // The same samples as each block sampled alone (other chunks) from the whole volume.
         for (size_t b = 0; b < row.size(); ++b) {
-          ASSERT_EQ(samples[b], extractBlock(part, v.data(), l, row[b], rc.ghost, rc.sampling)) << "block " << b;
+          ASSERT_EQ(samples[b], extractBlock(part, v.data(), l, row[b], rc.ghost, rc.sampling))
+              << "block " << b;
         }
         if (l == part.levels() - 1 && !rc.ghost) {
           EXPECT_GT(src.reads, 1) << "a finest row is read in several chunks";

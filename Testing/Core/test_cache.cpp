@@ -5,9 +5,9 @@
 #include <random>
 #include <thread>
 
-#include "afam/render/cache.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/predict/predictor_factory.hpp"
+#include "afam/render/cache.hpp"
 #include "afam/render/prefetch.hpp"
 #include "render_test_util.hpp"
 
@@ -48,8 +48,10 @@ TEST(Cache, BudgetsAreNeverExceeded) {
     LruCache cache(file, b);
     std::uniform_int_distribution<int64_t> pick(0, n - 1);
     for (int i = 0; i < 400; ++i) {
-      if (i % 3 == 0) cache.prefetch(pick(rng));
-      else cache.get(pick(rng));
+      if (i % 3 == 0)
+        cache.prefetch(pick(rng));
+      else
+        cache.get(pick(rng));
       if (b.bytes) {
         ASSERT_LE(cache.residentBytes(), b.bytes);
       }
@@ -82,7 +84,7 @@ TEST(Cache, BandwidthCapLimitsThroughput) {
   auto file = smallFile();
   LruCache cache(file, CacheBudget{});
   const uint64_t bytes = 20 * file->entries()[0].size;  // 10 kB
-  cache.setBandwidthCap(200e3);                            // 200 kB/s -> >= 50 ms
+  cache.setBandwidthCap(200e3);                         // 200 kB/s -> >= 50 ms
   const auto t0 = std::chrono::steady_clock::now();
   for (int64_t e = 0; e < 20; ++e) cache.get(e);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -119,7 +121,8 @@ TEST(Prefetch, PredictorsAndNames) {
   EXPECT_THROW(makePrefetchPredictor("bogus"), InvalidArgument);
   EXPECT_EQ(predictorNames().size(), 5u);
   const auto lp = makePrefetchPredictor("linear");
-  std::vector<Camera> h = {Camera::fromPose({1.5, 30, 10}, 8, 8), Camera::fromPose({1.5, 30, 12}, 8, 8)};
+  std::vector<Camera> h = {Camera::fromPose({1.5, 30, 10}, 8, 8),
+                           Camera::fromPose({1.5, 30, 12}, 8, 8)};
   Camera next;
   ASSERT_TRUE(lp->predict(h, next));
   const Camera expect = Camera::fromPose({1.5, 30, 14}, 8, 8);

@@ -4,12 +4,11 @@
 #include <cmath>
 #include <fstream>
 
-#include "afam/scene/camera.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/scene/camera.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;
-
 
 TEST(Camera, PoseFrameFollowsTheDataReadme) {
   const Pose pose{1.3, 35.0, 120.0};
@@ -25,7 +24,8 @@ TEST(Camera, PoseFrameFollowsTheDataReadme) {
   EXPECT_NEAR(dot(c.right, c.forward), 0, 1e-12);
   EXPECT_NEAR(dot(c.up, c.forward), 0, 1e-12);
   EXPECT_NEAR(dot(c.forward, c.eye), -1.3, 1e-12);
-  const Vec3 x{c.right[1] * c.up[2] - c.right[2] * c.up[1], c.right[2] * c.up[0] - c.right[0] * c.up[2],
+  const Vec3 x{c.right[1] * c.up[2] - c.right[2] * c.up[1],
+               c.right[2] * c.up[0] - c.right[0] * c.up[2],
                c.right[0] * c.up[1] - c.right[1] * c.up[0]};
   EXPECT_NEAR(dot(x, c.forward), -1, 1e-12);
   EXPECT_DOUBLE_EQ(c.tanHalfX, 0.125);

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "afam/render/level_decode.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/render/level_decode.hpp"
 #include "afam/render/raycast.hpp"
 #include "afam/render/renderer.hpp"
 #include "damaged_copy.hpp"
@@ -27,9 +27,12 @@ RenderOptions options(int forceLevel) {
   return o;
 }
 
-Camera camera(int size) { return Camera::lookAt({1.6, 1.9, 1.3}, {0, 0, 0}, {0, 0, 1}, 60, size, size); }
+Camera camera(int size) {
+  return Camera::lookAt({1.6, 1.9, 1.3}, {0, 0, 0}, {0, 0, 1}, 60, size, size);
+}
 
-bool rayHitsBox(const RayCamera& c, int x, int y, const double lo[3], const double hi[3], double margin) {
+bool rayHitsBox(const RayCamera& c, int x, int y, const double lo[3], const double hi[3],
+                double margin) {
   float o[3], d[3], l[3], h[3], t0, t1;
   pixelRay(c, x, y, o, d);
   for (int a = 0; a < 3; ++a) {
@@ -81,8 +84,8 @@ TEST(Damage, FinestCutDrawsAroundDamagedBlocksAndOnlyThere) {
     EXPECT_NE(r.find("checksum"), std::string::npos) << r;
     EXPECT_NE(r.find("afam verify"), std::string::npos) << r;
   }
-  for (const char* block : {"level 2 block (1, 1, 0)", "level 2 block (2, 2, 2)", "level 1 block (1, 1, 1)",
-                            "level 0 block (0, 0, 0)"}) {
+  for (const char* block : {"level 2 block (1, 1, 0)", "level 2 block (2, 2, 2)",
+                            "level 1 block (1, 1, 1)", "level 0 block (0, 0, 0)"}) {
     int n = 0;
     for (const std::string& r : sb.damageReports) n += r.find(block) != std::string::npos ? 1 : 0;
     EXPECT_EQ(n, 1) << block;
@@ -99,7 +102,8 @@ TEST(Damage, FinestCutDrawsAroundDamagedBlocksAndOnlyThere) {
       const size_t i = (size_t(y) * c.width + x) * 4;
       bool same = true;
       for (int k = 0; k < 4; ++k) same = same && ig.rgba[i + k] == ib.rgba[i + k];
-      if (rayHitsBox(rc, x, y, lo[0], hi[0], 2.0 / 64) || rayHitsBox(rc, x, y, lo[1], hi[1], 2.0 / 64)) {
+      if (rayHitsBox(rc, x, y, lo[0], hi[0], 2.0 / 64) ||
+          rayHitsBox(rc, x, y, lo[1], hi[1], 2.0 / 64)) {
         ++inside;
         changed += same ? 0 : 1;
       } else {
@@ -107,9 +111,9 @@ TEST(Damage, FinestCutDrawsAroundDamagedBlocksAndOnlyThere) {
         differ += same ? 0 : 1;
       }
     }
-  std::printf("outside=%lld differ=%lld inside=%lld changed=%lld fg %lld / %lld\n", (long long)outside,
-              (long long)differ, (long long)inside, (long long)changed, (long long)foreground(ib),
-              (long long)foreground(ig));
+  std::printf("outside=%lld differ=%lld inside=%lld changed=%lld fg %lld / %lld\n",
+              (long long)outside, (long long)differ, (long long)inside, (long long)changed,
+              (long long)foreground(ib), (long long)foreground(ig));
   EXPECT_GT(outside, 4000);
   EXPECT_EQ(differ, 0);
   EXPECT_GT(changed, 50);  // the empty block shows
@@ -173,10 +177,12 @@ TEST(Damage, DamagedFileKeepsMostOfThePictureAndReportsEachBlockOnce) {
   auto intact = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
   std::vector<int64_t> hit;
   for (double f : {0.015, 0.10, 0.45, 0.75}) {
-    const uint64_t at = std::max<uint64_t>(uint64_t(f * double(intact->fileSize())), intact->payloadOffset());
+    const uint64_t at =
+        std::max<uint64_t>(uint64_t(f * double(intact->fileSize())), intact->payloadOffset());
     for (size_t i = 0; i < intact->entries().size(); ++i) {
       const ModelEntry& e = intact->entries()[i];
-      if (at >= e.offset && at < e.offset + std::max<uint64_t>(e.storedSize, 1) && e.storedSize >= 8) {
+      if (at >= e.offset && at < e.offset + std::max<uint64_t>(e.storedSize, 1) &&
+          e.storedSize >= 8) {
         hit.push_back(int64_t(i));
         break;
       }
@@ -191,7 +197,8 @@ TEST(Damage, DamagedFileKeepsMostOfThePictureAndReportsEachBlockOnce) {
   size_t messages = 0;
   for (int k = 0; k < 6; ++k) {
     const double a = k * 1.047;
-    const Camera c = Camera::lookAt({2.6 * std::cos(a), 2.6 * std::sin(a), 1.0}, {0, 0, 0}, {0, 0, 1}, 50, 300, 300);
+    const Camera c = Camera::lookAt({2.6 * std::cos(a), 2.6 * std::sin(a), 1.0}, {0, 0, 0},
+                                    {0, 0, 1}, 50, 300, 300);
     FrameStats sg, sb;
     fgGood += foreground(good.renderFrame(c, sg));
     fgBad += foreground(bad.renderFrame(c, sb));
@@ -200,7 +207,8 @@ TEST(Damage, DamagedFileKeepsMostOfThePictureAndReportsEachBlockOnce) {
   std::printf("levels hit %d %d %d %d; foreground %lld of %lld (%.1f%%), %zu messages\n",
               intact->entries()[size_t(hit[0])].level, intact->entries()[size_t(hit[1])].level,
               intact->entries()[size_t(hit[2])].level, intact->entries()[size_t(hit[3])].level,
-              (long long)fgBad, (long long)fgGood, 100.0 * double(fgBad) / double(fgGood), messages);
+              (long long)fgBad, (long long)fgGood, 100.0 * double(fgBad) / double(fgGood),
+              messages);
   EXPECT_GE(double(fgBad), 0.8 * double(fgGood));
   EXPECT_GE(messages, 1u);
   EXPECT_LE(messages, 4u);
@@ -238,10 +246,12 @@ TEST(Damage, OneCoarseModelStandsInForSeveralDamagedSiblingsOnce) {
 
 TEST(Damage, DecodedLevelTakesDamagedBlocksFromTheNearestIntactLevel) {
   const Damaged d = makeDamaged();
-  const LevelGrid g2 = levelGrid(d.intact->partition(), 2), g1 = levelGrid(d.intact->partition(), 1);
+  const LevelGrid g2 = levelGrid(d.intact->partition(), 2),
+                  g1 = levelGrid(d.intact->partition(), 1);
   const Index3 n = g2.dims, n1 = g1.dims;
   const auto all = [](const Index3& dims) { return Index3{dims[0] - 1, dims[1] - 1, dims[2] - 1}; };
-  std::vector<float> intact(size_t(n[0] * n[1] * n[2])), damaged(intact.size()), coarse(size_t(n1[0] * n1[1] * n1[2]));
+  std::vector<float> intact(size_t(n[0] * n[1] * n[2])), damaged(intact.size()),
+      coarse(size_t(n1[0] * n1[1] * n1[2]));
   decodeLevelBox(*d.intact, 2, {0, 0, 0}, all(n), intact.data());
   decodeLevelBox(*d.intact, 1, {0, 0, 0}, all(n1), coarse.data());
   // Strict callers (`afam decode`) still stop at the first damaged block.

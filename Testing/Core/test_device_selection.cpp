@@ -33,7 +33,9 @@ TEST(DeviceSelection, LaunchersAndOverrides) {
   EXPECT_EQ(localRankFromEnvironment(fakeEnv({{"MPI_LOCALRANKID", "3"}})), 3);
   EXPECT_EQ(localRankFromEnvironment(fakeEnv({{"MV2_COMM_WORLD_LOCAL_RANK", "2"}})), 2);
   EXPECT_EQ(localRankFromEnvironment(fakeEnv({{"SLURM_LOCALID", "5"}})), 5);
-  EXPECT_EQ(localRankFromEnvironment(fakeEnv({{"OMPI_COMM_WORLD_LOCAL_RANK", "1"}, {"SLURM_LOCALID", "5"}})), 1)
+  EXPECT_EQ(localRankFromEnvironment(
+                fakeEnv({{"OMPI_COMM_WORLD_LOCAL_RANK", "1"}, {"SLURM_LOCALID", "5"}})),
+            1)
       << "Open MPI's variable first";
   EXPECT_EQ(localRankFromEnvironment(fakeEnv({})), -1);
   EXPECT_EQ(selectGpuDevice(2, fakeEnv({})), 0) << "no launcher: device 0";

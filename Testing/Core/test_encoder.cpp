@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/render/level_decode.hpp"
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
 #include "afam/spline/fit.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 #include "render_test_util.hpp"
@@ -24,9 +24,12 @@ namespace {
 
 const std::string kVolumes = std::string(AFAM_TEST_DATA_DIR) + "/volumes/";
 const char* kCorpus[] = {
-    "neghip_66x66x66_uint8.raw",          "ironProt_68x68x68_uint8.raw",
-    "headsq_quarter_64x64x93_int16.raw",  "HeadMRVolume_48x62x42_uint8.raw",
-    "hydrogen_3d_orbital_64x64x64_float32.raw", "chi_field_50x50x50_float32.raw",
+    "neghip_66x66x66_uint8.raw",
+    "ironProt_68x68x68_uint8.raw",
+    "headsq_quarter_64x64x93_int16.raw",
+    "HeadMRVolume_48x62x42_uint8.raw",
+    "hydrogen_3d_orbital_64x64x64_float32.raw",
+    "chi_field_50x50x50_float32.raw",
     "bucky_32x32x32_uint8.raw",
 };
 
@@ -47,7 +50,8 @@ std::vector<float> mlVolume(int n) {
 
 std::string tmpPath(const std::string& name) { return afam_test::scratchPath(name); }
 
-InMemoryModels encode(const std::vector<float>& v, Index3 dims, EncoderOptions opt, EncodeStats* stats = nullptr) {
+InMemoryModels encode(const std::vector<float>& v, Index3 dims, EncoderOptions opt,
+                      EncodeStats* stats = nullptr) {
   ArraySource src(v.data(), dims);
   InMemoryModels models;
   opt.threads = opt.threads ? opt.threads : 2;
@@ -57,8 +61,9 @@ InMemoryModels encode(const std::vector<float>& v, Index3 dims, EncoderOptions o
 }
 
 // Compares the NCP* of every block: in-level search, fast vs exhaustive.
-void expectFastEqualsExhaustive(const std::vector<float>& v, Index3 dims, int levels, int blocks, double bound,
-                                bool relative, int64_t* fitsFast = nullptr, int64_t* fitsExh = nullptr) {
+void expectFastEqualsExhaustive(const std::vector<float>& v, Index3 dims, int levels, int blocks,
+                                double bound, bool relative, int64_t* fitsFast = nullptr,
+                                int64_t* fitsExh = nullptr) {
   EncoderOptions opt;
   opt.levels = levels;
   opt.blocksPerAxis = blocks;
@@ -75,8 +80,8 @@ void expectFastEqualsExhaustive(const std::vector<float>& v, Index3 dims, int le
   for (size_t i = 0; i < fast.entries.size(); ++i) {
     if (fast.entries[i].ncp != exh.entries[i].ncp) {
       if (++mismatches < 5)
-        ADD_FAILURE() << "block " << i << " level " << fast.entries[i].level << ": fast NCP " << fast.entries[i].ncp[0]
-                      << " exhaustive " << exh.entries[i].ncp[0];
+        ADD_FAILURE() << "block " << i << " level " << fast.entries[i].level << ": fast NCP "
+                      << fast.entries[i].ncp[0] << " exhaustive " << exh.entries[i].ncp[0];
     }
     EXPECT_EQ(fast.payloads[i], exh.payloads[i]);
   }
@@ -104,14 +109,16 @@ TEST(Encoder, RawFileSourceConvertsTypes) {
   const Index3 dims{3, 2, 2};
   const std::vector<int16_t> i16 = {-5, 0, 7, 32767, -32768, 1, 2, 3, 4, 5, 6, 7};
   const std::string p = tmpPath("t_3x2x2_int16.raw");
-  std::ofstream(p, std::ios::binary).write(reinterpret_cast<const char*>(i16.data()), std::streamsize(i16.size() * 2));
+  std::ofstream(p, std::ios::binary)
+      .write(reinterpret_cast<const char*>(i16.data()), std::streamsize(i16.size() * 2));
   RawFileSource src(p, dims, SampleType::Int16);
   std::vector<float> out(6);
   src.readSlab(1, 1, out.data());
   for (int i = 0; i < 6; ++i) EXPECT_EQ(out[size_t(i)], float(i16[size_t(6 + i)]));
   const std::vector<double> f64 = {1.5, -2.25, 3, 4, 5, 6, 7, 8, 9, 10, 11, 1e300};
   const std::string q = tmpPath("d.raw");
-  std::ofstream(q, std::ios::binary).write(reinterpret_cast<const char*>(f64.data()), std::streamsize(f64.size() * 8));
+  std::ofstream(q, std::ios::binary)
+      .write(reinterpret_cast<const char*>(f64.data()), std::streamsize(f64.size() * 8));
   RawFileSource s2(q, dims, SampleType::Float64);
   s2.readSlab(0, 1, out.data());
   EXPECT_EQ(out[1], -2.25f);
@@ -133,7 +140,8 @@ TEST(Encoder, FastEqualsExhaustiveOnCorpus) {
       expectFastEqualsExhaustive(v, dims, 2, 2, rel, true, &fitsFast, &fitsExh);
       expectFastEqualsExhaustive(v, dims, 3, 4, rel, true, &fitsFast, &fitsExh);
     }
-    expectFastEqualsExhaustive(v, dims, 4, 16, 1e-4, false, &fitsFast, &fitsExh);  // the paper's bound
+    expectFastEqualsExhaustive(v, dims, 4, 16, 1e-4, false, &fitsFast,
+                               &fitsExh);  // the paper's bound
   }
   std::printf("corpus fits: fast %lld, exhaustive %lld\n", (long long)fitsFast, (long long)fitsExh);
 }
@@ -161,7 +169,8 @@ TEST(Encoder, SearchPicksSmallestPassingNcp) {
     for (SearchMethod m : {SearchMethod::Fast, SearchMethod::Exhaustive}) {
       FitResult r;
       int64_t fits = 0;
-      EXPECT_EQ(searchNcp(fitter, v.data(), {33, 33, 33}, 2, bound, m, 3, r, fits), expected) << bound;
+      EXPECT_EQ(searchNcp(fitter, v.data(), {33, 33, 33}, 2, bound, m, 3, r, fits), expected)
+          << bound;
       EXPECT_EQ(r.ncp, (Int3{expected, expected, expected}));
       if (m == SearchMethod::Exhaustive) {
         EXPECT_EQ(fits, 31);
@@ -243,7 +252,8 @@ TEST(Encoder, ErrorBoundMetAndReportedHonestly) {
     const ModelEntry& e = m.entries[i];
     EXPECT_LE(e.rmse, opt.errorBound) << "every block meets the bound";
     // The stored RMSE and max error are those of the stored float32 model on the block's samples.
-    const std::vector<float> s = extractBlock(m.partition, v.data(), e.level, e.block, false, m.header.sampling);
+    const std::vector<float> s =
+        extractBlock(m.partition, v.data(), e.level, e.block, false, m.header.sampling);
     decodeBlockSamples(e, m.payloads[i].data(), m.header.mode, decoded);
     double sum = 0, mx = 0, lo = 1e30, hi = -1e30;
     for (size_t k = 0; k < s.size(); ++k) {
@@ -280,7 +290,8 @@ TEST(Encoder, DownsampledPayloadHasClampedGhostLayer) {
   std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
   for (int z = 0; z < dims[2]; ++z)
     for (int y = 0; y < dims[1]; ++y)
-      for (int x = 0; x < dims[0]; ++x) v[size_t((z * dims[1] + y) * dims[0] + x)] = float(x + 100 * y + 10000 * z);
+      for (int x = 0; x < dims[0]; ++x)
+        v[size_t((z * dims[1] + y) * dims[0] + x)] = float(x + 100 * y + 10000 * z);
   EncoderOptions opt;
   opt.levels = 2;
   opt.blocksPerAxis = 4;
@@ -315,7 +326,8 @@ TEST(Encoder, DownsampledPayloadHasClampedGhostLayer) {
 }
 
 TEST(Encoder, OddDimsAndSlabsRoundTripThroughAFile) {
-  for (Index3 dims : {Index3{64, 64, 93}, Index3{50, 50, 50}, Index3{40, 30, 1}, Index3{1, 1, 70}, Index3{2, 3, 4}}) {
+  for (Index3 dims : {Index3{64, 64, 93}, Index3{50, 50, 50}, Index3{40, 30, 1}, Index3{1, 1, 70},
+                      Index3{2, 3, 4}}) {
     SCOPED_TRACE(testing::Message() << dims[0] << "x" << dims[1] << "x" << dims[2]);
     std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
     for (size_t i = 0; i < v.size(); ++i) v[i] = float(std::sin(0.05 * double(i)));
@@ -331,8 +343,9 @@ TEST(Encoder, OddDimsAndSlabsRoundTripThroughAFile) {
     EXPECT_EQ(f->fileSize(), s.bytesOut);
     for (size_t i = 0; i < f->entries().size(); ++i) {
       const auto& e = f->entries()[i];
-      EXPECT_LE(e.rmse, std::max(1e-3, double(e.rmse) * (std::max({e.ncp[0], e.ncp[1], e.ncp[2]}) ==
-                                                           std::max({e.samples[0], e.samples[1], e.samples[2]}))));
+      EXPECT_LE(e.rmse, std::max(1e-3, double(e.rmse) *
+                                           (std::max({e.ncp[0], e.ncp[1], e.ncp[2]}) ==
+                                            std::max({e.samples[0], e.samples[1], e.samples[2]}))));
       f->readPayload(int64_t(i));
     }
     std::remove(path.c_str());
@@ -343,7 +356,8 @@ TEST(Encoder, StreamingSourceEqualsInMemory) {
   const int n = 40;
   const std::vector<float> v = mlVolume(n);
   const std::string raw = tmpPath("ml.raw");
-  std::ofstream(raw, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
+  std::ofstream(raw, std::ios::binary)
+      .write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
   EncoderOptions opt;
   opt.levels = 3;
   opt.blocksPerAxis = 4;
@@ -466,13 +480,15 @@ TEST(Encoder, DecodeLevelBoxJoinsBlocksAndReadsSubBoxes) {
         }
     EXPECT_EQ(checked, d[0] * d[1] * d[2]);
     // A sub-box straddling block boundaries equals the same region of the full decode.
-    const Index3 lo{1, d[1] / 3, d[2] / 2}, hi{d[0] - 2, d[1] - 1, std::min(d[2] - 1, d[2] / 2 + 2)};
+    const Index3 lo{1, d[1] / 3, d[2] / 2},
+        hi{d[0] - 2, d[1] - 1, std::min(d[2] - 1, d[2] / 2 + 2)};
     std::vector<float> sub(size_t((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1)));
     decodeLevelBox(*file, level, lo, hi, sub.data());
     size_t s = 0;
     for (int64_t z = lo[2]; z <= hi[2]; ++z)
       for (int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (int64_t x = lo[0]; x <= hi[0]; ++x) ASSERT_EQ(sub[s++], full[size_t((z * d[1] + y) * d[0] + x)]);
+        for (int64_t x = lo[0]; x <= hi[0]; ++x)
+          ASSERT_EQ(sub[s++], full[size_t((z * d[1] + y) * d[0] + x)]);
     if (level == part.levels() - 1) {
       // The finest level is the volume's own grid and approximates ML within the bound.
       EXPECT_EQ(d, (Index3{n, n, n}));
@@ -480,7 +496,8 @@ TEST(Encoder, DecodeLevelBoxJoinsBlocksAndReadsSubBoxes) {
       MarschnerLobb ml;
       marschnerLobbSlab(ml, {n, n, n}, 0, n, truth.data());
       double se = 0;
-      for (size_t i = 0; i < truth.size(); ++i) se += double(full[i] - truth[i]) * (full[i] - truth[i]);
+      for (size_t i = 0; i < truth.size(); ++i)
+        se += double(full[i] - truth[i]) * (full[i] - truth[i]);
       EXPECT_LT(std::sqrt(se / double(truth.size())), 2e-3);
     }
   }

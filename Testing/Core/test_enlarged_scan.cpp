@@ -36,7 +36,8 @@ TEST(EnlargedScan, ReproducesALinearFieldWithoutNoise) {
   for (int64_t z = 0; z < big[2]; ++z)
     for (int64_t y = 0; y < big[1]; ++y)
       for (int64_t x = 0; x < big[0]; ++x) {
-        const double sx = double(x) * (dims[0] - 1) / (big[0] - 1), sy = double(y) * (dims[1] - 1) / (big[1] - 1),
+        const double sx = double(x) * (dims[0] - 1) / (big[0] - 1),
+                     sy = double(y) * (dims[1] - 1) / (big[1] - 1),
                      sz = double(z) * (dims[2] - 1) / (big[2] - 1);
         const double want = 2 * sx - 3 * sy + 0.5 * sz + 10;
         worst = std::max(worst, std::fabs(v[size_t((z * big[1] + y) * big[0] + x)] - want));
@@ -55,7 +56,8 @@ TEST(EnlargedScan, SlabsAreTheSameHoweverTheVolumeIsCut) {
   std::vector<float> plane(size_t(big[0] * big[1]));
   for (int64_t z = 0; z < big[2]; ++z) {
     cut.readSlab(z, 1, plane.data());
-    for (size_t i = 0; i < plane.size(); ++i) ASSERT_EQ(plane[i], all[size_t(z) * plane.size() + i]) << z;
+    for (size_t i = 0; i < plane.size(); ++i)
+      ASSERT_EQ(plane[i], all[size_t(z) * plane.size() + i]) << z;
   }
   EnlargedScanSource otherSeed(src, {6, 5, 4}, big, 4.0, 43, 0, 255);
   EXPECT_NE(readAll(otherSeed), all) << "the seed changes the noise";
@@ -92,7 +94,8 @@ TEST(EnlargedScan, RefusesWhatItCannotMake) {
   const std::vector<float> one(8, 1.f);
   EXPECT_THROW(EnlargedScanSource(one, {2, 2, 2}, {1, 8, 8}, 0, 1, 0, 1), InvalidArgument);
   EXPECT_THROW(EnlargedScanSource(one, {2, 2, 2}, {8, 8, 8}, -1, 1, 0, 1), InvalidArgument);
-  EXPECT_THROW(EnlargedScanSource(one, {2, 2, 2}, {8, 8, 8}, std::nan(""), 1, 0, 1), InvalidArgument);
+  EXPECT_THROW(EnlargedScanSource(one, {2, 2, 2}, {8, 8, 8}, std::nan(""), 1, 0, 1),
+               InvalidArgument);
   EXPECT_THROW(EnlargedScanSource(one, {3, 2, 2}, {8, 8, 8}, 0, 1, 0, 1), InvalidArgument);
   EXPECT_THROW(EnlargedScanSource({}, {0, 2, 2}, {8, 8, 8}, 0, 1, 0, 1), InvalidArgument);
 }

@@ -101,8 +101,8 @@ TEST(EvaluateBatch, MatchesSinglePointOnAnisotropicModels) {
 TEST(EvaluateBatch, AnyCountIncludingPartialBlocks) {
   const SmallModel m(12, 12, 12, 2, 2, 2, 5u);
   const std::vector<float> all = testPoints(m.view, 6u);
-  for (size_t n : {size_t(0), size_t(1), size_t(3), size_t(4), size_t(63), size_t(64),
-                   size_t(65), size_t(130)}) {
+  for (size_t n : {size_t(0), size_t(1), size_t(3), size_t(4), size_t(63), size_t(64), size_t(65),
+                   size_t(130)}) {
     std::vector<float> uvw(all.begin(), all.begin() + std::ptrdiff_t(3 * n));
     expectBatchMatchesSinglePoint(m.view, uvw);
   }

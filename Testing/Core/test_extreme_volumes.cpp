@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/block_decode.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/block_decode.hpp"
 
 using namespace afam;
 
@@ -24,7 +24,8 @@ struct Volume {
   std::vector<float> v;
 };
 
-Volume make(const std::string& name, Index3 d, const std::function<double(int64_t, int64_t, int64_t)>& f) {
+Volume make(const std::string& name, Index3 d,
+            const std::function<double(int64_t, int64_t, int64_t)>& f) {
   Volume vol{name, d, std::vector<float>(size_t(d[0] * d[1] * d[2]))};
   size_t i = 0;
   for (int64_t z = 0; z < d[2]; ++z)
@@ -33,7 +34,9 @@ Volume make(const std::string& name, Index3 d, const std::function<double(int64_
   return vol;
 }
 
-double smooth(int64_t x, int64_t y, int64_t z) { return std::sin(0.31 * double(x)) * std::cos(0.23 * double(y + z)); }
+double smooth(int64_t x, int64_t y, int64_t z) {
+  return std::sin(0.31 * double(x)) * std::cos(0.23 * double(y + z));
+}
 
 std::vector<Volume> extremeVolumes() {
   std::mt19937 rng(7);
@@ -43,19 +46,28 @@ std::vector<Volume> extremeVolumes() {
   all.push_back(make("spike", {33, 33, 33}, [](int64_t x, int64_t y, int64_t z) {
     return x == 16 && y == 17 && z == 15 ? 1000.0 : 0.0;
   }));
-  all.push_back(make("step", {30, 30, 30}, [](int64_t x, int64_t, int64_t) { return x < 13 ? -1.0 : 2.0; }));
-  all.push_back(make("checkerboard", {24, 24, 24}, [](int64_t x, int64_t y, int64_t z) { return double((x + y + z) % 2); }));
+  all.push_back(
+      make("step", {30, 30, 30}, [](int64_t x, int64_t, int64_t) { return x < 13 ? -1.0 : 2.0; }));
+  all.push_back(make("checkerboard", {24, 24, 24},
+                     [](int64_t x, int64_t y, int64_t z) { return double((x + y + z) % 2); }));
   all.push_back(make("noise", {40, 40, 40}, [&](int64_t, int64_t, int64_t) { return u(rng); }));
   all.push_back(make("odd_sizes", {17, 23, 11}, smooth));
-  all.push_back(make("two_cubed", {2, 2, 2}, [](int64_t x, int64_t y, int64_t z) { return double(x + 2 * y + 4 * z); }));
+  all.push_back(make("two_cubed", {2, 2, 2},
+                     [](int64_t x, int64_t y, int64_t z) { return double(x + 2 * y + 4 * z); }));
   all.push_back(make("two_sample_axis", {30, 30, 2}, smooth));
-  all.push_back(make("needle", {300, 3, 3}, [](int64_t x, int64_t y, int64_t z) { return smooth(x, y, z) + 0.1 * double(y * z); }));
+  all.push_back(make("needle", {300, 3, 3}, [](int64_t x, int64_t y, int64_t z) {
+    return smooth(x, y, z) + 0.1 * double(y * z);
+  }));
   all.push_back(make("fifty_decades", {24, 24, 24}, [](int64_t x, int64_t y, int64_t z) {
     return std::pow(10.0, -25.0 + 50.0 * double(x + y + z) / 69.0);
   }));
-  all.push_back(make("subnormal", {24, 24, 24}, [](int64_t x, int64_t y, int64_t z) { return 1e-40 * smooth(x, y, z); }));
-  all.push_back(make("large_offset", {40, 40, 40}, [](int64_t x, int64_t y, int64_t z) { return 1e7 + smooth(x, y, z); }));
-  all.push_back(make("plateaus", {36, 36, 36}, [](int64_t x, int64_t y, int64_t z) { return std::floor(4 * smooth(x, y, z)); }));
+  all.push_back(make("subnormal", {24, 24, 24},
+                     [](int64_t x, int64_t y, int64_t z) { return 1e-40 * smooth(x, y, z); }));
+  all.push_back(make("large_offset", {40, 40, 40},
+                     [](int64_t x, int64_t y, int64_t z) { return 1e7 + smooth(x, y, z); }));
+  all.push_back(make("plateaus", {36, 36, 36}, [](int64_t x, int64_t y, int64_t z) {
+    return std::floor(4 * smooth(x, y, z));
+  }));
   return all;
 }
 
@@ -72,7 +84,8 @@ double levelRmse(const InMemoryModels& m, VolumeSource& src, int level) {
     for (int j = 0; j < nb[1]; ++j)
       for (int i = 0; i < nb[0]; ++i) {
         const int64_t e = m.entryIndex(level, {i, j, kz});
-        decodeBlockSamples(m.entries[size_t(e)], m.payloads[size_t(e)].data(), m.header.mode, decoded);
+        decodeBlockSamples(m.entries[size_t(e)], m.payloads[size_t(e)].data(), m.header.mode,
+                           decoded);
         const std::vector<float>& s = raw[size_t(j * nb[0] + i)];
         for (size_t k = 0; k < s.size(); ++k) {
           const double d = double(decoded[k]) - double(s[k]);
@@ -103,12 +116,12 @@ struct Case {
 
 TEST(ExtremeVolumes, EveryLevelMeetsItsBound) {
   // levels/blocks 0: the default partition from the dimensions.
-  const Case cases[] = {{1e-2, 0, 0}, {1e-3, 0, 0}, {1e-4, 0, 0}, {1e-2, 4, 16}, {1e-3, 4, 16},
+  const Case cases[] = {{1e-2, 0, 0},  {1e-3, 0, 0}, {1e-4, 0, 0}, {1e-2, 4, 16}, {1e-3, 4, 16},
                         {1e-4, 4, 16}, {1e-2, 2, 4}, {1e-3, 2, 4}, {1e-4, 2, 4}};
   for (const Volume& vol : extremeVolumes()) {
     for (const Case& c : cases) {
-      SCOPED_TRACE(vol.name + " bound " + std::to_string(c.bound) + " levels " + std::to_string(c.levels) +
-                   " blocks " + std::to_string(c.blocks));
+      SCOPED_TRACE(vol.name + " bound " + std::to_string(c.bound) + " levels " +
+                   std::to_string(c.levels) + " blocks " + std::to_string(c.blocks));
       ArraySource src(vol.v.data(), vol.dims);
       const EncoderOptions opt = relativeOptions(c.bound, c.levels, c.blocks);
       InMemoryModels m;
@@ -133,7 +146,8 @@ TEST(ExtremeVolumes, ReusedBlocksOverTheBoundAreSearched) {
   const Volume vol = make("noise", {40, 40, 40}, [&](int64_t, int64_t, int64_t) { return u(rng); });
   ArraySource src(vol.v.data(), vol.dims);
   EncoderOptions opt = relativeOptions(1e-4, 4, 16);
-  opt.compact = false;  // float splines: compact storage keeps noise as coded samples, whose children all search
+  opt.compact = false;  // float splines: compact storage keeps noise as coded samples, whose
+                        // children all search
   InMemoryModels m;
   const EncodeStats st = encodeVolume(src, opt, m);
   int64_t refits = 0;
@@ -144,7 +158,8 @@ TEST(ExtremeVolumes, ReusedBlocksOverTheBoundAreSearched) {
 }
 
 TEST(ExtremeVolumes, CoarsestCheckerboardLevelIsItsMean) {
-  const Volume vol = make("checkerboard", {24, 24, 24}, [](int64_t x, int64_t y, int64_t z) { return double((x + y + z) % 2); });
+  const Volume vol = make("checkerboard", {24, 24, 24},
+                          [](int64_t x, int64_t y, int64_t z) { return double((x + y + z) % 2); });
   ArraySource src(vol.v.data(), vol.dims);
   InMemoryModels m;
   encodeVolume(src, relativeOptions(1e-3, 3, 4), m);
@@ -162,7 +177,8 @@ TEST(ExtremeVolumes, CoarsestCheckerboardLevelIsItsMean) {
 }
 
 TEST(ExtremeVolumes, NonFiniteSamplesAreRefusedByName) {
-  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+  for (const float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
     Volume vol = make("nan", {12, 12, 12}, smooth);
     vol.v[size_t((5 * 12 + 4) * 12 + 3)] = bad;
     ArraySource src(vol.v.data(), vol.dims);

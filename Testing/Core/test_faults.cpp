@@ -20,9 +20,9 @@
 #include <thread>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 #include "scratch_dir.hpp"
 
@@ -39,9 +39,11 @@ std::vector<char> slurp(const std::string& path) {
 std::string writeMlRaw(int n, const std::string& stem) {
   std::vector<float> v(size_t(n) * n * n);
   marschnerLobbSlab(MarschnerLobb{}, {n, n, n}, 0, n, v.data());
-  const std::string path = afam_test::scratchPath(stem + "_" + std::to_string(n) + "x" + std::to_string(n) + "x" +
-                                                  std::to_string(n) + "_float32.raw");
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
+  const std::string path =
+      afam_test::scratchPath(stem + "_" + std::to_string(n) + "x" + std::to_string(n) + "x" +
+                             std::to_string(n) + "_float32.raw");
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * 4));
   return path;
 }
 
@@ -54,7 +56,8 @@ std::vector<std::pair<std::string, off_t>> temporaries(const std::string& out) {
     while (const dirent* e = ::readdir(d)) {
       const std::string name = e->d_name;
       struct stat s {};
-      if (name.compare(0, prefix.size(), prefix) == 0 && ::stat((dir + "/" + name).c_str(), &s) == 0)
+      if (name.compare(0, prefix.size(), prefix) == 0 &&
+          ::stat((dir + "/" + name).c_str(), &s) == 0)
         found.emplace_back(name, s.st_size);
     }
     ::closedir(d);
@@ -87,8 +90,9 @@ Child startEncode(const std::string& raw, const std::string& out, const std::str
       const rlimit limit{fileSizeLimit, fileSizeLimit};
       ::setrlimit(RLIMIT_FSIZE, &limit);
     }
-    ::execl(AFAM_EXE, AFAM_EXE, "encode", raw.c_str(), out.c_str(), "--levels", "3", "--blocks", "8",
-            "--error-bound", "1e-4", "--float-payloads", "--isotropic-ncp", "--threads", "2", "--quiet", static_cast<char*>(nullptr));
+    ::execl(AFAM_EXE, AFAM_EXE, "encode", raw.c_str(), out.c_str(), "--levels", "3", "--blocks",
+            "8", "--error-bound", "1e-4", "--float-payloads", "--isotropic-ncp", "--threads", "2",
+            "--quiet", static_cast<char*>(nullptr));
     ::_exit(127);
   }
   return c;
@@ -99,7 +103,8 @@ void wait(Child& c) { ASSERT_EQ(::waitpid(c.pid, &c.status, 0), c.pid); }
 // Waits until the encoder's temporary file of out (one not in `earlier`) holds at least `bytes`
 // (0: exists), then kills the encoder. Returns the size seen just before the kill, or -1 if the
 // encoder ended first.
-off_t killWhenTemporaryReaches(Child& c, const std::string& out, off_t bytes, const std::set<std::string>& earlier) {
+off_t killWhenTemporaryReaches(Child& c, const std::string& out, off_t bytes,
+                               const std::set<std::string>& earlier) {
   for (;;) {
     const auto tmp = temporaries(out);
     for (const auto& t : tmp)
@@ -135,10 +140,13 @@ TEST(Fault, Kill9DuringEncodeLeavesTheOldFileAndTheNextEncodeRemovesTheLeftovers
   std::set<std::string> earlier;  // temporary files left by the encodes killed so far
   for (const double fraction : {0.0, 0.25, 0.5, 0.8}) {
     Child c = startEncode(raw, out, log);
-    const off_t seen = killWhenTemporaryReaches(c, out, off_t(fraction * double(finalSize)), earlier);
-    ASSERT_GE(seen, 0) << "encode ended before its temporary file reached " << fraction << " of " << finalSize;
+    const off_t seen =
+        killWhenTemporaryReaches(c, out, off_t(fraction * double(finalSize)), earlier);
+    ASSERT_GE(seen, 0) << "encode ended before its temporary file reached " << fraction << " of "
+                       << finalSize;
     ASSERT_TRUE(c.killed());
-    EXPECT_EQ(slurp(out), oldBytes) << "killed at " << seen << " of " << finalSize << " bytes: output changed";
+    EXPECT_EQ(slurp(out), oldBytes)
+        << "killed at " << seen << " of " << finalSize << " bytes: output changed";
     EXPECT_NO_THROW(AfamFile::open(out));
     // Left: this encode's temporary file only; the one killed before it was removed by this
     // encode's writer when it started (its owner was dead).
@@ -153,10 +161,12 @@ TEST(Fault, Kill9DuringEncodeLeavesTheOldFileAndTheNextEncodeRemovesTheLeftovers
   Child next = startEncode(raw, out, log);
   wait(next);
   ASSERT_TRUE(next.exitedWith(0));
-  EXPECT_TRUE(temporaries(out).empty()) << "the next encode did not remove the stale temporary files";
+  EXPECT_TRUE(temporaries(out).empty())
+      << "the next encode did not remove the stale temporary files";
   const auto file = AfamFile::open(out);
   EXPECT_EQ(off_t(file->fileSize()), finalSize);
-  for (int64_t i = 0; i < int64_t(file->entries().size()); ++i) EXPECT_NO_THROW(file->readPayload(i));
+  for (int64_t i = 0; i < int64_t(file->entries().size()); ++i)
+    EXPECT_NO_THROW(file->readPayload(i));
 }
 
 TEST(Fault, FullDiskDuringEncodeIsAClearErrorAndLeavesNoPartialFile) {
@@ -175,12 +185,15 @@ TEST(Fault, FullDiskDuringEncodeIsAClearErrorAndLeavesNoPartialFile) {
     }
     Child c = startEncode(raw, out, log, 96 * 1024);
     wait(c);
-    EXPECT_TRUE(WIFEXITED(c.status) && WEXITSTATUS(c.status) != 0) << "encode past the size limit succeeded";
+    EXPECT_TRUE(WIFEXITED(c.status) && WEXITSTATUS(c.status) != 0)
+        << "encode past the size limit succeeded";
     const std::vector<char> text = slurp(log);
     const std::string message(text.begin(), text.end());
     EXPECT_NE(message.find("write failed: File too large"), std::string::npos) << message;
-    EXPECT_NE(message.find("full.afam.tmp-"), std::string::npos) << "error does not name the file: " << message;
-    EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1) << "one line expected: " << message;
+    EXPECT_NE(message.find("full.afam.tmp-"), std::string::npos)
+        << "error does not name the file: " << message;
+    EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 1)
+        << "one line expected: " << message;
     EXPECT_TRUE(temporaries(out).empty()) << "a partial temporary file was left";
     struct stat s {};
     if (withOldFile)
@@ -238,9 +251,12 @@ TEST(Fault, ReaderOfAFileReplacedByRenameSeesTheOldOrTheNewModelNeverAMix) {
       const auto f = AfamFile::open(path);
       for (int64_t i = 0; i < int64_t(f->entries().size()); ++i) (void)f->readPayload(i);
       const std::vector<uint32_t> c = checksums(*f);
-      if (c == sumsA) ++seenA;
-      else if (c == sumsB) ++seenB;
-      else ++mixed;
+      if (c == sumsA)
+        ++seenA;
+      else if (c == sumsB)
+        ++seenB;
+      else
+        ++mixed;
     } catch (const Error& e) {
       ++errors;
       ADD_FAILURE() << e.what();

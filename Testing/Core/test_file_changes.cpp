@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A file another process changes while it is open: noticed at the next read (FileChangedError,
 // naming the path and what changed), never taken for damage, never mixed with the old contents.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -28,13 +28,15 @@ std::vector<char> bytesOf(const std::string& path) {
 
 /// Overwrites `path` in place (same inode, as `cp` or a non-atomic writer does).
 void rewriteInPlace(const std::string& path, const std::vector<char>& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(bytes.data(), std::streamsize(bytes.size()));
 }
 
 /// A private copy of a small encoding, opened (each test changes its own copy).
 std::shared_ptr<const AfamFile> openCopy(const std::string& name) {
   const std::string path = afam_test::tempPath(name);
-  rewriteInPlace(path, bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 3, 4, 1e-3)->path()));
+  rewriteInPlace(path,
+                 bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 3, 4, 1e-3)->path()));
   return AfamFile::open(path);
 }
 
@@ -70,13 +72,15 @@ TEST(FileChanges, UnchangedFileReadsAndChecksClean) {
 TEST(FileChanges, InPlaceRewriteWithAnotherEncodingIsNoticedAtTheNextRead) {
   const auto f = openCopy("rewritten");
   const std::vector<float> before = f->readPayload(0);
-  rewriteInPlace(f->path(), bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
+  rewriteInPlace(f->path(),
+                 bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
   const std::string message = changeMessage([&] { f->readPayload(0); });
   EXPECT_NE(message.find(f->path()), std::string::npos) << message;
   EXPECT_NE(message.find("changed since it was opened"), std::string::npos) << message;
   EXPECT_NE(message.find("its size went from"), std::string::npos) << message;
   // Every entry: a read that lands on new bytes is a change, not damage (no FormatError).
-  for (int64_t e = 0; e < int64_t(f->entries().size()); ++e) EXPECT_THROW(f->readPayload(e), FileChangedError);
+  for (int64_t e = 0; e < int64_t(f->entries().size()); ++e)
+    EXPECT_THROW(f->readPayload(e), FileChangedError);
   EXPECT_THROW(f->checkUnchanged(), FileChangedError);
   EXPECT_FALSE(before.empty());
 }
@@ -87,7 +91,8 @@ TEST(FileChanges, TruncationIsAChangeNotATruncatedPayload) {
   ASSERT_EQ(::truncate(f->path().c_str(), off_t(size * 6 / 10)), 0);
   const int64_t last = int64_t(f->entries().size()) - 1;  // its payload is now past the end
   const std::string message = changeMessage([&] { f->readPayload(last); });
-  EXPECT_NE(message.find("its size went from " + std::to_string(size) + " to " + std::to_string(size * 6 / 10)),
+  EXPECT_NE(message.find("its size went from " + std::to_string(size) + " to " +
+                         std::to_string(size * 6 / 10)),
             std::string::npos)
       << message;
   EXPECT_THROW(f->readPayload(0), FileChangedError);  // still inside the file, but not trusted
@@ -112,7 +117,8 @@ TEST(FileChanges, ReplacementByRenameIsNoticedByTheFrameCheckWhileReadsStayOnThe
   const auto f = openCopy("replaced");
   const std::vector<float> before = f->readPayload(1);
   const std::string other = afam_test::tempPath("replacement");
-  rewriteInPlace(other, bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
+  rewriteInPlace(other,
+                 bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
   ASSERT_EQ(std::rename(other.c_str(), f->path().c_str()), 0);
   // The descriptor still reads the file that was opened, whole and consistent ...
   EXPECT_EQ(f->readPayload(1), before);
@@ -141,7 +147,8 @@ TEST(FileChanges, RendererStopsAtAChangedFileWithoutRecordingDamage) {
   // A renderer that has read nothing yet stops the same way, and records no damage either.
   const auto g = openCopy("render_cold");
   Renderer cold(g, options());
-  rewriteInPlace(g->path(), bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
+  rewriteInPlace(g->path(),
+                 bytesOf(afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-2)->path()));
   EXPECT_THROW(cold.renderFrame(camera(), st), FileChangedError);
   EXPECT_EQ(cold.cache().damage().count(), 0u);
 }

@@ -158,9 +158,8 @@ TEST(Fit, ErrorAndGridEvaluationAgreeWithPointEvaluation) {
       for (int y = 0; y < n[1]; ++y)
         for (int x = 0; x < n[0]; ++x) {
           const size_t i = (size_t(z) * n[1] + y) * n[0] + x;
-          const float v = afam::evaluateModel<false>(view, float(x) / (n[0] - 1),
-                                                     float(y) / (n[1] - 1), float(z) / (n[2] - 1),
-                                                     nullptr);
+          const float v = afam::evaluateModel<false>(
+              view, float(x) / (n[0] - 1), float(y) / (n[1] - 1), float(z) / (n[2] - 1), nullptr);
           EXPECT_NEAR(grid[i], v, 2e-6);
           const double e = double(grid[i]) - d[i];
           sum += e * e;
@@ -196,9 +195,10 @@ TEST(Fit, FitterReuseAcrossShapesMatchesFreshFitter) {
     for (Int3 n : {Int3{9, 8, 7}, Int3{16, 16, 16}, Int3{4, 12, 2}}) {
       std::vector<float> d(static_cast<size_t>(n[0]) * n[1] * n[2]);
       for (auto& x : d) x = uni(rng);
-      const Int3 ncp = afam::clampNcp(6, n, {afam::effectiveDegree(2, n[0]),
-                                             afam::effectiveDegree(2, n[1]),
-                                             afam::effectiveDegree(2, n[2])});
+      const Int3 ncp =
+          afam::clampNcp(6, n,
+                         {afam::effectiveDegree(2, n[0]), afam::effectiveDegree(2, n[1]),
+                          afam::effectiveDegree(2, n[2])});
       afam::BlockFitter fresh;
       const auto a = reused.fit(d.data(), n, ncp, 2);
       const auto b = fresh.fit(d.data(), n, ncp, 2);
@@ -267,7 +267,8 @@ TEST(MarschnerLobb, KnownValuesAndExactGradient) {
   EXPECT_NEAR(ml.valueT<double>(1, 0, -1), (2 + 0.5) / 2.5, 1e-12);
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> uni(-0.99, 0.99);
-  for (const afam::MarschnerLobb m : {afam::MarschnerLobb{}, afam::MarschnerLobb{0.05f, 6.f, 0.f, 7.f}}) {
+  for (const afam::MarschnerLobb m :
+       {afam::MarschnerLobb{}, afam::MarschnerLobb{0.05f, 6.f, 0.f, 7.f}}) {
     for (int i = 0; i < 300; ++i) {
       const double s = 0.5 * (m.hi - m.lo);
       const double x = m.lo + s * (1 + uni(rng)), y = m.lo + s * (1 + uni(rng)),
@@ -275,9 +276,10 @@ TEST(MarschnerLobb, KnownValuesAndExactGradient) {
       double g[3];
       m.gradientT<double>(x, y, z, g);
       const double h = 1e-6 * s;
-      const double fd[3] = {(m.valueT<double>(x + h, y, z) - m.valueT<double>(x - h, y, z)) / (2 * h),
-                            (m.valueT<double>(x, y + h, z) - m.valueT<double>(x, y - h, z)) / (2 * h),
-                            (m.valueT<double>(x, y, z + h) - m.valueT<double>(x, y, z - h)) / (2 * h)};
+      const double fd[3] = {
+          (m.valueT<double>(x + h, y, z) - m.valueT<double>(x - h, y, z)) / (2 * h),
+          (m.valueT<double>(x, y + h, z) - m.valueT<double>(x, y - h, z)) / (2 * h),
+          (m.valueT<double>(x, y, z + h) - m.valueT<double>(x, y, z - h)) / (2 * h)};
       for (int a = 0; a < 3; ++a) EXPECT_NEAR(g[a], fd[a], 1e-5 * (1 + std::fabs(g[a])));
       float gf[3];
       m.gradient(float(x), float(y), float(z), gf);
@@ -334,9 +336,9 @@ double mlGradientError(int n, int ncp, int p, unsigned seed) {
 TEST(Fit, GradientOfFittedMarschnerLobbMatchesExactGradient) {
   // ML with fM = 6 has ~6 radial periods across [-1, 1]: 64 samples resolve it coarsely, so the
   // gradient error is set by the sampling; it must shrink at the spline's order as n grows.
-  EXPECT_LT(mlGradientError(64, 64, 2, 10u), 0.15);   // measured 0.115
-  EXPECT_LT(mlGradientError(64, 64, 3, 10u), 0.07);   // measured 0.047
-  EXPECT_LT(mlGradientError(64, 48, 3, 10u), 0.25);   // measured 0.183
+  EXPECT_LT(mlGradientError(64, 64, 2, 10u), 0.15);  // measured 0.115
+  EXPECT_LT(mlGradientError(64, 64, 3, 10u), 0.07);  // measured 0.047
+  EXPECT_LT(mlGradientError(64, 48, 3, 10u), 0.25);  // measured 0.183
   const double fine = mlGradientError(128, 128, 3, 10u);
   EXPECT_LT(fine, 0.01);  // ~h^3: 8x smaller at twice the samples
 }

@@ -17,7 +17,8 @@ namespace {
 
 /// Marschner-Lobb on an n0 x n1 x n2 grid, planes z0.. of a grid 4 n2 deep, plus an offset.
 std::vector<float> mlBlock(const Int3& n, int z0, float offset) {
-  std::vector<float> out(static_cast<size_t>(n[0]) * static_cast<size_t>(n[1]) * static_cast<size_t>(n[2]));
+  std::vector<float> out(static_cast<size_t>(n[0]) * static_cast<size_t>(n[1]) *
+                         static_cast<size_t>(n[2]));
   marschnerLobbSlab(MarschnerLobb{}, {n[0], n[1], 4 * n[2]}, z0, n[2], out.data());
   for (float& v : out) v += offset;
   return out;
@@ -71,7 +72,8 @@ TEST(FitWithin, AgreesWithTheMeasuredErrorAndMostlyWithoutMeasuring) {
           }
         }
         // Just below the measured RMSE the answer flips, however it is reached.
-        EXPECT_FALSE(fitter.fitWithin(c.samples.data(), c.n, ncp, 2, std::nextafter(rmse, 0.0), squares, out));
+        EXPECT_FALSE(fitter.fitWithin(c.samples.data(), c.n, ncp, 2, std::nextafter(rmse, 0.0),
+                                      squares, out));
         fitter.measure(c.samples.data(), c.n, out);
         EXPECT_TRUE(out.errorMeasured);
         EXPECT_EQ(out.error.rmse, ref.error.rmse);
@@ -123,7 +125,8 @@ TEST(FitWithin, ChangedControlPointsAgreeWithTheMeasuredError) {
   EXPECT_GE(decided, calls * 3 / 5);
   FitResult other = fitter.fit(cases()[0].samples.data(), {17, 17, 17}, {5, 5, 5}, 2);
   const FitResult fr = fitter.fit(cases()[0].samples.data(), {17, 17, 17}, {6, 6, 6}, 2);
-  EXPECT_THROW(fitter.changeWithin(cases()[0].samples.data(), {17, 17, 17}, fr, other, 1.0), InvalidArgument);
+  EXPECT_THROW(fitter.changeWithin(cases()[0].samples.data(), {17, 17, 17}, fr, other, 1.0),
+               InvalidArgument);
 }
 
 TEST(FitWithin, NonFiniteSamplesAreRefusedLikeFitInto) {
@@ -133,5 +136,6 @@ TEST(FitWithin, NonFiniteSamplesAreRefusedLikeFitInto) {
   FitResult out;
   const double squares = sumOfSquares(v.data(), {17, 17, 17});
   EXPECT_FALSE(std::isfinite(squares));
-  EXPECT_THROW(fitter.fitWithin(v.data(), {17, 17, 17}, {9, 9, 9}, 2, 1e-3, squares, out), NumericError);
+  EXPECT_THROW(fitter.fitWithin(v.data(), {17, 17, 17}, {9, 9, 9}, 2, 1e-3, squares, out),
+               NumericError);
 }

@@ -5,17 +5,17 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "afam/render/level_decode.hpp"
-#include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
 
 using namespace afam;
 
@@ -47,7 +47,9 @@ std::vector<float> mixedVolume(Index3& dims) {
   for (int64_t z = 0; z < dims[2]; ++z)
     for (int64_t y = 0; y < dims[1]; ++y)
       for (int64_t x = 0; x < dims[0]; ++x, ++i)
-        v[i] = x < 32 ? 5.0f : (y < 20 ? 5.0f + 3.0f * float(std::sin(0.2 * double(x + y + z))) : 5.0f + u(rng));
+        v[i] = x < 32 ? 5.0f
+                      : (y < 20 ? 5.0f + 3.0f * float(std::sin(0.2 * double(x + y + z)))
+                                : 5.0f + u(rng));
   return v;
 }
 
@@ -76,9 +78,11 @@ TEST(FormatVersions, VersionOneFileStillDecodesTheSameValues) {
   ASSERT_EQ(dims, (Index3{17, 17, 17}));
   std::vector<float> decoded(size_t(17 * 17 * 17));
   decodeLevelBox(*f, 1, {0, 0, 0}, {16, 16, 16}, decoded.data());
-  const std::vector<char> expected = readAll(kFormat + "ml17_levels2_blocks2_v1_level1_decoded_17x17x17_float32.raw");
+  const std::vector<char> expected =
+      readAll(kFormat + "ml17_levels2_blocks2_v1_level1_decoded_17x17x17_float32.raw");
   ASSERT_EQ(expected.size(), decoded.size() * sizeof(float));
-  EXPECT_EQ(std::memcmp(expected.data(), decoded.data(), expected.size()), 0) << "version-1 decode changed";
+  EXPECT_EQ(std::memcmp(expected.data(), decoded.data(), expected.size()), 0)
+      << "version-1 decode changed";
 }
 
 TEST(FormatVersions, VersionTwoHoldsEveryKindAndRoundTrips) {
@@ -106,7 +110,8 @@ TEST(FormatVersions, VersionTwoHoldsEveryKindAndRoundTrips) {
   EXPECT_GT(kinds[int(BlockKind::Constant)], 0);
   EXPECT_GT(kinds[int(BlockKind::Spline)] + kinds[int(BlockKind::Interpolant)], 0);
   int64_t counted = 0;
-  for (const LevelStats& ls : st.levels) counted += ls.kinds[0] + ls.kinds[1] + ls.kinds[2] + ls.kinds[3];
+  for (const LevelStats& ls : st.levels)
+    counted += ls.kinds[0] + ls.kinds[1] + ls.kinds[2] + ls.kinds[3];
   EXPECT_EQ(counted, int64_t(f->entries().size()));
   std::remove(path.c_str());
 }
@@ -142,7 +147,10 @@ TEST(FormatVersions, VersionTwoDamageIsRefusedNamingTheBlock) {
     } catch (const FormatError& e) {
       const std::string w = e.what();
       EXPECT_NE(w.find(bad), std::string::npos) << w;
-      if (w.find("block (") != std::string::npos) ++refusedRead; else ++refusedOpen;
+      if (w.find("block (") != std::string::npos)
+        ++refusedRead;
+      else
+        ++refusedOpen;
     }
   }
   EXPECT_GT(refusedOpen, 50);

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <string>
 
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;

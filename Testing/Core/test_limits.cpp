@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "afam/scene/camera.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/scene/camera.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;
@@ -32,9 +32,11 @@ TEST(Limits, ReplayKeepsTheCacheWithinItsByteBudgetAtEveryFrame) {
       largest = std::max(largest, st.cachePeakBytes);
     }
     const CacheStats cs = renderer.cache().stats();
-    std::printf("[limits] prefetch=%s budget=%llu of %llu file bytes: largest frame peak %llu, %llu evictions\n",
-                prefetch.c_str(), (unsigned long long)o.cache.bytes, (unsigned long long)total,
-                (unsigned long long)largest, (unsigned long long)cs.evictions);
+    std::printf(
+        "[limits] prefetch=%s budget=%llu of %llu file bytes: largest frame peak %llu, %llu "
+        "evictions\n",
+        prefetch.c_str(), (unsigned long long)o.cache.bytes, (unsigned long long)total,
+        (unsigned long long)largest, (unsigned long long)cs.evictions);
     EXPECT_GT(cs.evictions, 0u) << "the budget never bound: the test proves nothing";
     EXPECT_GT(largest, o.cache.bytes / 2) << "the cache never filled half its budget";
   }

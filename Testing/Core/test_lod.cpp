@@ -85,9 +85,11 @@ TEST(Lod, FrustumCullingKeepsEveryBlockARayCanReach) {
     }
     // Points along random rays inside the volume must lie in non-culled blocks.
     for (int k = 0; k < 300; ++k) {
-      const double su = uv(rng) * c.tanHalfX, sv = uv(rng) * c.tanHalfY, tt = c.nearDistance + t(rng);
+      const double su = uv(rng) * c.tanHalfX, sv = uv(rng) * c.tanHalfY,
+                   tt = c.nearDistance + t(rng);
       double q[3];
-      for (int a = 0; a < 3; ++a) q[a] = c.eye[a] + tt * (c.forward[a] + su * c.right[a] + sv * c.up[a]);
+      for (int a = 0; a < 3; ++a)
+        q[a] = c.eye[a] + tt * (c.forward[a] + su * c.right[a] + sv * c.up[a]);
       if (std::abs(q[0]) > 1 || std::abs(q[1]) > 1 || std::abs(q[2]) > 1) continue;
       for (const BlockRef& b : cut) {
         double lo[3], hi[3];

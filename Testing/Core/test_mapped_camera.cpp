@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <random>
 
-#include "afam/scene/camera.hpp"
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/eval/ground_truth.hpp"
+#include "afam/render/cpu_raycaster.hpp"
+#include "afam/scene/camera.hpp"
 #include "afam/scene/lod.hpp"
 
 using namespace afam;
@@ -79,7 +79,8 @@ TEST(MappedCamera, PixelRaysLandOnTheWorldRays) {
         for (double s : {0.0, 5.0}) {
           const Vec3 pw{ow[0] + s * dw[0], ow[1] + s * dw[1], ow[2] + s * dw[2]};
           Vec3 pm = mul(m.linear, pw);
-          for (int a = 0; a < 3; ++a) pm[a] += m.offset[a] - om[a];  // relative to the mapped origin
+          for (int a = 0; a < 3; ++a)
+            pm[a] += m.offset[a] - om[a];  // relative to the mapped origin
           const double along = pm[0] * dm[0] + pm[1] * dm[1] + pm[2] * dm[2];
           const Vec3 off{pm[0] - along * dm[0], pm[1] - along * dm[1], pm[2] - along * dm[2]};
           EXPECT_LT(norm(off), 2e-5) << "parallel " << parallel << " pixel " << px << "," << py;
@@ -173,14 +174,16 @@ TEST(MappedCamera, RenderingThroughTheMapEqualsRenderingInTheWorld) {
       f.shading = 0;
       return f;
     };
-    const FrameView fw = view(local, {-half[0], -half[1], -half[2]}, half, float(sd * mapped.lengthUnit));
+    const FrameView fw =
+        view(local, {-half[0], -half[1], -half[2]}, half, float(sd * mapped.lengthUnit));
     const FrameView fm = view(mapped, {-1, -1, -1}, {1, 1, 1}, sd);
     ImageRGBA iw, im;
     renderCpuWith(fw, MarschnerLobbSampler{}, iw, 1);
     renderCpuWith(fm, MarschnerLobbSampler{}, im, 1);
     ASSERT_EQ(iw.rgba.size(), im.rgba.size());
     double worst = 0, covered = 0;
-    for (size_t i = 0; i < iw.rgba.size(); ++i) worst = std::max(worst, double(std::abs(iw.rgba[i] - im.rgba[i])));
+    for (size_t i = 0; i < iw.rgba.size(); ++i)
+      worst = std::max(worst, double(std::abs(iw.rgba[i] - im.rgba[i])));
     for (size_t i = 3; i < iw.rgba.size(); i += 4) covered += iw.rgba[i] > 0.01f;
     EXPECT_LT(worst, 1e-4) << (parallel ? "parallel" : "perspective");
     std::printf("[mapped] %s: worst |world - mapped| %.2e over %zu values\n",
@@ -193,7 +196,8 @@ TEST(MappedCamera, RenderingThroughTheMapEqualsRenderingInTheWorld) {
     ImageRGBA iwrong;
     renderCpuWith(wrong, MarschnerLobbSampler{}, iwrong, 1);
     double off = 0;
-    for (size_t i = 0; i < iw.rgba.size(); ++i) off = std::max(off, double(std::abs(iw.rgba[i] - iwrong.rgba[i])));
+    for (size_t i = 0; i < iw.rgba.size(); ++i)
+      off = std::max(off, double(std::abs(iw.rgba[i] - iwrong.rgba[i])));
     EXPECT_GT(off, 0.02);
   }
 }
@@ -263,7 +267,8 @@ TEST(MappedCamera, OffCentreTilesReassembleTheFullImage) {
             }
           }
       }
-    std::printf("[tiles] %s: worst |tile - whole| %.2e\n", parallel ? "parallel" : "perspective", worst);
+    std::printf("[tiles] %s: worst |tile - whole| %.2e\n", parallel ? "parallel" : "perspective",
+                worst);
     EXPECT_LT(worst, 1e-4);
     EXPECT_GT(covered, 0.2 * n * tw * n * th);
   }

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
-#include "afam/spline/fit.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/encode/ncp_search.hpp"
+#include "afam/spline/fit.hpp"
 
 using namespace afam;
 
@@ -35,7 +35,9 @@ std::vector<float> sampled(int n, F f) {
 int64_t product(const Int3& ncp) { return int64_t(ncp[0]) * ncp[1] * ncp[2]; }
 
 /// Layers along z on a quadratic trend in x: the spline's degree 2 represents x and y exactly.
-double layered(double x, double y, double z) { return std::sin(7 * kPi * z) + 0.3 * x * x + 0.0 * y; }
+double layered(double x, double y, double z) {
+  return std::sin(7 * kPi * z) + 0.3 * x * x + 0.0 * y;
+}
 
 }  // namespace
 
@@ -76,7 +78,8 @@ TEST(NcpSearch, LayeredBlockKeepsTheBoundWithFarFewerControlPoints) {
 TEST(NcpSearch, IsotropicBlockIsLeftAlone) {
   const int n = 33;
   const std::vector<float> v = sampled(n, [](double x, double y, double z) {
-    return std::cos(5 * kPi * std::sqrt((x - .4) * (x - .4) + (y - .5) * (y - .5) + (z - .6) * (z - .6)));
+    return std::cos(5 * kPi *
+                    std::sqrt((x - .4) * (x - .4) + (y - .5) * (y - .5) + (z - .6) * (z - .6)));
   });
   BlockFitter fitter;
   FitResult fr;
@@ -100,8 +103,12 @@ TEST(NcpSearch, WithinAQuarterOfTheExhaustiveSmallestProductOnAnisotropicBlocks)
   };
   const Case cases[] = {
       {"layers", [](double x, double, double z) { return std::sin(3 * kPi * z) + 0.2 * x * x; }},
-      {"sheet", [](double x, double y, double z) { return std::exp(-40 * (z - 0.5) * (z - 0.5)) * (1 + 0.2 * x + 0.1 * y); }},
-      {"ramp-and-wave", [](double x, double y, double) { return std::cos(2.5 * kPi * y) * (1 + x); }},
+      {"sheet",
+       [](double x, double y, double z) {
+         return std::exp(-40 * (z - 0.5) * (z - 0.5)) * (1 + 0.2 * x + 0.1 * y);
+       }},
+      {"ramp-and-wave",
+       [](double x, double y, double) { return std::cos(2.5 * kPi * y) * (1 + x); }},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -111,16 +118,18 @@ TEST(NcpSearch, WithinAQuarterOfTheExhaustiveSmallestProductOnAnisotropicBlocks)
     for (int kz = 3; kz <= n; ++kz)
       for (int ky = 3; ky <= n; ++ky)
         for (int kx = 3; kx <= n; ++kx)
-          if (int64_t(kx) * ky * kz < best && fitter.fit(v.data(), dims, {kx, ky, kz}, 2).error.rmse <= bound)
+          if (int64_t(kx) * ky * kz < best &&
+              fitter.fit(v.data(), dims, {kx, ky, kz}, 2).error.rmse <= bound)
             best = int64_t(kx) * ky * kz;
     FitResult fr;
     int64_t fits = 0;
     searchNcp(fitter, v.data(), dims, 2, bound, SearchMethod::Fast, 3, fr, fits);
     const int64_t iso = product(fr.ncp);
     refineNcpPerAxis(fitter, v.data(), dims, 2, bound, fr, fits);
-    std::printf("%s: isotropic %lld, per-axis %lld (%d x %d x %d), exhaustive smallest %lld, fits %lld\n", c.name,
-                (long long)iso, (long long)product(fr.ncp), fr.ncp[0], fr.ncp[1], fr.ncp[2], (long long)best,
-                (long long)fits);
+    std::printf(
+        "%s: isotropic %lld, per-axis %lld (%d x %d x %d), exhaustive smallest %lld, fits %lld\n",
+        c.name, (long long)iso, (long long)product(fr.ncp), fr.ncp[0], fr.ncp[1], fr.ncp[2],
+        (long long)best, (long long)fits);
     EXPECT_LE(fr.error.rmse, bound);
     EXPECT_LE(double(product(fr.ncp)), 1.25 * double(best));
     EXPECT_LT(product(fr.ncp), iso);
@@ -148,7 +157,7 @@ TEST(NcpSearch, EncodeOfALayeredVolumeIsSmallerAndMeetsTheBound) {
     for (const ModelEntry& e : models.entries) EXPECT_LE(e.rmse, s.bound);
     bytes[size_t(perAxis)] = s.bytesOut;
   }
-  std::printf("layered 65^3 at 1e-3: isotropic %llu bytes, per-axis %llu bytes\n", (unsigned long long)bytes[0],
-              (unsigned long long)bytes[1]);
+  std::printf("layered 65^3 at 1e-3: isotropic %llu bytes, per-axis %llu bytes\n",
+              (unsigned long long)bytes[0], (unsigned long long)bytes[1]);
   EXPECT_LT(double(bytes[1]), 0.8 * double(bytes[0]));
 }

@@ -17,7 +17,8 @@ namespace {
 // Every level: along each axis the blocks tile [0, N-1] with shared boundary samples, the first
 // starts at 0 and the last ends at N-1; sample positions are within the block and increasing.
 void checkPartition(Index3 dims, int levels, int blocks) {
-  SCOPED_TRACE(testing::Message() << dims[0] << "x" << dims[1] << "x" << dims[2] << " L=" << levels << " B=" << blocks);
+  SCOPED_TRACE(testing::Message() << dims[0] << "x" << dims[1] << "x" << dims[2] << " L=" << levels
+                                  << " B=" << blocks);
   const Partition p(dims, levels, blocks);
   int64_t total = 0;
   for (int l = 0; l < levels; ++l) {
@@ -42,7 +43,8 @@ void checkPartition(Index3 dims, int levels, int blocks) {
           EXPECT_GE(e.samples[a], 2);
           // Stride r: n about extent / r + 1.
           const double r = p.stride(l);
-          EXPECT_EQ(e.samples[a], std::max<int64_t>(2, std::llround(double(e.hi[a] - e.lo[a]) / r) + 1));
+          EXPECT_EQ(e.samples[a],
+                    std::max<int64_t>(2, std::llround(double(e.hi[a] - e.lo[a]) / r) + 1));
         }
         EXPECT_DOUBLE_EQ(p.samplePosition(e, a, 0), double(e.lo[a]));
         EXPECT_DOUBLE_EQ(p.samplePosition(e, a, e.samples[a] - 1), double(e.hi[a]));
@@ -153,7 +155,8 @@ TEST(Partition, DefaultShapeFollowsTheDimensions) {
     const afam::PartitionShape s = afam::defaultPartition(d);
     return std::array<int, 2>{s.levels, s.blocksPerAxis};
   };
-  EXPECT_EQ(shape({1025, 1025, 1025}), (std::array<int, 2>{4, 16})) << "the paper's setting at 1024^3";
+  EXPECT_EQ(shape({1025, 1025, 1025}), (std::array<int, 2>{4, 16}))
+      << "the paper's setting at 1024^3";
   EXPECT_EQ(shape({1024, 1024, 1024}), (std::array<int, 2>{4, 16}));
   EXPECT_EQ(shape({257, 257, 257}), (std::array<int, 2>{2, 4}));
   EXPECT_EQ(shape({66, 66, 66}), (std::array<int, 2>{1, 1}));

@@ -9,18 +9,18 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <set>
 
 #include "afam/base/errors.hpp"
-#include "afam/scene/lod.hpp"
 #include "afam/predict/appa.hpp"
 #include "afam/predict/forecache.hpp"
 #include "afam/predict/lstm.hpp"
 #include "afam/predict/predictor_factory.hpp"
+#include "afam/scene/lod.hpp"
 #include "afam/scene/trajectory_gen.hpp"
 #include "afam/scene/transfer_function.hpp"
 #include "render_test_util.hpp"
@@ -30,13 +30,12 @@ using namespace afam;
 
 namespace {
 
-std::string tmp(const std::string& stem) {
-  return afam_test::scratchPath(stem);
-}
+std::string tmp(const std::string& stem) { return afam_test::scratchPath(stem); }
 
 std::vector<unsigned char> slurp(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
-  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return std::vector<unsigned char>((std::istreambuf_iterator<char>(in)),
+                                    std::istreambuf_iterator<char>());
 }
 void spit(const std::string& p, const std::vector<unsigned char>& b) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
@@ -123,7 +122,8 @@ TEST(Predictors, LstmForwardMatchesTorch) {
   const std::vector<float> out = lstmForward(w, w.testInput.data(), int(w.testSteps));
   ASSERT_EQ(out.size(), w.testOutput.size());
   for (std::size_t k = 0; k < out.size(); ++k)
-    EXPECT_NEAR(out[k], w.testOutput[k], 1e-5f + 1e-5f * std::fabs(w.testOutput[k])) << "output " << k;
+    EXPECT_NEAR(out[k], w.testOutput[k], 1e-5f + 1e-5f * std::fabs(w.testOutput[k]))
+        << "output " << k;
 }
 
 TEST(Predictors, LstmWeightsFileRejectsDamage) {
@@ -147,14 +147,15 @@ TEST(Predictors, LstmWeightsFileRejectsDamage) {
   std::remove(bad.c_str());
 }
 
-// The bar: on exploration paths the weights never saw, the LSTM's next-pose error is below last-pose
-// linear extrapolation's (both in Cartesian eye positions, as `afam predict` measures them). The
-// paths are generated walks (trajectory_gen.hpp); with AFAM_TRAJECTORIES naming a folder of
-// recorded paths, its held-out user_2.dat is used instead.
+// The bar: on exploration paths the weights never saw, the LSTM's next-pose error is below
+// last-pose linear extrapolation's (both in Cartesian eye positions, as `afam predict` measures
+// them). The paths are generated walks (trajectory_gen.hpp); with AFAM_TRAJECTORIES naming a folder
+// of recorded paths, its held-out user_2.dat is used instead.
 TEST(Predictors, LstmBeatsLinearOnHeldOutPaths) {
   std::vector<std::vector<Pose>> paths;
   const char* recorded = std::getenv("AFAM_TRAJECTORIES");
-  if (recorded && *recorded) paths.push_back(loadTrajectory(std::string(recorded) + "/user_2.dat"));
+  if (recorded && *recorded)
+    paths.push_back(loadTrajectory(std::string(recorded) + "/user_2.dat"));
   else
     for (uint64_t seed : {101, 202, 303}) paths.push_back(explorationWalk(400, seed));
   const auto lin = makePrefetchPredictor("linear"), lstm = makePrefetchPredictor("lstm");
@@ -266,7 +267,10 @@ TEST(Predictors, AppaTableRoundTripStaleAndCorrupt) {
   EXPECT_EQ(back.blocks(Pose{1.15, 33, 100}), t.blocks(Pose{1.15, 33, 100}));
 
   int calls = 0;
-  auto counting = [&calls](const Pose& p) { ++calls; return fakeVisible(p); };
+  auto counting = [&calls](const Pose& p) {
+    ++calls;
+    return fakeVisible(p);
+  };
   AppaBuildReport rep;
   AppaTable::loadOrBuild(path, 42, g, counting, &rep);
   EXPECT_TRUE(rep.loadedFromCache);
@@ -314,7 +318,8 @@ TEST(Predictors, AppaTableMatchesBruteForceVisibility) {
     for (const BlockRef& b : sel.cut(file->partition(), cam)) {
       double blo[3], bhi[3];
       blockBox(file->partition(), b.level, b.ijk, blo, bhi);
-      if (!LodSelector::outsideFrustum(cam, blo, bhi)) brute.insert(file->entryIndex(b.level, b.ijk));
+      if (!LodSelector::outsideFrustum(cam, blo, bhi))
+        brute.insert(file->entryIndex(b.level, b.ijk));
     }
     const auto got = t.blocks(p);
     EXPECT_EQ(std::set<int64_t>(got.begin(), got.end()), brute) << "cell " << c;
@@ -407,7 +412,9 @@ TEST(Predictors, ForeCachePhaseSwitch) {
 // what the user dwelt on (here: block ids as signatures, views toward +phi show "similar" data).
 TEST(Predictors, ForeCacheSignatureModelPicksSimilarView) {
   ForeCacheDataSource data;
-  data.visibleBlocks = [](const Pose& p) { return std::vector<int64_t>{int64_t(std::floor(p.phiDeg))}; };
+  data.visibleBlocks = [](const Pose& p) {
+    return std::vector<int64_t>{int64_t(std::floor(p.phiDeg))};
+  };
   data.signature = [](int64_t b) { return BlockSignature{float(b) / 360.f, 0, 0, 0}; };
   ForeCacheModel fc({}, data);
   Pose p{1.2, 90, 100};

@@ -11,7 +11,8 @@
 using namespace afam;
 
 static_assert(std::is_trivially_copyable<FrameView>::value, "FrameView goes to kernels by value");
-static_assert(std::is_trivially_copyable<FrameSlot>::value, "FrameSlot goes to the device as bytes");
+static_assert(std::is_trivially_copyable<FrameSlot>::value,
+              "FrameSlot goes to the device as bytes");
 
 TEST(Raycast, ConstantTimeLookupEqualsBruteForce) {
   for (const Index3 dims : {Index3{65, 65, 65}, Index3{50, 33, 71}, Index3{100, 7, 2}}) {
@@ -191,8 +192,8 @@ TEST(Raycast, MaxDistanceStopsTheRayAtOpaqueGeometry) {
   // +inf changes nothing.
   EXPECT_EQ(free.calls, unset.calls);
   EXPECT_FLOAT_EQ(a.a, noLimit.a);
-  EXPECT_NEAR(free.calls, 201, 1);     // t = 4.00 .. 6.00
-  EXPECT_NEAR(limited.calls, 51, 1);   // t = 4.00 .. 4.50
+  EXPECT_NEAR(free.calls, 201, 1);    // t = 4.00 .. 6.00
+  EXPECT_NEAR(limited.calls, 51, 1);  // t = 4.00 .. 4.50
   EXPECT_EQ(hidden.calls, 0);
   EXPECT_EQ(c.a, 0.f);
   EXPECT_NEAR(b.a, 1.f - std::pow(0.99f, float(limited.calls)), 1e-5);
@@ -231,9 +232,9 @@ TEST(Raycast, ProjectionsTakeTheLargestSmallestAndMeanValueOfTheRay) {
   f.blendMode = kBlendMinimum;
   expect(castProjectionRayWith(f, s, 0, 0), -1.f, "minimum");
   // Average (VTK's convention): an opaque grey, the mean of alpha(v) (v - tfMin) / (tfMax - tfMin):
-  // here the mean of (0.5 + 0.3 z) (z + 1) / 2 over z in [-1, 1] = 0.3 (0.25 + 0.1 / 3 ... see below).
-  // For samples uniform in z on [a, b]: mean of (0.5 + 0.3 z)(z + 1)/2 = (1/2)(0.5 + 0.8 m + 0.3 q),
-  // m = mean z, q = mean z^2.
+  // here the mean of (0.5 + 0.3 z) (z + 1) / 2 over z in [-1, 1] = 0.3 (0.25 + 0.1 / 3 ... see
+  // below). For samples uniform in z on [a, b]: mean of (0.5 + 0.3 z)(z + 1)/2 = (1/2)(0.5 + 0.8 m
+  // + 0.3 q), m = mean z, q = mean z^2.
   auto expectGrey = [](const RGBA& c, float grey, const char* what) {
     EXPECT_NEAR(c.a, 1.f, 1e-6) << what;
     EXPECT_NEAR(c.r, grey, 2e-3) << what;

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/eval/ground_truth.hpp"
 #include "afam/eval/image_metrics.hpp"
 #include "afam/eval/png_io.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/renderer.hpp"
 #include "render_test_util.hpp"
 #include "scratch_dir.hpp"
@@ -41,9 +41,7 @@ ImageRGBA groundTruth(Renderer& r, const Camera& c) {
   return img;
 }
 
-double psnrOf(const ImageRGBA& a, const ImageRGBA& b) {
-  return compare(toRGB8(a), toRGB8(b)).psnr;
-}
+double psnrOf(const ImageRGBA& a, const ImageRGBA& b) { return compare(toRGB8(a), toRGB8(b)).psnr; }
 
 }  // namespace
 
@@ -241,7 +239,9 @@ TEST(Renderer, MaxDistanceHidesTheVolumeBehindOpaqueGeometry) {
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       float& t = limit[size_t(y) * n + size_t(x)];
-      if (x < n / 2) t = y < n / 2 ? 0.25f : float(eyeToCenter);  // in front (box is >= 0.32 away) / through the middle
+      if (x < n / 2)
+        t = y < n / 2 ? 0.25f
+                      : float(eyeToCenter);  // in front (box is >= 0.32 away) / through the middle
     }
   const ImageRGBA cut = r.renderFrame(cam, st, limit.data());
   double hiddenAlpha = 0, middleAlpha = 0, middleFullAlpha = 0, rightDiff = 0;
@@ -249,7 +249,8 @@ TEST(Renderer, MaxDistanceHidesTheVolumeBehindOpaqueGeometry) {
     for (int x = 0; x < n; ++x) {
       const size_t i = (size_t(y) * n + size_t(x)) * 4;
       if (x >= n / 2) {
-        for (int k = 0; k < 4; ++k) rightDiff += std::abs(cut.rgba[i + size_t(k)] - full.rgba[i + size_t(k)]);
+        for (int k = 0; k < 4; ++k)
+          rightDiff += std::abs(cut.rgba[i + size_t(k)] - full.rgba[i + size_t(k)]);
       } else if (y < n / 2) {
         hiddenAlpha += cut.rgba[i + 3];
       } else {
@@ -303,7 +304,8 @@ namespace {
 class RecordingCaster : public CpuCaster {
  public:
   RecordingCaster() : CpuCaster(2) {}
-  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) override {
+  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets,
+                  ImageRGBA& image) override {
     seen.push_back(targets);
     CastResult result = CpuCaster::cast(frame, targets, image);
     result.messages.push_back("frame " + std::to_string(seen.size()));

@@ -23,9 +23,10 @@ using namespace afam;
 
 namespace {
 
-const SampleType kTypes[] = {SampleType::Int8,  SampleType::UInt8,  SampleType::Int16,  SampleType::UInt16,
-                             SampleType::Int32, SampleType::UInt32, SampleType::Int64,  SampleType::UInt64,
-                             SampleType::Float32, SampleType::Float64};
+const SampleType kTypes[] = {SampleType::Int8,   SampleType::UInt8,  SampleType::Int16,
+                             SampleType::UInt16, SampleType::Int32,  SampleType::UInt32,
+                             SampleType::Int64,  SampleType::UInt64, SampleType::Float32,
+                             SampleType::Float64};
 
 /// Values of T on a dims grid: the type's extremes first, then a ramp that wraps within its range
 /// (negative values in signed types, fractions in floating ones).
@@ -38,7 +39,8 @@ std::vector<T> samplesOf(size_t count) {
       v[i] = special[i];
       continue;
     }
-    const long long ramp = (long long)(i * 37 % 251) - (std::numeric_limits<T>::is_signed ? 125 : 0);
+    const long long ramp =
+        (long long)(i * 37 % 251) - (std::numeric_limits<T>::is_signed ? 125 : 0);
     v[i] = std::numeric_limits<T>::is_integer ? T(ramp) : T(double(ramp) * 0.3125);
   }
   return v;
@@ -84,7 +86,8 @@ void checkTypedSource() {
           b.assign(m, -2.0f);
           typed.readRows(z0, nz, y0, ny, a.data());
           reference.readRows(z0, nz, y0, ny, b.data());
-          EXPECT_TRUE(sameBits(a, b)) << "planes " << z0 << " + " << nz << ", rows " << y0 << " + " << ny;
+          EXPECT_TRUE(sameBits(a, b))
+              << "planes " << z0 << " + " << nz << ", rows " << y0 << " + " << ny;
         }
     }
   EXPECT_THROW(typed.readRows(0, 1, 3, 2, a.data()), InvalidArgument);

@@ -96,8 +96,8 @@ TEST(Stability, StepOvershootIsBounded) {
       const afam::FitResult fit = fitter.fit(d.data(), {n, n, n}, {ncp, ncp, ncp}, p);
       ASSERT_TRUE(std::isfinite(fit.error.rmse));
       const double over = std::max(fit.error.maxValue - 1.0, 0.0 - fit.error.minValue);
-      std::printf("[ measured ] step, p = %d, NCP = %d: overshoot %.4f, RMSE %.4f\n", p, ncp,
-                  over, fit.error.rmse);
+      std::printf("[ measured ] step, p = %d, NCP = %d: overshoot %.4f, RMSE %.4f\n", p, ncp, over,
+                  fit.error.rmse);
       EXPECT_LT(over, 0.25) << "p=" << p << " ncp=" << ncp;
       if (ncp == n) {
         EXPECT_LT(fit.error.maxError, 1e-5);
@@ -113,7 +113,7 @@ TEST(Stability, SingleVoxelSpikeStaysBounded) {
     for (int ncp : {p + 1, 6, 9, 16, 17}) {
       std::vector<float> d(static_cast<size_t>(n) * n * n, 0.f);
       d[(size_t(8) * n + 8) * n + 8] = 1.f;  // centre
-      d[0] = -1.f;                          // corner, opposite sign
+      d[0] = -1.f;                           // corner, opposite sign
       const afam::FitResult fit = fitter.fit(d.data(), {n, n, n}, {ncp, ncp, ncp}, p);
       std::printf("[ measured ] spike, p = %d, NCP = %d: model in [%.4f, %.4f], max error %.4f\n",
                   p, ncp, fit.error.minValue, fit.error.maxValue, fit.error.maxError);
@@ -264,9 +264,10 @@ TEST(Stability, DegenerateShapesTinyAxesSlabsAndNonCubic) {
     Int3 n;
     int ncp, p;
   };
-  for (const Case c : {Case{{1, 1, 1}, 1, 2}, Case{{2, 2, 2}, 2, 2}, Case{{3, 3, 3}, 3, 2},
-                       Case{{3, 3, 3}, 3, 3}, Case{{2, 3, 1}, 3, 3}, Case{{1, 16, 16}, 16, 2},
-                       Case{{16, 1, 16}, 16, 2}, Case{{16, 16, 1}, 16, 3}, Case{{1, 1, 40}, 40, 3}}) {
+  for (const Case c :
+       {Case{{1, 1, 1}, 1, 2}, Case{{2, 2, 2}, 2, 2}, Case{{3, 3, 3}, 3, 2}, Case{{3, 3, 3}, 3, 3},
+        Case{{2, 3, 1}, 3, 3}, Case{{1, 16, 16}, 16, 2}, Case{{16, 1, 16}, 16, 2},
+        Case{{16, 16, 1}, 16, 3}, Case{{1, 1, 40}, 40, 3}}) {
     std::mt19937 rng(unsigned(c.n[0] * 100 + c.n[1] * 10 + c.n[2]));
     std::uniform_real_distribution<float> uni(-1.f, 1.f);
     std::vector<float> d(static_cast<size_t>(c.n[0]) * c.n[1] * c.n[2]);
@@ -299,7 +300,8 @@ TEST(Stability, SlabFitEqualsTwoDimensionalFit) {
   const int m = 20;
   std::vector<float> d(static_cast<size_t>(m) * m);
   for (int j = 0; j < m; ++j)
-    for (int i = 0; i < m; ++i) d[size_t(j) * m + i] = std::sin(0.4f * float(i)) * std::cos(0.3f * float(j));
+    for (int i = 0; i < m; ++i)
+      d[size_t(j) * m + i] = std::sin(0.4f * float(i)) * std::cos(0.3f * float(j));
   afam::BlockFitter fitter;
   const auto xy = fitter.fit(d.data(), {m, m, 1}, {9, 7, 1}, 2);
   const auto xz = fitter.fit(d.data(), {m, 1, m}, {9, 1, 7}, 2);

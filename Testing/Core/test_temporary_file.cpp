@@ -60,7 +60,8 @@ TEST(TemporaryFile, AKilledWritersFileIsKeptWhileItLivesAndRemovedAfterKill9) {
   }
   char c = 0;
   ASSERT_EQ(::read(ready[0], &c, 1), 1);
-  EXPECT_EQ(removeStaleTemporaries(out), 0) << "the file of a live writer (pid " << pid << ") was removed";
+  EXPECT_EQ(removeStaleTemporaries(out), 0)
+      << "the file of a live writer (pid " << pid << ") was removed";
   ASSERT_EQ(::kill(pid, SIGKILL), 0);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);

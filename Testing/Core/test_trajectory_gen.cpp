@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <numeric>
 
-#include "afam/scene/camera.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/scene/camera.hpp"
 #include "afam/scene/trajectory_gen.hpp"
 
 using namespace afam;
@@ -25,7 +25,9 @@ double angleStep(double a, double b) {
   return d;
 }
 
-double mean(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); }
+double mean(const std::vector<double>& v) {
+  return std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+}
 
 double lagOneAutocorrelation(const std::vector<double>& v) {
   const double m = mean(v);

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/volume/volume_formats.hpp"
 
 using namespace afam;
@@ -49,7 +49,8 @@ void spit(const std::string& path, const std::string& bytes) {
 
 std::string gzipped(const std::string& bytes, bool gzipWrapper) {
   z_stream z{};
-  EXPECT_EQ(deflateInit2(&z, 6, Z_DEFLATED, gzipWrapper ? 15 + 16 : 15, 8, Z_DEFAULT_STRATEGY), Z_OK);
+  EXPECT_EQ(deflateInit2(&z, 6, Z_DEFLATED, gzipWrapper ? 15 + 16 : 15, 8, Z_DEFAULT_STRATEGY),
+            Z_OK);
   std::string out(deflateBound(&z, uLong(bytes.size())), '\0');
   z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
   z.avail_in = uInt(bytes.size());
@@ -84,8 +85,10 @@ std::string encodeToBytes(VolumeSource& s, const std::string& out) {
   return slurp(out);
 }
 
-std::string nrrdHeader(const std::string& type, const std::string& sizes, const std::string& extra) {
-  return "NRRD0004\n# written by the test\ntype: " + type + "\ndimension: 3\nsizes: " + sizes + "\n" + extra;
+std::string nrrdHeader(const std::string& type, const std::string& sizes,
+                       const std::string& extra) {
+  return "NRRD0004\n# written by the test\ntype: " + type + "\ndimension: 3\nsizes: " + sizes +
+         "\n" + extra;
 }
 
 // The message of the exception `f` throws; empty (and a failure) when it throws none.
@@ -108,38 +111,51 @@ TEST(VolumeFormats, EveryLayoutReadsTheRawSamples) {
   const std::vector<float> want = samples(reference);
   const std::string sizes = "64 64 93";
   spit(work("head_attached.nrrd"),
-       nrrdHeader("short", sizes, "endian: little\nencoding: raw\nspacings: 3.2 3.2 1.5\nnote:=a: b\n"
-                                  "content: CT: head\n\n") + raw);
-  spit(work("head_gzip.nrrd"), nrrdHeader("int16", sizes, "endian: little\nencoding: gzip\n\n") + gzipped(raw, true));
+       nrrdHeader("short", sizes,
+                  "endian: little\nencoding: raw\nspacings: 3.2 3.2 1.5\nnote:=a: b\n"
+                  "content: CT: head\n\n") +
+           raw);
+  spit(work("head_gzip.nrrd"),
+       nrrdHeader("int16", sizes, "endian: little\nencoding: gzip\n\n") + gzipped(raw, true));
   spit(work("head_big.raw"), "skip me\nand me\n" + std::string(5, 'x') + swapped16(raw));
   spit(work("head_detached.nhdr"),
-       nrrdHeader("int16_t", sizes, "endian: big\nencoding: raw\ndata file: head_big.raw\nline skip: 2\nbyte skip: 5\n"));
+       nrrdHeader(
+           "int16_t", sizes,
+           "endian: big\nencoding: raw\ndata file: head_big.raw\nline skip: 2\nbyte skip: 5\n"));
   spit(work("head_tail.nhdr"),
-       nrrdHeader("short", sizes, "endian: big\nencoding: raw\ndata file: head_big.raw\nbyte skip: -1\n"));
-  spit(work("head_zlib.mha"), "ObjectType = Image\nNDims = 3\nDimSize = 64 64 93\nElementType = MET_SHORT\n"
-                              "BinaryDataByteOrderMSB = False\nCompressedData = True\nElementSpacing = 3.2 3.2 1.5\n"
-                              "ElementDataFile = LOCAL\n" + gzipped(raw, false));
-  spit(work("head.mhd"), "NDims = 3\nDimSize = 64 64 93\nElementType = MET_SHORT\nOffset = -10 5 2.5\n"
-                         "ElementDataFile = " + kVolumes + kHead + "\n");
-  for (const char* name : {"head_attached.nrrd", "head_gzip.nrrd", "head_detached.nhdr", "head_tail.nhdr",
-                           "head_zlib.mha", "head.mhd"}) {
+       nrrdHeader("short", sizes,
+                  "endian: big\nencoding: raw\ndata file: head_big.raw\nbyte skip: -1\n"));
+  spit(work("head_zlib.mha"),
+       "ObjectType = Image\nNDims = 3\nDimSize = 64 64 93\nElementType = MET_SHORT\n"
+       "BinaryDataByteOrderMSB = False\nCompressedData = True\nElementSpacing = 3.2 3.2 1.5\n"
+       "ElementDataFile = LOCAL\n" +
+           gzipped(raw, false));
+  spit(work("head.mhd"),
+       "NDims = 3\nDimSize = 64 64 93\nElementType = MET_SHORT\nOffset = -10 5 2.5\n"
+       "ElementDataFile = " +
+           kVolumes + kHead + "\n");
+  for (const char* name : {"head_attached.nrrd", "head_gzip.nrrd", "head_detached.nhdr",
+                           "head_tail.nhdr", "head_zlib.mha", "head.mhd"}) {
     SCOPED_TRACE(name);
     auto src = openHeaderVolume(work(name));
     EXPECT_EQ(src->dims(), (Index3{64, 64, 93}));
     EXPECT_EQ(src->name(), "head");
     EXPECT_EQ(samples(*src), want);
   }
-  EXPECT_EQ(openHeaderVolume(work("head_attached.nrrd"))->spacing(), (std::array<double, 3>{3.2, 3.2, 1.5}));
-  EXPECT_EQ(openHeaderVolume(work("head_zlib.mha"))->spacing(), (std::array<double, 3>{3.2, 3.2, 1.5}));
+  EXPECT_EQ(openHeaderVolume(work("head_attached.nrrd"))->spacing(),
+            (std::array<double, 3>{3.2, 3.2, 1.5}));
+  EXPECT_EQ(openHeaderVolume(work("head_zlib.mha"))->spacing(),
+            (std::array<double, 3>{3.2, 3.2, 1.5}));
   EXPECT_EQ(openHeaderVolume(work("head.mhd"))->origin(), (std::array<double, 3>{-10, 5, 2.5}));
   EXPECT_EQ(openHeaderVolume(work("head_gzip.nrrd"))->spacing(), (std::array<double, 3>{1, 1, 1}));
 }
 
 TEST(VolumeFormats, SpaceDirectionsAndOriginReachTheAfamHeader) {
-  spit(work("bucky_dirs.nrrd"),
-       nrrdHeader("uchar", "32 32 32", "encoding: raw\nspace: left-posterior-superior\n"
-                                      "space directions: (-0.5,0,0) (0, 0.5, 0) (0,0,2)\n"
-                                      "space origin: (1.5,-2,3)\n\n") + slurp(kVolumes + kBucky));
+  spit(work("bucky_dirs.nrrd"), nrrdHeader("uchar", "32 32 32",
+                                           "encoding: raw\nspace: left-posterior-superior\n"
+                                           "space directions: (-0.5,0,0) (0, 0.5, 0) (0,0,2)\n"
+                                           "space origin: (1.5,-2,3)\n\n") +
+                                    slurp(kVolumes + kBucky));
   auto src = openHeaderVolume(work("bucky_dirs.nrrd"));
   EXPECT_EQ(src->spacing(), (std::array<double, 3>{0.5, 0.5, 2}));
   EXPECT_EQ(src->origin(), (std::array<double, 3>{1.5, -2, 3}));
@@ -152,8 +168,10 @@ TEST(VolumeFormats, SpaceDirectionsAndOriginReachTheAfamHeader) {
 // The bar: the same volume through NRRD and MetaImage encodes to the same bytes as from raw.
 TEST(VolumeFormats, EncodingIsByteIdenticalToTheRawCopy) {
   const std::string raw = slurp(kVolumes + kBucky);
-  spit(work("bucky.nrrd"), nrrdHeader("uint8", "32 32 32", "encoding: gzip\n\n") + gzipped(raw, true));
-  spit(work("bucky.mha"), "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + raw);
+  spit(work("bucky.nrrd"),
+       nrrdHeader("uint8", "32 32 32", "encoding: gzip\n\n") + gzipped(raw, true));
+  spit(work("bucky.mha"),
+       "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + raw);
   RawFileSource rawSource(kVolumes + kBucky, {32, 32, 32}, SampleType::UInt8);
   const std::string want = encodeToBytes(rawSource, work("bucky_raw.afam"));
   ASSERT_GT(want.size(), 1000u);
@@ -173,10 +191,13 @@ TEST(VolumeFormats, SixtyFourBitIntegersReadAsTheirRawFile) {
   std::string little(values.size() * 8, '\0');
   std::memcpy(&little[0], values.data(), little.size());
   std::string big = little;
-  for (size_t i = 0; i < big.size(); i += 8) std::reverse(big.begin() + std::ptrdiff_t(i), big.begin() + std::ptrdiff_t(i + 8));
+  for (size_t i = 0; i < big.size(); i += 8)
+    std::reverse(big.begin() + std::ptrdiff_t(i), big.begin() + std::ptrdiff_t(i + 8));
   spit(work("long_2x3x4_int64.raw"), little);
   spit(work("long.nrrd"), nrrdHeader("long long", "2 3 4", "encoding: raw\nendian: big\n\n") + big);
-  spit(work("long.mha"), "NDims = 3\nDimSize = 2 3 4\nElementType = MET_LONG_LONG\nElementDataFile = LOCAL\n" + little);
+  spit(work("long.mha"),
+       "NDims = 3\nDimSize = 2 3 4\nElementType = MET_LONG_LONG\nElementDataFile = LOCAL\n" +
+           little);
   Index3 dims{};
   SampleType type{};
   ASSERT_TRUE(parseRawName(work("long_2x3x4_int64.raw"), dims, type));
@@ -202,27 +223,44 @@ TEST(VolumeFormats, HeadersThatLieAreRefusedNamingFileAndField) {
   const std::vector<Case> cases = {
       {"short.nrrd", nrrdHeader("uchar", "32 32 33", "encoding: raw\n\n") + raw, "sizes"},
       {"long.nrrd", nrrdHeader("uchar", "32 32 31", "encoding: raw\n\n") + raw, "sizes"},
-      {"wide.nrrd", nrrdHeader("ushort", "32 32 32", "endian: little\nencoding: raw\n\n") + raw, "type"},
-      {"gzshort.nrrd", nrrdHeader("uchar", "32 32 40", "encoding: gzip\n\n") + gzipped(raw, true), "sizes"},
-      {"gzlong.nrrd", nrrdHeader("uchar", "16 32 32", "encoding: gzip\n\n") + gzipped(raw, true), "sizes"},
-      {"gztrunc.nrrd", nrrdHeader("uchar", "32 32 32", "encoding: gzip\n\n") + gzipped(raw, true).substr(0, 300),
+      {"wide.nrrd", nrrdHeader("ushort", "32 32 32", "endian: little\nencoding: raw\n\n") + raw,
+       "type"},
+      {"gzshort.nrrd", nrrdHeader("uchar", "32 32 40", "encoding: gzip\n\n") + gzipped(raw, true),
+       "sizes"},
+      {"gzlong.nrrd", nrrdHeader("uchar", "16 32 32", "encoding: gzip\n\n") + gzipped(raw, true),
+       "sizes"},
+      {"gztrunc.nrrd",
+       nrrdHeader("uchar", "32 32 32", "encoding: gzip\n\n") + gzipped(raw, true).substr(0, 300),
        "truncated"},
-      {"type.nrrd", nrrdHeader("quaternion", "32 32 32", "encoding: raw\n\n") + raw, "field 'type'"},
-      {"enc.nrrd", nrrdHeader("uchar", "32 32 32", "encoding: bzip2\n\n") + raw, "field 'encoding'"},
-      {"dim.nrrd", "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1024 32\nencoding: raw\n\n" + raw, "field 'dimension'"},
-      {"noendian.nrrd", nrrdHeader("short", "32 32 16", "encoding: raw\n\n") + raw, "field 'endian'"},
-      {"nosizes.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nencoding: raw\n\n" + raw, "field 'sizes'"},
+      {"type.nrrd", nrrdHeader("quaternion", "32 32 32", "encoding: raw\n\n") + raw,
+       "field 'type'"},
+      {"enc.nrrd", nrrdHeader("uchar", "32 32 32", "encoding: bzip2\n\n") + raw,
+       "field 'encoding'"},
+      {"dim.nrrd", "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 1024 32\nencoding: raw\n\n" + raw,
+       "field 'dimension'"},
+      {"noendian.nrrd", nrrdHeader("short", "32 32 16", "encoding: raw\n\n") + raw,
+       "field 'endian'"},
+      {"nosizes.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nencoding: raw\n\n" + raw,
+       "field 'sizes'"},
       {"magic.nrrd", "PNRD0004\n" + raw, "field 'magic'"},
-      {"missing.nhdr", nrrdHeader("uchar", "32 32 32", "encoding: raw\ndata file: nowhere.raw\n"), "field 'data file'"},
-      {"short.mha", "NDims = 3\nDimSize = 32 32 33\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + raw,
+      {"missing.nhdr", nrrdHeader("uchar", "32 32 32", "encoding: raw\ndata file: nowhere.raw\n"),
+       "field 'data file'"},
+      {"short.mha",
+       "NDims = 3\nDimSize = 32 32 33\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + raw,
        "DimSize"},
-      {"type.mha", "NDims = 3\nDimSize = 32 32 32\nElementType = MET_COMPLEX\nElementDataFile = LOCAL\n" + raw,
+      {"type.mha",
+       "NDims = 3\nDimSize = 32 32 32\nElementType = MET_COMPLEX\nElementDataFile = LOCAL\n" + raw,
        "field 'ElementType'"},
-      {"zlib.mha", "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nCompressedData = True\n"
-                   "ElementDataFile = LOCAL\n" + raw, "damaged"},
-      {"missing.mhd", "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nElementDataFile = gone.raw\n",
+      {"zlib.mha",
+       "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nCompressedData = True\n"
+       "ElementDataFile = LOCAL\n" +
+           raw,
+       "damaged"},
+      {"missing.mhd",
+       "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\nElementDataFile = gone.raw\n",
        "field 'ElementDataFile'"},
-      {"nodata.mhd", "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\n", "field 'ElementDataFile'"},
+      {"nodata.mhd", "NDims = 3\nDimSize = 32 32 32\nElementType = MET_UCHAR\n",
+       "field 'ElementDataFile'"},
       {"empty.nrrd", "", "empty"},
       {"empty.mhd", "", "empty"},
   };

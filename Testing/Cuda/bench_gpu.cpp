@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "gpu_scene.hpp"
 
 using namespace afam;
@@ -69,9 +69,12 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--sanitize") return sanitizeOneFrame();
-    if (a == "--volume" && i + 1 < argc) volumeN = std::atoi(argv[++i]);
-    else if (a == "--reps" && i + 1 < argc) reps = std::atoi(argv[++i]);
-    else if (a == "--table" && i + 1 < argc) tablePath = argv[++i];
+    if (a == "--volume" && i + 1 < argc)
+      volumeN = std::atoi(argv[++i]);
+    else if (a == "--reps" && i + 1 < argc)
+      reps = std::atoi(argv[++i]);
+    else if (a == "--table" && i + 1 < argc)
+      tablePath = argv[++i];
   }
   std::string why;
   if (!gpuAvailable(&why)) {
@@ -85,8 +88,10 @@ int main(int argc, char** argv) {
     double t0 = seconds();
     const Volume ml = marschnerLobbVolume(volumeN);
     const EncodedVolume e = encodeVolume(ml, 4, 16, 2, 0.75);
-    std::printf("Marschner-Lobb %d^3, 4 levels, 16 finest blocks/axis, p=2, NCP=0.75n: encoded "
-                "in %.1f s\n", volumeN, seconds() - t0);
+    std::printf(
+        "Marschner-Lobb %d^3, 4 levels, 16 finest blocks/axis, p=2, NCP=0.75n: encoded "
+        "in %.1f s\n",
+        volumeN, seconds() - t0);
     GpuRenderer gpu(size_t(4) << 30);
     std::vector<Row> rows;
 
@@ -128,16 +133,16 @@ int main(int argc, char** argv) {
       r.differing = d.differing;
       r.blocks = frame.view.slotCount;
       rows.push_back(r);
-      std::printf("%s: pose (%.3f, %.2f, %.2f), %d blocks; kernel median %.3f ms (%llu samples, "
-                  "%.1f G/s) [%s]; bare %.3f ms (%llu samples, %.1f G/s) [%s]; render cold %.2f "
-                  "ms (upload %.2f ms, %llu models, %.1f MB), warm %.2f ms; CPU %.1f ms; "
-                  "max diff %d/255, %lld px differ\n",
-                  r.name.c_str(), pose.distance, pose.thetaDeg, pose.phiDeg, frame.view.slotCount,
-                  r.ms, (unsigned long long)full.samples, r.gsps, fullInfo.c_str(), r.bareMs,
-                  (unsigned long long)bare.samples, r.bareGsps, bareInfo.c_str(), cold.totalMs,
-                  cold.uploadMs, (unsigned long long)cold.modelsUploaded,
-                  double(cold.bytesUploaded) / 1e6, warm.totalMs, cpuMs, d.maxAbs8,
-                  (long long)d.differing);
+      std::printf(
+          "%s: pose (%.3f, %.2f, %.2f), %d blocks; kernel median %.3f ms (%llu samples, "
+          "%.1f G/s) [%s]; bare %.3f ms (%llu samples, %.1f G/s) [%s]; render cold %.2f "
+          "ms (upload %.2f ms, %llu models, %.1f MB), warm %.2f ms; CPU %.1f ms; "
+          "max diff %d/255, %lld px differ\n",
+          r.name.c_str(), pose.distance, pose.thetaDeg, pose.phiDeg, frame.view.slotCount, r.ms,
+          (unsigned long long)full.samples, r.gsps, fullInfo.c_str(), r.bareMs,
+          (unsigned long long)bare.samples, r.bareGsps, bareInfo.c_str(), cold.totalMs,
+          cold.uploadMs, (unsigned long long)cold.modelsUploaded, double(cold.bytesUploaded) / 1e6,
+          warm.totalMs, cpuMs, d.maxAbs8, (long long)d.differing);
     }
 
     // --- Floating-point contract and occupancy variants on view 0 (the default is exact).
@@ -163,8 +168,8 @@ int main(int argc, char** argv) {
           const GpuKernelTiming full =
               gpu.timeKernel(frame.view, frame.keys.data(), GpuKernelKind::Full, reps);
           const std::string info = gpu.lastKernelInfo();
-          const GpuKernelTiming bare = gpu.timeKernel(frame.view, frame.keys.data(),
-                                                      GpuKernelKind::BareValueGradient, reps);
+          const GpuKernelTiming bare =
+              gpu.timeKernel(frame.view, frame.keys.data(), GpuKernelKind::BareValueGradient, reps);
           char line[512];
           std::snprintf(line, sizeof(line), "| %s%s | %.3f | %.1f | %.1f | %d | %lld | %s |\n",
                         mode.second, minBlocks ? " + 64 registers" : "", full.median(),
@@ -223,8 +228,8 @@ int main(int argc, char** argv) {
         const GpuKernelTiming full =
             gpu.timeKernel(frame.view, frame.keys.data(), GpuKernelKind::Full, reps);
         Row r;
-        r.name = std::to_string(frame.view.slotCount) + " blocks, " +
-                 (shaded ? "shaded" : "unshaded");
+        r.name =
+            std::to_string(frame.view.slotCount) + " blocks, " + (shaded ? "shaded" : "unshaded");
         r.ms = full.median();
         r.samples = full.samples;
         r.gsps = double(full.samples) / (r.ms * 1e-3) / 1e9;
@@ -256,8 +261,8 @@ int main(int argc, char** argv) {
     table << "\n| 8 vs 512 visible blocks (same data, full resolution) | blocks | kernel ms | "
              "G samples/s |\n|---|---|---|---|\n";
     for (const Row& r : blockRows) {
-      std::snprintf(line, sizeof(line), "| %s | %lld | %.3f | %.1f |\n", r.name.c_str(),
-                    r.blocks, r.ms, r.gsps);
+      std::snprintf(line, sizeof(line), "| %s | %lld | %.3f | %.1f |\n", r.name.c_str(), r.blocks,
+                    r.ms, r.gsps);
       table << line;
     }
     for (int shaded = 0; shaded < 2 && blockRows.size() == 4; ++shaded) {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "gpu_scene.hpp"
 
+#include <sys/stat.h>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -8,14 +9,13 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
-#include <sys/stat.h>
 #include <thread>
 
 #include "afam/base/errors.hpp"
 #include "afam/scene/lod.hpp"
-#include "afam/volume/marschner_lobb.hpp"
 #include "afam/scene/trajectory_gen.hpp"
 #include "afam/scene/transfer_function.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace afam::gputest {
 
@@ -127,8 +127,8 @@ EncodedVolume encodeVolume(const Volume& v, int levels, int finestBlocks, int de
         for (int z = 0; z < n[2]; ++z)
           for (int y = 0; y < n[1]; ++y)
             for (int x = 0; x < n[0]; ++x) {
-              const float* c = v.data.data() + (i0[2][z] * v.dims[1] + i0[1][y]) * v.dims[0] +
-                               i0[0][x];
+              const float* c =
+                  v.data.data() + (i0[2][z] * v.dims[1] + i0[1][y]) * v.dims[0] + i0[0][x];
               const float fx = fr[0][x], fy = fr[1][y], fz = fr[2][z];
               const float c00 = c[0] + fx * (c[sx] - c[0]);
               const float c10 = c[sy] + fx * (c[sy + sx] - c[sy]);
@@ -199,8 +199,9 @@ EncodedVolume rawBlocks(const Volume& v, int levels, int finestBlocks) {
       for (int z = 0; z < padded[2]; ++z)
         for (int y = 0; y < padded[1]; ++y)
           for (int x = 0; x < padded[0]; ++x) {
-            const float* c = v.data.data() + (i0[2][size_t(z)] * v.dims[1] + i0[1][size_t(y)]) *
-                                                 v.dims[0] + i0[0][size_t(x)];
+            const float* c = v.data.data() +
+                             (i0[2][size_t(z)] * v.dims[1] + i0[1][size_t(y)]) * v.dims[0] +
+                             i0[0][size_t(x)];
             const float fx = fr[0][size_t(x)], fy = fr[1][size_t(y)], fz = fr[2][size_t(z)];
             const float c00 = c[0] + fx * (c[sx] - c[0]);
             const float c10 = c[sy] + fx * (c[sy + sx] - c[sy]);
@@ -216,7 +217,8 @@ EncodedVolume rawBlocks(const Volume& v, int levels, int finestBlocks) {
 
 std::vector<BlockId> wholeLevel(const Partition& p, int level) {
   std::vector<BlockId> out;
-  for (int64_t i = 0; i < p.blockCount(level); ++i) out.push_back({level, p.blockFromLinear(level, i)});
+  for (int64_t i = 0; i < p.blockCount(level); ++i)
+    out.push_back({level, p.blockFromLinear(level, i)});
   return out;
 }
 

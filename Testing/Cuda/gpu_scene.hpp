@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "afam/scene/camera.hpp"
-#include "afam/spline/fit.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/render/raycast.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/spline/fit.hpp"
 
 namespace afam::gputest {
 
@@ -80,10 +80,10 @@ void buildFrame(const EncodedVolume& e, const std::vector<BlockId>& blocks, cons
 
 /// Images: premultiplied float RGBA -> 8-bit over black, and their comparison.
 struct ImageDiff {
-  int maxAbs8 = 0;          ///< max abs difference per channel, in 1/255 units
-  int64_t differing = 0;    ///< pixels whose 8-bit RGB differ at all
-  int64_t nonFinite = 0;    ///< GPU pixels that are NaN/Inf (unwritten under poisoning)
-  double maxAbsFloat = 0;   ///< on the premultiplied floats
+  int maxAbs8 = 0;         ///< max abs difference per channel, in 1/255 units
+  int64_t differing = 0;   ///< pixels whose 8-bit RGB differ at all
+  int64_t nonFinite = 0;   ///< GPU pixels that are NaN/Inf (unwritten under poisoning)
+  double maxAbsFloat = 0;  ///< on the premultiplied floats
   int64_t pixels = 0;
 };
 ImageDiff compareImages(const std::vector<float>& cpu, const std::vector<float>& gpu);

@@ -20,9 +20,10 @@ TEST(GpuDamage, DamagedFileCastOnTheGpuMatchesTheCpu) {
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
   auto intact = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 4, 1e-3);
   // Two siblings drawn by their parent, a block left empty, a damaged coarsest block.
-  const std::vector<int64_t> damaged = {intact->entryIndex(0, {0, 0, 0}), intact->entryIndex(1, {1, 1, 1}),
-                                        intact->entryIndex(2, {0, 0, 0}), intact->entryIndex(2, {1, 0, 0}),
-                                        intact->entryIndex(2, {2, 2, 2})};
+  const std::vector<int64_t> damaged = {
+      intact->entryIndex(0, {0, 0, 0}), intact->entryIndex(1, {1, 1, 1}),
+      intact->entryIndex(2, {0, 0, 0}), intact->entryIndex(2, {1, 0, 0}),
+      intact->entryIndex(2, {2, 2, 2})};
   auto file = afam_test::damagedCopy(*intact, afam_test::tempPath("gpu_damaged"), damaged);
   for (int level : {0, 1, 2}) {
     RenderOptions o;
@@ -30,9 +31,9 @@ TEST(GpuDamage, DamagedFileCastOnTheGpuMatchesTheCpu) {
     o.cache = CacheBudget{};
     o.lod.forceLevel = level;
     Renderer cpu(file, o), gpu(file, o);
-    std::unique_ptr<FrameCaster> caster = makeGpuCaster(size_t(256) << 20, o.threads, [](const std::string& m) {
-      std::printf("gpu: %s\n", m.c_str());
-    });
+    std::unique_ptr<FrameCaster> caster =
+        makeGpuCaster(size_t(256) << 20, o.threads,
+                      [](const std::string& m) { std::printf("gpu: %s\n", m.c_str()); });
     ASSERT_TRUE(caster);
     gpu.setCaster(std::move(caster));
     const Camera c = Camera::lookAt({1.6, 1.9, 1.3}, {0, 0, 0}, {0, 0, 1}, 60, 128, 128);
@@ -44,8 +45,11 @@ TEST(GpuDamage, DamagedFileCastOnTheGpuMatchesTheCpu) {
       worst = std::max(worst, double(std::fabs(ic.rgba[i] - ig.rgba[i])));
       if (i % 4 == 3) alpha += ic.rgba[i];
     }
-    std::printf("[gpu-damage] level %d: slots %lld, damaged %lld, reports %zu, max |gpu - cpu| %.5f, alpha %.1f\n",
-                level, (long long)sg.slots, (long long)sg.damagedBlocks, sg.damageReports.size(), worst, alpha);
+    std::printf(
+        "[gpu-damage] level %d: slots %lld, damaged %lld, reports %zu, max |gpu - cpu| %.5f, alpha "
+        "%.1f\n",
+        level, (long long)sg.slots, (long long)sg.damagedBlocks, sg.damageReports.size(), worst,
+        alpha);
     EXPECT_EQ(sg.slots, sc.slots);
     EXPECT_EQ(sg.damagedBlocks, sc.damagedBlocks);
     EXPECT_GE(sg.damagedBlocks, 1);

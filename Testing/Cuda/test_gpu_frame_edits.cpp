@@ -34,7 +34,8 @@ FrameSettings rampSettings(const AfamFile& file) {
 
 double maxDiff(const ImageRGBA& a, const ImageRGBA& b) {
   double worst = 0;
-  for (size_t i = 0; i < a.rgba.size(); ++i) worst = std::max(worst, double(std::fabs(a.rgba[i] - b.rgba[i])));
+  for (size_t i = 0; i < a.rgba.size(); ++i)
+    worst = std::max(worst, double(std::fabs(a.rgba[i] - b.rgba[i])));
   return worst;
 }
 
@@ -51,9 +52,9 @@ TEST(GpuFrameEdits, EditsKeepTheCacheAndTheGpuPool) {
   s.lod.bandWidth = 100;  // every block at the finest level
   s.sampleDistance = 0.01f;
   Renderer gpu(file, resources, s), cpu(file, resources, s);
-  std::unique_ptr<GpuCaster> owned = GpuCaster::create(size_t(512) << 20, resources.threads, [](const std::string& m) {
-    std::printf("gpu: %s\n", m.c_str());
-  });
+  std::unique_ptr<GpuCaster> owned =
+      GpuCaster::create(size_t(512) << 20, resources.threads,
+                        [](const std::string& m) { std::printf("gpu: %s\n", m.c_str()); });
   ASSERT_TRUE(owned);
   GpuCaster& caster = *owned;
   gpu.setCaster(std::move(owned));
@@ -62,8 +63,9 @@ TEST(GpuFrameEdits, EditsKeepTheCacheAndTheGpuPool) {
   gpu.renderFrame(c, first);
   cpu.renderFrame(c, firstCpu);
   const uint64_t uploads = caster.poolStats().uploads;
-  std::printf("[gpu-edits] first frame: %lld models, %llu misses, %llu uploads\n", (long long)first.slots,
-              (unsigned long long)first.misses, (unsigned long long)uploads);
+  std::printf("[gpu-edits] first frame: %lld models, %llu misses, %llu uploads\n",
+              (long long)first.slots, (unsigned long long)first.misses,
+              (unsigned long long)uploads);
   ASSERT_GE(first.slots, 100);
   ASSERT_EQ(uploads, uint64_t(first.slots));
 
@@ -78,9 +80,10 @@ TEST(GpuFrameEdits, EditsKeepTheCacheAndTheGpuPool) {
     FrameStats sg, sc;
     const ImageRGBA ig = gpu.renderFrame(c, edited, sg), ic = cpu.renderFrame(c, edited, sc);
     const double d = maxDiff(ig, ic);
-    std::printf("[gpu-edits] edit %d: hits %llu, misses %llu, uploads so far %llu, max |gpu - cpu| %.5f\n", step,
-                (unsigned long long)sg.hits, (unsigned long long)sg.misses,
-                (unsigned long long)caster.poolStats().uploads, d);
+    std::printf(
+        "[gpu-edits] edit %d: hits %llu, misses %llu, uploads so far %llu, max |gpu - cpu| %.5f\n",
+        step, (unsigned long long)sg.hits, (unsigned long long)sg.misses,
+        (unsigned long long)caster.poolStats().uploads, d);
     EXPECT_EQ(sg.misses, 0u) << "edit " << step;
     EXPECT_EQ(sg.hits, uint64_t(first.slots)) << "edit " << step;
     EXPECT_EQ(caster.poolStats().uploads, uploads) << "edit " << step;
@@ -94,7 +97,8 @@ TEST(GpuFrameEdits, ImageLeftOnTheDeviceEqualsTheHostImage) {
   auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 2, 4, 1e-3);
   const FrameSettings s = rampSettings(*file);
   Renderer renderer(file, RendererResources{}, s);
-  std::unique_ptr<GpuCaster> owned = GpuCaster::create(size_t(64) << 20, 0, [](const std::string&) {});
+  std::unique_ptr<GpuCaster> owned =
+      GpuCaster::create(size_t(64) << 20, 0, [](const std::string&) {});
   ASSERT_TRUE(owned);
   GpuCaster& caster = *owned;
   renderer.setCaster(std::move(owned));
@@ -118,14 +122,17 @@ TEST(GpuFrameEdits, ImageLeftOnTheDeviceEqualsTheHostImage) {
   EXPECT_EQ(caster.lastTimes().downloadMs, 0.0);
   EXPECT_EQ(st.cast.gpuDownloadMs, 0.0);
   std::vector<float> back(floats);
-  ASSERT_EQ(cudaMemcpy(back.data(), device, floats * sizeof(float), cudaMemcpyDeviceToHost), cudaSuccess);
+  ASSERT_EQ(cudaMemcpy(back.data(), device, floats * sizeof(float), cudaMemcpyDeviceToHost),
+            cudaSuccess);
   size_t differing = 0, opaque = 0;
   for (size_t i = 0; i < floats; ++i) {
     differing += back[i] != host.rgba[i] ? 1 : 0;
     opaque += (i % 4 == 3 && host.rgba[i] > 0.01f) ? 1 : 0;
   }
-  std::printf("[gpu-target] 120x90 frame on the device: %zu of %zu floats differ from the host image, %zu pixels drawn\n",
-              differing, floats, opaque);
+  std::printf(
+      "[gpu-target] 120x90 frame on the device: %zu of %zu floats differ from the host image, %zu "
+      "pixels drawn\n",
+      differing, floats, opaque);
   EXPECT_EQ(differing, 0u);
   EXPECT_GT(opaque, 1000u);
 
@@ -172,7 +179,8 @@ TEST(GpuFrameEdits, AFailingGpuHandsThisAndLaterFramesToTheCpuOnce) {
   const ImageRGBA first = gpu.renderFrame(c, firstStats), second = gpu.renderFrame(c, secondStats);
   collect(firstStats);
   collect(secondStats);
-  std::printf("[gpu-failure] %zu report(s): %s\n", reports.size(), reports.empty() ? "" : reports[0].c_str());
+  std::printf("[gpu-failure] %zu report(s): %s\n", reports.size(),
+              reports.empty() ? "" : reports[0].c_str());
   EXPECT_TRUE(caster.failed());
   EXPECT_FALSE(caster.castsOnGpu());
   EXPECT_FALSE(firstStats.cast.onGpu);

@@ -12,17 +12,17 @@
 #include <memory>
 #include <tuple>
 
-#include "afam/render/cpu_raycaster.hpp"
 #include "afam/cuda/gpu_renderer.hpp"
+#include "afam/render/cpu_raycaster.hpp"
 #include "gpu_scene.hpp"
 
 namespace afam::gputest {
 namespace {
 
-#define AFAM_SKIP_WITHOUT_GPU()                                         \
-  do {                                                                  \
-    std::string why;                                                    \
-    if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;  \
+#define AFAM_SKIP_WITHOUT_GPU()                                        \
+  do {                                                                 \
+    std::string why;                                                   \
+    if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why; \
   } while (0)
 
 const EncodedVolume* encoded(const std::string& name, int degree) {
@@ -90,12 +90,12 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
     const ImageRGBA& cpu = both.cpu;
     const std::vector<float>& image = both.gpu;
     const ImageDiff& d = both.diff;
-    std::printf("[gpu-vs-cpu] %-14s p=%d %-8s pose(%.2f,%.0f,%.0f) slots=%d: max |diff| %d/255, "
-                "%lld of %lld pixels differ, max float diff %.2e, unwritten %lld  (%s)\n",
-                name.c_str(), degree, shaded ? "shaded" : "unshaded", pose.distance,
-                pose.thetaDeg, pose.phiDeg, frame.view.slotCount, d.maxAbs8,
-                (long long)d.differing, (long long)d.pixels, d.maxAbsFloat,
-                (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
+    std::printf(
+        "[gpu-vs-cpu] %-14s p=%d %-8s pose(%.2f,%.0f,%.0f) slots=%d: max |diff| %d/255, "
+        "%lld of %lld pixels differ, max float diff %.2e, unwritten %lld  (%s)\n",
+        name.c_str(), degree, shaded ? "shaded" : "unshaded", pose.distance, pose.thetaDeg,
+        pose.phiDeg, frame.view.slotCount, d.maxAbs8, (long long)d.differing, (long long)d.pixels,
+        d.maxAbsFloat, (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
     EXPECT_EQ(d.nonFinite, 0);
     EXPECT_LE(d.maxAbs8, 2);
     // The faster floating-point contracts, reported (the bar applies to the default, Exact).
@@ -104,11 +104,12 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
       std::vector<float> other(image.size());
       gpu.render(frame.view, frame.keys.data(), other.data());
       const ImageDiff o = compareImages(cpu.rgba, other);
-      std::printf("[gpu-vs-cpu:%s] %-14s p=%d %-8s: max |diff| %d/255, %lld pixels differ, "
-                  "unwritten %lld\n",
-                  mode == GpuFloatMode::Fma ? "fma" : "fast", name.c_str(), degree,
-                  shaded ? "shaded" : "unshaded", o.maxAbs8, (long long)o.differing,
-                  (long long)o.nonFinite);
+      std::printf(
+          "[gpu-vs-cpu:%s] %-14s p=%d %-8s: max |diff| %d/255, %lld pixels differ, "
+          "unwritten %lld\n",
+          mode == GpuFloatMode::Fma ? "fma" : "fast", name.c_str(), degree,
+          shaded ? "shaded" : "unshaded", o.maxAbs8, (long long)o.differing,
+          (long long)o.nonFinite);
       EXPECT_EQ(o.nonFinite, 0);
     }
     gpu.setFloatMode(GpuFloatMode::Exact);
@@ -119,14 +120,15 @@ TEST_P(GpuMatchesCpu, ImagesAgree) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Volumes, GpuMatchesCpu,
-    ::testing::Combine(::testing::Values("marschner_lobb", "neghip", "ironProt"),
-                       ::testing::Values(1, 2, 3), ::testing::Bool()),
-    [](const ::testing::TestParamInfo<Case>& param) {
-      return std::get<0>(param.param) + "_p" + std::to_string(std::get<1>(param.param)) +
-             (std::get<2>(param.param) ? "_shaded" : "_unshaded");
-    });
+INSTANTIATE_TEST_SUITE_P(Volumes, GpuMatchesCpu,
+                         ::testing::Combine(::testing::Values("marschner_lobb", "neghip",
+                                                              "ironProt"),
+                                            ::testing::Values(1, 2, 3), ::testing::Bool()),
+                         [](const ::testing::TestParamInfo<Case>& param) {
+                           return std::get<0>(param.param) + "_p" +
+                                  std::to_string(std::get<1>(param.param)) +
+                                  (std::get<2>(param.param) ? "_shaded" : "_unshaded");
+                         });
 
 // Cameras as the VTK mapper builds them: given in the world, mapped into the normalised frame of
 // a non-cubic, rotated volume (non-orthonormal frame, per-ray step metric), perspective and
@@ -155,11 +157,12 @@ TEST(GpuRenderer, MappedAndParallelCamerasMatchCpu) {
       const Frame& frame = both.frame;
       const ImageRGBA& cpu = both.cpu;
       const ImageDiff& d = both.diff;
-      std::printf("[gpu-vs-cpu] mapped %-11s p=2 %-8s slots=%d: max |diff| %d/255, %lld of %lld "
-                  "pixels differ, unwritten %lld\n",
-                  parallel ? "parallel" : "perspective", shaded ? "shaded" : "unshaded",
-                  frame.view.slotCount, d.maxAbs8, (long long)d.differing, (long long)d.pixels,
-                  (long long)d.nonFinite);
+      std::printf(
+          "[gpu-vs-cpu] mapped %-11s p=2 %-8s slots=%d: max |diff| %d/255, %lld of %lld "
+          "pixels differ, unwritten %lld\n",
+          parallel ? "parallel" : "perspective", shaded ? "shaded" : "unshaded",
+          frame.view.slotCount, d.maxAbs8, (long long)d.differing, (long long)d.pixels,
+          (long long)d.nonFinite);
       EXPECT_EQ(d.nonFinite, 0);
       EXPECT_LE(d.maxAbs8, 2);
       double alpha = 0;
@@ -183,10 +186,11 @@ TEST(GpuRenderer, ProjectionsMatchCpu) {
       renderOnBoth(gpu, *e, camera, false, both, mode);
       const ImageRGBA& cpu = both.cpu;
       const ImageDiff& d = both.diff;
-      std::printf("[gpu-vs-cpu] projection mode=%d %s: max |diff| %d/255, %lld of %lld pixels "
-                  "differ, unwritten %lld  (%s)\n",
-                  mode, specialise ? "p=2" : "p=any", d.maxAbs8, (long long)d.differing,
-                  (long long)d.pixels, (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
+      std::printf(
+          "[gpu-vs-cpu] projection mode=%d %s: max |diff| %d/255, %lld of %lld pixels "
+          "differ, unwritten %lld  (%s)\n",
+          mode, specialise ? "p=2" : "p=any", d.maxAbs8, (long long)d.differing,
+          (long long)d.pixels, (long long)d.nonFinite, gpu.lastKernelInfo().c_str());
       EXPECT_EQ(d.nonFinite, 0);
       EXPECT_LE(d.maxAbs8, 2);
       // Not empty, so the comparison means something (the preset table makes the lowest values
@@ -257,9 +261,10 @@ TEST(GpuRenderer, MaxDistanceMatchesCpuAndHidesTheVolume) {
         rightFull += full[i];
       }
     }
-  std::printf("[gpu-depth] max |diff| vs CPU %d/255, unwritten %lld; alpha left %.1f of %.1f, "
-              "hidden %.3f, right %.1f of %.1f\n",
-              d.maxAbs8, (long long)d.nonFinite, left, leftFull, hidden, right, rightFull);
+  std::printf(
+      "[gpu-depth] max |diff| vs CPU %d/255, unwritten %lld; alpha left %.1f of %.1f, "
+      "hidden %.3f, right %.1f of %.1f\n",
+      d.maxAbs8, (long long)d.nonFinite, left, leftFull, hidden, right, rightFull);
   EXPECT_EQ(d.nonFinite, 0);
   EXPECT_LE(d.maxAbs8, 2);
   EXPECT_EQ(hidden, 0.0);
@@ -290,10 +295,11 @@ TEST(GpuDsBaseline, RawBlocksMatchCpuAndTexturePathWritesEveryPixel) {
     gpu.render(frame.view, frame.keys.data(), image.data());
     const std::string info = gpu.lastKernelInfo();
     const ImageDiff t = compareImages(cpu.rgba, image);
-    std::printf("[ds] %s: castRay raw slots vs CPU max |diff| %d/255 (%lld px); 3D textures vs "
-                "CPU max |diff| %d/255 (%lld px differ, hardware 8-bit filter weights) (%s)\n",
-                shaded ? "shaded" : "unshaded", d.maxAbs8, (long long)d.differing, t.maxAbs8,
-                (long long)t.differing, info.c_str());
+    std::printf(
+        "[ds] %s: castRay raw slots vs CPU max |diff| %d/255 (%lld px); 3D textures vs "
+        "CPU max |diff| %d/255 (%lld px differ, hardware 8-bit filter weights) (%s)\n",
+        shaded ? "shaded" : "unshaded", d.maxAbs8, (long long)d.differing, t.maxAbs8,
+        (long long)t.differing, info.c_str());
     EXPECT_EQ(d.nonFinite, 0);
     EXPECT_LE(d.maxAbs8, 2);
     EXPECT_EQ(t.nonFinite, 0);
@@ -334,11 +340,11 @@ TEST(GpuModelPool, ReplayUploadsMatchLedgerAndStayUnderBudget) {
     ASSERT_EQ(t.modelsUploaded, 0u);
   }
   const PoolStats& s = gpu.pool().stats();
-  std::printf("[pool] %zu frames, budget %zu B (60%% of %zu): %llu uploads, %llu hits, %llu "
-              "evictions, %.1f MB uploaded, peak resident %zu B\n",
-              poses.size(), budget, total, (unsigned long long)s.uploads,
-              (unsigned long long)s.hits, (unsigned long long)s.evictions,
-              double(s.bytesUploaded) / 1e6, s.peakResidentBytes);
+  std::printf(
+      "[pool] %zu frames, budget %zu B (60%% of %zu): %llu uploads, %llu hits, %llu "
+      "evictions, %.1f MB uploaded, peak resident %zu B\n",
+      poses.size(), budget, total, (unsigned long long)s.uploads, (unsigned long long)s.hits,
+      (unsigned long long)s.evictions, double(s.bytesUploaded) / 1e6, s.peakResidentBytes);
   EXPECT_LE(s.peakResidentBytes, budget);
   EXPECT_GT(s.evictions, 0u);
 }
@@ -351,7 +357,8 @@ TEST(GpuModelPool, OutOfBudgetIsRecoverable) {
   buildFrame(*e, wholeLevel(e->partition, 2), camera, FrameOptions{}, big);
   buildFrame(*e, wholeLevel(e->partition, 0), camera, FrameOptions{}, small);
   size_t smallBytes = 0;
-  for (const FrameSlot& s : small.slots) smallBytes += ((GpuRenderer::slotFloats(s) * 4 + 255) / 256) * 256;
+  for (const FrameSlot& s : small.slots)
+    smallBytes += ((GpuRenderer::slotFloats(s) * 4 + 255) / 256) * 256;
   GpuRenderer gpu(smallBytes * 2);
   std::vector<float> image(size_t(64) * 64 * 4);
   EXPECT_THROW(gpu.render(big.view, big.keys.data(), image.data()), GpuOutOfMemory);

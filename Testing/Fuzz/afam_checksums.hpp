@@ -39,7 +39,8 @@ inline void fixAfamChecksums(std::vector<uint8_t>& b, uint8_t which) {
       const uint64_t offset = loadAt<uint64_t>(b, e);
       uint64_t bytes = 4;  // version 1: the NCP's float32 control points
       for (int a = 0; a < 3; ++a) bytes *= loadAt<uint16_t>(b, e + 8 + 2 * a);
-      if (loadAt<uint32_t>(b, 8) >= 2) bytes = loadAt<uint32_t>(b, e + 36);  // version 2: stored bytes
+      if (loadAt<uint32_t>(b, 8) >= 2)
+        bytes = loadAt<uint32_t>(b, e + 36);  // version 2: stored bytes
       if (offset <= b.size() && bytes <= b.size() - offset)
         storeAt<uint32_t>(b, e + 32, afam::crc32(b.data() + offset, bytes));
     }

@@ -8,10 +8,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "afam/render/level_decode.hpp"
-#include "afam/format/afam_file.hpp"
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
 #include "afam_checksums.hpp"
 #include "memory_file.hpp"
 
@@ -47,7 +47,8 @@ void decodeCoarsestLevel(const afam::AfamFile& file) {
   const afam::LevelGrid grid = afam::levelGrid(file.partition(), 0);
   if (!atMost(grid.dims, kMaxDecodedLevelSamples)) return;
   std::vector<float> out(static_cast<size_t>(grid.dims[0] * grid.dims[1] * grid.dims[2]));
-  afam::decodeLevelBox(file, 0, {0, 0, 0}, {grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1}, out.data());
+  afam::decodeLevelBox(file, 0, {0, 0, 0}, {grid.dims[0] - 1, grid.dims[1] - 1, grid.dims[2] - 1},
+                       out.data());
 }
 
 }  // namespace

@@ -18,7 +18,8 @@ namespace {
 void fixChecksum(std::vector<uint8_t>& b) {
   if (b.size() < 4) return;
   const uint32_t h = afam::fnv1a32(b.data(), b.size() - 4);
-  for (int i = 0; i < 4; ++i) b[b.size() - 4 + static_cast<size_t>(i)] = static_cast<uint8_t>(h >> (8 * i));
+  for (int i = 0; i < 4; ++i)
+    b[b.size() - 4 + static_cast<size_t>(i)] = static_cast<uint8_t>(h >> (8 * i));
 }
 
 }  // namespace
@@ -31,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string& path = memory.write(bytes.data(), bytes.size());
   try {
     afam::LstmWeights w = afam::loadLstmWeights(path);
-    if (w.testSteps > 0) (void)afam::lstmForward(w, w.testInput.data(), static_cast<int>(w.testSteps));
+    if (w.testSteps > 0)
+      (void)afam::lstmForward(w, w.testInput.data(), static_cast<int>(w.testSteps));
     const afam::LstmPredictor predictor(std::move(w));
     std::vector<afam::Camera> history;
     for (int i = 0; i < 3; ++i)

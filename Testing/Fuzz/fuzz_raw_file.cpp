@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/encode/encoder.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
 #include "memory_file.hpp"
 
 namespace {

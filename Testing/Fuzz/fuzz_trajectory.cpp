@@ -5,8 +5,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "afam/scene/camera.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/scene/camera.hpp"
 #include "memory_file.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

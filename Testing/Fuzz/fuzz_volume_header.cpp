@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Fuzz target: NRRD and MetaImage headers (volume_formats.hpp) and, when the samples are attached to
-// the header, the source over them (raw or gzip/zlib inflated), read slab by slab. Input: one
+// Fuzz target: NRRD and MetaImage headers (volume_formats.hpp) and, when the samples are attached
+// to the header, the source over them (raw or gzip/zlib inflated), read slab by slab. Input: one
 // control byte (even: NRRD, odd: MetaImage), then the file. Detached data files are not opened: a
 // fuzzed header may name any path (a FIFO would hang the run).
 #include <algorithm>
@@ -38,8 +38,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const afam::Index3 d = header.dims;
   if (d[0] < 1 || d[1] < 1 || d[2] < 1) __builtin_trap();  // a parsed header promises its dims
-  if (header.dataPath != header.headerPath || d[0] > kMaxVoxels || d[1] > kMaxVoxels || d[2] > kMaxVoxels ||
-      d[0] * d[1] * d[2] > kMaxVoxels)
+  if (header.dataPath != header.headerPath || d[0] > kMaxVoxels || d[1] > kMaxVoxels ||
+      d[2] > kMaxVoxels || d[0] * d[1] * d[2] > kMaxVoxels)
     return 0;
   try {
     afam::HeaderVolumeSource source(header);

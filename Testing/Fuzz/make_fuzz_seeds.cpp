@@ -2,8 +2,8 @@
 // Writes the seed corpus of the fuzz targets: small valid inputs of every kind, made by the same
 // code that makes real files (the encoder, the writer), so a format change changes the seeds too.
 //   make_fuzz_seeds OUT_DIR
-// creates OUT_DIR/{afam_file,raw_file,volume_header,trajectory,lstm_weights}/seed-* (control bytes as each
-// fuzz target expects them).
+// creates OUT_DIR/{afam_file,raw_file,volume_header,trajectory,lstm_weights}/seed-* (control bytes
+// as each fuzz target expects them).
 #include <sys/stat.h>
 
 #include <cmath>
@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/encode/encoder.hpp"
 #include "afam/base/hash.hpp"
+#include "afam/encode/encoder.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 
 namespace {
@@ -60,7 +60,12 @@ Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, i
 void afamSeeds(const std::string& out) {
   const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
   using M = afam::EncodingMode;
-  const struct { afam::Index3 dims; M mode; int levels, blocks; const char* name; } cases[] = {
+  const struct {
+    afam::Index3 dims;
+    M mode;
+    int levels, blocks;
+    const char* name;
+  } cases[] = {
       {{7, 6, 5}, M::Adaptive, 2, 2, "adaptive"},
       {{8, 5, 4}, M::InLevel, 2, 2, "inlevel"},
       {{5, 5, 5}, M::Fixed, 1, 1, "fixed"},
@@ -81,15 +86,20 @@ Bytes floatBytes(const std::vector<float>& f) {
 
 void rawSeeds(const std::string& out) {
   const std::string dir = out + "/raw_file";
-  const struct { const char* name; int voxels, bytesPerVoxel; } cases[] = {
-      {"ml_4x3x2_float32.raw", 24, 4}, {"vol_2x2x2_float64.raw", 8, 8}, {"ct_5x1x3_uint8.raw", 15, 1},
-      {"mri_3x3x1_uint16.raw", 9, 2}, {"a/b/c_2x3x4_int16.raw", 24, 2},
+  const struct {
+    const char* name;
+    int voxels, bytesPerVoxel;
+  } cases[] = {
+      {"ml_4x3x2_float32.raw", 24, 4},  {"vol_2x2x2_float64.raw", 8, 8},
+      {"ct_5x1x3_uint8.raw", 15, 1},    {"mri_3x3x1_uint16.raw", 9, 2},
+      {"a/b/c_2x3x4_int16.raw", 24, 2},
   };
   for (const auto& c : cases) {
     const std::string name = c.name;
     Bytes b(name.begin(), name.end());
     b.push_back(0);
-    for (int i = 0; i < c.voxels * c.bytesPerVoxel; ++i) b.push_back(static_cast<uint8_t>(i * 37 + 11));
+    for (int i = 0; i < c.voxels * c.bytesPerVoxel; ++i)
+      b.push_back(static_cast<uint8_t>(i * 37 + 11));
     std::string file = name;
     for (char& ch : file)
       if (ch == '/') ch = '-';
@@ -107,10 +117,16 @@ void volumeHeaderSeeds(const std::string& out) {
     b.insert(b.end(), payload.begin(), payload.end());
     return b;
   };
-  writeSeed(dir, "nrrd-raw", 0,
-            withText("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nspacings: 1 2 3\nencoding: raw\n\n", samples));
-  writeSeed(dir, "nrrd-int16", 0,
-            withText("NRRD0004\ntype: short\ndimension: 3\nsizes: 2 3 2\nendian: little\nencoding: raw\n\n", samples));
+  writeSeed(
+      dir, "nrrd-raw", 0,
+      withText(
+          "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nspacings: 1 2 3\nencoding: raw\n\n",
+          samples));
+  writeSeed(
+      dir, "nrrd-int16", 0,
+      withText(
+          "NRRD0004\ntype: short\ndimension: 3\nsizes: 2 3 2\nendian: little\nencoding: raw\n\n",
+          samples));
   writeSeed(dir, "mha-raw", 1,
             withText("NDims = 3\nDimSize = 4 3 2\nElementType = MET_UCHAR\nElementSpacing = 1 1 2\n"
                      "ElementDataFile = LOCAL\n",
@@ -128,7 +144,8 @@ void volumeHeaderSeeds(const std::string& out) {
 void trajectorySeeds(const std::string& out) {
   const std::string dir = out + "/trajectory";
   // Stored as three planes: distances, then theta, then phi (camera.cpp).
-  writeSeed(dir, "three-views", 0, floatBytes({1.2f, 1.5f, 1.7f, 10.f, 45.f, 170.f, -20.f, 0.f, 80.f}), false);
+  writeSeed(dir, "three-views", 0,
+            floatBytes({1.2f, 1.5f, 1.7f, 10.f, 45.f, 170.f, -20.f, 0.f, 80.f}), false);
   writeSeed(dir, "one-view", 0, floatBytes({1.0f, 0.f, 0.f}), false);
 }
 

@@ -78,7 +78,8 @@ inline vtkSmartPointer<vtkAFAMEncoder> EncodeModels(vtkImageData* image)
 
 /// Marschner-Lobb encoded by EncodeModels into a mapper (screen-space LOD policy, finer than the
 /// distance bands at these views); `image` gets the sampled volume. nullptr when encoding failed.
-inline vtkSmartPointer<vtkAFAMVolumeMapper> MarschnerLobbMapper(vtkSmartPointer<vtkImageData>& image)
+inline vtkSmartPointer<vtkAFAMVolumeMapper> MarschnerLobbMapper(
+  vtkSmartPointer<vtkImageData>& image)
 {
   image = MarschnerLobbImage();
   vtkSmartPointer<vtkAFAMEncoder> encoder = EncodeModels(image);
@@ -114,14 +115,16 @@ inline vtkSmartPointer<vtkVolumeProperty> VolumeProperty()
 
 /// Collects the warning messages `object` emits into `messages` (for as long as the returned
 /// command lives).
-inline vtkSmartPointer<vtkCallbackCommand> CollectWarnings(
-  vtkObject* object, std::vector<std::string>& messages)
+inline vtkSmartPointer<vtkCallbackCommand> CollectWarnings(vtkObject* object,
+  std::vector<std::string>& messages)
 {
   auto command = vtkSmartPointer<vtkCallbackCommand>::New();
-  command->SetCallback([](vtkObject*, unsigned long, void* clientData, void* callData) {
-    static_cast<std::vector<std::string>*>(clientData)->push_back(
-      callData ? static_cast<const char*>(callData) : "");
-  });
+  command->SetCallback(
+    [](vtkObject*, unsigned long, void* clientData, void* callData)
+    {
+      static_cast<std::vector<std::string>*>(clientData)
+        ->push_back(callData ? static_cast<const char*>(callData) : "");
+    });
   command->SetClientData(&messages);
   object->AddObserver(vtkCommand::WarningEvent, command);
   return command;
@@ -138,7 +141,8 @@ inline vtkSmartPointer<vtkVolume> MakeVolume(vtkVolumeMapper* mapper, vtkVolumeP
 
 /// The tests' window: 301 x 300 (an awkward width), no multisampling, `renderer` in it, an
 /// interactor, and the camera at (3.2, 2.4, 4.4) looking at the origin with a 30 degree view.
-inline void SetUpWindow(vtkRenderer* renderer, vtkRenderWindow* window,
+inline void SetUpWindow(vtkRenderer* renderer,
+  vtkRenderWindow* window,
   vtkRenderWindowInteractor* interactor)
 {
   window->SetSize(301, 300);
@@ -162,7 +166,8 @@ inline std::vector<unsigned char> ReadPixels(vtkRenderWindow* window)
   grab->ReadFrontBufferOff();
   grab->ShouldRerenderOff();
   grab->Update();
-  auto* scalars = vtkUnsignedCharArray::SafeDownCast(grab->GetOutput()->GetPointData()->GetScalars());
+  auto* scalars =
+    vtkUnsignedCharArray::SafeDownCast(grab->GetOutput()->GetPointData()->GetScalars());
   const unsigned char* p = scalars ? scalars->GetPointer(0) : nullptr;
   return p ? std::vector<unsigned char>(p, p + scalars->GetNumberOfValues())
            : std::vector<unsigned char>();
@@ -186,7 +191,9 @@ inline void UseTestDevice(vtkAFAMVolumeMapper* mapper)
 /// then the same frame cast on the CPU; the two must agree within 2/255 on every channel of every
 /// pixel. Prints "[vtk gpu-vs-cpu] <what>: ..."; leaves the mapper on the GPU and the GPU frame
 /// drawn. Without it: true, nothing done.
-inline bool GpuMatchesCpu(vtkRenderWindow* window, vtkAFAMVolumeMapper* mapper, const std::string& what)
+inline bool GpuMatchesCpu(vtkRenderWindow* window,
+  vtkAFAMVolumeMapper* mapper,
+  const std::string& what)
 {
   if (!TestOnGpu())
   {
@@ -215,9 +222,10 @@ inline bool GpuMatchesCpu(vtkRenderWindow* window, vtkAFAMVolumeMapper* mapper, 
   }
   // AFAM_TEST_INTEROP=1 (the GPU machine, OpenGL on the NVIDIA driver): the GPU frame must also
   // have reached the window without the host.
-  const bool needInterop = std::getenv("AFAM_TEST_INTEROP") && std::string(std::getenv("AFAM_TEST_INTEROP")) == "1";
-  const bool ok = usedGpu && (onDevice || !needInterop) && gpu.size() == cpu.size() &&
-    !gpu.empty() && worst <= 2;
+  const bool needInterop =
+    std::getenv("AFAM_TEST_INTEROP") && std::string(std::getenv("AFAM_TEST_INTEROP")) == "1";
+  const bool ok =
+    usedGpu && (onDevice || !needInterop) && gpu.size() == cpu.size() && !gpu.empty() && worst <= 2;
   std::cout << "[vtk gpu-vs-cpu] " << what << ": cast on the GPU " << usedGpu
             << ", drawn from the GPU (interop) " << onDevice << ", max |diff| " << worst << "/255, "
             << differing << " channel values differ (bar 2/255"
@@ -231,8 +239,11 @@ inline bool GpuMatchesCpu(vtkRenderWindow* window, vtkAFAMVolumeMapper* mapper, 
 /// a few pixels off or stretched. This one is strict: the fraction of pixels whose largest channel
 /// differs from the baseline (the -V argument) by more than `channelTolerance` must stay under
 /// `maxFraction`. Prints the figures; false (and why) on a mismatch or an unreadable baseline.
-inline bool PixelsMatchBaseline(vtkRenderWindow* window, int argc, char* argv[],
-  int channelTolerance = 24, double maxFraction = 0.005)
+inline bool PixelsMatchBaseline(vtkRenderWindow* window,
+  int argc,
+  char* argv[],
+  int channelTolerance = 24,
+  double maxFraction = 0.005)
 {
   std::string baseline, outDir;
   for (int i = 0; i + 1 < argc; ++i)
@@ -282,9 +293,8 @@ inline bool PixelsMatchBaseline(vtkRenderWindow* window, int argc, char* argv[],
   }
   const double fraction = double(differing) / double(pixels);
   std::cout << "strict comparison: " << differing << " of " << pixels << " pixels ("
-            << 100.0 * fraction << " %) differ by more than " << channelTolerance
-            << "/255 (bar " << 100.0 * maxFraction << " %); largest difference " << worst
-            << "/255\n";
+            << 100.0 * fraction << " %) differ by more than " << channelTolerance << "/255 (bar "
+            << 100.0 * maxFraction << " %); largest difference " << worst << "/255\n";
   if (fraction > maxFraction)
   {
     std::cerr << "strict comparison: the image differs from " << baseline << "\n";

@@ -72,20 +72,34 @@ bool Parse(int argc, char* argv[], Options& o)
   {
     const std::string a = argv[i];
     const bool hasValue = i + 1 < argc;
-    if (a == "--trajectory" && hasValue) o.Trajectory = argv[++i];
-    else if (a == "--orbit" && hasValue) o.Orbit = std::atoi(argv[++i]);
-    else if (a == "--size" && hasValue) o.Size = std::atoi(argv[++i]);
-    else if (a == "--frames" && hasValue) o.Frames = std::atoi(argv[++i]);
-    else if (a == "--device" && hasValue) o.Gpu = std::string(argv[++i]) == "gpu";
-    else if (a == "--cache-mb" && hasValue) o.CacheMB = std::atof(argv[++i]);
-    else if (a == "--csv" && hasValue) o.Csv = argv[++i];
-    else if (a == "--require-gpu") o.RequireGpu = true;
-    else if (a == "--require-interop") o.RequireInterop = true;
-    else if (a == "--host-draw") o.HostDraw = true;
-    else if (a == "--offscreen") o.Offscreen = true;
-    else if (a == "--plane") o.Plane = true;
-    else if (a == "--cold") o.Cold = true;
-    else if (a[0] != '-' && o.File.empty()) o.File = a;
+    if (a == "--trajectory" && hasValue)
+      o.Trajectory = argv[++i];
+    else if (a == "--orbit" && hasValue)
+      o.Orbit = std::atoi(argv[++i]);
+    else if (a == "--size" && hasValue)
+      o.Size = std::atoi(argv[++i]);
+    else if (a == "--frames" && hasValue)
+      o.Frames = std::atoi(argv[++i]);
+    else if (a == "--device" && hasValue)
+      o.Gpu = std::string(argv[++i]) == "gpu";
+    else if (a == "--cache-mb" && hasValue)
+      o.CacheMB = std::atof(argv[++i]);
+    else if (a == "--csv" && hasValue)
+      o.Csv = argv[++i];
+    else if (a == "--require-gpu")
+      o.RequireGpu = true;
+    else if (a == "--require-interop")
+      o.RequireInterop = true;
+    else if (a == "--host-draw")
+      o.HostDraw = true;
+    else if (a == "--offscreen")
+      o.Offscreen = true;
+    else if (a == "--plane")
+      o.Plane = true;
+    else if (a == "--cold")
+      o.Cold = true;
+    else if (a[0] != '-' && o.File.empty())
+      o.File = a;
     else
     {
       std::cerr << "BenchAFAMRenderLoop: unknown or incomplete argument '" << a << "'\n";
@@ -116,7 +130,11 @@ double Median(std::vector<double> v)
 
 // The VTK camera that casts Core's rays for `pose`: the normalised frame [-1, 1]^3 is the data box
 // (centre `c`, half extents `h`), so the eye maps by c + h * eye and the view angle is Core's.
-void PlaceCamera(vtkCamera* camera, const afam::Pose& pose, const double c[3], const double h[3], int size)
+void PlaceCamera(vtkCamera* camera,
+  const afam::Pose& pose,
+  const double c[3],
+  const double h[3],
+  int size)
 {
   const afam::Camera core = afam::Camera::fromPose(pose, size, size);
   double eye[3], focal[3];
@@ -198,7 +216,8 @@ int main(int argc, char* argv[])
   mapper->SetInputConnection(reader->GetOutputPort());
   mapper->SetLodPolicyToDistanceBands();
   mapper->SetCacheBudgetMB(o.CacheMB);
-  mapper->SetRenderDevice(o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
+  mapper->SetRenderDevice(
+    o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
   mapper->SetGpuImageInterop(!o.HostDraw);
   const double* b = mapper->GetBounds();
   const double c[3] = { 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]) };
@@ -212,8 +231,8 @@ int main(int argc, char* argv[])
   mapper->SetSampleDistance(0.005 * unit);
   vtkNew<vtkVolume> volume;
   volume->SetMapper(mapper);
-  SetPresetTransferFunction(volume->GetProperty(), file->header().valueMin,
-    file->header().valueMax, unit);
+  SetPresetTransferFunction(
+    volume->GetProperty(), file->header().valueMin, file->header().valueMax, unit);
   vtkNew<vtkRenderer> renderer;
   renderer->AddVolume(volume);
   if (o.Plane)
@@ -255,19 +274,26 @@ int main(int argc, char* argv[])
     window->WaitForCompletion();
     const double call =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    frames.push_back({ call, 1e3 * mapper->GetLastTotalTime(), 1e3 * mapper->GetLastRenderTime(),
-      1e3 * mapper->GetLastCachingTime(), 1e3 * mapper->GetLastDepthReadTime(),
-      1e3 * mapper->GetLastDrawTime(), Milliseconds(mapper->GetLastGpuUploadTime()),
-      Milliseconds(mapper->GetLastGpuKernelTime()), Milliseconds(mapper->GetLastGpuDownloadTime()),
-      mapper->GetLastUsedGpu(), mapper->GetLastImageOnDevice(),
+    frames.push_back({ call,
+      1e3 * mapper->GetLastTotalTime(),
+      1e3 * mapper->GetLastRenderTime(),
+      1e3 * mapper->GetLastCachingTime(),
+      1e3 * mapper->GetLastDepthReadTime(),
+      1e3 * mapper->GetLastDrawTime(),
+      Milliseconds(mapper->GetLastGpuUploadTime()),
+      Milliseconds(mapper->GetLastGpuKernelTime()),
+      Milliseconds(mapper->GetLastGpuDownloadTime()),
+      mapper->GetLastUsedGpu(),
+      mapper->GetLastImageOnDevice(),
       static_cast<long long>(mapper->GetLastVisibleBlocks()),
       static_cast<long long>(mapper->GetLastCacheMisses()) });
     const FrameTimes& f = frames.back();
     if (csv.is_open())
     {
       csv << i << ',' << f.RenderCall << ',' << f.Mapper << ',' << f.Kernel << ',' << f.Caching
-          << ',' << f.DepthRead << ',' << f.Draw << ',' << f.GpuUpload << ',' << f.GpuKernel
-          << ',' << f.GpuDownload << ',' << f.Gpu << ',' << f.Interop << ',' << f.Visible << ',' << f.Misses << '\n';
+          << ',' << f.DepthRead << ',' << f.Draw << ',' << f.GpuUpload << ',' << f.GpuKernel << ','
+          << f.GpuDownload << ',' << f.Gpu << ',' << f.Interop << ',' << f.Visible << ','
+          << f.Misses << '\n';
     }
   }
   // Which OpenGL the window got (Mesa's llvmpipe or the GPU's own driver).
@@ -315,16 +341,33 @@ int main(int argc, char* argv[])
   const double renderCall = Median(series["render_call"]);
   std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d offscreen=%d plane=%d "
               "gpu_frames=%zu interop_frames=%zu first_frame_ms=%.3f message='%s' interop='%s'\n",
-    o.File.c_str(), frames.size(), o.Size, o.Size, o.Gpu ? "gpu" : "cpu", o.Cold ? 1 : 0,
-    o.Offscreen ? 1 : 0, o.Plane ? 1 : 0, onGpu, interop, frames[0].RenderCall, mapper->GetLastDeviceMessage(),
+    o.File.c_str(),
+    frames.size(),
+    o.Size,
+    o.Size,
+    o.Gpu ? "gpu" : "cpu",
+    o.Cold ? 1 : 0,
+    o.Offscreen ? 1 : 0,
+    o.Plane ? 1 : 0,
+    onGpu,
+    interop,
+    frames[0].RenderCall,
+    mapper->GetLastDeviceMessage(),
     mapper->GetLastInteropProblem());
   std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
               "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "
               "median_draw_ms=%.3f median_gpu_upload_ms=%.3f median_gpu_kernel_ms=%.3f "
               "median_gpu_download_ms=%.3f fps=%.1f\n",
-    renderCall, Median(series["mapper"]), Median(series["kernel"]), Median(series["caching"]),
-    Median(series["copies"]), Median(series["depth_read"]), Median(series["draw"]),
-    Median(series["gpu_upload"]), Median(series["gpu_kernel"]), Median(series["gpu_download"]),
+    renderCall,
+    Median(series["mapper"]),
+    Median(series["kernel"]),
+    Median(series["caching"]),
+    Median(series["copies"]),
+    Median(series["depth_read"]),
+    Median(series["draw"]),
+    Median(series["gpu_upload"]),
+    Median(series["gpu_kernel"]),
+    Median(series["gpu_download"]),
     renderCall > 0 ? 1e3 / renderCall : 0.0);
   if (o.RequireGpu && onGpu != frames.size())
   {
@@ -336,8 +379,9 @@ int main(int argc, char* argv[])
   if (o.RequireInterop && (frames.size() < 2 || interop + 1 < frames.size()))
   {
     std::cerr << "BenchAFAMRenderLoop: --require-interop and only " << interop << " of "
-              << frames.size() << " frames went through CUDA-OpenGL interop: "
-              << mapper->GetLastInteropProblem() << "\n";
+              << frames.size()
+              << " frames went through CUDA-OpenGL interop: " << mapper->GetLastInteropProblem()
+              << "\n";
     return 1;
   }
   return 0;

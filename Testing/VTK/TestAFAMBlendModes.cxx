@@ -33,7 +33,10 @@ struct Difference
   int box = 0;
 };
 
-std::array<int, 4> Box(const std::vector<unsigned char>& rgb, int w, int h, const unsigned char bg[3])
+std::array<int, 4> Box(const std::vector<unsigned char>& rgb,
+  int w,
+  int h,
+  const unsigned char bg[3])
 {
   std::array<int, 4> b{ w, h, -1, -1 };
   for (int y = 0; y < h; ++y)
@@ -84,8 +87,9 @@ int main(int, char*[])
   const unsigned char bg[3] = { 26, 26, 38 };
 
   int failures = 0;
-  const char* names[4] = { "composite", "maximum intensity", "minimum intensity",
-    "average intensity" };
+  const char* names[4] = {
+    "composite", "maximum intensity", "minimum intensity", "average intensity"
+  };
   // Measured at 1/255 or less for every mode (composite 0.94, maximum 0.87, minimum 0.29,
   // average 0.43): the bars leave room for another OpenGL driver's sampling of VTK's side.
   const double meanBar[4] = { 3.0, 2.0, 2.0, 2.0 };
@@ -119,10 +123,10 @@ int main(int, char*[])
     }
     const size_t centre = (static_cast<size_t>(h / 2) * w + w / 2) * 3;
     std::cout << names[mode] << ": centre pixel " << int(a[centre]) << " " << int(a[centre + 1])
-              << " " << int(a[centre + 2]) << " (VTK " << int(b[centre]) << " " << int(b[centre + 1])
-              << " " << int(b[centre + 2]) << "); mean |Adaptive-FAM - VTK| " << mean
-              << "/255 per channel (bar " << meanBar[mode] << "), foreground boxes (" << ba[0]
-              << " " << ba[1] << " " << ba[2] << " " << ba[3] << ") and (" << bb[0] << " "
+              << " " << int(a[centre + 2]) << " (VTK " << int(b[centre]) << " "
+              << int(b[centre + 1]) << " " << int(b[centre + 2]) << "); mean |Adaptive-FAM - VTK| "
+              << mean << "/255 per channel (bar " << meanBar[mode] << "), foreground boxes ("
+              << ba[0] << " " << ba[1] << " " << ba[2] << " " << ba[3] << ") and (" << bb[0] << " "
               << bb[1] << " " << bb[2] << " " << bb[3] << "), largest difference " << box
               << " px\n";
     if (a.size() != b.size() || mean > meanBar[mode] || box > 4 || ba[2] < 0)

@@ -38,13 +38,16 @@ namespace
 {
 struct Shot
 {
-  double sum = 0;      // sum of all RGB bytes
-  int max = 0;         // brightest byte
+  double sum = 0; // sum of all RGB bytes
+  int max = 0;    // brightest byte
   vtkTypeInt64 limited = 0;
 };
 
-Shot Take(vtkRenderWindow* window, vtkRenderer* renderer, vtkPlaneSource* plane,
-  vtkAFAMVolumeMapper* mapper, double z)
+Shot Take(vtkRenderWindow* window,
+  vtkRenderer* renderer,
+  vtkPlaneSource* plane,
+  vtkAFAMVolumeMapper* mapper,
+  double z)
 {
   plane->SetOrigin(-3, -3, z);
   plane->SetPoint1(3, -3, z);
@@ -119,13 +122,13 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
 
   const vtkTypeInt64 pixels = static_cast<vtkTypeInt64>(width) * height;
   std::cout << "sum of RGB bytes: plane in front " << front.sum << " (max " << front.max
-            << "), behind " << back.sum << ", through the middle " << middle.sum
-            << ", at z = -0.5 " << quarter.sum << ", in front without depth compositing "
-            << frontIgnored.sum
+            << "), behind " << back.sum << ", through the middle " << middle.sum << ", at z = -0.5 "
+            << quarter.sum << ", in front without depth compositing " << frontIgnored.sum
             << "; depth-limited pixels " << front.limited << " / " << back.limited << " / "
             << middle.limited << " / " << frontIgnored.limited << " of " << pixels << "\n";
   int failures = 0;
-  auto check = [&failures](bool ok, const char* what) {
+  auto check = [&failures](bool ok, const char* what)
+  {
     if (!ok)
     {
       std::cerr << "FAILED: " << what << "\n";
@@ -142,10 +145,11 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
     "plane through the middle: only the front part of the volume shows");
   check(quarter.sum > 1.5 * middle.sum && quarter.sum < 0.9 * back.sum,
     "plane at z = -0.5: more of the volume than at z = 0, less than all of it");
-  std::cout << "parallel projection: in front " << parallelFront.sum << " (max " << parallelFront.max
-            << "), behind " << parallelBack.sum << ", middle " << parallelMiddle.sum
-            << "; moved to z in [-2, 0]: in front " << movedFront.sum << " (max " << movedFront.max
-            << "), behind " << movedBack.sum << ", middle " << movedMiddle.sum << "\n";
+  std::cout << "parallel projection: in front " << parallelFront.sum << " (max "
+            << parallelFront.max << "), behind " << parallelBack.sum << ", middle "
+            << parallelMiddle.sum << "; moved to z in [-2, 0]: in front " << movedFront.sum
+            << " (max " << movedFront.max << "), behind " << movedBack.sum << ", middle "
+            << movedMiddle.sum << "\n";
   check(parallelFront.limited == pixels && parallelFront.max <= 1,
     "parallel projection, plane in front: the volume is hidden");
   check(parallelBack.sum > 1e5, "parallel projection, plane behind: the volume shows");
@@ -177,7 +181,7 @@ int TestAFAMDepthCompositing(int argc, char* argv[])
   }
   const bool placed = afam_vtk_test::PixelsMatchBaseline(window, argc, argv);
   return (failures == 0 && placed && result == vtkRegressionTester::PASSED) ? EXIT_SUCCESS
-                                                                          : EXIT_FAILURE;
+                                                                            : EXIT_FAILURE;
 }
 
 int main(int argc, char* argv[])

@@ -54,7 +54,7 @@ vtkSmartPointer<vtkFloatArray> Ramp(const char* name, int n, float scale, int co
 }
 
 /// A one-component array of `name` holding i % 97 (values every 1-byte type holds).
-template <class Array>
+template<class Array>
 vtkSmartPointer<Array> ByteRamp(const char* name, int n)
 {
   auto a = vtkSmartPointer<Array>::New();
@@ -77,15 +77,19 @@ std::string Slurp(const std::string& path)
 /// Encodes `image`; returns the error messages (empty on success); `encoded` gets the model file
 /// (empty when nothing was encoded), `bytes` (when given) its contents before the filter, and the
 /// file with it, goes away.
-std::vector<std::string> Encode(
-  vtkImageData* image, const char* selected, std::string& encoded, std::string* bytes = nullptr)
+std::vector<std::string> Encode(vtkImageData* image,
+  const char* selected,
+  std::string& encoded,
+  std::string* bytes = nullptr)
 {
   std::vector<std::string> errors;
   vtkNew<vtkCallbackCommand> watch;
-  watch->SetCallback([](vtkObject*, unsigned long, void* clientData, void* callData) {
-    static_cast<std::vector<std::string>*>(clientData)->push_back(
-      callData ? static_cast<const char*>(callData) : "");
-  });
+  watch->SetCallback(
+    [](vtkObject*, unsigned long, void* clientData, void* callData)
+    {
+      static_cast<std::vector<std::string>*>(clientData)
+        ->push_back(callData ? static_cast<const char*>(callData) : "");
+    });
   watch->SetClientData(&errors);
   vtkNew<vtkAFAMEncoder> encoder;
   encoder->AddObserver(vtkCommand::ErrorEvent, watch);
@@ -175,7 +179,8 @@ int main(int, char*[])
     for (vtkSmartPointer<vtkDataArray> values :
       { vtkSmartPointer<vtkDataArray>(ByteRamp<vtkUnsignedCharArray>("density", n)),
         vtkSmartPointer<vtkDataArray>(ByteRamp<vtkSignedCharArray>("density", n)),
-        vtkSmartPointer<vtkDataArray>(ByteRamp<vtkSOADataArrayTemplate<unsigned char>>("density", n)) })
+        vtkSmartPointer<vtkDataArray>(
+          ByteRamp<vtkSOADataArrayTemplate<unsigned char>>("density", n)) })
     {
       vtkNew<vtkImageData> image;
       image->SetDimensions(n, n, n);
@@ -216,8 +221,7 @@ int main(int, char*[])
       "a string array is refused: " +
         (stringErrors.empty() ? std::string("no error") : stringErrors[0]));
     const std::vector<std::string> complexErrors = Encode(image, "spectrum", encoded);
-    Check(encoded.empty() &&
-        Mentions(complexErrors, { "'spectrum' has 2 components", "float" }),
+    Check(encoded.empty() && Mentions(complexErrors, { "'spectrum' has 2 components", "float" }),
       "a two-component array is refused: " +
         (complexErrors.empty() ? std::string("no error") : complexErrors[0]));
   }

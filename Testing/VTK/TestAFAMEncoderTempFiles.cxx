@@ -87,10 +87,12 @@ int main()
   int left = 0;
   for (const auto& entry : fs::directory_iterator(dir))
   {
-    left += entry.path().filename().string().rfind("afam-encoder-" + std::to_string(::getpid()), 0) == 0;
+    left +=
+      entry.path().filename().string().rfind("afam-encoder-" + std::to_string(::getpid()), 0) == 0;
   }
   Check(left == 0, "the encoder's own file goes with the filter");
   fs::remove_all(dir);
-  std::cout << (failures ? "TestAFAMEncoderTempFiles FAILED\n" : "TestAFAMEncoderTempFiles passed\n");
+  std::cout << (failures ? "TestAFAMEncoderTempFiles FAILED\n"
+                         : "TestAFAMEncoderTempFiles passed\n");
   return failures ? EXIT_FAILURE : EXIT_SUCCESS;
 }

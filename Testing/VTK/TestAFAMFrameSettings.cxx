@@ -36,8 +36,8 @@ long Foreground(const std::vector<unsigned char>& rgb)
   long n = 0;
   for (size_t i = 0; i + 2 < rgb.size(); i += 3)
   {
-    n += (std::abs(rgb[i] - 26) > 8 || std::abs(rgb[i + 1] - 26) > 8 ||
-           std::abs(rgb[i + 2] - 38) > 8)
+    n +=
+      (std::abs(rgb[i] - 26) > 8 || std::abs(rgb[i + 1] - 26) > 8 || std::abs(rgb[i + 2] - 38) > 8)
       ? 1
       : 0;
   }
@@ -65,9 +65,9 @@ int main(int, char*[])
 
   window->Render();
   const vtkTypeInt64 visible = mapper->GetLastVisibleBlocks();
-  Check(mapper->GetLastCacheMisses() > 0 && visible > 0, "the first frame reads " +
-      std::to_string(mapper->GetLastCacheMisses()) + " models, " + std::to_string(visible) +
-      " visible");
+  Check(mapper->GetLastCacheMisses() > 0 && visible > 0,
+    "the first frame reads " + std::to_string(mapper->GetLastCacheMisses()) + " models, " +
+      std::to_string(visible) + " visible");
 
   // Edits that keep every block's visibility: nothing is read, nothing is rebuilt.
   vtkColorTransferFunction* color = property->GetRGBTransferFunction(0);
@@ -78,7 +78,9 @@ int main(int, char*[])
     { "shading on", [&] { property->ShadeOn(); } },
     { "sample distance", [&] { mapper->SetSampleDistance(0.013); } },
     { "unit distance", [&] { property->SetScalarOpacityUnitDistance(0.07); } },
-    { "maximum intensity and back", [&] {
+    { "maximum intensity and back",
+      [&]
+      {
         mapper->SetBlendModeToMaximumIntensity();
         window->Render();
         mapper->SetBlendModeToComposite();
@@ -111,15 +113,20 @@ int main(int, char*[])
   saved->DeepCopy(opacity);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::vector<Bad> bad = {
-    { "opacity without points", [&] { opacity->RemoveAllPoints(); },
+    { "opacity without points",
+      [&] { opacity->RemoveAllPoints(); },
       [&] { opacity->DeepCopy(saved); },
       { "opacity transfer function has no points", "keeping the last transfer function" } },
-    { "colour with NaN", [&] { color->AddRGBPoint(0.7, nan, 0.5, 0.5); },
-      [&] { color->RemovePoint(0.7); }, { "is not finite", "keeping the last transfer function" } },
-    { "unit distance 0", [&] { property->SetScalarOpacityUnitDistance(0.0); },
+    { "colour with NaN",
+      [&] { color->AddRGBPoint(0.7, nan, 0.5, 0.5); },
+      [&] { color->RemovePoint(0.7); },
+      { "is not finite", "keeping the last transfer function" } },
+    { "unit distance 0",
+      [&] { property->SetScalarOpacityUnitDistance(0.0); },
       [&] { property->SetScalarOpacityUnitDistance(0.07); },
       { "sample distance 0 is not", "opacity unit distance 0 is not", "keeping 0.0" } },
-    { "unit distance -1", [&] { property->SetScalarOpacityUnitDistance(-1.0); },
+    { "unit distance -1",
+      [&] { property->SetScalarOpacityUnitDistance(-1.0); },
       [&] { property->SetScalarOpacityUnitDistance(0.07); },
       { "sample distance -", "opacity unit distance -", "keeping" } },
   };
@@ -137,9 +144,9 @@ int main(int, char*[])
     }
     Check(named, b.name + ": " + std::to_string(warnings.size()) + " warning(s): " + all);
     const std::vector<unsigned char> drawn = afam_vtk_test::ReadPixels(window);
-    Check(drawn == good, b.name + ": the last usable settings drawn (" +
-        std::to_string(Foreground(drawn)) + " foreground pixels, " +
-        std::to_string(goodForeground) + " before)");
+    Check(drawn == good,
+      b.name + ": the last usable settings drawn (" + std::to_string(Foreground(drawn)) +
+        " foreground pixels, " + std::to_string(goodForeground) + " before)");
     Check(mapper->GetLastCacheMisses() == 0 && mapper->GetNumberOfRendererBuilds() == 1,
       b.name + ": cache kept");
     b.undo();

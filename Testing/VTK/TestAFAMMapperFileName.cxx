@@ -39,8 +39,9 @@ int main(int, char*[])
   long differing = 0, foreground = 0;
   for (size_t i = 0; i + 2 < got.size() && i + 2 < expected.size(); i += 3)
   {
-    differing += (got[i] != expected[i] || got[i + 1] != expected[i + 1] ||
-                   got[i + 2] != expected[i + 2]) ? 1 : 0;
+    differing +=
+      (got[i] != expected[i] || got[i + 1] != expected[i + 1] || got[i + 2] != expected[i + 2]) ? 1
+                                                                                                : 0;
     foreground += (std::abs(got[i] - 26) > 8 || std::abs(got[i + 2] - 38) > 8) ? 1 : 0;
   }
   std::cout << "FileName only (" << file << "): " << alone->GetNumberOfFrames() << " frame(s), "

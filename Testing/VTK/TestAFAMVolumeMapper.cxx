@@ -38,7 +38,6 @@
 #include <string>
 #include <vector>
 
-
 int TestAFAMVolumeMapper(int argc, char* argv[])
 {
   bool gpu = afam_vtk_test::TestOnGpu();
@@ -162,8 +161,8 @@ int TestAFAMVolumeMapper(int argc, char* argv[])
   // (The time check is for the CPU caster, whose time scales with pixels; a GPU frame this small
   // is dominated by fixed costs.)
   const bool slower = !mapper->GetLastUsedGpu() && interactiveSeconds >= 0.6 * stillSeconds;
-  if (std::abs(interactiveScale - 75.0 / 301.0) > 1e-9 || slower ||
-    moving.size() != still.size() || meanDiff > 8.0 || mapper->GetLastImageScale() != 1.0)
+  if (std::abs(interactiveScale - 75.0 / 301.0) > 1e-9 || slower || moving.size() != still.size() ||
+    meanDiff > 8.0 || mapper->GetLastImageScale() != 1.0)
   {
     std::cerr << "interactive image scaling: expected scale 75/301 (the minimum 0.25), a faster "
                  "frame, the same picture, and full size again when still\n";

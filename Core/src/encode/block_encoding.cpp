@@ -20,7 +20,8 @@ namespace {
 // block whose error budget is not spent gains nothing from it. Factors of 2 sqrt(3) x budget (the
 // step whose uniform rounding error alone would spend it), tried from the largest.
 constexpr double kFitShare = 0.9;
-constexpr double kStepFactors[] = {4.0, 3.2, 2.6, 2.1, 1.7, 1.4, 1.15, 1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
+constexpr double kStepFactors[] = {4.0, 3.2,  2.6, 2.1,  1.7, 1.4, 1.15,
+                                   1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
 constexpr int kZstdLevel = 15;
 
 template <typename T>
@@ -73,8 +74,8 @@ void exactModel(const BlockExtent& e, const std::vector<float>& samples, FitResu
 /// modes the error is then checked on the block's own samples: a block that skipped the search
 /// (cross-level reuse) and misses the bound is searched, and one that misses it even at NCP = n is
 /// the exact model (t.exact).
-void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, double bound, BlockTask& t,
-              FitResult& fr) {
+void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, double bound,
+              BlockTask& t, FitResult& fr) {
   Int3 degs{};
   int nmax = 1;
   for (int a = 0; a < 3; ++a) {
@@ -83,8 +84,8 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   }
   const int lo = std::min(c.opt.degree + 1, nmax);
   auto search = [&]() {
-    t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search, c.opt.fastWindow,
-                          fr, t.fits);
+    t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search,
+                          c.opt.fastWindow, fr, t.fits);
     t.complex = t.ncpStar > lo;
     if (c.opt.perAxisNcp && t.complex && fr.error.rmse <= bound)
       refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits);
@@ -92,9 +93,10 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   if (t.search) {
     search();
   } else {
-    const Int3 ncp = c.opt.mode == EncodingMode::Fixed
-                         ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
-                         : clampNcp(lo, e.samples, degs);
+    const Int3 ncp =
+        c.opt.mode == EncodingMode::Fixed
+            ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
+            : clampNcp(lo, e.samples, degs);
     fitter.fitInto(t.samples.data(), e.samples, ncp, c.opt.degree, true, fr);
     ++t.fits;
     t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
@@ -150,7 +152,8 @@ struct Candidate {
   std::vector<uint8_t> bytes;
 };
 
-bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound, Candidate& out) {
+bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound,
+                  Candidate& out) {
   double mean = 0;
   for (float v : s) mean += double(v);
   const float c = float(mean / double(s.size()));
@@ -167,15 +170,16 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree,
   return true;
 }
 
-bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound, BlockFitter& fitter,
-                Candidate& out) {
+bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
+                BlockFitter& fitter, Candidate& out) {
   const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
   FitResult q = fr;
   bool lattice = true;
   FitResult passed;  // the last passing step's model (its error measured only near the bound)
   auto passes = [&](double k) {
-    if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k, Predictor::Lorenzo, q.control)) {
+    if (!quantizeValues(fr.control.data(), fr.ncp, 2 * std::sqrt(3.0) * budget * k,
+                        Predictor::Lorenzo, q.control)) {
       lattice = false;
       return false;
     }
@@ -187,7 +191,9 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   if (best < 0 || !lattice) return false;
   const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
   std::vector<uint8_t> bytes;
-  if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes, q.control)) return false;
+  if (!encodeValues(fr.control.data(), fr.ncp, step, Predictor::Lorenzo, kZstdLevel, bytes,
+                    q.control))
+    return false;
   // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
   if (q.control == passed.control)
     q = std::move(passed);
@@ -198,15 +204,16 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   return out.error.rmse <= bound;
 }
 
-/// The samples, predicted and coded, as an Interpolant: the step is chosen on the quantized samples,
-/// then the decoded model (the interpolating spline) is measured on the samples.
-bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, double beat, BlockFitter& fitter,
-                 Candidate& out) {
+/// The samples, predicted and coded, as an Interpolant: the step is chosen on the quantized
+/// samples, then the decoded model (the interpolating spline) is measured on the samples.
+bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, double beat,
+                 BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
   std::vector<float> recon;
   bool lattice = true;
   auto passes = [&](double k) {
-    if (!quantizeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation, recon)) {
+    if (!quantizeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, Predictor::Interpolation,
+                        recon)) {
       lattice = false;
       return false;
     }
@@ -214,15 +221,15 @@ bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, 
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
-  if (estimateCodedBytes(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation) >
-      beat)
+  if (estimateCodedBytes(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best],
+                         Predictor::Interpolation) > beat)
     return false;  // cannot win: spare the coding
   Candidate c;
   c.kind = BlockKind::Interpolant;
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-  if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best], Predictor::Interpolation, kZstdLevel,
-                    c.bytes, recon))
+  if (!encodeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * kStepFactors[best],
+                    Predictor::Interpolation, kZstdLevel, c.bytes, recon))
     return false;
   ModelEntry probe;
   probe.kind = c.kind;
@@ -237,7 +244,8 @@ bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, 
   model.control.resize(s.size());
   decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
   c.error = fitter.error(s.data(), n, model);
-  if (!(c.error.rmse <= bound)) return false;  // float rounding of the interpolant: leave it to the others
+  if (!(c.error.rmse <= bound))
+    return false;  // float rounding of the interpolant: leave it to the others
   out = std::move(c);
   return true;
 }
@@ -267,9 +275,11 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
                           codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
-  // Samples pay when the spline is missing or spends more than a bit per sample; they are coded only
-  // when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
-  const double beat = haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
+  // Samples pay when the spline is missing or spends more than a bit per sample; they are coded
+  // only when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could
+  // beat it.
+  const double beat =
+      haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
   if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) &&
       codeSamples(t.samples, e.samples, c.opt.degree, c.bound, beat, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
@@ -320,12 +330,13 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
       storeFloat(fr, t.exact, t);
     }
   } catch (const NumericError& ex) {
-    throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName + ": " + ex.what());
+    throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName +
+                       ": " + ex.what());
   }
   if (bounded(c.opt.mode) && !(t.rmse <= c.bound)) {
     std::ostringstream msg;
-    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName << " has RMSE " << t.entry.rmse
-        << " over the bound " << c.bound << " even stored exactly";
+    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName
+        << " has RMSE " << t.entry.rmse << " over the bound " << c.bound << " even stored exactly";
     throw NumericError(msg.str());
   }
   for (int a = 0; a < 3; ++a)

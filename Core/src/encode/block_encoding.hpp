@@ -13,9 +13,10 @@
 
 namespace afam {
 
-
 /// Bounded modes promise each block's RMSE <= the bound on its own samples; Fixed does not.
-inline bool bounded(EncodingMode mode) { return mode == EncodingMode::Adaptive || mode == EncodingMode::InLevel; }
+inline bool bounded(EncodingMode mode) {
+  return mode == EncodingMode::Adaptive || mode == EncodingMode::InLevel;
+}
 
 struct BlockTask {
   Int3 ijk{};
@@ -26,12 +27,12 @@ struct BlockTask {
   int ncpStar = 0;
   int64_t fits = 0;
   bool complex = false;
-  bool refit = false;          ///< skipped the search by cross-level reuse, missed the bound, searched
-  bool exact = false;          ///< stored as its samples (no NCP met the bound)
+  bool refit = false;  ///< skipped the search by cross-level reuse, missed the bound, searched
+  bool exact = false;  ///< stored as its samples (no NCP met the bound)
   bool reducedDegree = false;  ///< an axis has fewer samples than the degree needs
-  double rmse = 0, maxError = 0;  ///< of the stored model on the block's samples (the entry keeps floats)
+  double rmse = 0,
+         maxError = 0;  ///< of the stored model on the block's samples (the entry keeps floats)
 };
-
 
 struct FitContext {
   const EncoderOptions& opt;

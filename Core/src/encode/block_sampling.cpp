@@ -128,7 +128,8 @@ void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockT
     double* dst = acc.data() + size_t(j) * size_t(bt.nx);
     for (int i = 0; i < bt.nx; ++i) {
       double v = 0;
-      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) v += tx.weight[k] * h[tx.index[k]];
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k)
+        v += tx.weight[k] * h[tx.index[k]];
       dst[i] += w * v;
     }
   }
@@ -147,7 +148,8 @@ std::vector<int64_t> chunkPlanes(const AxisTaps& tz, int k0, int k1) {
 /// ChunkBudget::QuarterOfSamples at most a quarter of the samples it fills (so a row of blocks and
 /// the planes it is filtered from take at most 1.25 times the row's samples); at least one plane (a
 /// chunk always covers one z-sample, whatever its taps).
-size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out, ChunkBudget budget) {
+size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& out,
+                        ChunkBudget budget) {
   size_t floats = (size_t(256) << 20) / sizeof(float);
   if (budget == ChunkBudget::QuarterOfSamples) {
     size_t samples = 0;
@@ -160,7 +162,8 @@ size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& ou
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
 /// yBase on).
 void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
-                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
+                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt,
+                    float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
@@ -181,7 +184,8 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
       continue;
     }
     acc.assign(nxy, 0.0);
-    for (size_t t = t0; t < t1; ++t) addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
+    for (size_t t = t0; t < t1; ++t)
+      addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
   }
 }
@@ -207,8 +211,9 @@ const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64
   return buf;
 }
 
-void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
-                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out, const BlockLoop& loop,
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
+                    const std::vector<Int3>& blocks, bool ghost, LevelSampling sampling,
+                    std::vector<std::vector<float>*>& out, const BlockLoop& loop,
                     ChunkBudget budget) {
   if (blocks.empty()) return;
   const int g = ghost ? 1 : 0;
@@ -254,8 +259,8 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const
   }
 }
 
-std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk, bool ghost,
-                                LevelSampling sampling) {
+std::vector<float> extractBlock(const Partition& part, const float* volume, int level, Int3 ijk,
+                                bool ghost, LevelSampling sampling) {
   ArraySource src(volume, part.dims());
   PlaneReader planes(src, part.dims());
   std::vector<float> out;

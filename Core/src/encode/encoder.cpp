@@ -7,17 +7,17 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
-#include <limits>
 #include <future>
+#include <limits>
 #include <mutex>
 #include <sstream>
 #include <thread>
 
-#include "afam/spline/fit.hpp"
-#include "fitted_blocks.hpp"
-#include "afam/encode/ncp_search.hpp"
-#include "block_encoding.hpp"
 #include "afam/base/worker_pool.hpp"
+#include "afam/encode/ncp_search.hpp"
+#include "afam/spline/fit.hpp"
+#include "block_encoding.hpp"
+#include "fitted_blocks.hpp"
 
 namespace afam {
 
@@ -34,7 +34,6 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-
 }  // namespace
 
 // ------------------------------------------------------------------------------------------------
@@ -49,12 +48,15 @@ LevelSampling levelSampling(EncodingMode mode) {
 }
 
 void validateOptions(const EncoderOptions& opt) {
-  if (opt.degree < 1 || opt.degree > 5) throw InvalidArgument("encode: degree " + std::to_string(opt.degree) + " outside [1, 5]");
+  if (opt.degree < 1 || opt.degree > 5)
+    throw InvalidArgument("encode: degree " + std::to_string(opt.degree) + " outside [1, 5]");
   if (!std::isfinite(opt.errorBound) || opt.errorBound < 0)
-    throw InvalidArgument("encode: error bound " + std::to_string(opt.errorBound) + " must be finite and > 0");
+    throw InvalidArgument("encode: error bound " + std::to_string(opt.errorBound) +
+                          " must be finite and > 0");
   if (bounded(opt.mode) && opt.errorBound == 0)
-    throw InvalidArgument("encode: error bound 0 asks for an exact copy: give a positive bound (e.g. --error-bound "
-                          "1e-6 --relative) or use --mode fixed --ncp 0 (interpolation at every sample)");
+    throw InvalidArgument(
+        "encode: error bound 0 asks for an exact copy: give a positive bound (e.g. --error-bound "
+        "1e-6 --relative) or use --mode fixed --ncp 0 (interpolation at every sample)");
   if (opt.fixedNcp < 0) throw InvalidArgument("encode: --ncp must be >= 0");
 }
 
@@ -146,12 +148,13 @@ bool extendRange(const float* v, size_t n, float& lo, float& hi) {
 
 /// Value range and NaN/Inf check in one streaming pass (unless the source knows its range) over
 /// this process's share of the z-planes; the team reduces the shares to the volume's range.
-void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress, EncodeTeam& team,
-                    double& vmin, double& vmax) {
+void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
+                    EncodeTeam& team, double& vmin, double& vmax) {
   if (source.knownRange(vmin, vmax)) return;
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
-  const int64_t chunk = std::max<int64_t>(1, (int64_t(1) << 18) / std::max<int64_t>(plane, 1));  // ~1 MB
+  const int64_t chunk =
+      std::max<int64_t>(1, (int64_t(1) << 18) / std::max<int64_t>(plane, 1));  // ~1 MB
   const WorkShare planes = workShare(dims[2], team.rank(), team.size());
   std::vector<float> buf;
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
@@ -160,17 +163,21 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
     buf.resize(size_t(nz * plane));
     source.readSlab(z, nz, buf.data());
     if (!extendRange(buf.data(), buf.size(), lo, hi)) {
-      const size_t i = size_t(std::find_if(buf.begin(), buf.end(), [](float v) { return !std::isfinite(v); }) -
-                              buf.begin());
+      const size_t i =
+          size_t(std::find_if(buf.begin(), buf.end(), [](float v) { return !std::isfinite(v); }) -
+                 buf.begin());
       const float v = buf[i];
-      const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1], z + int64_t(i) / plane};
+      const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1],
+                              z + int64_t(i) / plane};
       std::ostringstream msg;
-      msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of " << source.name()
-          << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
-          << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz)) << "; the encoder needs finite values";
+      msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of "
+          << source.name() << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
+          << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz))
+          << "; the encoder needs finite values";
       throw NumericError(msg.str());
     }
-    if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) / double(planes.end - planes.first)))
+    if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) /
+                         double(planes.end - planes.first)))
       throw cancelled();
   }
   vmin = lo;
@@ -202,8 +209,8 @@ void teamStep(EncodeTeam& team, Step&& step) {
   if (!agreed.empty()) throw Error("encode: " + agreed);
 }
 
-VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels, double vmin,
-                        double vmax) {
+VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels,
+                        double vmin, double vmax) {
   VolumeHeader header;
   header.dims = source.dims();
   header.origin = source.origin();
@@ -252,30 +259,41 @@ void addLevel(const LevelStats& ls, EncodeStats& stats) {
 }
 
 /// Encodes the levels coarse to fine; one instance per encodeVolume call. In a team of several
-/// processes each fits its workShare of every level, and finishLevel hands the level's models to the
-/// first process, which alone calls the sink.
+/// processes each fits its workShare of every level, and finishLevel hands the level's models to
+/// the first process, which alone calls the sink.
 class LevelEncoder {
  public:
-  LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound, int threads,
-               EncodeProgress& progress, ModelSink& sink, EncodeTeam& team)
-      : source_(source), opt_(opt), part_(part), bound_(bound), progress_(progress), sink_(sink), team_(team),
-        fitters_(size_t(threads)), pool_(threads), samplePool_(threads), planes_(source, part.dims()) {
+  LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound,
+               int threads, EncodeProgress& progress, ModelSink& sink, EncodeTeam& team)
+      : source_(source),
+        opt_(opt),
+        part_(part),
+        bound_(bound),
+        progress_(progress),
+        sink_(sink),
+        team_(team),
+        fitters_(size_t(threads)),
+        pool_(threads),
+        samplePool_(threads),
+        planes_(source, part.dims()) {
     sampleLoop_ = [this](int64_t count, const std::function<void(int64_t)>& fn) {
-      samplePool_.run(count, [&fn](int, int64_t b) { fn(b); }, [] { return true; });
+      samplePool_.run(
+          count, [&fn](int, int64_t b) { fn(b); }, [] { return true; });
     };
   }
 
   /// Lines of blocks of one level, sampled.
   struct Batch {
     std::vector<BlockTask> tasks;
-    int64_t endLine = 0;   ///< the first line not in this batch
-    double seconds = 0;    ///< spent sampling it
+    int64_t endLine = 0;  ///< the first line not in this batch
+    double seconds = 0;   ///< spent sampling it
   };
 
-  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and filtering,
-  /// on the sampling pool) while the fitting pool fits the current one, so reading the volume does
-  /// not leave the fitting threads idle; during the level's last batch the next level's first batch
-  /// is sampled, handed back in `pending` (empty: level l samples its first batch itself).
+  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and
+  /// filtering, on the sampling pool) while the fitting pool fits the current one, so reading the
+  /// volume does not leave the fitting threads idle; during the level's last batch the next level's
+  /// first batch is sampled, handed back in `pending` (empty: level l samples its first batch
+  /// itself).
   LevelStats encodeLevel(int l, std::future<Batch>& pending) {
     const auto tl = Clock::now();
     LevelStats ls;
@@ -292,7 +310,8 @@ class LevelEncoder {
   /// blocks of level l are complex (the next level's cross-level reuse).
   void finishLevel(int l, LevelStats& ls) {
     if (team_.size() > 1) {
-      if (opt_.mode == EncodingMode::Adaptive && l + 1 < part_.levels()) team_.mergeFlags(complexCur_);
+      if (opt_.mode == EncodingMode::Adaptive && l + 1 < part_.levels())
+        team_.mergeFlags(complexCur_);
       const std::vector<std::vector<uint8_t>> all = team_.gatherToFirst(outgoing_);
       outgoing_.clear();
       outgoing_.shrink_to_fit();
@@ -327,8 +346,11 @@ class LevelEncoder {
                                                            : WorkShare{};
       if (!nextLines.empty()) {
         const int nl = more ? l : l + 1;
-        const auto policy = source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
-        next = std::async(policy, [this, nl, nextLines] { return gatherLines(nl, nextLines.first, nextLines.end); });
+        const auto policy =
+            source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
+        next = std::async(policy, [this, nl, nextLines] {
+          return gatherLines(nl, nextLines.first, nextLines.end);
+        });
       }
       try {
         fitBatch(l, cur.tasks, levelDone);
@@ -363,7 +385,8 @@ class LevelEncoder {
   /// Before leaving on an error: a batch being sampled on another thread uses members, so it must
   /// finish first; a deferred one (readsOnCallingThread) has not started and is dropped.
   static void settle(std::future<Batch>& next) {
-    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred) next.wait();
+    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred)
+      next.wait();
   }
 
   /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
@@ -469,7 +492,8 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   return encodeVolume(source, opt, sink, solo);
 }
 
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink, EncodeTeam& team) {
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink,
+                         EncodeTeam& team) {
   const auto t0 = Clock::now();
   const double cpu0 = processCpuSeconds();
   validateOptions(opt);
@@ -480,8 +504,10 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   EncoderOptions resolved = opt;
   if (resolved.levels == 0) resolved.levels = shape.levels;
   if (resolved.blocksPerAxis == 0) resolved.blocksPerAxis = shape.blocksPerAxis;
-  const Partition part(dims, resolved.levels, resolved.blocksPerAxis);  // validates levels, blocks, dims
-  const int threads = std::max(1, opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency()));
+  const Partition part(dims, resolved.levels,
+                       resolved.blocksPerAxis);  // validates levels, blocks, dims
+  const int threads =
+      std::max(1, opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency()));
 
   EncodeStats stats;
   stats.threads = threads;
@@ -489,19 +515,23 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   stats.bytesIn = uint64_t(stats.inputVoxels) * uint64_t(source.bytesPerVoxel());
 
   EncodeProgress progress(part, opt);
-  teamStep(team, [&] { scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax); });
+  teamStep(team,
+           [&] { scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax); });
   team.reduceRange(stats.valueMin, stats.valueMax);
   progress.finishRange();
-  stats.bound = opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
+  stats.bound =
+      opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
   teamStep(team, [&] {  // the first process alone hands models to the sink
-    if (team.rank() == 0) sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+    if (team.rank() == 0)
+      sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
   });
   stats.levelsUsed = resolved.levels;
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 
   const auto tFit0 = Clock::now();
   LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team);
-  std::future<LevelEncoder::Batch> pending;  // a level's first batch, sampled during the previous level
+  std::future<LevelEncoder::Batch>
+      pending;  // a level's first batch, sampled during the previous level
   for (int l = 0; l < part.levels(); ++l) {
     LevelStats ls;
     teamStep(team, [&] { ls = levels.encodeLevel(l, pending); });
@@ -518,13 +548,14 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   return stats;
 }
 
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath) {
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options,
+                         const std::string& outPath) {
   SoloTeam solo;
   return encodeVolume(source, options, outPath, solo);
 }
 
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
-                         EncodeTeam& team) {
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options,
+                         const std::string& outPath, EncodeTeam& team) {
   FileModelSink sink(outPath);
   const auto t0 = Clock::now();
   const double cpu0 = processCpuSeconds();

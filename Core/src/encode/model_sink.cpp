@@ -13,7 +13,8 @@ void InMemoryModels::begin(const VolumeHeader& h) {
   payloads.assign(size_t(total), {});
   stored.assign(size_t(total), {});
   levelStart.assign(size_t(h.levels) + 1, 0);
-  for (int l = 0; l < h.levels; ++l) levelStart[size_t(l) + 1] = levelStart[size_t(l)] + partition.blockCount(l);
+  for (int l = 0; l < h.levels; ++l)
+    levelStart[size_t(l) + 1] = levelStart[size_t(l)] + partition.blockCount(l);
 }
 
 int64_t InMemoryModels::entryIndex(int level, Int3 ijk) const {
@@ -43,7 +44,9 @@ void InMemoryModels::write(const std::string& path) const {
   w.commit();
 }
 
-void FileModelSink::begin(const VolumeHeader& h) { writer_ = std::make_unique<AfamWriter>(path_, h); }
+void FileModelSink::begin(const VolumeHeader& h) {
+  writer_ = std::make_unique<AfamWriter>(path_, h);
+}
 
 void FileModelSink::add(const ModelEntry& e, const void* stored) { writer_->addStored(e, stored); }
 

@@ -9,8 +9,8 @@
 
 namespace afam {
 
-int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound, SearchMethod method,
-              int window, FitResult& result, int64_t& fits) {
+int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
+              SearchMethod method, int window, FitResult& result, int64_t& fits) {
   Int3 degs{};
   int nmax = 1;
   for (int a = 0; a < 3; ++a) {
@@ -78,7 +78,8 @@ std::array<double, 3> axisRoughness(const float* samples, Int3 n) {
   std::array<double, 3> r{0, 0, 0};
   const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
   const size_t stride[3] = {1, nx, nx * ny};
-  std::vector<double> column(nx);  // a sum per x: the inner loop is independent across x (vectorised)
+  std::vector<double> column(
+      nx);  // a sum per x: the inner loop is independent across x (vectorised)
   for (int a = 0; a < 3; ++a) {
     if (n[a] < 3) continue;
     std::fill(column.begin(), column.end(), 0.0);
@@ -110,7 +111,8 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
     return false;
   }
   std::array<int, 3> order{0, 1, 2};
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return rough[size_t(a)] < rough[size_t(b)]; });
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return rough[size_t(a)] < rough[size_t(b)]; });
   FitResult trial;
   bool reduced = false;
   double squares = -1;  // computed for the first axis tried
@@ -120,7 +122,8 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
     const int lo = effectiveDegree(degree, n[size_t(a)]) + 1;
     int fail = lo - 1, pass = result.ncp[size_t(a)];  // NCP `pass` meets the bound on this axis
     while (pass - fail > 1) {
-      const int mid = fail == lo - 1 ? lo : fail + (pass - fail) / 2;  // try p+1 first: layers need no more
+      const int mid =
+          fail == lo - 1 ? lo : fail + (pass - fail) / 2;  // try p+1 first: layers need no more
       Int3 ncp = result.ncp;
       ncp[size_t(a)] = mid;
       const bool ok = fitter.fitWithin(samples, n, ncp, degree, bound, squares, trial);

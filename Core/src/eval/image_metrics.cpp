@@ -96,7 +96,8 @@ double ssim(const MetricImage& a, const MetricImage& b) {
         double m[5] = {0, 0, 0, 0, 0};
         for (int k = 0; k <= 2 * R; ++k) {
           const double va = A(x, y + k), vb = B(x, y + k), g = w[k];
-          m[0] += g * va, m[1] += g * vb, m[2] += g * va * va, m[3] += g * vb * vb, m[4] += g * va * vb;
+          m[0] += g * va, m[1] += g * vb, m[2] += g * va * va, m[3] += g * vb * vb,
+              m[4] += g * va * vb;
         }
         for (int q = 0; q < 5; ++q) tmp[(size_t(q) * oh + y) * W + x] = m[q];
       }

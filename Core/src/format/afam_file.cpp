@@ -12,60 +12,62 @@
 #include <limits>
 #include <sstream>
 
-#include "afam/format/block_codec.hpp"
 #include "afam/base/errors.hpp"
-#include "afam/spline/fit.hpp"
+#include "afam/format/block_codec.hpp"
 #include "afam/format/temporary_file.hpp"
+#include "afam/spline/fit.hpp"
 
 namespace afam {
 
 #if defined(__BYTE_ORDER__) && (__BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__)
-#error "the .afam reader and writer copy little-endian structs byte for byte: little-endian hosts only"
+#error \
+    "the .afam reader and writer copy little-endian structs byte for byte: little-endian hosts only"
 #endif
 
 namespace {
 
 constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
-constexpr uint32_t kVersion = 2;      // written; version 1 is still read
+constexpr uint32_t kVersion = 2;  // written; version 1 is still read
 constexpr uint32_t kEndianTag = 0x01020304u;
-constexpr uint64_t kAlign = 64;         // start of the payload area
-constexpr uint32_t kPayloadAlign = 4;    // payload offsets (float32 arrays, uploaded unchanged)
+constexpr uint64_t kAlign = 64;        // start of the payload area
+constexpr uint32_t kPayloadAlign = 4;  // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
 
 // On-disk header of versions 1 and 2 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
-// each member's byte offset and size beside it (@offset, size), checked by the static_asserts below.
+// each member's byte offset and size beside it (@offset, size), checked by the static_asserts
+// below.
 struct FileHeader {
-  char magic[8];                  // @0, 8 B
-  uint32_t version;               // @8, 4 B
-  uint32_t endianTag;             // @12, 4 B
-  uint32_t headerSize;            // @16, 4 B
-  uint32_t entrySize;             // @20, 4 B
-  int64_t dims[3];                // @24, 24 B
-  double origin[3];               // @48, 24 B
-  double spacing[3];              // @72, 24 B
-  double valueMin;                // @96, 8 B
-  double valueMax;                // @104, 8 B
-  double errorBound;              // @112, 8 B
-  int32_t levels;                 // @120, 4 B
-  int32_t blocksPerAxis;          // @124, 4 B
-  int32_t degree;                 // @128, 4 B
-  int32_t fixedNcp;               // @132, 4 B
-  uint8_t mode;                   // @136, 1 B
-  uint8_t relativeBound;          // @137, 1 B
-  uint8_t levelSampling;          // @138, 1 B; LevelSampling: 0 point (older files), 1 box
-  uint8_t sourceBytesPerSample;   // @139, 1 B; bytes of one sample of the encoded input (0: unknown)
-  uint32_t indexChecksum;         // @140, 4 B
-  uint64_t entryCount;            // @144, 8 B
-  uint64_t indexOffset;           // @152, 8 B
-  uint64_t payloadOffset;         // @160, 8 B
-  uint64_t fileSize;              // @168, 8 B
-  char scalarName[64];            // @176, 64 B
+  char magic[8];                 // @0, 8 B
+  uint32_t version;              // @8, 4 B
+  uint32_t endianTag;            // @12, 4 B
+  uint32_t headerSize;           // @16, 4 B
+  uint32_t entrySize;            // @20, 4 B
+  int64_t dims[3];               // @24, 24 B
+  double origin[3];              // @48, 24 B
+  double spacing[3];             // @72, 24 B
+  double valueMin;               // @96, 8 B
+  double valueMax;               // @104, 8 B
+  double errorBound;             // @112, 8 B
+  int32_t levels;                // @120, 4 B
+  int32_t blocksPerAxis;         // @124, 4 B
+  int32_t degree;                // @128, 4 B
+  int32_t fixedNcp;              // @132, 4 B
+  uint8_t mode;                  // @136, 1 B
+  uint8_t relativeBound;         // @137, 1 B
+  uint8_t levelSampling;         // @138, 1 B; LevelSampling: 0 point (older files), 1 box
+  uint8_t sourceBytesPerSample;  // @139, 1 B; bytes of one sample of the encoded input (0: unknown)
+  uint32_t indexChecksum;        // @140, 4 B
+  uint64_t entryCount;           // @144, 8 B
+  uint64_t indexOffset;          // @152, 8 B
+  uint64_t payloadOffset;        // @160, 8 B
+  uint64_t fileSize;             // @168, 8 B
+  char scalarName[64];           // @176, 64 B
   int32_t levelBlocks[kMaxLevels][3];  // @240, 192 B
-  uint64_t totalPayloadBytes;     // @432, 8 B
-  uint32_t payloadAlignment;      // @440, 4 B; a power of two in [4, 4096] that every payload
-                                  // offset is a multiple of
-  uint8_t reserved1[576];         // @444, 576 B
-  uint32_t headerChecksum;        // @1020, 4 B; CRC32 of bytes [0, 1020)
+  uint64_t totalPayloadBytes;          // @432, 8 B
+  uint32_t payloadAlignment;           // @440, 4 B; a power of two in [4, 4096] that every payload
+                                       // offset is a multiple of
+  uint8_t reserved1[576];              // @444, 576 B
+  uint32_t headerChecksum;             // @1020, 4 B; CRC32 of bytes [0, 1020)
 };
 static_assert(sizeof(FileHeader) == 1024, "header size");
 static_assert(offsetof(FileHeader, version) == 8, "layout");
@@ -104,17 +106,17 @@ static_assert(offsetof(FileHeader, headerChecksum) == 1020, "layout");
 // file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
 // against 169).
 struct IndexEntryV1 {
-  uint64_t offset;                // @0, 8 B
-  uint16_t ncp[3];                // @8, 6 B
-  uint16_t flags;                 // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
-                                  // bits: an unknown feature
-  float minValue;                 // @16, 4 B
-  float maxValue;                 // @20, 4 B
-  float rmse;                     // @24, 4 B
-  float maxError;                 // @28, 4 B
-  uint32_t checksum;              // @32, 4 B
-  uint32_t storedBytes;           // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
-                                  // the NCP's floats)
+  uint64_t offset;       // @0, 8 B
+  uint16_t ncp[3];       // @8, 6 B
+  uint16_t flags;        // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
+                         // bits: an unknown feature
+  float minValue;        // @16, 4 B
+  float maxValue;        // @20, 4 B
+  float rmse;            // @24, 4 B
+  float maxError;        // @28, 4 B
+  uint32_t checksum;     // @32, 4 B
+  uint32_t storedBytes;  // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
+                         // the NCP's floats)
 };
 static_assert(sizeof(IndexEntryV1) == 40, "entry size");
 static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
@@ -147,14 +149,14 @@ uint64_t alignUp(uint64_t v, uint64_t a = kAlign) { return (v + a - 1) / a * a; 
 
 std::string sysError() { return std::strerror(errno); }
 
-
 void preadAll(int fd, void* out, uint64_t bytes, uint64_t offset, const std::string& path,
               const std::string& what) {
   auto* p = static_cast<char*>(out);
   uint64_t done = 0;
   while (done < bytes) {
-    const ssize_t r = ::pread(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
-                              static_cast<off_t>(offset + done));
+    const ssize_t r =
+        ::pread(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                static_cast<off_t>(offset + done));
     if (r < 0) {
       if (errno == EINTR) continue;
       throw IoError(path + ": cannot read " + what + ": " + sysError());
@@ -170,8 +172,9 @@ void pwriteAll(int fd, const void* data, uint64_t bytes, uint64_t offset, const 
   const auto* p = static_cast<const char*>(data);
   uint64_t done = 0;
   while (done < bytes) {
-    const ssize_t r = ::pwrite(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
-                               static_cast<off_t>(offset + done));
+    const ssize_t r =
+        ::pwrite(fd, p + done, static_cast<size_t>(std::min<uint64_t>(bytes - done, 1u << 30)),
+                 static_cast<off_t>(offset + done));
     if (r < 0) {
       if (errno == EINTR) continue;
       throw IoError(path + ": write failed: " + sysError());
@@ -194,8 +197,6 @@ bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
   return true;
 }
 
-
-
 /// NCP and degree a model of this kind must have on one axis of n samples.
 struct AxisRule {
   int degree, ncpLo, ncpHi;
@@ -210,7 +211,8 @@ AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
 }
 
 /// Empty when the model is valid for its block, else what is wrong.
-std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree, const BlockExtent& e) {
+std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree,
+                         const BlockExtent& e) {
   if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Interpolant))
     return "unknown block kind " + std::to_string(static_cast<int>(m.kind));
   if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded))
@@ -220,21 +222,25 @@ std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegre
   for (int a = 0; a < 3; ++a) {
     const AxisRule r = axisRule(m.kind, mode, headerDegree, e.samples[a]);
     if (m.ncp[a] < r.ncpLo || m.ncp[a] > r.ncpHi || m.degree[a] != r.degree || m.ncp[a] > 65535)
-      return std::string(blockKindName(m.kind)) + " NCP " + std::to_string(m.ncp[a]) + " / degree " +
-             std::to_string(m.degree[a]) + " invalid on axis " + std::to_string(a) + " (NCP in [" +
-             std::to_string(r.ncpLo) + ", " + std::to_string(r.ncpHi) + "], degree " + std::to_string(r.degree) + ")";
+      return std::string(blockKindName(m.kind)) + " NCP " + std::to_string(m.ncp[a]) +
+             " / degree " + std::to_string(m.degree[a]) + " invalid on axis " + std::to_string(a) +
+             " (NCP in [" + std::to_string(r.ncpLo) + ", " + std::to_string(r.ncpHi) +
+             "], degree " + std::to_string(r.degree) + ")";
   }
   return {};
 }
 
 /// Stored bytes of an uncoded model.
-uint64_t uncodedBytes(const ModelEntry& m) { return m.kind == BlockKind::Constant ? 4 : payloadBytes(m.ncp); }
+uint64_t uncodedBytes(const ModelEntry& m) {
+  return m.kind == BlockKind::Constant ? 4 : payloadBytes(m.ncp);
+}
 
-void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh, const BlockExtent& e,
-                const std::string& where, ModelEntry& m) {
+void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
+                const BlockExtent& e, const std::string& where, ModelEntry& m) {
   const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
   if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
-  if ((r.flags & ~uint16_t(0x1ff)) != 0) throw bad("unknown entry flags " + std::to_string(r.flags));
+  if ((r.flags & ~uint16_t(0x1ff)) != 0)
+    throw bad("unknown entry flags " + std::to_string(r.flags));
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
   m.samples = e.samples;
@@ -247,9 +253,10 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
   if (!checkedPayloadBytes(r.ncp, m.size)) throw bad("payload size overflows");
   m.storedSize = version == 1 ? m.size : r.storedBytes;
   if (!m.coded && m.storedSize != uncodedBytes(m))
-    throw bad("stored size " + std::to_string(m.storedSize) + " is not the " + std::to_string(uncodedBytes(m)) +
-              " bytes of an uncoded " + blockKindName(m.kind));
-  if (m.coded && m.storedSize <= kCodedHeaderBytes) throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
+    throw bad("stored size " + std::to_string(m.storedSize) + " is not the " +
+              std::to_string(uncodedBytes(m)) + " bytes of an uncoded " + blockKindName(m.kind));
+  if (m.coded && m.storedSize <= kCodedHeaderBytes)
+    throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
 }
 
 }  // namespace
@@ -279,7 +286,8 @@ uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes) {
 uint64_t payloadBytes(const Int3& ncp) {
   const int32_t n[3] = {ncp[0], ncp[1], ncp[2]};
   uint64_t out = 0;
-  if (!checkedPayloadBytes(n, out)) throw InvalidArgument("payload size: invalid or overflowing NCP");
+  if (!checkedPayloadBytes(n, out))
+    throw InvalidArgument("payload size: invalid or overflowing NCP");
   return out;
 }
 
@@ -291,15 +299,20 @@ uint64_t paperModelBytes(const Int3& ncp, const Int3& degree) {
 
 const char* blockKindName(BlockKind kind) {
   switch (kind) {
-    case BlockKind::Spline: return "spline";
-    case BlockKind::Samples: return "samples";
-    case BlockKind::Constant: return "constant";
-    case BlockKind::Interpolant: return "interpolant";
+    case BlockKind::Spline:
+      return "spline";
+    case BlockKind::Samples:
+      return "samples";
+    case BlockKind::Constant:
+      return "constant";
+    case BlockKind::Interpolant:
+      return "interpolant";
   }
   return "unknown";
 }
 
-void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out, const std::string& where) {
+void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
+                         const std::string& where) {
   const size_t count = e.size / sizeof(float);
   if (e.kind == BlockKind::Constant) {
     float c;
@@ -312,7 +325,8 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     samples.resize(count);
     decodeValues(stored, e.storedSize, e.ncp, samples.data(), where.c_str());
     try {
-      fitter.fitInto(samples.data(), e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
+      fitter.fitInto(samples.data(), e.ncp, e.ncp,
+                     std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
     } catch (const Error& ex) {
       throw FormatError(where + ": interpolant does not decode: " + ex.what());
     }
@@ -326,10 +340,14 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
 
 const char* modeName(EncodingMode mode) {
   switch (mode) {
-    case EncodingMode::Adaptive: return "adaptive";
-    case EncodingMode::InLevel: return "inlevel";
-    case EncodingMode::Fixed: return "fixed";
-    case EncodingMode::Downsampled: return "ds";
+    case EncodingMode::Adaptive:
+      return "adaptive";
+    case EncodingMode::InLevel:
+      return "inlevel";
+    case EncodingMode::Fixed:
+      return "fixed";
+    case EncodingMode::Downsampled:
+      return "ds";
   }
   return "unknown";
 }
@@ -375,14 +393,16 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
   if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
   if (h.version != 1 && h.version != kVersion)
-    throw bad("unsupported format version " + std::to_string(h.version) + " (this reader knows versions 1 and " +
-              std::to_string(kVersion) + ")");
+    throw bad("unsupported format version " + std::to_string(h.version) +
+              " (this reader knows versions 1 and " + std::to_string(kVersion) + ")");
   if (crc32(&h, offsetof(FileHeader, headerChecksum)) != h.headerChecksum)
     throw bad("header checksum mismatch (header damaged)");
   if (h.headerSize != sizeof(FileHeader) || h.entrySize != sizeof(IndexEntryV1))
     throw bad("header or index entry size does not match version " + std::to_string(h.version));
-  if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 || (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
-    throw bad("payload alignment " + std::to_string(h.payloadAlignment) + " is not a power of two in [4, 4096]");
+  if (h.payloadAlignment < 4 || h.payloadAlignment > 4096 ||
+      (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
+    throw bad("payload alignment " + std::to_string(h.payloadAlignment) +
+              " is not a power of two in [4, 4096]");
   if (h.fileSize != f->fileSize_)
     throw bad(h.fileSize > f->fileSize_
                   ? "truncated: " + std::to_string(f->fileSize_) + " bytes, header says " +
@@ -402,7 +422,8 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     throw bad("absurd level count " + std::to_string(h.levels));
   if (h.blocksPerAxis < 1 || h.blocksPerAxis > 65535)
     throw bad("absurd blocks per axis " + std::to_string(h.blocksPerAxis));
-  if (h.degree < 1 || h.degree > 5) throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
+  if (h.degree < 1 || h.degree > 5)
+    throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
   if (h.mode > static_cast<uint8_t>(EncodingMode::Downsampled))
     throw bad("unknown encoding mode " + std::to_string(h.mode));
   vh.valueMin = h.valueMin;
@@ -433,10 +454,12 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   if (h.entryCount != expected)
     throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
               std::to_string(expected) + " blocks of the partition");
-  if (h.indexOffset != sizeof(FileHeader)) throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
+  if (h.indexOffset != sizeof(FileHeader))
+    throw bad("index offset " + std::to_string(h.indexOffset) + " invalid");
   // Overflow-safe: the index must fit between its offset and the payload start, inside the file.
   if (h.entryCount > (f->fileSize_ - h.indexOffset) / sizeof(IndexEntryV1))
-    throw bad("truncated: index of " + std::to_string(h.entryCount) + " entries runs past the end of the file");
+    throw bad("truncated: index of " + std::to_string(h.entryCount) +
+              " entries runs past the end of the file");
   const uint64_t indexBytes = h.entryCount * sizeof(IndexEntryV1);
   if (h.payloadOffset < h.indexOffset + indexBytes || h.payloadOffset > f->fileSize_ ||
       h.payloadOffset % kAlign != 0)
@@ -445,12 +468,14 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
 
   std::vector<IndexEntryV1> raw(h.entryCount);
   preadAll(f->fd_, raw.data(), indexBytes, h.indexOffset, path, "index");
-  if (crc32(raw.data(), indexBytes) != h.indexChecksum) throw bad("index checksum mismatch (index damaged)");
+  if (crc32(raw.data(), indexBytes) != h.indexChecksum)
+    throw bad("index checksum mismatch (index damaged)");
 
   f->levelStart_.resize(static_cast<size_t>(vh.levels) + 1);
   f->levelStart_[0] = 0;
   for (int l = 0; l < vh.levels; ++l)
-    f->levelStart_[static_cast<size_t>(l) + 1] = f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
+    f->levelStart_[static_cast<size_t>(l) + 1] =
+        f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
 
   f->entries_.resize(raw.size());
   uint64_t payloadSum = 0;
@@ -458,16 +483,20 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   for (size_t i = 0; i < raw.size(); ++i) {
     while (static_cast<int64_t>(i) >= f->levelStart_[static_cast<size_t>(level) + 1]) ++level;
     const IndexEntryV1& r = raw[i];
-    const Int3 ijk = part.blockFromLinear(level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
-    const std::string where = "index entry " + std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
+    const Int3 ijk = part.blockFromLinear(
+        level, static_cast<int64_t>(i) - f->levelStart_[static_cast<size_t>(level)]);
+    const std::string where =
+        "index entry " + std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
     ModelEntry& m = f->entries_[i];
     m.level = level;
     m.block = ijk;
     parseEntry(r, h.version, vh, part.extent(level, ijk), path + ": " + where, m);
-    if (r.offset < h.payloadOffset || r.offset % h.payloadAlignment != 0 || r.offset > f->fileSize_ ||
-        m.storedSize > f->fileSize_ - r.offset)
-      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" + std::to_string(m.storedSize) +
-                ") lies outside the payload area or is misaligned (file size " + std::to_string(f->fileSize_) + ")");
+    if (r.offset < h.payloadOffset || r.offset % h.payloadAlignment != 0 ||
+        r.offset > f->fileSize_ || m.storedSize > f->fileSize_ - r.offset)
+      throw bad(where + ": payload [" + std::to_string(r.offset) + ", +" +
+                std::to_string(m.storedSize) +
+                ") lies outside the payload area or is misaligned (file size " +
+                std::to_string(f->fileSize_) + ")");
     const uint64_t bytes = m.storedSize;
     payloadSum += bytes;
     m.offset = r.offset;
@@ -477,7 +506,8 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
     m.maxError = r.maxError;
     m.checksum = r.checksum;
   }
-  if (payloadSum != h.totalPayloadBytes) throw bad("payload sizes do not add up to the header's total");
+  if (payloadSum != h.totalPayloadBytes)
+    throw bad("payload sizes do not add up to the header's total");
   return f;
 }
 
@@ -528,15 +558,20 @@ void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];
   const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
   if (e.storedSize == e.size) {  // uncoded floats: read in place
-    preadAll(fd_, out, e.size, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
-    if (crc32(out, e.size) != e.checksum) throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
+    preadAll(fd_, out, e.size, e.offset, path_,
+             "payload of " + Partition::blockName(e.level, e.block));
+    if (crc32(out, e.size) != e.checksum)
+      throw FormatError(path_ + ": payload checksum mismatch at " +
+                        Partition::blockName(e.level, e.block));
     return;
   }
   thread_local std::vector<uint8_t> stored;
   stored.resize(e.storedSize);
-  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_, "payload of " + Partition::blockName(e.level, e.block));
+  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_,
+           "payload of " + Partition::blockName(e.level, e.block));
   if (crc32(stored.data(), e.storedSize) != e.checksum)
-    throw FormatError(path_ + ": payload checksum mismatch at " + Partition::blockName(e.level, e.block));
+    throw FormatError(path_ + ": payload checksum mismatch at " +
+                      Partition::blockName(e.level, e.block));
   decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
 }
 
@@ -561,14 +596,17 @@ AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
   if (total > (int64_t(1) << 31)) throw InvalidArgument("writer: more than 2^31 micro-blocks");
   levelStart_.resize(static_cast<size_t>(header.levels) + 1, 0);
   for (int l = 0; l < header.levels; ++l)
-    levelStart_[static_cast<size_t>(l) + 1] = levelStart_[static_cast<size_t>(l)] + partition_.blockCount(l);
+    levelStart_[static_cast<size_t>(l) + 1] =
+        levelStart_[static_cast<size_t>(l)] + partition_.blockCount(l);
   entries_.resize(static_cast<size_t>(total));
   present_.assign(static_cast<size_t>(total), 0);
-  payloadOffset_ = alignUp(sizeof(FileHeader) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
+  payloadOffset_ =
+      alignUp(sizeof(FileHeader) + static_cast<uint64_t>(total) * sizeof(IndexEntryV1));
   for (int a = 0; a < 3; ++a)
     if (partition_.extent(header.levels - 1, {0, 0, 0}).samples[a] > 65533 ||
         partition_.extent(0, {0, 0, 0}).samples[a] > 65533)
-      throw InvalidArgument("writer: micro-blocks of more than 65533 samples per axis (use more blocks)");
+      throw InvalidArgument(
+          "writer: micro-blocks of more than 65533 samples per axis (use more blocks)");
   end_ = payloadOffset_;
 
   removeStaleTemporaries(path);                 // left by writers killed before they finished
@@ -598,23 +636,27 @@ void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   const Int3 b = partition_.blocksPerAxis(in.level);
   for (int a = 0; a < 3; ++a)
     if (in.block[a] < 0 || in.block[a] >= b[a])
-      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " out of range");
+      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
+                            " out of range");
   const BlockExtent e = partition_.extent(in.level, in.block);
   if (in.samples != e.samples)
-    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": samples disagree with the partition");
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
+                          ": samples disagree with the partition");
   const std::string problem = modelProblem(in, header_.mode, header_.degree, e);
-  if (!problem.empty()) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": " + problem);
+  if (!problem.empty())
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": " + problem);
   const uint64_t bytes = in.storedSize;
   if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
                : bytes != uncodedBytes(in))
-    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": stored size " + std::to_string(bytes) +
-                          " invalid");
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
+                          ": stored size " + std::to_string(bytes) + " invalid");
   const uint32_t crc = crc32(stored, bytes);
   const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
                                           partition_.linearIndex(in.level, in.block));
   std::lock_guard<std::mutex> lock(mutex_);
   if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
-  if (present_[slot]) throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
+  if (present_[slot])
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
   const uint64_t offset = end_;
   pwriteAll(fd_, stored, bytes, offset, tmpPath_);
   end_ = alignUp(offset + bytes, kPayloadAlign);
@@ -633,7 +675,8 @@ void AfamWriter::commit() {
     if (!present_[i]) {
       int level = 0;
       while (static_cast<int64_t>(i) >= levelStart_[static_cast<size_t>(level) + 1]) ++level;
-      const Int3 ijk = partition_.blockFromLinear(level, static_cast<int64_t>(i) - levelStart_[static_cast<size_t>(level)]);
+      const Int3 ijk = partition_.blockFromLinear(
+          level, static_cast<int64_t>(i) - levelStart_[static_cast<size_t>(level)]);
       throw InvalidArgument(path_ + ": commit without " + Partition::blockName(level, ijk));
     }
   std::vector<IndexEntryV1> raw(entries_.size());
@@ -713,7 +756,8 @@ void AfamWriter::commit() {
   committed_ = true;
   // Make the rename durable: fsync the directory (best effort).
   const size_t slash = path_.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : path_.substr(0, slash));
+  const std::string dir =
+      slash == std::string::npos ? "." : (slash == 0 ? "/" : path_.substr(0, slash));
   const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     ::fsync(dfd);

@@ -27,12 +27,14 @@ struct Lattice {
 /// q[index] known when it returns.
 template <typename Fn>
 void lorenzo(const Lattice& L, const double* q, int s, Fn&& fn) {
-  auto at = [&](int x, int y, int z) -> double { return x < 0 || y < 0 || z < 0 ? 0.0 : q[size_t(L.index(x, y, z))]; };
+  auto at = [&](int x, int y, int z) -> double {
+    return x < 0 || y < 0 || z < 0 ? 0.0 : q[size_t(L.index(x, y, z))];
+  };
   for (int z = 0; z < L.n[2]; z += s)
     for (int y = 0; y < L.n[1]; y += s)
       for (int x = 0; x < L.n[0]; x += s) {
         const double p = at(x - s, y, z) + at(x, y - s, z) + at(x, y, z - s) - at(x - s, y - s, z) -
-                          at(x - s, y, z - s) - at(x, y - s, z - s) + at(x - s, y - s, z - s);
+                         at(x - s, y, z - s) - at(x, y - s, z - s) + at(x - s, y - s, z - s);
         fn(L.index(x, y, z), p);
       }
 }
@@ -59,15 +61,18 @@ void interpolation(const Lattice& L, const double* q, Fn&& fn) {
     for (int z = 0; z < L.n[2]; z += s2)
       for (int y = 0; y < L.n[1]; y += s2)
         for (int x = s; x < L.n[0]; x += s2)
-          fn(L.index(x, y, z), interpolate(x, s, L.n[0], [&](int k) { return q[size_t(L.index(k, y, z))]; }));
+          fn(L.index(x, y, z),
+             interpolate(x, s, L.n[0], [&](int k) { return q[size_t(L.index(k, y, z))]; }));
     for (int z = 0; z < L.n[2]; z += s2)
       for (int y = s; y < L.n[1]; y += s2)
         for (int x = 0; x < L.n[0]; x += s)
-          fn(L.index(x, y, z), interpolate(y, s, L.n[1], [&](int k) { return q[size_t(L.index(x, k, z))]; }));
+          fn(L.index(x, y, z),
+             interpolate(y, s, L.n[1], [&](int k) { return q[size_t(L.index(x, k, z))]; }));
     for (int z = s; z < L.n[2]; z += s2)
       for (int y = 0; y < L.n[1]; y += s)
         for (int x = 0; x < L.n[0]; x += s)
-          fn(L.index(x, y, z), interpolate(z, s, L.n[2], [&](int k) { return q[size_t(L.index(x, y, k))]; }));
+          fn(L.index(x, y, z),
+             interpolate(z, s, L.n[2], [&](int k) { return q[size_t(L.index(x, y, k))]; }));
   }
 }
 
@@ -120,8 +125,8 @@ T* threadBuffer(size_t count) {
 /// quantizes the prediction residual: code = round((v - prediction) / step), reconstruction =
 /// prediction + code * step, so each reconstructed value lies within step / 2 of its value.
 /// false when a code exceeds 2^50.
-bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor, std::vector<int64_t>& codes,
-                     std::vector<float>& reconstructed) {
+bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor,
+                     std::vector<int64_t>& codes, std::vector<float>& reconstructed) {
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   std::vector<double> r(count, 0.0);
   codes.clear();
@@ -144,7 +149,8 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
 
 }  // namespace
 
-bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor, std::vector<float>& reconstructed) {
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
+                    std::vector<float>& reconstructed) {
   if (!(step > 0) || !std::isfinite(step)) return false;
   std::vector<int64_t> codes;
   return predictQuantize(values, n, step, predictor, codes, reconstructed);
@@ -154,7 +160,8 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
   if (!(step > 0) || !std::isfinite(step)) return std::numeric_limits<double>::infinity();
   std::vector<int64_t> codes;
   std::vector<float> recon;
-  if (!predictQuantize(values, n, step, predictor, codes, recon)) return std::numeric_limits<double>::infinity();
+  if (!predictQuantize(values, n, step, predictor, codes, recon))
+    return std::numeric_limits<double>::infinity();
   std::sort(codes.begin(), codes.end());
   double bits = 0;
   for (size_t i = 0; i < codes.size();) {
@@ -179,30 +186,38 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
   out.resize(kCodedHeaderBytes + ZSTD_compressBound(varints.size()));
   std::memcpy(out.data(), &step, 8);
   out[8] = uint8_t(predictor);
-  const size_t z = ZSTD_compressCCtx(threadCCtx(), out.data() + kCodedHeaderBytes, out.size() - kCodedHeaderBytes,
-                                     varints.data(), varints.size(), zstdLevel);
+  const size_t z =
+      ZSTD_compressCCtx(threadCCtx(), out.data() + kCodedHeaderBytes,
+                        out.size() - kCodedHeaderBytes, varints.data(), varints.size(), zstdLevel);
   if (ZSTD_isError(z)) throw Error(std::string("zstd: ") + ZSTD_getErrorName(z));
   out.resize(kCodedHeaderBytes + z);
   return true;
 }
 
 void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
-  auto bad = [&](const std::string& what) { return FormatError(std::string(where) + ": coded payload " + what); };
+  auto bad = [&](const std::string& what) {
+    return FormatError(std::string(where) + ": coded payload " + what);
+  };
   if (bytes < kCodedHeaderBytes + 1) throw bad("shorter than its header");
   double step;
   std::memcpy(&step, data, 8);
   if (!(step > 0) || !std::isfinite(step)) throw bad("has an invalid quantization step");
-  if (data[8] > uint8_t(Predictor::Interpolation)) throw bad("names unknown predictor " + std::to_string(data[8]));
+  if (data[8] > uint8_t(Predictor::Interpolation))
+    throw bad("names unknown predictor " + std::to_string(data[8]));
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   // The frame says how many varint bytes it holds (at most 10 a value); the buffers are the
   // thread's, reused without being cleared: every value the predictors read is written first.
-  const unsigned long long framed = ZSTD_getFrameContentSize(data + kCodedHeaderBytes, bytes - kCodedHeaderBytes);
+  const unsigned long long framed =
+      ZSTD_getFrameContentSize(data + kCodedHeaderBytes, bytes - kCodedHeaderBytes);
   if (framed == ZSTD_CONTENTSIZE_ERROR) throw bad("does not decompress (not a zstd frame)");
-  const size_t capacity = framed == ZSTD_CONTENTSIZE_UNKNOWN ? count * 10 : size_t(std::min<unsigned long long>(framed, count * 10));
+  const size_t capacity = framed == ZSTD_CONTENTSIZE_UNKNOWN
+                              ? count * 10
+                              : size_t(std::min<unsigned long long>(framed, count * 10));
   uint8_t* varints = threadBuffer<uint8_t>(capacity);
   const size_t got = ZSTD_decompressDCtx(threadDCtx(), varints, capacity, data + kCodedHeaderBytes,
                                          bytes - kCodedHeaderBytes);
-  if (ZSTD_isError(got)) throw bad(std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");
+  if (ZSTD_isError(got))
+    throw bad(std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");
   double* r = threadBuffer<double>(count);
   size_t pos = 0;
   visit(Predictor(data[8]), Lattice{n}, r, [&](int64_t i, double pred) {

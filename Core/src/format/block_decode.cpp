@@ -9,7 +9,8 @@
 
 namespace afam {
 
-void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode mode, std::vector<float>& out) {
+void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode mode,
+                        std::vector<float>& out) {
   const Int3 n = e.samples;
   if (mode == EncodingMode::Downsampled) {
     out.resize(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
@@ -17,7 +18,8 @@ void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode 
     for (int z = 0; z < n[2]; ++z)
       for (int y = 0; y < n[1]; ++y)
         std::memcpy(out.data() + (size_t(z) * size_t(n[1]) + size_t(y)) * size_t(n[0]),
-                    payload + ((size_t(z) + 1) * gy + size_t(y) + 1) * gx + 1, size_t(n[0]) * sizeof(float));
+                    payload + ((size_t(z) + 1) * gy + size_t(y) + 1) * gx + 1,
+                    size_t(n[0]) * sizeof(float));
     return;
   }
   FitResult model;
@@ -29,7 +31,8 @@ void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode 
 
 LevelGrid levelGrid(const Partition& part, int level) {
   if (level < 0 || level >= part.levels())
-    throw InvalidArgument("level " + std::to_string(level) + " outside [0, " + std::to_string(part.levels() - 1) + "]");
+    throw InvalidArgument("level " + std::to_string(level) + " outside [0, " +
+                          std::to_string(part.levels() - 1) + "]");
   LevelGrid g;
   const Int3 nb = part.blocksPerAxis(level);
   for (int a = 0; a < 3; ++a) {

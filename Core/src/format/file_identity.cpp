@@ -31,7 +31,8 @@ FileIdentity identityOfPath(const std::string& path) {
 
 std::string describeChange(const FileIdentity& opened, const FileIdentity& now) {
   if (!now.exists) return "it no longer exists";
-  if (now.device != opened.device || now.inode != opened.inode) return "it was replaced by another file";
+  if (now.device != opened.device || now.inode != opened.inode)
+    return "it was replaced by another file";
   if (now.size != opened.size)
     return "its size went from " + std::to_string(opened.size) + " to " + std::to_string(now.size) +
            " bytes";

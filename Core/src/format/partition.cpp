@@ -17,7 +17,8 @@ Partition::Partition(Index3 dims, int levels, int finestBlocksPerAxis)
                             std::to_string(dims[a]) + ", must be >= 1");
   }
   if (levels < 1 || levels > 16)
-    throw InvalidArgument("partition: levels is " + std::to_string(levels) + ", must be in [1, 16]");
+    throw InvalidArgument("partition: levels is " + std::to_string(levels) +
+                          ", must be in [1, 16]");
   if (finestBlocksPerAxis < 1 || finestBlocksPerAxis > 65535)
     throw InvalidArgument("partition: blocks per axis is " + std::to_string(finestBlocksPerAxis) +
                           ", must be in [1, 65535]");
@@ -27,8 +28,8 @@ Partition::Partition(Index3 dims, int levels, int finestBlocksPerAxis)
     auto& b = finestBounds_[a];
     b.resize(static_cast<size_t>(bf + 1));
     for (int64_t i = 0; i <= bf; ++i)
-      b[static_cast<size_t>(i)] = static_cast<int64_t>(
-          std::llround(static_cast<double>(i) * static_cast<double>(n - 1) / static_cast<double>(bf)));
+      b[static_cast<size_t>(i)] = static_cast<int64_t>(std::llround(
+          static_cast<double>(i) * static_cast<double>(n - 1) / static_cast<double>(bf)));
   }
 }
 
@@ -72,7 +73,8 @@ BlockExtent Partition::extent(int level, Int3 ijk) const {
     if (extentSamples == 0) {
       e.samples[a] = 1;
     } else {
-      const int64_t n = std::llround(static_cast<double>(extentSamples) / static_cast<double>(r)) + 1;
+      const int64_t n =
+          std::llround(static_cast<double>(extentSamples) / static_cast<double>(r)) + 1;
       e.samples[a] = static_cast<int>(std::max<int64_t>(2, n));
     }
   }
@@ -117,10 +119,12 @@ Int3 Partition::parent(int level, Int3 ijk) const {
 }
 
 PartitionShape defaultPartition(const Index3& dims, int blockEdge) {
-  if (blockEdge < 2) throw InvalidArgument("block edge " + std::to_string(blockEdge) + " must be >= 2 samples");
+  if (blockEdge < 2)
+    throw InvalidArgument("block edge " + std::to_string(blockEdge) + " must be >= 2 samples");
   const int64_t n = std::max({dims[0], dims[1], dims[2]});
   PartitionShape s;
-  s.blocksPerAxis = int(std::max<int64_t>(1, std::min<int64_t>(65535, std::llround(double(n - 1) / blockEdge))));
+  s.blocksPerAxis =
+      int(std::max<int64_t>(1, std::min<int64_t>(65535, std::llround(double(n - 1) / blockEdge))));
   while (s.levels < 16 && (s.blocksPerAxis >> s.levels) >= 2) ++s.levels;
   return s;
 }

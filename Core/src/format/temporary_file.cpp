@@ -28,13 +28,16 @@ void splitPath(const std::string& path, std::string& dir, std::string& base) {
 }
 
 bool isOwnPattern(const std::string& name, const std::string& prefix) {
-  if (name.size() != prefix.size() + kRandomChars || name.compare(0, prefix.size(), prefix) != 0) return false;
+  if (name.size() != prefix.size() + kRandomChars || name.compare(0, prefix.size(), prefix) != 0)
+    return false;
   for (size_t i = prefix.size(); i < name.size(); ++i)
     if (!std::isalnum(static_cast<unsigned char>(name[i]))) return false;
   return true;
 }
 
-bool sameFile(const struct stat& a, const struct stat& b) { return a.st_dev == b.st_dev && a.st_ino == b.st_ino; }
+bool sameFile(const struct stat& a, const struct stat& b) {
+  return a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+}
 
 // Removes `file` if it is a regular file of ours whose lock is free. The lock is held while
 // checking that the name still refers to the file opened, so a writer that just created it (and
@@ -43,9 +46,11 @@ bool removeIfStale(const std::string& file) {
   const int fd = ::open(file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) return false;
   bool removed = false;
-  struct stat opened {}, named {};
+  struct stat opened {
+  }, named{};
   if (::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) && opened.st_uid == ::geteuid() &&
-      ::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::lstat(file.c_str(), &named) == 0 && sameFile(opened, named))
+      ::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::lstat(file.c_str(), &named) == 0 &&
+      sameFile(opened, named))
     removed = ::unlink(file.c_str()) == 0;
   ::close(fd);  // releases the lock
   return removed;
@@ -59,12 +64,14 @@ int createLockedTemporary(const std::string& path, std::string& tmpPath) {
     std::vector<char> buf(tmpl.begin(), tmpl.end());
     buf.push_back('\0');
     const int fd = ::mkostemp(buf.data(), O_CLOEXEC);
-    if (fd < 0) throw IoError(path + ": cannot create temporary file " + tmpl + ": " + std::strerror(errno));
-    struct stat opened {}, named {};
+    if (fd < 0)
+      throw IoError(path + ": cannot create temporary file " + tmpl + ": " + std::strerror(errno));
+    struct stat opened {
+    }, named{};
     // Between mkostemp and flock another writer may have judged the file stale and removed it:
     // then the name no longer refers to this descriptor, and we start again.
-    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &opened) == 0 && ::lstat(buf.data(), &named) == 0 &&
-        sameFile(opened, named)) {
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &opened) == 0 &&
+        ::lstat(buf.data(), &named) == 0 && sameFile(opened, named)) {
       ::fchmod(fd, 0644);
       tmpPath = buf.data();
       return fd;

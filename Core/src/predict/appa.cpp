@@ -12,9 +12,9 @@
 #include <iterator>
 #include <thread>
 
+#include "afam/base/errors.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/atomic_write.hpp"
-#include "afam/base/errors.hpp"
 #include "afam/scene/lod.hpp"
 
 namespace afam {
@@ -83,7 +83,8 @@ AppaTable AppaTable::build(const AppaGrid& grid, const VisibleFn& visible, int t
   std::vector<std::vector<int64_t>> per(static_cast<std::size_t>(cells));
   threads = std::max(1, threads);
   auto work = [&](int t) {
-    for (int c = t; c < cells; c += threads) per[static_cast<std::size_t>(c)] = visible(grid.samplePose(c));
+    for (int c = t; c < cells; c += threads)
+      per[static_cast<std::size_t>(c)] = visible(grid.samplePose(c));
   };
   if (threads == 1) {
     work(0);
@@ -111,7 +112,8 @@ std::pair<const uint32_t*, const uint32_t*> AppaTable::lookup(const Pose& pose) 
   if (offsets_.size() < 2) return {nullptr, nullptr};
   const int c = grid_.cellOf(pose);
   const uint32_t* base = entries_.data();
-  return {base + offsets_[static_cast<std::size_t>(c)], base + offsets_[static_cast<std::size_t>(c) + 1]};
+  return {base + offsets_[static_cast<std::size_t>(c)],
+          base + offsets_[static_cast<std::size_t>(c) + 1]};
 }
 
 std::vector<int64_t> AppaTable::blocks(const Pose& pose) const {
@@ -141,7 +143,8 @@ void AppaTable::save(const std::string& path) const {
 AppaTable AppaTable::load(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open APPA table '" + path + "'");
-  std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<unsigned char> b((std::istreambuf_iterator<char>(in)),
+                               std::istreambuf_iterator<char>());
   if (b.size() < 12 || std::memcmp(b.data(), "AFAPPA\0\0", 8) != 0)
     throw FormatError("APPA table '" + path + "': bad magic (not an APPA table)");
   const std::size_t body = b.size() - 4;
@@ -171,7 +174,8 @@ AppaTable AppaTable::load(const std::string& path) {
       static_cast<uint32_t>(t.grid_.phiCells()) != np)
     throw FormatError("APPA table '" + path + "': cell counts do not match the steps");
   const std::size_t cells = std::size_t(nd) * nt * np;
-  if ((body - r.pos) / 4 < cells + 1) throw FormatError("APPA table '" + path + "': truncated offsets");
+  if ((body - r.pos) / 4 < cells + 1)
+    throw FormatError("APPA table '" + path + "': truncated offsets");
   t.offsets_.resize(cells + 1);
   for (auto& o : t.offsets_) o = r.get<uint32_t>("offsets");
   if (t.offsets_[0] != 0) throw FormatError("APPA table '" + path + "': first offset not 0");
@@ -242,9 +246,9 @@ uint64_t appaSourceKey(const AfamFile& file, const std::string& context) {
   return h;
 }
 
-AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file, const LodSelector& selector,
-                                      int width, int height, std::vector<float> tfTable,
-                                      double tfLo, double tfHi) {
+AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file,
+                                      const LodSelector& selector, int width, int height,
+                                      std::vector<float> tfTable, double tfLo, double tfHi) {
   return [file, selector, width, height, tf = std::move(tfTable), tfLo, tfHi](const Pose& pose) {
     const Camera cam = Camera::fromPose(pose, width, height);
     const Selection sel = selector.select(*file, cam, tf, tfLo, tfHi);

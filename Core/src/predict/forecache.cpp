@@ -24,9 +24,12 @@ double emaAlpha = 0.5;  // weight of the newest move in a symbol's displacement
 
 const char* toString(ForeCachePhase phase) {
   switch (phase) {
-    case ForeCachePhase::Foraging: return "foraging";
-    case ForeCachePhase::Navigation: return "navigation";
-    case ForeCachePhase::Sensemaking: return "sensemaking";
+    case ForeCachePhase::Foraging:
+      return "foraging";
+    case ForeCachePhase::Navigation:
+      return "navigation";
+    case ForeCachePhase::Sensemaking:
+      return "sensemaking";
   }
   return "?";
 }
@@ -158,7 +161,8 @@ ForeCachePhase classifyPhase(const std::deque<CameraMove>& moves, double current
   const double meanStep = path / n;
   const double consistency = path > 1e-9 ? std::hypot(sx, sy) / path : 0.0;
   // Zooming is navigation (the user is moving towards or away from something).
-  if (zoom / n > o.zoomEpsilon && meanStep < o.sensemakingDegrees) return ForeCachePhase::Navigation;
+  if (zoom / n > o.zoomEpsilon && meanStep < o.sensemakingDegrees)
+    return ForeCachePhase::Navigation;
   if (meanStep < o.sensemakingDegrees || consistency < o.consistency)
     return ForeCachePhase::Sensemaking;
   if (currentDistance >= o.foragingDistance) return ForeCachePhase::Foraging;

@@ -58,7 +58,8 @@ inline float sigmoid(float x) { return 1.0f / (1.0f + std::exp(-x)); }
 LstmWeights loadLstmWeights(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open LSTM weights '" + path + "'");
-  std::vector<unsigned char> buf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<unsigned char> buf((std::istreambuf_iterator<char>(in)),
+                                 std::istreambuf_iterator<char>());
   if (in.bad()) throw IoError("reading LSTM weights '" + path + "' failed");
   if (buf.size() < 8 + 4 || std::memcmp(buf.data(), "AFLSTM\0\0", 8) != 0)
     throw FormatError("LSTM weights '" + path + "': bad magic (not an AFLSTM file)");

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <unordered_set>
 
-#include "afam/format/afam_file.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/predict/lstm.hpp"
 
 namespace afam {
@@ -15,9 +15,10 @@ Pose poseOf(const Camera& c) { return poseFromPosition(c.eye); }
 
 std::string appaContext(const PredictorContext& ctx) {
   // Everything that changes which blocks a pose sees.
-  std::string s = "lod:" + std::to_string(int(ctx.lod.policy)) + ":" + std::to_string(ctx.lod.bandWidth) +
-                  ":" + std::to_string(ctx.lod.pixelBudget) + ":" + std::to_string(ctx.lod.frustumCulling) +
-                  ":" + std::to_string(ctx.lod.tfCulling) + ";tf:" + std::to_string(ctx.tfLo) + ":" +
+  std::string s = "lod:" + std::to_string(int(ctx.lod.policy)) + ":" +
+                  std::to_string(ctx.lod.bandWidth) + ":" + std::to_string(ctx.lod.pixelBudget) +
+                  ":" + std::to_string(ctx.lod.frustumCulling) + ":" +
+                  std::to_string(ctx.lod.tfCulling) + ";tf:" + std::to_string(ctx.tfLo) + ":" +
                   std::to_string(ctx.tfHi) + ":";
   const uint64_t tfHash = fnv1a64(ctx.tfTable.data(), ctx.tfTable.size() * sizeof(float));
   return s + std::to_string(tfHash) + ";camera:fromPose-256";
@@ -34,8 +35,9 @@ BlockSignature entrySignature(const AfamFile& file, int64_t entry) {
   const VolumeHeader& h = file.header();
   const double lo = h.valueMin, range = h.valueMax > h.valueMin ? h.valueMax - h.valueMin : 1.0;
   const double ncp = double(e.ncp[0]) * e.ncp[1] * e.ncp[2];
-  return {float((0.5 * (e.minValue + e.maxValue) - lo) / range), float((e.maxValue - e.minValue) / range),
-          float(std::log2(std::max(1.0, ncp)) / 15.0), float(e.rmse / range)};
+  return {float((0.5 * (e.minValue + e.maxValue) - lo) / range),
+          float((e.maxValue - e.minValue) / range), float(std::log2(std::max(1.0, ncp)) / 15.0),
+          float(e.rmse / range)};
 }
 
 namespace {
@@ -52,7 +54,8 @@ std::unique_ptr<Predictor> makeAppa(const PredictorContext& ctx) {
 }
 }  // namespace
 
-std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx) {
+std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name,
+                                                 const PredictorContext& ctx) {
   if (name == "none") return std::make_unique<NoPredictor>();
   if (name == "linear") return std::make_unique<LinearPredictor>();
   if (name == "lstm")
@@ -72,7 +75,8 @@ bool AppaPredictor::predict(const std::vector<Camera>& history, Camera& next) co
   return true;
 }
 
-bool AppaPredictor::predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const {
+bool AppaPredictor::predictEntries(const std::vector<Camera>& history,
+                                   std::vector<int64_t>& entries) const {
   if (!hasTable_ || history.empty()) return false;
   auto [b, e] = table_.lookup(poseOf(history.back()));
   entries.assign(b, e);

@@ -53,7 +53,8 @@ size_t BlockLoader::pendingOf(const std::vector<int64_t>& entries) const {
 size_t BlockLoader::waitFor(const std::vector<int64_t>& entries, Clock::time_point deadline) {
   std::unique_lock<std::mutex> lock(mutex_);
   size_t left = pendingOf(entries);
-  while (left > 0 && done_.wait_until(lock, deadline) != std::cv_status::timeout) left = pendingOf(entries);
+  while (left > 0 && done_.wait_until(lock, deadline) != std::cv_status::timeout)
+    left = pendingOf(entries);
   return pendingOf(entries);
 }
 

@@ -15,7 +15,8 @@ using Clock = std::chrono::steady_clock;
 
 LruCache::LruCache(std::shared_ptr<const AfamFile> file, CacheBudget budget,
                    std::shared_ptr<DamageLog> damage)
-    : file_(std::move(file)), budget_(budget),
+    : file_(std::move(file)),
+      budget_(budget),
       damage_(damage ? std::move(damage) : std::make_shared<DamageLog>()) {
   if (!file_) throw InvalidArgument("cache: no file");
 }

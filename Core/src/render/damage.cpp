@@ -13,8 +13,10 @@ bool DamageLog::isDamaged(int64_t entry) const {
 bool DamageLog::record(const AfamFile& file, int64_t entry, const std::string& message) {
   std::lock_guard<std::mutex> g(mutex_);
   if (!damaged_.insert(entry).second) return false;
-  pending_.push_back(message + "; this micro-model is skipped and its region drawn from the nearest "
-                     "intact level (`afam verify " + file.path() + "` lists every damaged micro-model)");
+  pending_.push_back(message +
+                     "; this micro-model is skipped and its region drawn from the nearest "
+                     "intact level (`afam verify " +
+                     file.path() + "` lists every damaged micro-model)");
   return true;
 }
 

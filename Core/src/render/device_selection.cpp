@@ -8,7 +8,9 @@ namespace afam {
 
 namespace {
 
-const char* lookup(const EnvironmentLookup& env, const char* name) { return env ? env(name) : std::getenv(name); }
+const char* lookup(const EnvironmentLookup& env, const char* name) {
+  return env ? env(name) : std::getenv(name);
+}
 
 /// A non-negative decimal integer below 2^20, or -1.
 int parseIndex(const char* text) {
@@ -25,7 +27,8 @@ int parseIndex(const char* text) {
 }  // namespace
 
 int localRankFromEnvironment(const EnvironmentLookup& env) {
-  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "MV2_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID"}) {
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID",
+                           "MV2_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID"}) {
     const int rank = parseIndex(lookup(env, name));
     if (rank >= 0) return rank;
   }

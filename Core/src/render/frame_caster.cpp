@@ -6,7 +6,8 @@
 
 namespace afam {
 
-CastResult CpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) {
+CastResult CpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets,
+                           ImageRGBA& image) {
   FrameView view = frame.view;
   view.maxDistance = targets.maxDistance;
   renderCpu(view, image, threads_);

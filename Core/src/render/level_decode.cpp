@@ -6,11 +6,11 @@
 #include <limits>
 #include <memory>
 
-#include "afam/render/damage.hpp"
 #include "afam/base/errors.hpp"
-#include "afam/spline/fit.hpp"
+#include "afam/render/damage.hpp"
 #include "afam/render/raycast.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/spline/fit.hpp"
 
 namespace afam {
 
@@ -59,8 +59,9 @@ class StandIns {
 
 /// Level-grid samples [b0, b1] of a damaged block, written into the box `out` (origin lo, n
 /// samples per axis) from its stand-ins.
-void fillFromStandIns(const AfamFile& f, const LevelGrid& g, const BlockRef& damaged, const int64_t b0[3],
-                      const int64_t b1[3], const Index3& lo, const Index3& n, float* out) {
+void fillFromStandIns(const AfamFile& f, const LevelGrid& g, const BlockRef& damaged,
+                      const int64_t b0[3], const int64_t b1[3], const Index3& lo, const Index3& n,
+                      float* out) {
   const StandIns standIns(f, damaged);
   const BlockExtent e = f.partition().extent(damaged.level, damaged.ijk);
   for (int64_t z = b0[2]; z <= b1[2]; ++z)
@@ -69,7 +70,8 @@ void fillFromStandIns(const AfamFile& f, const LevelGrid& g, const BlockRef& dam
         const int64_t at[3] = {xi, y, z};
         float x[3];  // voxel coordinates of the sample
         for (int a = 0; a < 3; ++a)
-          x[a] = float(f.partition().samplePosition(e, a, int(at[a] - g.start[size_t(a)][size_t(damaged.ijk[a])])));
+          x[a] = float(f.partition().samplePosition(
+              e, a, int(at[a] - g.start[size_t(a)][size_t(damaged.ijk[a])])));
         out[((z - lo[2]) * n[1] + (y - lo[1])) * n[0] + (xi - lo[0])] = standIns.valueAt(x);
       }
 }
@@ -77,7 +79,8 @@ void fillFromStandIns(const AfamFile& f, const LevelGrid& g, const BlockRef& dam
 }  // namespace
 
 void decodeLevelBox(const AfamFile& f, int level, const Index3& lo, const Index3& hi, float* out,
-                    const std::function<void(double)>& progress, std::vector<std::string>* damaged) {
+                    const std::function<void(double)>& progress,
+                    std::vector<std::string>* damaged) {
   const Partition& part = f.partition();
   const LevelGrid g = levelGrid(part, level);
   const Int3 nb = part.blocksPerAxis(level);
@@ -92,7 +95,8 @@ void decodeLevelBox(const AfamFile& f, int level, const Index3& lo, const Index3
     first[a] = int(std::upper_bound(st.begin(), st.end(), lo[a]) - st.begin()) - 1;
     last[a] = int(std::upper_bound(st.begin(), st.end(), hi[a]) - st.begin()) - 1;
   }
-  const double total = double(last[0] - first[0] + 1) * (last[1] - first[1] + 1) * (last[2] - first[2] + 1);
+  const double total =
+      double(last[0] - first[0] + 1) * (last[1] - first[1] + 1) * (last[2] - first[2] + 1);
   double done = 0;
   std::vector<float> payload, dec;
   for (int k = first[2]; k <= last[2]; ++k)

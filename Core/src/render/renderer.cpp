@@ -82,7 +82,8 @@ void Renderer::setFrameSettings(const FrameSettings& settings) {
 
 Selection Renderer::select(const Camera& camera) const {
   static const std::vector<float> none;
-  return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_, tfHi_);
+  return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_,
+                     tfHi_);
 }
 
 void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {

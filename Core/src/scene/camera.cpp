@@ -8,8 +8,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "afam/format/atomic_write.hpp"
 #include "afam/base/errors.hpp"
+#include "afam/format/atomic_write.hpp"
 
 namespace afam {
 namespace {
@@ -79,7 +79,8 @@ Camera Camera::lookAt(const Vec3& eye, const Vec3& focal, const Vec3& viewUp, do
   c.forward = sub(focal, eye);
   if (!normalize(c.forward)) throw InvalidArgument("camera: eye and focal point coincide");
   c.right = cross(c.forward, viewUp);
-  if (!normalize(c.right)) throw InvalidArgument("camera: view up is parallel to the view direction");
+  if (!normalize(c.right))
+    throw InvalidArgument("camera: view up is parallel to the view direction");
   c.up = cross(c.right, c.forward);
   c.tanHalfY = std::tan(0.5 * viewAngleDeg * kPi / 180.0);
   c.tanHalfX = c.tanHalfY * double(width) / double(height);

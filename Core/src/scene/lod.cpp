@@ -51,8 +51,9 @@ int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Cam
   // Half the view's height at the block: parallel, tanHalfY |up|; perspective, at distance d
   // along a ray, d tanHalfY |up| / |forward| (both |.| = 1 unless the camera was mapped()).
   const double upLength = std::sqrt(dot(c.up, c.up));
-  const double halfHeight = c.parallel ? c.tanHalfY * upLength
-                                       : d * c.tanHalfY * upLength / std::sqrt(dot(c.forward, c.forward));
+  const double halfHeight = c.parallel
+                                ? c.tanHalfY * upLength
+                                : d * c.tanHalfY * upLength / std::sqrt(dot(c.forward, c.forward));
   const double pixels = spacing / halfHeight * (0.5 * c.height);
   return pixels > options_.pixelBudget ? level + 1 : level;
 }

@@ -12,7 +12,8 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 void checkViews(int views) {
-  if (views < 1) throw InvalidArgument("trajectory: views must be at least 1, not " + std::to_string(views));
+  if (views < 1)
+    throw InvalidArgument("trajectory: views must be at least 1, not " + std::to_string(views));
 }
 
 void checkDistance(const char* what, double d) {
@@ -36,7 +37,7 @@ class PortableRandom {
  public:
   explicit PortableRandom(uint64_t seed) : state_(seed) {}
   double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
-  double normal(double sigma) {  // Box-Muller
+  double normal(double sigma) {                                                   // Box-Muller
     const double u1 = 1.0 - uniform(), u2 = uniform();
     return sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * kPi * u2);
   }
@@ -99,9 +100,12 @@ TrajectoryKind parseTrajectoryKind(const std::string& name) {
 
 const char* trajectoryKindName(TrajectoryKind kind) {
   switch (kind) {
-    case TrajectoryKind::Orbit: return "orbit";
-    case TrajectoryKind::Dolly: return "dolly";
-    case TrajectoryKind::Walk: return "walk";
+    case TrajectoryKind::Orbit:
+      return "orbit";
+    case TrajectoryKind::Dolly:
+      return "dolly";
+    case TrajectoryKind::Walk:
+      return "walk";
   }
   return "unknown";
 }
@@ -115,12 +119,13 @@ std::vector<Pose> orbitTrajectory(int views, double distance, double thetaDeg, d
     throw InvalidArgument("trajectory: phi and turns must be finite");
   std::vector<Pose> poses(static_cast<size_t>(views));
   for (int i = 0; i < views; ++i)
-    poses[size_t(i)] = Pose{distance, thetaDeg, wrapDegrees(phiStartDeg + 360.0 * turns * i / views)};
+    poses[size_t(i)] =
+        Pose{distance, thetaDeg, wrapDegrees(phiStartDeg + 360.0 * turns * i / views)};
   return poses;
 }
 
-std::vector<Pose> dollyTrajectory(int views, double fromDistance, double toDistance, double thetaDeg,
-                                  double phiDeg) {
+std::vector<Pose> dollyTrajectory(int views, double fromDistance, double toDistance,
+                                  double thetaDeg, double phiDeg) {
   checkViews(views);
   checkDistance("the first distance", fromDistance);
   checkDistance("the last distance", toDistance);
@@ -129,12 +134,14 @@ std::vector<Pose> dollyTrajectory(int views, double fromDistance, double toDista
   std::vector<Pose> poses(static_cast<size_t>(views));
   for (int i = 0; i < views; ++i) {
     const double t = views == 1 ? 0.0 : double(i) / double(views - 1);
-    poses[size_t(i)] = Pose{fromDistance + (toDistance - fromDistance) * t, thetaDeg, wrapDegrees(phiDeg)};
+    poses[size_t(i)] =
+        Pose{fromDistance + (toDistance - fromDistance) * t, thetaDeg, wrapDegrees(phiDeg)};
   }
   return poses;
 }
 
-std::vector<Pose> explorationWalk(int views, uint64_t seed, double minDistance, double maxDistance) {
+std::vector<Pose> explorationWalk(int views, uint64_t seed, double minDistance,
+                                  double maxDistance) {
   checkViews(views);
   checkDistance("the smallest distance", minDistance);
   checkDistance("the largest distance", maxDistance);
@@ -158,10 +165,12 @@ std::vector<Pose> explorationWalk(int views, uint64_t seed, double minDistance, 
 
 std::vector<Pose> generateTrajectory(const TrajectoryOptions& o) {
   switch (o.kind) {
-    case TrajectoryKind::Orbit: return orbitTrajectory(o.views, o.distance, o.thetaDeg, o.phiDeg, o.turns);
+    case TrajectoryKind::Orbit:
+      return orbitTrajectory(o.views, o.distance, o.thetaDeg, o.phiDeg, o.turns);
     case TrajectoryKind::Dolly:
       return dollyTrajectory(o.views, o.fromDistance, o.toDistance, o.thetaDeg, o.phiDeg);
-    case TrajectoryKind::Walk: return explorationWalk(o.views, o.seed, o.minDistance, o.maxDistance);
+    case TrajectoryKind::Walk:
+      return explorationWalk(o.views, o.seed, o.minDistance, o.maxDistance);
   }
   throw InvalidArgument("trajectory: unknown kind");
 }

@@ -93,7 +93,7 @@ int64_t rayLengthsFromDepth(const float* depth, int tileWidth, int tileHeight,
   const int w = t.width, h = t.height;
   limits.assign(size_t(w) * size_t(h), std::numeric_limits<float>::infinity());
   int64_t limited = 0;
-  for (int y = 0; y < h; ++y) {  // y = 0: bottom row
+  for (int y = 0; y < h; ++y) {                           // y = 0: bottom row
     float* row = &limits[size_t(h - 1 - y) * size_t(w)];  // row 0 = top
     for (int x = 0; x < w; ++x) {
       row[x] = rayLimitFromDepth(t, depth, x, y);

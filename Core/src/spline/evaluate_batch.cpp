@@ -58,8 +58,7 @@ struct Lanes4 : LaneTypes<Vec4, Vec4i, 4> {
     r2 = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
   }
   /// (gu, gv, gw) of the four points interleaved into out[0..11].
-  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw,
-                                              float* out) {
+  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw, float* out) {
     const F uv01 = __builtin_shufflevector(gu, gv, 0, 4, 1, 5);
     const F vw12 = __builtin_shufflevector(gv, gw, 1, 5, 2, 6);
     const F uv33 = __builtin_shufflevector(gu, gv, 3, 7, 3, 7);
@@ -81,8 +80,7 @@ struct Lanes8 : LaneTypes<Vec8, Vec8i, 8> {
     r1 = __builtin_shufflevector(lo[1], hi[1], 0, 1, 2, 3, 4, 5, 6, 7);
     r2 = __builtin_shufflevector(lo[2], hi[2], 0, 1, 2, 3, 4, 5, 6, 7);
   }
-  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw,
-                                              float* out) {
+  static AFAM_BATCH_INLINE void storeGradient(const F& gu, const F& gv, const F& gw, float* out) {
     Lanes4::storeGradient(__builtin_shufflevector(gu, gu, 0, 1, 2, 3),
                           __builtin_shufflevector(gv, gv, 0, 1, 2, 3),
                           __builtin_shufflevector(gw, gw, 0, 1, 2, 3), out);
@@ -158,7 +156,7 @@ template <typename L, bool G, bool Padded>
 AFAM_BATCH_INLINE void contract(const float* const* corners, int nx, int ny, const BlockBasis& t,
                                 int i, typename L::F* out) {
   using F = typename L::F;
-  auto at = [i](const float (*table)[kBlock], int r) { return load<F>(table[r] + i); };
+  auto at = [i](const float(*table)[kBlock], int r) { return load<F>(table[r] + i); };
   const F nx0 = at(t.N[0], 0), nx1 = at(t.N[0], 1), nx2 = at(t.N[0], 2);
   F dnx0 = {}, dnx1 = {}, dnx2 = {};
   if (G) {
@@ -203,8 +201,8 @@ AFAM_BATCH_INLINE void contract(const float* const* corners, int nx, int ny, con
 }
 
 template <typename L, bool G>
-AFAM_BATCH_INLINE void evaluateBlock(const ModelView& m, const float* uvw, int count,
-                                     float* value, float* gradient) {
+AFAM_BATCH_INLINE void evaluateBlock(const ModelView& m, const float* uvw, int count, float* value,
+                                     float* gradient) {
   using F = typename L::F;
   using I = typename L::I;
   constexpr int kLanes = L::kCount;
@@ -225,8 +223,7 @@ AFAM_BATCH_INLINE void evaluateBlock(const ModelView& m, const float* uvw, int c
   // Corners whose 4-wide row loads could read past the last control point take 3-wide loads.
   const int lastSafeCorner = m.knots[2].ncp * ny * nx - 1 - ((2 * ny + 2) * nx + 3);
   for (int i = 0; i < padded; i += kLanes) {
-    const I corner =
-        load<I>(t.first[0] + i) + load<I>(t.first[1] + i) + load<I>(t.first[2] + i);
+    const I corner = load<I>(t.first[0] + i) + load<I>(t.first[1] + i) + load<I>(t.first[2] + i);
     const I outside = corner > lastSafeCorner;
     const float* corners[kLanes];
     bool inBounds = true;
@@ -275,8 +272,8 @@ void evaluateDegree2Lanes4(const ModelView& m, const float* uvw, std::size_t n, 
 #define AFAM_BATCH_AVX2 1
 template <bool G>
 __attribute__((target("avx2"))) void evaluateDegree2Lanes8(const ModelView& m, const float* uvw,
-                                                            std::size_t n, float* value,
-                                                            float* gradient) {
+                                                           std::size_t n, float* value,
+                                                           float* gradient) {
   evaluateBlocked<Lanes8, G>(m, uvw, n, value, gradient);
 }
 #endif
@@ -301,8 +298,8 @@ int detail::batchLanes() {
   return 4;
 }
 
-void detail::evaluateModelBatchLanes(int lanes, const ModelView& m, const float* uvw,
-                                     std::size_t n, float* value, float* gradient) {
+void detail::evaluateModelBatchLanes(int lanes, const ModelView& m, const float* uvw, std::size_t n,
+                                     float* value, float* gradient) {
   const int p = m.knots[0].degree;
   if (p == 2 && m.knots[1].degree == 2 && m.knots[2].degree == 2 && m.knots[0].ncp >= 3 &&
       m.knots[1].ncp >= 3 && m.knots[2].ncp >= 3) {

@@ -254,8 +254,8 @@ void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, 
   }
 }
 
-/// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along x
-/// become the vectors of the row kernels.
+/// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along
+/// x become the vectors of the row kernels.
 template <typename In, typename Out>
 void transpose(const In* __restrict src, size_t rows, size_t cols, Out* __restrict dst) {
   constexpr size_t kTile = 16;
@@ -281,7 +281,8 @@ void checkFinite(const float* samples, const std::array<int, 3>& n) {
       std::ostringstream msg;
       msg << "afam fit: sample (" << x << ", " << y << ", " << z << ") (flat index " << i
           << ") of the " << n[0] << " x " << n[1] << " x " << n[2] << " block is "
-          << (std::isnan(samples[i]) ? "NaN" : "infinite") << "; non-finite samples cannot be fitted";
+          << (std::isnan(samples[i]) ? "NaN" : "infinite")
+          << "; non-finite samples cannot be fitted";
       throw NumericError(msg.str());
     }
   }
@@ -379,9 +380,10 @@ FitResult BlockFitter::fit(const float* samples, std::array<int, 3> n, std::arra
   return out;
 }
 
-BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples, const std::array<int, 3>& n,
-                                                       const std::array<int, 3>& ncp, int degree,
-                                                       bool checkSamples) {
+BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples,
+                                                      const std::array<int, 3>& n,
+                                                      const std::array<int, 3>& ncp, int degree,
+                                                      bool checkSamples) {
   validateSamples(n);
   if (degree < 1 || degree > kMaxDegree) {
     std::ostringstream msg;
@@ -422,7 +424,8 @@ double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::
   transpose(bufY.data(), lines, nx, bufT.data());
   grow(bufB, mx * lines);
   for (size_t c0 = 0; c0 < lines; c0 += kChunk)
-    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines, std::min(kChunk, lines - c0));
+    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines,
+                       std::min(kChunk, lines - c0));
 
   // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
   // then z and y on the control-point layout (x fastest) in bufC.
@@ -466,7 +469,8 @@ double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
   return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
 
-double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b) {
+double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a,
+                                       const FitResult& b) {
   trimCache();
   const AxisSystem& ax = axis(n[0], a.ncp[0], a.degree[0], true);
   const AxisSystem& ay = axis(n[1], a.ncp[1], a.degree[1], true);
@@ -491,8 +495,8 @@ void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array
   if (computeError) measure(samples, n, out);
 }
 
-bool BlockFitter::decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n,
-                         FitResult& model) {
+bool BlockFitter::decide(const RmseRange& range, double bound, const float* samples,
+                         std::array<int, 3> n, FitResult& model) {
   if (range.lo > bound || range.hi <= bound) {
     model.error.rmse = range.lo > bound ? range.lo : range.hi;
     return range.hi <= bound;
@@ -501,8 +505,8 @@ bool BlockFitter::decide(const RmseRange& range, double bound, const float* samp
   return model.error.rmse <= bound;
 }
 
-bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
-                            double bound, double sumOfSquares, FitResult& out) {
+bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
+                            int degree, double bound, double sumOfSquares, FitResult& out) {
   Impl& im = *impl_;
   const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree, !std::isfinite(sumOfSquares));
   const double largest = im.solve(axes, samples, n, out);
@@ -521,8 +525,9 @@ bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const
   float largest = 0;
   for (size_t i = 0; i < fitted.control.size(); ++i)
     largest = std::max({largest, std::fabs(fitted.control[i]), std::fabs(changed.control[i])});
-  const RmseRange range = changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
-                                           size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  const RmseRange range =
+      changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
+                       size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
   changed.errorMeasured = false;
   changed.error = ErrorStats{};
   return decide(range, bound, samples, n, changed);
@@ -560,7 +565,8 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
   const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
   const size_t planeSize = nx * ny;
 
-  // x: control lines -> sample lines, transposed (line index fastest) so that lines are the vectors.
+  // x: control lines -> sample lines, transposed (line index fastest) so that lines are the
+  // vectors.
   const size_t lines = my * mz;
   grow(bufT, mx * lines);
   transpose(model.control.data(), lines, mx, bufT.data());
@@ -571,8 +577,7 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
   // y: per z-slab, x-rows.
   grow(bufEY, planeSize * mz);
   for (size_t k = 0; k < mz; ++k)
-    evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx,
-                 nullptr);
+    evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx, nullptr);
   // z: whole planes; either written out or reduced against the samples plane by plane.
   if (gridOut) {
     grow(plane, planeSize);
@@ -671,7 +676,8 @@ AxisConditioning axisConditioning(int n, int ncp, int degree) {
   buildCollocation(s, n, ncp, p);
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, ncp);
   for (int i = 0; i < n; ++i)
-    for (int r = 0; r <= p; ++r) a(i, s.first[size_t(i)] + r) = s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
+    for (int r = 0; r <= p; ++r)
+      a(i, s.first[size_t(i)] + r) = s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);  // singular values only
   const auto& sv = svd.singularValues();
   AxisConditioning out;

@@ -14,9 +14,10 @@ namespace {
 /// The rounding that rmseRange and changedRmseRange allow for, on `count` samples of a model whose
 /// largest |control point| is `largestControl`.
 struct Rounding {
-  double sums = 0;       ///< relative: sums of `count` terms and the solve, taken generously
-  double controls = 0;   ///< absolute: the float32 rounding of the control points moves the model
-                         ///< by at most half an ulp of the largest (a sample's basis weights are convex)
+  double sums = 0;  ///< relative: sums of `count` terms and the solve, taken generously
+  double controls =
+      0;  ///< absolute: the float32 rounding of the control points moves the model
+          ///< by at most half an ulp of the largest (a sample's basis weights are convex)
   double measuring = 0;  ///< absolute: the rounding of each model value when the error is measured
 };
 
@@ -48,7 +49,8 @@ RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, s
   return measuredRange((residual - slack) / n, hi * hi, r);
 }
 
-RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl, size_t count) {
+RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl,
+                           size_t count) {
   const Rounding r = roundingOf(largestControl, count);
   const double n = double(std::max<size_t>(count, 1));
   const double fLo = std::max(0.0, fittedRmse * (1 - r.sums) - r.measuring);

@@ -21,7 +21,8 @@ uint64_t mix(uint64_t x) {  // splitmix64's finaliser: a counter-based generator
 /// Approximately standard normal, from four 16-bit uniforms of one hash (Irwin-Hall, |g| < 3.47).
 float gaussianAt(uint64_t index, uint64_t seed) {
   const uint64_t h = mix(index ^ mix(seed));
-  const float sum = float(h & 0xffff) + float((h >> 16) & 0xffff) + float((h >> 32) & 0xffff) + float(h >> 48);
+  const float sum =
+      float(h & 0xffff) + float((h >> 16) & 0xffff) + float((h >> 32) & 0xffff) + float(h >> 48);
   constexpr float kScale = 1.0f / 65536.0f;
   constexpr float kInvStd = 1.7320508f;  // 1 / sqrt(4 / 12)
   return (sum * kScale - 2.0f) * kInvStd;
@@ -33,24 +34,33 @@ double estimateScanNoise(const std::vector<float>& samples, const Index3& dims) 
   std::vector<float> diffs;
   for (int64_t row = 0; row < dims[1] * dims[2]; ++row)
     for (int64_t x = 0; x + 1 < dims[0]; ++x)
-      diffs.push_back(std::fabs(samples[size_t(row * dims[0] + x + 1)] - samples[size_t(row * dims[0] + x)]));
+      diffs.push_back(
+          std::fabs(samples[size_t(row * dims[0] + x + 1)] - samples[size_t(row * dims[0] + x)]));
   if (diffs.empty()) return 0;
   std::nth_element(diffs.begin(), diffs.begin() + std::ptrdiff_t(diffs.size() / 2), diffs.end());
   return double(diffs[diffs.size() / 2]) / (0.6745 * std::sqrt(2.0));
 }
 
 EnlargedScanSource::EnlargedScanSource(std::vector<float> samples, Index3 dims, Index3 target,
-                                       double noiseSigma, uint64_t seed, double clampLo, double clampHi)
-    : source_(std::move(samples)), dims_(dims), target_(target), sigma_(noiseSigma), seed_(seed),
-      lo_(clampLo), hi_(clampHi) {
+                                       double noiseSigma, uint64_t seed, double clampLo,
+                                       double clampHi)
+    : source_(std::move(samples)),
+      dims_(dims),
+      target_(target),
+      sigma_(noiseSigma),
+      seed_(seed),
+      lo_(clampLo),
+      hi_(clampHi) {
   for (int a = 0; a < 3; ++a) {
     if (dims_[a] < 1) throw InvalidArgument("the volume to enlarge is empty");
-    if (target_[a] < 2) throw InvalidArgument("an enlarged volume needs at least 2 samples per axis");
+    if (target_[a] < 2)
+      throw InvalidArgument("an enlarged volume needs at least 2 samples per axis");
   }
   if (source_.size() != size_t(dims_[0] * dims_[1] * dims_[2]))
     throw InvalidArgument("the volume to enlarge has " + std::to_string(source_.size()) +
                           " samples, not the product of its dimensions");
-  if (!(sigma_ >= 0) || !std::isfinite(sigma_)) throw InvalidArgument("the noise must be finite and >= 0");
+  if (!(sigma_ >= 0) || !std::isfinite(sigma_))
+    throw InvalidArgument("the noise must be finite and >= 0");
   tx_ = taps(dims_[0], target_[0]);
   ty_ = taps(dims_[1], target_[1]);
   tz_ = taps(dims_[2], target_[2]);

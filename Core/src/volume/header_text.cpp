@@ -18,11 +18,13 @@ constexpr size_t kMaxLine = 64 * 1024;
 constexpr uint64_t kMaxHeader = 1024 * 1024;
 }  // namespace
 
-HeaderLines::HeaderLines(const std::string& path, const char* format) : path_(path), format_(format) {
+HeaderLines::HeaderLines(const std::string& path, const char* format)
+    : path_(path), format_(format) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw IoError(path + ": cannot open " + format + " header: " + std::strerror(errno));
-  if (!S_ISREG(st.st_mode)) throw IoError(path + ": cannot read " + format + " header: not a regular file");
+  if (!S_ISREG(st.st_mode))
+    throw IoError(path + ": cannot read " + format + " header: not a regular file");
   if (st.st_size == 0) throw IoError(path + ": empty file, no " + std::string(format) + " header");
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) throw IoError(path + ": cannot open " + format + " header: " + std::strerror(errno));
@@ -42,11 +44,14 @@ bool HeaderLines::next(std::string& line) {
     if (c == '\n') break;
     line.push_back(char(c));
     if (line.size() > kMaxLine)
-      throw FormatError(path_ + ": line longer than 64 KiB in the " + format_ + " header (binary data?)");
+      throw FormatError(path_ + ": line longer than 64 KiB in the " + format_ +
+                        " header (binary data?)");
   }
-  if (std::ferror(file_)) throw IoError(path_ + ": cannot read " + format_ + " header: " + std::strerror(errno));
+  if (std::ferror(file_))
+    throw IoError(path_ + ": cannot read " + format_ + " header: " + std::strerror(errno));
   if (offset_ > kMaxHeader)
-    throw FormatError(path_ + ": " + format_ + " header longer than 1 MiB (no end of header found)");
+    throw FormatError(path_ + ": " + format_ +
+                      " header longer than 1 MiB (no end of header found)");
   if (!line.empty() && line.back() == '\r') line.pop_back();
   return any;
 }
@@ -78,22 +83,27 @@ int64_t parseInteger(const std::string& path, const std::string& field, const st
   errno = 0;
   char* end = nullptr;
   const long long v = std::strtoll(token.c_str(), &end, 10);
-  if (token.empty() || *end != '\0' || errno == ERANGE) fieldError(path, field, "'" + token + "' is not an integer");
+  if (token.empty() || *end != '\0' || errno == ERANGE)
+    fieldError(path, field, "'" + token + "' is not an integer");
   return int64_t(v);
 }
 
-double parseReal(const std::string& path, const std::string& field, const std::string& token, bool allowNan) {
+double parseReal(const std::string& path, const std::string& field, const std::string& token,
+                 bool allowNan) {
   if (allowNan && lowercase(token) == "nan") return std::nan("");
   char* end = nullptr;
   const double v = std::strtod(token.c_str(), &end);
-  if (token.empty() || *end != '\0' || !std::isfinite(v)) fieldError(path, field, "'" + token + "' is not a finite number");
+  if (token.empty() || *end != '\0' || !std::isfinite(v))
+    fieldError(path, field, "'" + token + "' is not a finite number");
   return v;
 }
 
-std::vector<std::string> threeWords(const std::string& path, const std::string& field, const std::string& value) {
+std::vector<std::string> threeWords(const std::string& path, const std::string& field,
+                                    const std::string& value) {
   std::vector<std::string> w = words(value);
   if (w.size() != 3)
-    fieldError(path, field, "'" + value + "' has " + std::to_string(w.size()) + " values; a 3-D volume needs 3");
+    fieldError(path, field,
+               "'" + value + "' has " + std::to_string(w.size()) + " values; a 3-D volume needs 3");
   return w;
 }
 

@@ -32,7 +32,8 @@ class HeaderLines {
 };
 
 /// "PATH: field 'FIELD': WHAT" (FormatError).
-[[noreturn]] void fieldError(const std::string& path, const std::string& field, const std::string& what);
+[[noreturn]] void fieldError(const std::string& path, const std::string& field,
+                             const std::string& what);
 
 std::string trim(const std::string& s);
 std::string lowercase(std::string s);
@@ -42,7 +43,8 @@ int64_t parseInteger(const std::string& path, const std::string& field, const st
 double parseReal(const std::string& path, const std::string& field, const std::string& token,
                  bool allowNan = false);
 /// Exactly three values of a field.
-std::vector<std::string> threeWords(const std::string& path, const std::string& field, const std::string& value);
+std::vector<std::string> threeWords(const std::string& path, const std::string& field,
+                                    const std::string& value);
 /// `name` relative to the folder of `headerPath` (unchanged when absolute).
 std::string siblingPath(const std::string& headerPath, const std::string& name);
 

@@ -19,19 +19,21 @@ namespace afam {
 namespace {
 
 uint64_t expectedBytes(const VolumeFileHeader& h) {
-  return uint64_t(h.dims[0]) * uint64_t(h.dims[1]) * uint64_t(h.dims[2]) * uint64_t(sampleTypeSize(h.type));
+  return uint64_t(h.dims[0]) * uint64_t(h.dims[1]) * uint64_t(h.dims[2]) *
+         uint64_t(sampleTypeSize(h.type));
 }
 
 /// "the header's sizes 32 32 32 and type uint8 (fields 'sizes', 'type' of H) need N bytes"
 std::string headerNeeds(const VolumeFileHeader& h) {
   return "the sizes " + std::to_string(h.dims[0]) + " " + std::to_string(h.dims[1]) + " " +
-         std::to_string(h.dims[2]) + " and type " + sampleTypeName(h.type) + " (fields '" + h.sizesField +
-         "', '" + h.typeField + "' of " + h.headerPath + ") need " + std::to_string(expectedBytes(h)) + " bytes";
+         std::to_string(h.dims[2]) + " and type " + sampleTypeName(h.type) + " (fields '" +
+         h.sizesField + "', '" + h.typeField + "' of " + h.headerPath + ") need " +
+         std::to_string(expectedBytes(h)) + " bytes";
 }
 
 [[noreturn]] void missingData(const VolumeFileHeader& h, const std::string& why) {
-  throw IoError(h.dataPath + ": cannot open the data file named by field '" + h.dataField + "' of " + h.headerPath +
-                ": " + why);
+  throw IoError(h.dataPath + ": cannot open the data file named by field '" + h.dataField +
+                "' of " + h.headerPath + ": " + why);
 }
 
 int openData(const VolumeFileHeader& h, uint64_t& size) {
@@ -46,14 +48,17 @@ int openData(const VolumeFileHeader& h, uint64_t& size) {
   return fd;
 }
 
-void readFully(int fd, const std::string& path, uint64_t offset, unsigned char* dst, uint64_t bytes) {
+void readFully(int fd, const std::string& path, uint64_t offset, unsigned char* dst,
+               uint64_t bytes) {
   uint64_t done = 0;
   while (done < bytes) {
-    const ssize_t r = ::pread(fd, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)), off_t(offset + done));
+    const ssize_t r = ::pread(fd, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)),
+                              off_t(offset + done));
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0)
-      throw IoError(path + ": read failed at byte " + std::to_string(offset + done) + ": " +
-                    (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
+      throw IoError(
+          path + ": read failed at byte " + std::to_string(offset + done) + ": " +
+          (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
     done += uint64_t(r);
   }
 }
@@ -67,27 +72,31 @@ uint64_t payloadStart(const VolumeFileHeader& h, int fd, uint64_t fileSize) {
     unsigned char c = 0;
     do {
       if (offset >= fileSize)
-        throw FormatError(h.dataPath + ": field 'line skip' of " + h.headerPath + ": the file has fewer than " +
-                          std::to_string(h.lineSkip) + " lines");
+        throw FormatError(h.dataPath + ": field 'line skip' of " + h.headerPath +
+                          ": the file has fewer than " + std::to_string(h.lineSkip) + " lines");
       readFully(fd, h.dataPath, offset++, &c, 1);
     } while (c != '\n');
   }
   if (h.byteSkip == -1) {
     if (fileSize - offset < expectedBytes(h))
-      throw FormatError(h.dataPath + ": holds " + std::to_string(fileSize - offset) + " bytes, but " + headerNeeds(h));
+      throw FormatError(h.dataPath + ": holds " + std::to_string(fileSize - offset) +
+                        " bytes, but " + headerNeeds(h));
     return fileSize - expectedBytes(h);
   }
   return offset + uint64_t(h.byteSkip);
 }
 
 // Big-endian payloads are swapped; little-endian ones are read as they are.
-static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the byte swapping assumes a little-endian host");
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "the byte swapping assumes a little-endian host");
 
 }  // namespace
 
 HeaderVolumeSource::HeaderVolumeSource(VolumeFileHeader header) : header_(std::move(header)) {
-  if (header_.compressed) inflateAll();
-  else openRaw();
+  if (header_.compressed)
+    inflateAll();
+  else
+    openRaw();
 }
 
 HeaderVolumeSource::~HeaderVolumeSource() {
@@ -101,8 +110,9 @@ void HeaderVolumeSource::openRaw() {
     rawOffset_ = payloadStart(header_, fd_, size);
     const uint64_t have = size >= rawOffset_ ? size - rawOffset_ : 0;
     if (have != expectedBytes(header_))
-      throw FormatError(header_.dataPath + ": holds " + std::to_string(have) + " bytes of data after byte " +
-                        std::to_string(rawOffset_) + ", but " + headerNeeds(header_));
+      throw FormatError(header_.dataPath + ": holds " + std::to_string(have) +
+                        " bytes of data after byte " + std::to_string(rawOffset_) + ", but " +
+                        headerNeeds(header_));
   } catch (...) {
     ::close(fd_);
     fd_ = -1;
@@ -117,8 +127,8 @@ void HeaderVolumeSource::inflateAll() {
   try {
     const uint64_t start = payloadStart(header_, fd, size);
     if (start >= size)
-      throw FormatError(header_.dataPath + ": no compressed data after byte " + std::to_string(start) + ", but " +
-                        headerNeeds(header_));
+      throw FormatError(header_.dataPath + ": no compressed data after byte " +
+                        std::to_string(start) + ", but " + headerNeeds(header_));
     packed.resize(size - start);
     readFully(fd, header_.dataPath, start, packed.data(), packed.size());
   } catch (...) {
@@ -152,16 +162,17 @@ void HeaderVolumeSource::inflateAll() {
   const std::string msg = z.msg ? z.msg : "";
   inflateEnd(&z);
   if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR)
-    throw FormatError(header_.dataPath + ": compressed data are damaged (zlib: " + (msg.empty() ? "error" : msg) + ")");
+    throw FormatError(header_.dataPath + ": compressed data are damaged (zlib: " +
+                      (msg.empty() ? "error" : msg) + ")");
   if (out > expected)
-    throw FormatError(header_.dataPath + ": the compressed data hold more than " + std::to_string(expected) +
-                      " bytes, but " + headerNeeds(header_));
+    throw FormatError(header_.dataPath + ": the compressed data hold more than " +
+                      std::to_string(expected) + " bytes, but " + headerNeeds(header_));
   if (rc != Z_STREAM_END)
     throw FormatError(header_.dataPath + ": the compressed data end after " + std::to_string(out) +
                       " bytes without their trailer (truncated file?); " + headerNeeds(header_));
   if (out != expected)
-    throw FormatError(header_.dataPath + ": the compressed data hold " + std::to_string(out) + " bytes, but " +
-                      headerNeeds(header_));
+    throw FormatError(header_.dataPath + ": the compressed data hold " + std::to_string(out) +
+                      " bytes, but " + headerNeeds(header_));
   inflated_.resize(expected);
 }
 
@@ -180,7 +191,8 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   const uint64_t count = uint64_t(header_.dims[0]) * uint64_t(header_.dims[1]) * uint64_t(zCount);
   const uint64_t offset = uint64_t(z0) * uint64_t(header_.dims[0]) * uint64_t(header_.dims[1]) * es;
   const bool swap = header_.bigEndian;
-  if (!inflated_.empty()) return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
+  if (!inflated_.empty())
+    return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
   buffer_.resize(count * es);
   readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), buffer_.size());
   samplesToFloat(header_.type, buffer_.data(), count, out, swap);
@@ -195,7 +207,8 @@ bool hasVolumeHeaderExtension(const std::string& path) {
 
 VolumeFileHeader readVolumeHeader(const std::string& path) {
   const size_t dot = path.find_last_of('.');
-  const std::string ext = dot == std::string::npos ? "" : header_text::lowercase(path.substr(dot + 1));
+  const std::string ext =
+      dot == std::string::npos ? "" : header_text::lowercase(path.substr(dot + 1));
   if (ext == "nrrd" || ext == "nhdr") return readNrrdHeader(path);
   if (ext == "mha" || ext == "mhd") return readMetaImageHeader(path);
   throw InvalidArgument(path + ": not a .nrrd, .nhdr, .mha or .mhd file");

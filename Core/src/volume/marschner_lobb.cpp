@@ -19,8 +19,8 @@ double coordinate(const MarschnerLobb& ml, int64_t k, int64_t n) {
 
 void marschnerLobbSlab(const MarschnerLobb& ml, std::array<int64_t, 3> dims, int64_t z0,
                        int64_t zCount, float* out) {
-  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1 || z0 < 0 || zCount < 0 ||
-      z0 + zCount > dims[2] || (!out && zCount > 0) || !(ml.hi > ml.lo)) {
+  if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1 || z0 < 0 || zCount < 0 || z0 + zCount > dims[2] ||
+      (!out && zCount > 0) || !(ml.hi > ml.lo)) {
     std::ostringstream msg;
     msg << "afam marschnerLobbSlab: invalid slab [" << z0 << ", " << z0 + zCount << ") of "
         << dims[0] << " x " << dims[1] << " x " << dims[2] << " on [" << ml.lo << ", " << ml.hi

@@ -15,31 +15,52 @@ namespace {
 
 SampleType nrrdType(const std::string& path, const std::string& value) {
   static const std::map<std::string, SampleType> kTypes = {
-      {"signed char", SampleType::Int8},       {"int8", SampleType::Int8},
-      {"int8_t", SampleType::Int8},            {"uchar", SampleType::UInt8},
-      {"unsigned char", SampleType::UInt8},    {"uint8", SampleType::UInt8},
-      {"uint8_t", SampleType::UInt8},          {"short", SampleType::Int16},
-      {"short int", SampleType::Int16},        {"signed short", SampleType::Int16},
-      {"signed short int", SampleType::Int16}, {"int16", SampleType::Int16},
-      {"int16_t", SampleType::Int16},          {"ushort", SampleType::UInt16},
-      {"unsigned short", SampleType::UInt16},  {"unsigned short int", SampleType::UInt16},
-      {"uint16", SampleType::UInt16},          {"uint16_t", SampleType::UInt16},
-      {"int", SampleType::Int32},              {"signed int", SampleType::Int32},
-      {"int32", SampleType::Int32},            {"int32_t", SampleType::Int32},
-      {"uint", SampleType::UInt32},            {"unsigned int", SampleType::UInt32},
-      {"uint32", SampleType::UInt32},          {"uint32_t", SampleType::UInt32},
-      {"longlong", SampleType::Int64},          {"long long", SampleType::Int64},
-      {"long long int", SampleType::Int64},     {"signed long long", SampleType::Int64},
-      {"signed long long int", SampleType::Int64}, {"int64", SampleType::Int64},
-      {"int64_t", SampleType::Int64},           {"ulonglong", SampleType::UInt64},
-      {"unsigned long long", SampleType::UInt64}, {"unsigned long long int", SampleType::UInt64},
-      {"uint64", SampleType::UInt64},           {"uint64_t", SampleType::UInt64},
-      {"float", SampleType::Float32},          {"double", SampleType::Float64},
+      {"signed char", SampleType::Int8},
+      {"int8", SampleType::Int8},
+      {"int8_t", SampleType::Int8},
+      {"uchar", SampleType::UInt8},
+      {"unsigned char", SampleType::UInt8},
+      {"uint8", SampleType::UInt8},
+      {"uint8_t", SampleType::UInt8},
+      {"short", SampleType::Int16},
+      {"short int", SampleType::Int16},
+      {"signed short", SampleType::Int16},
+      {"signed short int", SampleType::Int16},
+      {"int16", SampleType::Int16},
+      {"int16_t", SampleType::Int16},
+      {"ushort", SampleType::UInt16},
+      {"unsigned short", SampleType::UInt16},
+      {"unsigned short int", SampleType::UInt16},
+      {"uint16", SampleType::UInt16},
+      {"uint16_t", SampleType::UInt16},
+      {"int", SampleType::Int32},
+      {"signed int", SampleType::Int32},
+      {"int32", SampleType::Int32},
+      {"int32_t", SampleType::Int32},
+      {"uint", SampleType::UInt32},
+      {"unsigned int", SampleType::UInt32},
+      {"uint32", SampleType::UInt32},
+      {"uint32_t", SampleType::UInt32},
+      {"longlong", SampleType::Int64},
+      {"long long", SampleType::Int64},
+      {"long long int", SampleType::Int64},
+      {"signed long long", SampleType::Int64},
+      {"signed long long int", SampleType::Int64},
+      {"int64", SampleType::Int64},
+      {"int64_t", SampleType::Int64},
+      {"ulonglong", SampleType::UInt64},
+      {"unsigned long long", SampleType::UInt64},
+      {"unsigned long long int", SampleType::UInt64},
+      {"uint64", SampleType::UInt64},
+      {"uint64_t", SampleType::UInt64},
+      {"float", SampleType::Float32},
+      {"double", SampleType::Float64},
   };
   const auto it = kTypes.find(lowercase(value));
   if (it == kTypes.end())
-    fieldError(path, "type", "unknown or unsupported type '" + value +
-                                 "' (8- to 64-bit integers, float and double are read)");
+    fieldError(path, "type",
+               "unknown or unsupported type '" + value +
+                   "' (8- to 64-bit integers, float and double are read)");
   return it->second;
 }
 
@@ -51,7 +72,8 @@ bool nrrdCompressed(const std::string& path, const std::string& value) {
 }
 
 /// "(a,b,c)" -> its three numbers.
-std::array<double, 3> nrrdVector(const std::string& path, const std::string& field, const std::string& token) {
+std::array<double, 3> nrrdVector(const std::string& path, const std::string& field,
+                                 const std::string& token) {
   if (token.size() < 2 || token.front() != '(' || token.back() != ')')
     fieldError(path, field, "'" + token + "' is not a vector (x,y,z)");
   std::string inner = token.substr(1, token.size() - 2);
@@ -77,7 +99,8 @@ std::array<double, 3> spacingFromDirections(const std::string& path, const std::
   for (int a = 0; a < 3; ++a) {
     const auto d = nrrdVector(path, "space directions", w[size_t(a)]);
     s[size_t(a)] = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    if (!(s[size_t(a)] > 0)) fieldError(path, "space directions", "axis " + std::to_string(a) + " has length 0");
+    if (!(s[size_t(a)] > 0))
+      fieldError(path, "space directions", "axis " + std::to_string(a) + " has length 0");
   }
   return s;
 }
@@ -108,13 +131,15 @@ void applyField(VolumeFileHeader& h, const std::string& key, const std::string& 
     h.compressed = nrrdCompressed(p, value);
   } else if (key == "endian") {
     const std::string v = lowercase(value);
-    if (v != "little" && v != "big") fieldError(p, key, "'" + value + "' is neither little nor big");
+    if (v != "little" && v != "big")
+      fieldError(p, key, "'" + value + "' is neither little nor big");
     h.bigEndian = v == "big";
   } else if (key == "spacings") {
     const auto w = threeWords(p, key, value);
     for (int a = 0; a < 3; ++a) {
       const double s = parseReal(p, key, w[size_t(a)], true);
-      if (!std::isnan(s) && !(s > 0)) fieldError(p, key, "'" + value + "': spacings must be positive");
+      if (!std::isnan(s) && !(s > 0))
+        fieldError(p, key, "'" + value + "': spacings must be positive");
       h.spacing[size_t(a)] = std::isnan(s) ? 1.0 : s;
     }
   } else if (key == "space directions") {
@@ -122,7 +147,8 @@ void applyField(VolumeFileHeader& h, const std::string& key, const std::string& 
   } else if (key == "space origin") {
     h.origin = nrrdVector(p, key, trim(value));
   } else if (key == "data file") {
-    if (words(value).size() != 1 || value.find('%') != std::string::npos || lowercase(words(value)[0]) == "list")
+    if (words(value).size() != 1 || value.find('%') != std::string::npos ||
+        lowercase(words(value)[0]) == "list")
       fieldError(p, key, "'" + value + "': several data files are not supported (one file is)");
     h.dataPath = siblingPath(p, trim(value));
   } else if (key == "byte skip") {
@@ -155,23 +181,28 @@ VolumeFileHeader readNrrdHeader(const std::string& path) {
     }
     if (line[0] == '#') continue;
     const size_t first = line.find(':');
-    if (first != std::string::npos && first + 1 < line.size() && line[first + 1] == '=') continue;  // key:=value
+    if (first != std::string::npos && first + 1 < line.size() && line[first + 1] == '=')
+      continue;  // key:=value
     const size_t colon = line.find(": ");
     if (colon == std::string::npos || colon != first)
       fieldError(path, trim(line), "a header line is not 'field: value'");
-    applyField(h, canonicalKey(lowercase(trim(line.substr(0, colon)))), trim(line.substr(colon + 2)), seen);
+    applyField(h, canonicalKey(lowercase(trim(line.substr(0, colon)))),
+               trim(line.substr(colon + 2)), seen);
   }
   for (const char* required : {"dimension", "type", "sizes", "encoding"})
     if (!seen[required]) fieldError(path, required, "missing");
-  if (sampleTypeSize(h.type) > 1 && !seen["endian"]) fieldError(path, "endian", "missing (needed for multi-byte types)");
+  if (sampleTypeSize(h.type) > 1 && !seen["endian"])
+    fieldError(path, "endian", "missing (needed for multi-byte types)");
   if (h.dataPath.empty()) {
     if (!blank) fieldError(path, "data file", "missing, and no data follow the header");
     h.dataPath = path;
     h.dataOffset = lines.offset();
     if (seen["byte skip"] || seen["line skip"])
-      fieldError(path, seen["byte skip"] ? "byte skip" : "line skip", "only for a detached data file");
+      fieldError(path, seen["byte skip"] ? "byte skip" : "line skip",
+                 "only for a detached data file");
   }
-  if (h.compressed && h.byteSkip == -1) fieldError(path, "byte skip", "-1 is only for raw encoding");
+  if (h.compressed && h.byteSkip == -1)
+    fieldError(path, "byte skip", "-1 is only for raw encoding");
   return h;
 }
 

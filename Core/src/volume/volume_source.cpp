@@ -18,8 +18,12 @@ namespace afam {
 
 ArraySource::ArraySource(const void* data, SampleType type, Index3 dims, std::string name,
                          std::array<double, 3> origin, std::array<double, 3> spacing)
-    : data_(static_cast<const unsigned char*>(data)), type_(type), dims_(dims), name_(std::move(name)),
-      origin_(origin), spacing_(spacing) {
+    : data_(static_cast<const unsigned char*>(data)),
+      type_(type),
+      dims_(dims),
+      name_(std::move(name)),
+      origin_(origin),
+      spacing_(spacing) {
   if (!data) throw InvalidArgument("ArraySource: null data");
   for (int a = 0; a < 3; ++a)
     if (dims[a] < 1) throw InvalidArgument("ArraySource: dimensions must be >= 1");
@@ -34,7 +38,8 @@ void VolumeSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCou
   std::vector<float> plane(size_t(d[0] * d[1]));
   for (int64_t z = 0; z < zCount; ++z) {
     readSlab(z0 + z, 1, plane.data());
-    std::copy(plane.begin() + y0 * d[0], plane.begin() + (y0 + yCount) * d[0], out + z * d[0] * yCount);
+    std::copy(plane.begin() + y0 * d[0], plane.begin() + (y0 + yCount) * d[0],
+              out + z * d[0] * yCount);
   }
 }
 
@@ -43,10 +48,11 @@ void ArraySource::readSlab(int64_t z0, int64_t zCount, float* out) {
 }
 
 void ArraySource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) {
-  if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2] || y0 < 0 || yCount < 0 || y0 + yCount > dims_[1])
-    throw InvalidArgument("ArraySource: planes [" + std::to_string(z0) + ", " + std::to_string(z0 + zCount) +
-                          "), rows [" + std::to_string(y0) + ", " + std::to_string(y0 + yCount) +
-                          ") outside the volume");
+  if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2] || y0 < 0 || yCount < 0 ||
+      y0 + yCount > dims_[1])
+    throw InvalidArgument("ArraySource: planes [" + std::to_string(z0) + ", " +
+                          std::to_string(z0 + zCount) + "), rows [" + std::to_string(y0) + ", " +
+                          std::to_string(y0 + yCount) + ") outside the volume");
   const size_t row = size_t(dims_[0]), plane = row * size_t(dims_[1]), rows = row * size_t(yCount);
   const size_t bytes = size_t(sampleTypeSize(type_));
   if (yCount == dims_[1]) {  // whole planes: one run of samples
@@ -54,7 +60,8 @@ void ArraySource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCoun
     return;
   }
   for (int64_t z = 0; z < zCount; ++z)
-    samplesToFloat(type_, data_ + (size_t(z0 + z) * plane + size_t(y0) * row) * bytes, rows, out + size_t(z) * rows);
+    samplesToFloat(type_, data_ + (size_t(z0 + z) * plane + size_t(y0) * row) * bytes, rows,
+                   out + size_t(z) * rows);
 }
 
 bool parseRawName(const std::string& path, Index3& dims, SampleType& type) {
@@ -73,8 +80,8 @@ bool parseRawName(const std::string& path, Index3& dims, SampleType& type) {
   return true;
 }
 
-RawFileSource::RawFileSource(const std::string& path, Index3 dims, SampleType type, std::array<double, 3> origin,
-                             std::array<double, 3> spacing)
+RawFileSource::RawFileSource(const std::string& path, Index3 dims, SampleType type,
+                             std::array<double, 3> origin, std::array<double, 3> spacing)
     : path_(path), dims_(dims), type_(type), origin_(origin), spacing_(spacing) {
   for (int a = 0; a < 3; ++a)
     if (dims[a] < 1) throw InvalidArgument(path + ": dimensions must be >= 1");
@@ -87,15 +94,17 @@ RawFileSource::RawFileSource(const std::string& path, Index3 dims, SampleType ty
     if (__builtin_mul_overflow(expected, uint64_t(dims[a]), &expected)) {
       ::close(fd_);
       fd_ = -1;
-      throw InvalidArgument(path + ": " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
-                            std::to_string(dims[2]) + " " + sampleTypeName(type) + " is more than 2^64 bytes");
+      throw InvalidArgument(path + ": " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) +
+                            "x" + std::to_string(dims[2]) + " " + sampleTypeName(type) +
+                            " is more than 2^64 bytes");
     }
   if (uint64_t(st.st_size) != expected) {
     ::close(fd_);
     fd_ = -1;
     throw InvalidArgument(path + ": file has " + std::to_string(st.st_size) + " bytes, " +
-                          std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) +
-                          " " + sampleTypeName(type) + " needs " + std::to_string(expected));
+                          std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
+                          std::to_string(dims[2]) + " " + sampleTypeName(type) + " needs " +
+                          std::to_string(expected));
   }
 }
 
@@ -104,7 +113,8 @@ RawFileSource::~RawFileSource() {
 }
 
 std::string RawFileSource::name() const {
-  std::string base = path_.substr(path_.find_last_of('/') == std::string::npos ? 0 : path_.find_last_of('/') + 1);
+  std::string base =
+      path_.substr(path_.find_last_of('/') == std::string::npos ? 0 : path_.find_last_of('/') + 1);
   const size_t us = base.find('_');
   return us == std::string::npos || us == 0 ? base : base.substr(0, us);
 }
@@ -125,10 +135,13 @@ void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   }
   uint64_t done = 0;
   while (done < bytes) {
-    const ssize_t r = ::pread(fd_, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)), off_t(offset + done));
+    const ssize_t r = ::pread(fd_, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)),
+                              off_t(offset + done));
     if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) throw IoError(path_ + ": read failed at byte " + std::to_string(offset + done) + ": " +
-                              (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
+    if (r <= 0)
+      throw IoError(
+          path_ + ": read failed at byte " + std::to_string(offset + done) + ": " +
+          (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
     done += uint64_t(r);
   }
   if (type_ != SampleType::Float32) samplesToFloat(type_, dst, count, out);

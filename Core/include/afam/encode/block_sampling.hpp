@@ -13,7 +13,8 @@
 
 namespace afam {
 
-/// Reads rows of listed z-planes of a source into a buffer, consecutive planes in one readRows call.
+/// Reads rows of listed z-planes of a source into a buffer, consecutive planes in one readRows
+/// call.
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);
@@ -45,12 +46,14 @@ enum class ChunkBudget { Large, QuarterOfSamples };
 /// the z-planes the blocks need are read in chunks (one readRows per run of consecutive planes;
 /// whole planes for a whole row of blocks) as large as `budget` allows, at least the planes of one
 /// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk
-/// separably (y, then x, then z; sums in double), blocks in parallel through `loop` when given. out[b] is resized to the block's (ghosted) sample count.
-/// `ghost` adds one sample on each side at the same spacing (DS payload layout); `sampling` says how
-/// coarse levels are filtered (see LevelSampling).
-void sampleBlockRow(const Partition& part, PlaneReader& planes, int level, const std::vector<Int3>& blocks,
-                    bool ghost, LevelSampling sampling, std::vector<std::vector<float>*>& out,
-                    const BlockLoop& loop = {}, ChunkBudget budget = ChunkBudget::Large);
+/// separably (y, then x, then z; sums in double), blocks in parallel through `loop` when given.
+/// out[b] is resized to the block's (ghosted) sample count. `ghost` adds one sample on each side at
+/// the same spacing (DS payload layout); `sampling` says how coarse levels are filtered (see
+/// LevelSampling).
+void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
+                    const std::vector<Int3>& blocks, bool ghost, LevelSampling sampling,
+                    std::vector<std::vector<float>*>& out, const BlockLoop& loop = {},
+                    ChunkBudget budget = ChunkBudget::Large);
 
 /// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
 /// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample
@@ -59,13 +62,15 @@ std::vector<float> extractBlock(const Partition& part, const float* volume, int 
                                 bool ghost = false, LevelSampling sampling = LevelSampling::Point);
 
 /// Streams the micro-block samples of one z-row of blocks of a level from a source, reading only
-/// the planes needed (in chunks, see sampleBlockRow). Used by the encoder, `afam verify --against` and tests.
+/// the planes needed (in chunks, see sampleBlockRow). Used by the encoder, `afam verify --against`
+/// and tests.
 class BlockRowReader {
  public:
   BlockRowReader(VolumeSource& source, const Partition& partition);
   ~BlockRowReader();
   /// out[j * bx + i] = samples of block (i, j, kz), x fastest; ghost as in extractBlock.
-  void readRow(int level, int kz, bool ghost, LevelSampling sampling, std::vector<std::vector<float>>& out);
+  void readRow(int level, int kz, bool ghost, LevelSampling sampling,
+               std::vector<std::vector<float>>& out);
   uint64_t bytesRead() const;
 
  private:

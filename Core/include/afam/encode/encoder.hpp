@@ -35,28 +35,28 @@
 #include <string>
 #include <vector>
 
-#include "afam/format/afam_file.hpp"
+#include "afam/base/errors.hpp"
 #include "afam/encode/block_sampling.hpp"
 #include "afam/encode/encode_team.hpp"
-#include "afam/base/errors.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/encode/ncp_search.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/volume/volume_source.hpp"
 
 namespace afam {
 
 struct EncoderOptions {
-  int levels = 0;              ///< 0: from the volume's dimensions (defaultPartition)
-  int blocksPerAxis = 0;       ///< finest blocks per axis; 0: from the dimensions (defaultPartition)
+  int levels = 0;         ///< 0: from the volume's dimensions (defaultPartition)
+  int blocksPerAxis = 0;  ///< finest blocks per axis; 0: from the dimensions (defaultPartition)
   int degree = 2;
   double errorBound = 1e-4;
   bool relativeBound = false;  ///< bound = errorBound * (valueMax - valueMin)
   EncodingMode mode = EncodingMode::Adaptive;
-  int fixedNcp = 0;            ///< Fixed mode: NCP per axis, 0 = n
-  int threads = 0;             ///< 0 = hardware concurrency
+  int fixedNcp = 0;  ///< Fixed mode: NCP per axis, 0 = n
+  int threads = 0;   ///< 0 = hardware concurrency
   SearchMethod search = SearchMethod::Fast;
-  int fastWindow = 3;          ///< Fast search: NCPs checked below the bisection result
+  int fastWindow = 3;  ///< Fast search: NCPs checked below the bisection result
   /// Bounded modes: store each block in its smallest form within the bound (a constant, a coded
   /// spline or coded samples; block_codec.hpp). false: float32 splines, the paper's payloads.
   bool compact = true;
@@ -69,20 +69,22 @@ struct EncoderOptions {
 };
 
 struct LevelStats {
-  int64_t blocks = 0;          ///< micro-blocks of the level
-  int64_t searched = 0;        ///< blocks that ran the in-level search
-  int64_t complex = 0;         ///< blocks with NCP* > p+1
-  int64_t refits = 0;          ///< blocks whose cross-level reuse missed the bound and were searched
-  int64_t exact = 0;           ///< blocks no NCP could fit within the bound, stored as their samples
-  int64_t reducedDegree = 0;   ///< blocks with an axis of 2..degree samples (degree lowered there)
-  int64_t fits = 0;            ///< fits performed at this level
-  int64_t samples = 0;         ///< micro-block samples fitted (sum of n0 n1 n2)
-  uint64_t payloadBytes = 0;   ///< sum of stored payload sizes
-  std::array<int64_t, 4> kinds{};  ///< blocks per BlockKind (spline, samples, constant, interpolant)
-  uint64_t paperBytes = 0;     ///< the paper's layout for the same models
+  int64_t blocks = 0;         ///< micro-blocks of the level
+  int64_t searched = 0;       ///< blocks that ran the in-level search
+  int64_t complex = 0;        ///< blocks with NCP* > p+1
+  int64_t refits = 0;         ///< blocks whose cross-level reuse missed the bound and were searched
+  int64_t exact = 0;          ///< blocks no NCP could fit within the bound, stored as their samples
+  int64_t reducedDegree = 0;  ///< blocks with an axis of 2..degree samples (degree lowered there)
+  int64_t fits = 0;           ///< fits performed at this level
+  int64_t samples = 0;        ///< micro-block samples fitted (sum of n0 n1 n2)
+  uint64_t payloadBytes = 0;  ///< sum of stored payload sizes
+  std::array<int64_t, 4>
+      kinds{};              ///< blocks per BlockKind (spline, samples, constant, interpolant)
+  uint64_t paperBytes = 0;  ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;
-  double sampleSeconds = 0;    ///< time spent sampling the volume (overlaps fitting after the first batch)
+  double sampleSeconds =
+      0;  ///< time spent sampling the volume (overlaps fitting after the first batch)
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
 };
 
@@ -91,15 +93,15 @@ struct EncodeStats {
   int64_t fits = 0;
   int64_t blocks = 0;
   int64_t inputVoxels = 0;
-  uint64_t bytesIn = 0;        ///< raw volume size as float32 (dims product * 4)
-  uint64_t bytesOut = 0;       ///< file size (or header+index+payloads for a sink)
+  uint64_t bytesIn = 0;   ///< raw volume size as float32 (dims product * 4)
+  uint64_t bytesOut = 0;  ///< file size (or header+index+payloads for a sink)
   uint64_t payloadBytes = 0;
-  uint64_t paperBytes = 0;     ///< the paper's layout: sum of 1 + ((NCP+p)*3 + NCP^3)*4
-  double seconds = 0;          ///< wall time of the whole encode
-  double fitSeconds = 0;       ///< wall time of the fitting phases
-  double cpuSeconds = 0;       ///< process CPU time (user + system) spent in the encode
+  uint64_t paperBytes = 0;  ///< the paper's layout: sum of 1 + ((NCP+p)*3 + NCP^3)*4
+  double seconds = 0;       ///< wall time of the whole encode
+  double fitSeconds = 0;    ///< wall time of the fitting phases
+  double cpuSeconds = 0;    ///< process CPU time (user + system) spent in the encode
   double maxRmse = 0, maxError = 0;
-  double bound = 0;            ///< absolute RMSE bound used
+  double bound = 0;  ///< absolute RMSE bound used
   double valueMin = 0, valueMax = 0;
   int threads = 1;
   int levelsUsed = 0, blocksPerAxisUsed = 0;  ///< the partition encoded (defaults resolved)
@@ -109,23 +111,27 @@ struct EncodeStats {
   }
   /// Input voxels per CPU-second: the per-thread rate that other processes sharing the cores
   /// do not distort.
-  double voxelsPerCpuSecond() const { return cpuSeconds > 0 ? double(inputVoxels) / cpuSeconds : 0; }
+  double voxelsPerCpuSecond() const {
+    return cpuSeconds > 0 ? double(inputVoxels) / cpuSeconds : 0;
+  }
 };
 
 /// Encodes into a sink. Throws InvalidArgument (options), NumericError (NaN/Inf, naming the block),
 /// IoError (source), Cancelled.
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink);
 /// Encodes into an .afam file, written atomically (nothing is left on error or cancel).
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath);
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options,
+                         const std::string& outPath);
 
 /// The same models, fitted by the processes of a team (encode_team.hpp), every one calling this
 /// with the same options and a source of the same volume (which may read other processes' memory).
 /// Only the first process (rank 0) calls the sink, and its statistics count every block; the
 /// others' count nothing but their levels' block totals and their own timings. An exception on any
 /// process is thrown on all (another's as afam::Error naming its rank).
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink, EncodeTeam& team);
-/// Into an .afam file that the first process writes (atomically; the others write nothing).
-EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, const std::string& outPath,
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options, ModelSink& sink,
                          EncodeTeam& team);
+/// Into an .afam file that the first process writes (atomically; the others write nothing).
+EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& options,
+                         const std::string& outPath, EncodeTeam& team);
 
 }  // namespace afam

@@ -27,9 +27,9 @@ class InMemoryModels : public ModelSink {
   void add(const ModelEntry& entry, const void* stored) override;
   VolumeHeader header;
   Partition partition;
-  std::vector<ModelEntry> entries;            ///< ordered like the file: level, then linear index
-  std::vector<std::vector<float>> payloads;   ///< same order, decoded control points
-  std::vector<std::vector<uint8_t>> stored;   ///< same order, as the file stores them
+  std::vector<ModelEntry> entries;           ///< ordered like the file: level, then linear index
+  std::vector<std::vector<float>> payloads;  ///< same order, decoded control points
+  std::vector<std::vector<uint8_t>> stored;  ///< same order, as the file stores them
   std::vector<int64_t> levelStart;
   int64_t entryIndex(int level, Int3 ijk) const;
   /// Writes everything to an .afam file (atomic).

@@ -15,13 +15,13 @@ struct FitResult;
 enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 
 /// In-level search on one block's samples: NCP* = the smallest scalar NCP in [p+1, n] (n the
-/// block's largest sample count, clamped per axis by clampNcp) whose RMSE is <= bound; n if none is.
-/// Returns NCP* and the fit at NCP* in `result` (its error measured on the samples); `fits` counts
-/// the fits performed. Each candidate is judged by BlockFitter::fitWithin, which gives the answer
-/// measuring its error would. Fast and Exhaustive give the same NCP* (see encoder.hpp for how Fast
-/// searches).
-int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree, double bound,
-              SearchMethod method, int window, FitResult& result, int64_t& fits);
+/// block's largest sample count, clamped per axis by clampNcp) whose RMSE is <= bound; n if none
+/// is. Returns NCP* and the fit at NCP* in `result` (its error measured on the samples); `fits`
+/// counts the fits performed. Each candidate is judged by BlockFitter::fitWithin, which gives the
+/// answer measuring its error would. Fast and Exhaustive give the same NCP* (see encoder.hpp for
+/// how Fast searches).
+int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
+              double bound, SearchMethod method, int window, FitResult& result, int64_t& fits);
 
 /// Per-axis refinement of a passing fit: for each axis whose samples are much smoother than the
 /// roughest axis (mean squared second difference at most kAnisotropy times smaller), the smallest
@@ -29,8 +29,8 @@ int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, i
 /// current NCP). Smoothest axis first. `result` must meet the bound on entry and still does on
 /// return (its error measured), with a control-point count never larger. Returns true when an axis
 /// was reduced.
-bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree, double bound,
-                      FitResult& result, int64_t& fits);
+bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
+                      double bound, FitResult& result, int64_t& fits);
 
 /// Roughness ratio between the roughest and an axis at which refineNcpPerAxis tries that axis.
 constexpr double kAnisotropy = 8.0;

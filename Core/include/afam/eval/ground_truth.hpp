@@ -7,8 +7,8 @@
 #pragma once
 
 #include "afam/base/host_device.hpp"
-#include "afam/volume/marschner_lobb.hpp"
 #include "afam/render/raycast.hpp"
+#include "afam/volume/marschner_lobb.hpp"
 
 namespace afam {
 

@@ -3,7 +3,8 @@
 //
 // Layout (byte-exact description in docs/FORMAT.md), little-endian, offsets not pointers:
 //   [0, 1024)                   FileHeader (fixed size, CRC32 over its bytes)
-//   [1024, 1024 + 40 E)         index: E = one 40-byte entry per micro-block of every level, ordered
+//   [1024, 1024 + 40 E)         index: E = one 40-byte entry per micro-block of every level,
+//   ordered
 //                               by level (0 = coarsest) then by the block's linear index (x
 //                               fastest); CRC32 of the whole index stored in the header
 //   [payloadOffset, fileSize)   payloads (payloadOffset a multiple of 64; each payload offset a
@@ -41,12 +42,12 @@ struct VolumeHeader {
   double valueMin = 0, valueMax = 0;
   std::string scalarName;  ///< at most 63 bytes are stored
   int levels = 1;
-  int blocksPerAxis = 1;   ///< requested finest B (Partition reduces it on short axes)
+  int blocksPerAxis = 1;  ///< requested finest B (Partition reduces it on short axes)
   int degree = 2;
-  double errorBound = 0;   ///< as given by the user (absolute, or relative when relativeBound)
+  double errorBound = 0;  ///< as given by the user (absolute, or relative when relativeBound)
   bool relativeBound = false;
   EncodingMode mode = EncodingMode::Adaptive;
-  int fixedNcp = 0;        ///< Fixed mode: requested NCP (0 = n)
+  int fixedNcp = 0;  ///< Fixed mode: requested NCP (0 = n)
   /// How coarse levels were sampled (and what their error is measured against).
   LevelSampling sampling = LevelSampling::Point;
   int sourceBytesPerSample = 0;  ///< of the encoded input (1 for uint8, ...); 0 when unknown
@@ -67,21 +68,23 @@ const char* blockKindName(BlockKind kind);
 struct ModelEntry {
   int level = 0;
   Int3 block{};
-  Int3 ncp{};       ///< control points per axis (DS: samples + 2)
-  Int3 degree{};    ///< effective degree per axis (DS: 1)
-  Int3 samples{};   ///< micro-block samples per axis (Partition::extent)
+  Int3 ncp{};      ///< control points per axis (DS: samples + 2)
+  Int3 degree{};   ///< effective degree per axis (DS: 1)
+  Int3 samples{};  ///< micro-block samples per axis (Partition::extent)
   uint64_t offset = 0;
-  uint64_t size = 0;        ///< bytes of the decoded float32 control points (what readPayload gives)
+  uint64_t size = 0;  ///< bytes of the decoded float32 control points (what readPayload gives)
   float minValue = 0, maxValue = 0, rmse = 0, maxError = 0;
-  uint32_t checksum = 0;    ///< CRC32 of the stored bytes
+  uint32_t checksum = 0;  ///< CRC32 of the stored bytes
   BlockKind kind = BlockKind::Spline;
-  bool coded = false;       ///< quantized, predicted and zstd-coded (block_codec.hpp)
-  uint64_t storedSize = 0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
+  bool coded = false;  ///< quantized, predicted and zstd-coded (block_codec.hpp)
+  uint64_t storedSize =
+      0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
 };
 
 /// The decoded control points of a stored payload (entry.storedSize bytes) into out
 /// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
-void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out, const std::string& where);
+void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out,
+                         const std::string& where);
 // For B-spline modes the payload is ncp.x*ncp.y*ncp.z float32 control points, x fastest.
 // For Downsampled (DS) the payload is (samples+2) per axis float32 raw samples with a one-voxel
 // ghost layer (clamped at the volume edge), x fastest, and ncp holds samples+2, degree holds 1.
@@ -139,8 +142,9 @@ class AfamFile {  // read-only; opening reads only header and index
 
  private:
   AfamFile() = default;
-  void readVerifiedPayload(int64_t entry, void* out) const;  ///< readPayload without the change check
-  void throwIfChanged(const FileIdentity& now) const;        ///< FileChangedError unless now == identity_
+  void readVerifiedPayload(int64_t entry,
+                           void* out) const;           ///< readPayload without the change check
+  void throwIfChanged(const FileIdentity& now) const;  ///< FileChangedError unless now == identity_
   std::string path_;
   int fd_ = -1;
   uint32_t version_ = 0;
@@ -154,9 +158,10 @@ class AfamFile {  // read-only; opening reads only header and index
 
 /// Writes header + index + payloads to PATH.tmp-XXXXXX, then fsync + rename on commit(): atomic.
 /// The destructor without commit() removes the temporary file; a writer killed before either
-/// leaves it, and the next writer to PATH removes it (temporary_file.hpp says how it knows). add() is thread-safe (one mutex;
-/// the payload write happens under it) and takes the blocks in any order; every block of every
-/// level of the header's Partition must be added exactly once before commit().
+/// leaves it, and the next writer to PATH removes it (temporary_file.hpp says how it knows). add()
+/// is thread-safe (one mutex; the payload write happens under it) and takes the blocks in any
+/// order; every block of every level of the header's Partition must be added exactly once before
+/// commit().
 class AfamWriter {
  public:
   AfamWriter(const std::string& path, const VolumeHeader& header);

@@ -18,7 +18,8 @@
 //            largest power of two below the longest axis) are Lorenzo-predicted on their own
 //            lattice; then for s = S/2, ..., 1 the points at odd multiples of s are predicted along
 //            x, then y, then z from the known points at +-s (cubic (-a + 9b + 9c - d) / 16 where
-//            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour). Suits samples.
+//            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour). Suits
+//            samples.
 // Codes are zigzag varints (1 byte when |code| < 64) compressed by zstd.
 //
 // Coded payload bytes: [0, 8) f64 step; [8] u8 predictor (0 Lorenzo, 1 interpolation);
@@ -44,8 +45,10 @@ constexpr size_t kCodedHeaderBytes = 9;
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
                   std::vector<uint8_t>& out, std::vector<float>& reconstructed);
 
-/// The values as encodeValues would reconstruct them, without the entropy coding (to choose a step).
-bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor, std::vector<float>& reconstructed);
+/// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
+/// step).
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
+                    std::vector<float>& reconstructed);
 
 /// Order-0 entropy, in bytes, of the codes encodeValues would produce (a cheap estimate of its
 /// coded size, to skip coding a candidate that cannot win); infinity when the step does not fit.

@@ -12,7 +12,8 @@ namespace afam {
 
 /// Samples of a decoded micro-block on its own n0 x n1 x n2 grid: the spline evaluated at the
 /// sample parameters (B-spline modes) or the stored samples without the ghost layer (DS).
-void decodeBlockSamples(const ModelEntry& entry, const float* payload, EncodingMode mode, std::vector<float>& out);
+void decodeBlockSamples(const ModelEntry& entry, const float* payload, EncodingMode mode,
+                        std::vector<float>& out);
 
 /// The sample grid of one decoded level: per axis the level's blocks' samples joined on their
 /// shared boundary samples (dims), and where block i starts on each axis (start[a][i]).

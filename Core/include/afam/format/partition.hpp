@@ -7,11 +7,11 @@
 // are the sample indices round(i (N-1) / Bf), i = 0..Bf, so neighbours share one boundary sample.
 // Level l groups r = 2^(L-1-l) finest blocks per axis: it has ceil(Bf / r) blocks (the last one may
 // group fewer; that is how edge blocks of any dims are handled) and block j spans the finest
-// boundaries [j r, min((j+1) r, Bf)]. Its micro-block is sampled with stride r: n = round(extent/r)+1
-// samples at lo + k (hi-lo)/(n-1). Where those positions fall between grid samples (dims that are not
-// B 2^k + 1) the value is linearly interpolated along that axis; for B 2^k + 1 dims every position is
-// a grid sample and the micro-block is the paper's plain strided downsampling.
-// A one-sample axis gives blocks of extent 0 with n = 1.
+// boundaries [j r, min((j+1) r, Bf)]. Its micro-block is sampled with stride r: n =
+// round(extent/r)+1 samples at lo + k (hi-lo)/(n-1). Where those positions fall between grid
+// samples (dims that are not B 2^k + 1) the value is linearly interpolated along that axis; for B
+// 2^k + 1 dims every position is a grid sample and the micro-block is the paper's plain strided
+// downsampling. A one-sample axis gives blocks of extent 0 with n = 1.
 #pragma once
 
 #include <array>
@@ -24,15 +24,15 @@ namespace afam {
 using Int3 = std::array<int, 3>;
 using Index3 = std::array<int64_t, 3>;
 
-/// The finest block edge, in samples, of the default partition: the paper's 16 blocks at 1024^3, and
-/// on the corpus (32-93 samples an axis) the smallest files of the edges tried (16, 32, 64; see
+/// The finest block edge, in samples, of the default partition: the paper's 16 blocks at 1024^3,
+/// and on the corpus (32-93 samples an axis) the smallest files of the edges tried (16, 32, 64; see
 /// docs/BENCHMARKS.md, "Compression against ZFP").
 constexpr int kDefaultBlockEdge = 64;
 
 /// Levels and finest blocks per axis that fit a volume: blocks of about kDefaultBlockEdge samples
 /// along the longest axis (B = round((N - 1) / edge), at least 1), and levels down to a coarsest
-/// level of 2 blocks along it (L = 1 + floor(log2(B / 2)); 1 when B < 4). For 1025^3 and the default edge of
-/// 64 that is the paper's 16 blocks and 4 levels.
+/// level of 2 blocks along it (L = 1 + floor(log2(B / 2)); 1 when B < 4). For 1025^3 and the
+/// default edge of 64 that is the paper's 16 blocks and 4 levels.
 struct PartitionShape {
   int levels = 1, blocksPerAxis = 1;
 };
@@ -41,15 +41,15 @@ PartitionShape defaultPartition(const Index3& dims, int blockEdge = kDefaultBloc
 /// How the samples of a coarse level (stride r > 1) are taken from the volume. Point: the sampling
 /// rule above (linear interpolation at the sample positions), the paper's strided downsampling.
 /// Box: the mean of the volume's (multi)linear interpolant over a window of r samples per axis
-/// centred on each position (the volume mirrored at its ends; the whole axis when it is shorter), i.e. the
-/// volume filtered for the level's spacing, so that coarse levels do not alias. The finest level
-/// (r = 1) is point-sampled either way.
+/// centred on each position (the volume mirrored at its ends; the whole axis when it is shorter),
+/// i.e. the volume filtered for the level's spacing, so that coarse levels do not alias. The finest
+/// level (r = 1) is point-sampled either way.
 enum class LevelSampling : uint8_t { Point = 0, Box = 1 };
 
 /// Where one micro-block sits, in voxel index coordinates of the full volume.
 struct BlockExtent {
-  Index3 lo{};   ///< first sample index per axis
-  Index3 hi{};   ///< last sample index per axis (shared with the next block)
+  Index3 lo{};     ///< first sample index per axis
+  Index3 hi{};     ///< last sample index per axis (shared with the next block)
   Int3 samples{};  ///< micro-block samples per axis
 };
 

@@ -26,8 +26,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/scene/camera.hpp"
 #include "afam/base/hash.hpp"
+#include "afam/scene/camera.hpp"
 
 namespace afam {
 
@@ -103,8 +103,8 @@ uint64_t appaSourceKey(const AfamFile& file, const std::string& context);
 /// The visibility APPA stores, computed as the renderer does: the recorded-trajectory camera of the
 /// pose (width x height), LodSelector::select with the transfer function, entries ordered by the
 /// distance from the eye to the block centre.
-AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file, const LodSelector& selector,
-                                      int width, int height, std::vector<float> tfTable, double tfLo,
-                                      double tfHi);
+AppaTable::VisibleFn makeLodVisibleFn(std::shared_ptr<const AfamFile> file,
+                                      const LodSelector& selector, int width, int height,
+                                      std::vector<float> tfTable, double tfLo, double tfHi);
 
 }  // namespace afam

@@ -2,7 +2,8 @@
 // ForeCache (Battle, Chang, Stonebraker, SIGMOD 2016) for a 3D orbiting camera, run live.
 //
 // ForeCache combines two recommenders and switches between them by the user's analysis phase:
-//  * actions-based (AB): an n-gram Markov chain over the user's recent moves predicts the next move;
+//  * actions-based (AB): an n-gram Markov chain over the user's recent moves predicts the next
+//  move;
 //  * signature-based (SB): recommends data whose statistical signature resembles the data the user
 //    has recently dwelt on;
 //  * a phase classifier over the recent moves (ForeCache: Foraging, Navigation, Sensemaking). The
@@ -32,14 +33,14 @@ enum class ForeCachePhase { Foraging, Navigation, Sensemaking };
 const char* toString(ForeCachePhase phase);
 
 struct ForeCacheOptions {
-  int order = 3;                  ///< Markov chain order (longest context), backs off to shorter ones
-  double stayDegrees = 0.4;       ///< steps below this angle (and zoom) are "stay"
-  double fastDegrees = 5.0;       ///< angle separating the two speed classes
-  double zoomEpsilon = 0.02;      ///< |delta distance| that makes a pure-zoom move
-  int phaseWindow = 6;            ///< moves the phase classifier looks at
+  int order = 3;              ///< Markov chain order (longest context), backs off to shorter ones
+  double stayDegrees = 0.4;   ///< steps below this angle (and zoom) are "stay"
+  double fastDegrees = 5.0;   ///< angle separating the two speed classes
+  double zoomEpsilon = 0.02;  ///< |delta distance| that makes a pure-zoom move
+  int phaseWindow = 6;        ///< moves the phase classifier looks at
   double sensemakingDegrees = 1.5;  ///< mean step below this (or no net progress): Sensemaking
-  double consistency = 0.5;       ///< net / path length below this: wandering (Sensemaking)
-  double foragingDistance = 1.6;  ///< far from the volume and moving: Foraging
+  double consistency = 0.5;         ///< net / path length below this: wandering (Sensemaking)
+  double foragingDistance = 1.6;    ///< far from the volume and moving: Foraging
 };
 
 /// A move between two poses in the first pose's tangent frame.

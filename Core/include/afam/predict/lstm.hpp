@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/scene/camera.hpp"
 #include "afam/predict/predictor.hpp"
+#include "afam/scene/camera.hpp"
 
 namespace afam {
 
@@ -34,7 +34,8 @@ struct LstmWeights {
 /// sizes, checksum, truncation), naming the file.
 LstmWeights loadLstmWeights(const std::string& path);
 
-/// The head output for a sequence of `steps` feature rows (steps x input floats), zero initial state.
+/// The head output for a sequence of `steps` feature rows (steps x input floats), zero initial
+/// state.
 std::vector<float> lstmForward(const LstmWeights& w, const float* sequence, int steps);
 
 /// The weights file shipped with the sources: $AFAM_LSTM_WEIGHTS if set, else the repository's

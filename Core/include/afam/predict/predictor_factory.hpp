@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "afam/scene/lod.hpp"
 #include "afam/predict/appa.hpp"
 #include "afam/predict/forecache.hpp"
 #include "afam/predict/predictor.hpp"
+#include "afam/scene/lod.hpp"
 
 namespace afam {
 
@@ -29,9 +29,9 @@ struct PredictorContext {
   LodOptions lod;
   std::vector<float> tfTable;  ///< the renderer's TF table (TF culling) over [tfLo, tfHi]
   double tfLo = 0, tfHi = 1;
-  std::string lstmWeights;      ///< empty: defaultLstmWeightsPath()
+  std::string lstmWeights;  ///< empty: defaultLstmWeightsPath()
   AppaGrid appaGrid;
-  std::string appaTablePath;    ///< empty: FILE.afam.appa
+  std::string appaTablePath;  ///< empty: FILE.afam.appa
   int appaThreads = 1;
   AppaBuildReport* appaReport = nullptr;  ///< filled when the APPA table is loaded or built
 };
@@ -40,7 +40,8 @@ struct PredictorContext {
 /// use ctx.file when it is set: without a file appa predicts the parent POV but no blocks, and
 /// forecache runs without its signature model). Throws InvalidArgument for other names, and
 /// whatever a loader throws (a missing or corrupt LSTM weights file, for example).
-std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name, const PredictorContext& ctx = {});
+std::unique_ptr<Predictor> makePrefetchPredictor(const std::string& name,
+                                                 const PredictorContext& ctx = {});
 
 /// The names makePrefetchPredictor takes, in the order the command line lists them.
 const std::vector<std::string>& predictorNames();
@@ -56,7 +57,8 @@ class AppaPredictor : public Predictor {
   /// The parent POV's camera (what the table stores blocks for).
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
   /// False without a table.
-  bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;
+  bool predictEntries(const std::vector<Camera>& history,
+                      std::vector<int64_t>& entries) const override;
   const AppaTable& table() const { return table_; }
 
  private:
@@ -73,7 +75,8 @@ class ForeCachePredictor : public Predictor {
   const char* name() const override { return "forecache"; }
   bool predict(const std::vector<Camera>& history, Camera& next) const override;
   /// False without a file.
-  bool predictEntries(const std::vector<Camera>& history, std::vector<int64_t>& entries) const override;
+  bool predictEntries(const std::vector<Camera>& history,
+                      std::vector<int64_t>& entries) const override;
   ForeCachePhase phase() const;
 
  private:

@@ -50,12 +50,12 @@ struct CacheBudget {
 };
 
 struct CacheStats {
-  uint64_t hits = 0, misses = 0;          ///< frame lookups (get with Purpose::Frame)
-  uint64_t bytesRead = 0, blocksRead = 0; ///< all reads, frame and prefetch
+  uint64_t hits = 0, misses = 0;           ///< frame lookups (get with Purpose::Frame)
+  uint64_t bytesRead = 0, blocksRead = 0;  ///< all reads, frame and prefetch
   uint64_t prefetchLoads = 0, prefetchBytes = 0, prefetchDropped = 0;
   uint64_t evictions = 0, bypasses = 0;
-  double readSeconds = 0;       ///< wall time inside reads, including the bandwidth sleep
-  double throttleSeconds = 0;   ///< of which sleeping for the bandwidth cap
+  double readSeconds = 0;      ///< wall time inside reads, including the bandwidth sleep
+  double throttleSeconds = 0;  ///< of which sleeping for the bandwidth cap
 };
 
 using Payload = std::shared_ptr<const std::vector<float>>;
@@ -83,7 +83,7 @@ class LruCache {
   void setPinned(const std::vector<int64_t>& entries);
   void clearPinned();
 
-  void dropOsCache() const;                ///< posix_fadvise DONTNEED on the whole file
+  void dropOsCache() const;                     ///< posix_fadvise DONTNEED on the whole file
   void setBandwidthCap(double bytesPerSecond);  ///< 0 = no cap
 
   CacheStats stats() const;
@@ -106,8 +106,8 @@ class LruCache {
     uint64_t bytes = 0;
     std::list<int64_t>::iterator pos;
   };
-  Payload load(int64_t entry);                       // read + throttle, outside the lock
-  bool makeRoom(uint64_t bytes, bool mayEvictPinned); // under the lock
+  Payload load(int64_t entry);                         // read + throttle, outside the lock
+  bool makeRoom(uint64_t bytes, bool mayEvictPinned);  // under the lock
   void throttle(uint64_t bytes, std::chrono::steady_clock::time_point readStart);
 
   std::shared_ptr<const AfamFile> file_;

@@ -83,7 +83,8 @@ class FrameCaster {
 class CpuCaster : public FrameCaster {
  public:
   explicit CpuCaster(int threads) : threads_(threads) {}
-  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) override;
+  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets,
+                  ImageRGBA& image) override;
   bool castsOnGpu() const override { return false; }
   std::string description() const override { return "CPU"; }
 

@@ -17,8 +17,8 @@
 //    (normally [-1, 1]^3, every axis rescaled independently as in the paper). Cameras, rays,
 //    sample distance, LOD distances and shading all live in this frame.
 //  * Voxel frame: continuous voxel index coordinates x in [0, dims-1] per axis, the frame of
-//    Partition's block extents. x = (n - boxLo) * voxelPerUnit, voxelPerUnit = (dims-1)/(boxHi-boxLo)
-//    (0 on a one-sample axis).
+//    Partition's block extents. x = (n - boxLo) * voxelPerUnit, voxelPerUnit =
+//    (dims-1)/(boxHi-boxLo) (0 on a one-sample axis).
 //  * Model parameters: a micro-model covering voxel extent [lo, hi] on an axis is evaluated at
 //    u = (x - lo) / (hi - lo), clamped to [0, 1] (u = 0 when hi == lo).
 //
@@ -59,9 +59,9 @@
 // ---------------------------------------------------------------------------------------------
 //  tf: tfSize RGBA entries (float, interleaved r,g,b,a) spanning [tfMin, tfMax], linearly
 //  interpolated, clamped outside. The alpha of an entry is the opacity of a segment of length
-//  tfReferenceDistance; a sample uses alpha' = 1 - (1 - alpha)^(sampleDistance / tfReferenceDistance).
-//  Shading (Shaded = true): Phong with a headlight (light at the eye, L = V = -d), two-sided
-//  normals n = normalize(gradient in the normalised frame):
+//  tfReferenceDistance; a sample uses alpha' = 1 - (1 - alpha)^(sampleDistance /
+//  tfReferenceDistance). Shading (Shaded = true): Phong with a headlight (light at the eye, L = V =
+//  -d), two-sided normals n = normalize(gradient in the normalised frame):
 //      c_out = c * (ambient + diffuse * |n.L|) + specular * |n.H|^specularPower * specularColor
 //  (H = L for a headlight). Where |gradient| < 1e-12 the sample is unshaded (c_out = c).
 //  With Shaded = false no gradient is ever computed (the evaluation is compiled with
@@ -76,10 +76,10 @@
 
 #include <stdint.h>
 
-#include "afam/spline/basis.hpp"
-#include "afam/spline/evaluate.hpp"
 #include "afam/base/host_device.hpp"
 #include "afam/scene/ray_camera.hpp"
+#include "afam/spline/basis.hpp"
+#include "afam/spline/evaluate.hpp"
 
 #if !defined(__CUDACC__)
 #include <cmath>
@@ -101,7 +101,7 @@ struct FrameSlot {
   Knots knots[3];              ///< spline: implied knots; raw: knots[a].ncp = padded sample count
   float lo[3] = {0.f, 0.f, 0.f};         ///< block extent, voxel coordinates
   float invExtent[3] = {0.f, 0.f, 0.f};  ///< 1 / (hi - lo), 0 on a one-sample axis
-  uint64_t offset = 0;         ///< first float of this model in FrameView::pool
+  uint64_t offset = 0;                   ///< first float of this model in FrameView::pool
 };
 
 /// Everything a ray needs for one frame. Trivially copyable; all pointers are non-owning and
@@ -116,10 +116,11 @@ struct FrameView {
   float voxelMax[3] = {0.f, 0.f, 0.f};      ///< dims-1
 
   // Indirection grid over the finest block grid.
-  int gridDims[3] = {1, 1, 1};               ///< finest blocks per axis (Bf)
-  float cellPerVoxel[3] = {0.f, 0.f, 0.f};   ///< Bf / (dims-1) (estimate before the +-1 correction)
-  const float* cellBounds[3] = {nullptr, nullptr, nullptr};  ///< Bf+1 finest boundaries per axis, voxel coords
-  const int32_t* cellSlot = nullptr;          ///< Bx*By*Bz, x fastest: slot index or -1
+  int gridDims[3] = {1, 1, 1};              ///< finest blocks per axis (Bf)
+  float cellPerVoxel[3] = {0.f, 0.f, 0.f};  ///< Bf / (dims-1) (estimate before the +-1 correction)
+  const float* cellBounds[3] = {nullptr, nullptr,
+                                nullptr};  ///< Bf+1 finest boundaries per axis, voxel coords
+  const int32_t* cellSlot = nullptr;       ///< Bx*By*Bz, x fastest: slot index or -1
 
   // Resident models.
   const FrameSlot* slots = nullptr;
@@ -161,7 +162,9 @@ namespace rc {
 AFAM_HD float minf(float a, float b) { return a < b ? a : b; }
 AFAM_HD float maxf(float a, float b) { return a > b ? a : b; }
 AFAM_HD float clampf(float x, float a, float b) { return x < a ? a : (x > b ? b : x); }
-AFAM_HD float dot3(const float* a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+AFAM_HD float dot3(const float* a, const float* b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 }  // namespace rc
 
@@ -205,8 +208,10 @@ AFAM_HD int findCell(const FrameView& f, int axis, float x) {
   int c = int(x * f.cellPerVoxel[axis]);
   c = c < 0 ? 0 : (c > n - 1 ? n - 1 : c);
   const float* b = f.cellBounds[axis];
-  if (c > 0 && x < b[c]) --c;
-  else if (c < n - 1 && x >= b[c + 1]) ++c;
+  if (c > 0 && x < b[c])
+    --c;
+  else if (c < n - 1 && x >= b[c + 1])
+    ++c;
   return c;
 }
 
@@ -224,7 +229,8 @@ AFAM_HD int32_t lookupSlot(const FrameView& f, const float* x) {
 
 /// Spline slot: value (and gradient in voxel units, d/dx) at voxel coordinate x.
 template <bool WithGradient>
-AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* pool, const float* x, float* gVoxel) {
+AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* pool, const float* x,
+                               float* gVoxel) {
   ModelView m;
   m.knots[0] = s.knots[0];
   m.knots[1] = s.knots[1];
@@ -284,12 +290,18 @@ AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* pool, const float* 
   }
   const float value = trilinearRaw(s, data, t[0], t[1], t[2]);
   if (WithGradient) {
-    gVoxel[0] = 0.5f * (trilinearRaw(s, data, t[0] + 1.f, t[1], t[2]) -
-                        trilinearRaw(s, data, t[0] - 1.f, t[1], t[2])) * perVoxel[0];
-    gVoxel[1] = 0.5f * (trilinearRaw(s, data, t[0], t[1] + 1.f, t[2]) -
-                        trilinearRaw(s, data, t[0], t[1] - 1.f, t[2])) * perVoxel[1];
-    gVoxel[2] = 0.5f * (trilinearRaw(s, data, t[0], t[1], t[2] + 1.f) -
-                        trilinearRaw(s, data, t[0], t[1], t[2] - 1.f)) * perVoxel[2];
+    gVoxel[0] = 0.5f *
+                (trilinearRaw(s, data, t[0] + 1.f, t[1], t[2]) -
+                 trilinearRaw(s, data, t[0] - 1.f, t[1], t[2])) *
+                perVoxel[0];
+    gVoxel[1] = 0.5f *
+                (trilinearRaw(s, data, t[0], t[1] + 1.f, t[2]) -
+                 trilinearRaw(s, data, t[0], t[1] - 1.f, t[2])) *
+                perVoxel[1];
+    gVoxel[2] = 0.5f *
+                (trilinearRaw(s, data, t[0], t[1], t[2] + 1.f) -
+                 trilinearRaw(s, data, t[0], t[1], t[2] - 1.f)) *
+                perVoxel[2];
   }
   return value;
 }
@@ -309,14 +321,14 @@ AFAM_HD void voxelToNormalisedGradient(const FrameView& f, const float* gVoxel, 
 }
 
 /// The default sampler: the frame's resident micro-models (spline or raw), found in O(1).
-/// A sampler provides `template <bool G> bool sample(const FrameView&, const float* p, float& value,
-/// float* gradient) const` with p and gradient in the NORMALISED frame; it returns false where
-/// nothing is to be sampled (culled cell). castRayWith<> accepts any such sampler (ground_truth.hpp
-/// plugs the analytic Marschner-Lobb function in here).
-/// FixedDegree > 0 promises that every spline slot of the frame has that degree on all axes: the
-/// slot's knots are copied with the degree as a compile-time constant, so the compiler unrolls the
-/// basis and tensor loops of evaluateModel and keeps their arrays in registers (the CUDA kernels
-/// specialise this way; the values are those of the generic path, same functions, same operations).
+/// A sampler provides `template <bool G> bool sample(const FrameView&, const float* p, float&
+/// value, float* gradient) const` with p and gradient in the NORMALISED frame; it returns false
+/// where nothing is to be sampled (culled cell). castRayWith<> accepts any such sampler
+/// (ground_truth.hpp plugs the analytic Marschner-Lobb function in here). FixedDegree > 0 promises
+/// that every spline slot of the frame has that degree on all axes: the slot's knots are copied
+/// with the degree as a compile-time constant, so the compiler unrolls the basis and tensor loops
+/// of evaluateModel and keeps their arrays in registers (the CUDA kernels specialise this way; the
+/// values are those of the generic path, same functions, same operations).
 template <int FixedDegree = -1>
 struct ModelSamplerT {
   template <bool WithGradient>

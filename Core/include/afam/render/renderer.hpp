@@ -24,16 +24,16 @@
 #include <vector>
 
 #include "afam/format/afam_file.hpp"
+#include "afam/predict/predictor.hpp"
 #include "afam/render/cache.hpp"
-#include "afam/scene/camera.hpp"
 #include "afam/render/damage.hpp"
 #include "afam/render/frame_caster.hpp"
 #include "afam/render/frame_settings.hpp"
 #include "afam/render/image.hpp"
-#include "afam/scene/lod.hpp"
-#include "afam/predict/predictor.hpp"
 #include "afam/render/prefetch.hpp"
 #include "afam/render/raycast.hpp"
+#include "afam/scene/camera.hpp"
+#include "afam/scene/lod.hpp"
 #include "afam/scene/transfer_function.hpp"
 
 namespace afam {
@@ -54,10 +54,11 @@ struct RenderOptions : RendererResources, FrameSettings {};
 
 struct FrameStats {
   double cachingMs = 0, renderMs = 0, latencyMs = 0;
-  uint64_t hits = 0, misses = 0, bytesRead = 0;      ///< frame lookups and all reads during the frame
-  uint64_t prefetchedBlocks = 0, prefetchedBytes = 0;  ///< loaded by the prefetch thread during the frame
+  uint64_t hits = 0, misses = 0, bytesRead = 0;  ///< frame lookups and all reads during the frame
+  uint64_t prefetchedBlocks = 0,
+           prefetchedBytes = 0;  ///< loaded by the prefetch thread during the frame
   CullCounts culled;
-  int64_t slots = 0;                                 ///< models in the FrameView
+  int64_t slots = 0;  ///< models in the FrameView
   uint64_t poolBytes = 0;
   /// The cache's resident bytes at the end of the frame, and the most it held during the frame
   /// (frame and prefetch loads); both stay within the cache's byte budget.

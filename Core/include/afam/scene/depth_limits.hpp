@@ -13,9 +13,9 @@ namespace afam {
 
 /// How a window depth becomes a ray length, for one frame (built by depthToRay, view_mapping.hpp).
 struct DepthToRay {
-  double m[16];          ///< normalised device coordinates -> normalised frame (row-major, projective)
-  double eye[3];         ///< the camera's eye in the frame
-  double normal[3];      ///< the image plane's normal (parallel projection)
+  double m[16];      ///< normalised device coordinates -> normalised frame (row-major, projective)
+  double eye[3];     ///< the camera's eye in the frame
+  double normal[3];  ///< the image plane's normal (parallel projection)
   double forwardDotNormal = 1;  ///< dot(forward, normal) / |forward|
   int parallel = 0;
   int tileWidth = 0, tileHeight = 0;  ///< the depth buffer's size (row 0 at the bottom)
@@ -25,9 +25,11 @@ struct DepthToRay {
 /// The nearest depth among the tile pixels that image pixel (x, y) covers (y = 0: bottom row).
 AFAM_HD float nearestTileDepth(const DepthToRay& t, const float* depth, int x, int y) {
   const int y0 = y * t.tileHeight / t.height;
-  const int y1 = (y + 1) * t.tileHeight / t.height > y0 + 1 ? (y + 1) * t.tileHeight / t.height : y0 + 1;
+  const int y1 =
+      (y + 1) * t.tileHeight / t.height > y0 + 1 ? (y + 1) * t.tileHeight / t.height : y0 + 1;
   const int x0 = x * t.tileWidth / t.width;
-  const int x1 = (x + 1) * t.tileWidth / t.width > x0 + 1 ? (x + 1) * t.tileWidth / t.width : x0 + 1;
+  const int x1 =
+      (x + 1) * t.tileWidth / t.width > x0 + 1 ? (x + 1) * t.tileWidth / t.width : x0 + 1;
   float z = 1.0f;
   for (int yt = y0; yt < y1; ++yt)
     for (int xt = x0; xt < x1; ++xt) {
@@ -52,7 +54,8 @@ AFAM_HD float rayLimitFromDepth(const DepthToRay& t, const float* depth, int x, 
   if (!(p[3] > 0 || p[3] < 0)) return inf;
   const double d[3] = {p[0] / p[3] - t.eye[0], p[1] / p[3] - t.eye[1], p[2] / p[3] - t.eye[2]};
   if (t.parallel)
-    return float((d[0] * t.normal[0] + d[1] * t.normal[1] + d[2] * t.normal[2]) / t.forwardDotNormal);
+    return float((d[0] * t.normal[0] + d[1] * t.normal[1] + d[2] * t.normal[2]) /
+                 t.forwardDotNormal);
   return float(sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
 }
 

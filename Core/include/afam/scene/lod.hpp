@@ -23,8 +23,8 @@
 #include <vector>
 
 #include "afam/format/afam_file.hpp"
-#include "afam/scene/camera.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/scene/camera.hpp"
 
 namespace afam {
 
@@ -36,7 +36,7 @@ struct LodOptions {
   double pixelBudget = 1.0;  ///< screen policy: allowed projected sample spacing in pixels
   bool frustumCulling = true;
   bool tfCulling = true;
-  int forceLevel = -1;       ///< >= 0: every block at this level (benchmarks, tests); -1 = policy
+  int forceLevel = -1;  ///< >= 0: every block at this level (benchmarks, tests); -1 = policy
 };
 
 /// One block of a cut: level and ijk; entry is the file's entry index (-1 without a file).

@@ -26,15 +26,15 @@ enum class TrajectoryKind { Orbit, Dolly, Walk };
 
 struct TrajectoryOptions {
   TrajectoryKind kind = TrajectoryKind::Walk;
-  int views = 400;                ///< number of points of view (>= 1)
-  uint64_t seed = 1;              ///< walk: the same seed gives the same path
-  double distance = 1.5;          ///< orbit: distance of the eye from the origin
-  double thetaDeg = 60;           ///< orbit and dolly: polar angle (degrees, in [0, 180])
-  double phiDeg = 30;             ///< dolly: azimuth; orbit: azimuth of the first view
-  double turns = 1;               ///< orbit: full turns over the path (negative: clockwise)
-  double fromDistance = 2.0;      ///< dolly: first distance
-  double toDistance = 0.25;       ///< dolly: last distance (> 0)
-  double minDistance = 1.0;       ///< walk: distances stay in [minDistance, maxDistance]
+  int views = 400;            ///< number of points of view (>= 1)
+  uint64_t seed = 1;          ///< walk: the same seed gives the same path
+  double distance = 1.5;      ///< orbit: distance of the eye from the origin
+  double thetaDeg = 60;       ///< orbit and dolly: polar angle (degrees, in [0, 180])
+  double phiDeg = 30;         ///< dolly: azimuth; orbit: azimuth of the first view
+  double turns = 1;           ///< orbit: full turns over the path (negative: clockwise)
+  double fromDistance = 2.0;  ///< dolly: first distance
+  double toDistance = 0.25;   ///< dolly: last distance (> 0)
+  double minDistance = 1.0;   ///< walk: distances stay in [minDistance, maxDistance]
   double maxDistance = 1.7;
 };
 
@@ -48,8 +48,8 @@ std::vector<Pose> generateTrajectory(const TrajectoryOptions& options);
 
 std::vector<Pose> orbitTrajectory(int views, double distance, double thetaDeg, double phiStartDeg,
                                   double turns);
-std::vector<Pose> dollyTrajectory(int views, double fromDistance, double toDistance, double thetaDeg,
-                                  double phiDeg);
+std::vector<Pose> dollyTrajectory(int views, double fromDistance, double toDistance,
+                                  double thetaDeg, double phiDeg);
 std::vector<Pose> explorationWalk(int views, uint64_t seed, double minDistance = 1.0,
                                   double maxDistance = 1.7);
 

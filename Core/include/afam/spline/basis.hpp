@@ -25,10 +25,10 @@ constexpr int kMaxOrder = kMaxDegree + 1;
 
 /// Knot vector implied by (ncp, degree); trivially copyable, usable on the device.
 struct Knots {
-  int ncp = 1;     ///< number of control points on this axis, >= degree+1
-  int degree = 0;  ///< 0..kMaxDegree (0 only for one-sample axes)
-  float offset = 0.f;  ///< c: position of interior knot j is c + j*h
-  float spacing = 1.f; ///< h
+  int ncp = 1;          ///< number of control points on this axis, >= degree+1
+  int degree = 0;       ///< 0..kMaxDegree (0 only for one-sample axes)
+  float offset = 0.f;   ///< c: position of interior knot j is c + j*h
+  float spacing = 1.f;  ///< h
 
   AFAM_HD static Knots make(int ncp_, int degree_) {
     Knots k;
@@ -76,9 +76,7 @@ struct Knots {
 };
 
 /// Clamp a parameter to [0, 1]; NaN maps to 0 so a bad coordinate never indexes out of range.
-AFAM_HD float clampParameter(float u) {
-  return u >= 0.f ? (u <= 1.f ? u : 1.f) : 0.f;
-}
+AFAM_HD float clampParameter(float u) { return u >= 0.f ? (u <= 1.f ? u : 1.f) : 0.f; }
 
 /// Non-zero basis functions of degree `deg` <= k.degree on span s of k's knot vector
 /// (Cox-de Boor, The NURBS Book A2.2): N[r] = N_{s-deg+r, deg}(u), r = 0..deg.
@@ -110,9 +108,9 @@ AFAM_HD int degree2KnotHalfUnits(const Knots& k, int i) {
 ///  * p = 1: every span (the knots are uniform);
 ///  * p = 2: every span, the clamped end spans included: with U = 2 u / h and the knots in units
 ///    of h/2 (integers K), N[0] = (K[s+1] - U)^2 / ((K[s+1] - K[s-1]) (K[s+1] - K[s])),
-///    N[2] = (U - K[s])^2 / ((K[s+2] - K[s]) (K[s+1] - K[s])), N[1] = 1 - N[0] - N[2] (clamped at 0)
-///    (interior spans: both products are 8; the two spans at each clamped end: 9 and 15, 10 and 8,
-///    chosen by selects; only ncp < 6, where the ends meet, divides);
+///    N[2] = (U - K[s])^2 / ((K[s+2] - K[s]) (K[s+1] - K[s])), N[1] = 1 - N[0] - N[2] (clamped at
+///    0) (interior spans: both products are 8; the two spans at each clamped end: 9 and 15, 10 and
+///    8, chosen by selects; only ncp < 6, where the ends meet, divides);
 ///  * p = 3: spans whose 2p surrounding knots are all interior (the cardinal cubic).
 /// Returns false (and writes nothing) elsewhere; those take the Cox-de Boor recurrence.
 /// Agrees with it to rounding (tested).
@@ -210,7 +208,7 @@ AFAM_HD void basisFunctionsAndDerivatives(const Knots& k, int s, Real u, Real* N
     return;
   }
   if (closedFormBasis<Real>(k, s, u, N, dN)) return;
-  Real lower[kMaxOrder];  // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
+  Real lower[kMaxOrder];     // degree p-1 functions N_{s-p+1+r, p-1}(u), r = 0..p-1
   Real inv[kMaxOrder] = {};  // 1 / (t[s+r+1] - t[s+r+1-p]), r = 0..p-1 (degree-p denominators)
   basisOfDegree(k, s, u, p - 1, lower);
   // Last step of Cox-de Boor (degree p-1 -> p), keeping the reciprocals for the derivative.

@@ -100,10 +100,14 @@ AFAM_HD float evaluateModel(const ModelView& m, float u, float v, float w, float
   const int p = m.knots[0].degree;
   if (p == m.knots[1].degree && p == m.knots[2].degree) {
     switch (p) {
-      case 1: return detail::evaluateModelFixedDegree<1, WithGradient>(m, u, v, w, gradient);
-      case 2: return detail::evaluateModelFixedDegree<2, WithGradient>(m, u, v, w, gradient);
-      case 3: return detail::evaluateModelFixedDegree<3, WithGradient>(m, u, v, w, gradient);
-      default: break;
+      case 1:
+        return detail::evaluateModelFixedDegree<1, WithGradient>(m, u, v, w, gradient);
+      case 2:
+        return detail::evaluateModelFixedDegree<2, WithGradient>(m, u, v, w, gradient);
+      case 3:
+        return detail::evaluateModelFixedDegree<3, WithGradient>(m, u, v, w, gradient);
+      default:
+        break;
     }
   }
 #endif

@@ -33,9 +33,9 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/types.hpp"
 #include "afam/spline/evaluate.hpp"
 #include "afam/spline/rmse_range.hpp"
-#include "afam/base/types.hpp"
 
 namespace afam {
 
@@ -103,16 +103,16 @@ class BlockFitter {
   /// end of the range (> bound: false, <= bound: true); measure() then gives the full statistics.
   /// `sumOfSquares` is afam::sumOfSquares(samples, n): finite, it also vouches that the samples
   /// are (they are not scanned again). Throws as fitInto.
-  bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree, double bound,
-                 double sumOfSquares, FitResult& out);
+  bool fitWithin(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp, int degree,
+                 double bound, double sumOfSquares, FitResult& out);
 
   /// Whether `changed`, the model `fitted` (a least-squares fit of these samples, its error
   /// measured) with other control points (quantized, say), meets `bound`: the same answer as
   /// measuring it, mostly without measuring, from fitted's RMSE and the energy of the change
   /// (changedRmseRange). changed.errorMeasured and changed.error as in fitWithin. Throws
   /// InvalidArgument when the shapes differ or fitted's error was not measured.
-  bool changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted, FitResult& changed,
-                    double bound);
+  bool changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
+                    FitResult& changed, double bound);
 
   /// Measures the model's error on the samples unless model.errorMeasured.
   void measure(const float* samples, std::array<int, 3> n, FitResult& model);
@@ -127,7 +127,8 @@ class BlockFitter {
  private:
   /// The answer of fitWithin and changeWithin: the decisive end of the range (model unmeasured),
   /// else the measured error.
-  bool decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n, FitResult& model);
+  bool decide(const RmseRange& range, double bound, const float* samples, std::array<int, 3> n,
+              FitResult& model);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -20,10 +20,11 @@ struct RmseRange {
 /// by at most half an ulp of it). Rounding of the sums and of the measurement is allowed for.
 RmseRange rmseRange(double sumOfSquares, double energy, double largestControl, size_t count);
 
-/// Range of the measured RMSE of a least-squares fit's control points c changed to q, from the fit's
-/// measured RMSE and changeEnergy = (c - q)^T A^T A (c - q): |d - A q|^2 = |d - A c|^2 +
-/// |A (c - q)|^2 up to a cross term that only the float32 rounding of c makes non-zero.
-/// largestControl = max |control point| of both.
-RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl, size_t count);
+/// Range of the measured RMSE of a least-squares fit's control points c changed to q, from the
+/// fit's measured RMSE and changeEnergy = (c - q)^T A^T A (c - q): |d - A q|^2 = |d - A c|^2 + |A
+/// (c - q)|^2 up to a cross term that only the float32 rounding of c makes non-zero. largestControl
+/// = max |control point| of both.
+RmseRange changedRmseRange(double fittedRmse, double changeEnergy, double largestControl,
+                           size_t count);
 
 }  // namespace afam

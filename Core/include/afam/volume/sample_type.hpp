@@ -10,13 +10,25 @@
 
 namespace afam {
 
-enum class SampleType : uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64 };
+enum class SampleType : uint8_t {
+  Int8,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Int64,
+  UInt64,
+  Float32,
+  Float64
+};
 
 /// Bytes per sample: 1, 2, 4 or 8.
 int sampleTypeSize(SampleType type);
 /// "int8", "uint8", ..., "float32", "float64" (the names of raw files, name_XxYxZ_type.raw).
 const char* sampleTypeName(SampleType type);
-/// Every name, for messages: "int8, uint8, int16, uint16, int32, uint32, int64, uint64, float32 or float64".
+/// Every name, for messages: "int8, uint8, int16, uint16, int32, uint32, int64, uint64, float32 or
+/// float64".
 const std::string& sampleTypeNames();
 /// A sampleTypeName, or "float" (float32) or "double" (float64); throws InvalidArgument naming the
 /// accepted names for another.
@@ -33,22 +45,29 @@ constexpr SampleType sampleTypeOf() {
     static_assert(sizeof(T) == 4 || sizeof(T) == 8, "float or double");
     return sizeof(T) == 4 ? SampleType::Float32 : SampleType::Float64;
   } else {
-    static_assert(sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8, "1 to 8 bytes");
+    static_assert(sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8,
+                  "1 to 8 bytes");
     constexpr bool s = std::is_signed_v<T>;
     switch (sizeof(T)) {
-      case 1: return s ? SampleType::Int8 : SampleType::UInt8;
-      case 2: return s ? SampleType::Int16 : SampleType::UInt16;
-      case 4: return s ? SampleType::Int32 : SampleType::UInt32;
-      default: return s ? SampleType::Int64 : SampleType::UInt64;
+      case 1:
+        return s ? SampleType::Int8 : SampleType::UInt8;
+      case 2:
+        return s ? SampleType::Int16 : SampleType::UInt16;
+      case 4:
+        return s ? SampleType::Int32 : SampleType::UInt32;
+      default:
+        return s ? SampleType::Int64 : SampleType::UInt64;
     }
   }
 }
 
 /// out[i] = static_cast<float>(sample i), for `count` samples of `type` at `samples` (any
 /// alignment); `swapBytes` reverses each sample's bytes first (big-endian data on this host).
-void samplesToFloat(SampleType type, const void* samples, uint64_t count, float* out, bool swapBytes = false);
+void samplesToFloat(SampleType type, const void* samples, uint64_t count, float* out,
+                    bool swapBytes = false);
 
-/// The values a sample of `type` can hold (integers: exactly; floats: +-their largest finite value).
+/// The values a sample of `type` can hold (integers: exactly; floats: +-their largest finite
+/// value).
 void sampleTypeRange(SampleType type, double& lo, double& hi);
 
 /// The inverse, for volumes written in a type (generated scans): each value rounded to the

@@ -39,9 +39,9 @@ namespace afam {
 
 /// What a NRRD or MetaImage header says about its volume and where the samples are.
 struct VolumeFileHeader {
-  std::string format;       ///< "NRRD" or "MetaImage"
-  std::string headerPath;   ///< the file the header was read from
-  std::string dataPath;     ///< the file holding the samples (headerPath when attached)
+  std::string format;      ///< "NRRD" or "MetaImage"
+  std::string headerPath;  ///< the file the header was read from
+  std::string dataPath;    ///< the file holding the samples (headerPath when attached)
   Index3 dims{};
   SampleType type = SampleType::UInt8;
   bool bigEndian = false;

@@ -82,7 +82,8 @@ class RawFileSource : public VolumeSource {
  public:
   /// Throws IoError if the file cannot be opened, InvalidArgument if its size is not dims * type.
   RawFileSource(const std::string& path, Index3 dims, SampleType type,
-                std::array<double, 3> origin = {0, 0, 0}, std::array<double, 3> spacing = {1, 1, 1});
+                std::array<double, 3> origin = {0, 0, 0},
+                std::array<double, 3> spacing = {1, 1, 1});
   ~RawFileSource() override;
   Index3 dims() const override { return dims_; }
   std::array<double, 3> origin() const override { return origin_; }

@@ -23,7 +23,8 @@ class GpuCaster : public FrameCaster {
   /// process's (selectGpuDevice) and allocates a model pool of `budgetBytes`, halving down to
   /// 16 MiB while device memory is short. Returns nullptr, every reason given to `report`, when
   /// no GPU is usable.
-  static std::unique_ptr<GpuCaster> create(size_t budgetBytes, int threads, const GpuReport& report);
+  static std::unique_ptr<GpuCaster> create(size_t budgetBytes, int threads,
+                                           const GpuReport& report);
   ~GpuCaster() override;
 
   /// Casts on the GPU into targets.deviceRgba when given and large enough (nothing comes back to
@@ -31,7 +32,8 @@ class GpuCaster : public FrameCaster {
   /// for a frame cast on the CPU). A frame whose models exceed the pool is cast on the CPU (said
   /// once); a frame whose CUDA work fails otherwise is cast on the CPU, and so is every later
   /// frame (failed(), said once). Never throws for a full or failing GPU.
-  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets, ImageRGBA& image) override;
+  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets,
+                  ImageRGBA& image) override;
   bool castsOnGpu() const override { return !failed_; }
   /// The cudaStream_t of the pool and the kernels.
   void* deviceStream() const override { return stream(); }

@@ -14,7 +14,10 @@ namespace afam {
 class GpuError : public Error {
  public:
   GpuError(const std::string& message, std::string file, int line, std::string errorName, int code)
-      : Error(message), file_(std::move(file)), line_(line), errorName_(std::move(errorName)),
+      : Error(message),
+        file_(std::move(file)),
+        line_(line),
+        errorName_(std::move(errorName)),
         code_(code) {}
   const std::string& file() const { return file_; }
   int line() const { return line_; }

@@ -22,7 +22,7 @@ namespace afam {
 
 /// Times of one render() call, milliseconds from CUDA events on the renderer's stream.
 struct GpuFrameTimes {
-  double uploadMs = 0;    ///< models not yet resident + frame tables
+  double uploadMs = 0;  ///< models not yet resident + frame tables
   double kernelMs = 0;
   double downloadMs = 0;  ///< image back to the host
   double totalMs = 0;
@@ -32,8 +32,8 @@ struct GpuFrameTimes {
 };
 
 enum class GpuKernelKind {
-  Full,             ///< castRay<Shaded>: lookup, value(+gradient), TF, Phong, compositing
-  BareValueGradient ///< baseline: lookup + value + gradient at every sample of the same rays
+  Full,              ///< castRay<Shaded>: lookup, value(+gradient), TF, Phong, compositing
+  BareValueGradient  ///< baseline: lookup + value + gradient at every sample of the same rays
 };
 
 /// Floating-point contract of the kernels.

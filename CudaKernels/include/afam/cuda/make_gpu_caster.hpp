@@ -24,7 +24,8 @@ using GpuReport = std::function<void(const std::string&)>;
 /// usable, every reason given to `report` (e.g. "no usable GPU: CUDA driver is missing or too
 /// old (cudaErrorInsufficientDriver, 35)", or "this build has no CUDA renderer (built without
 /// nvcc)"). Never throws for a missing, full or failing GPU.
-std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report);
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads,
+                                           const GpuReport& report);
 
 /// True when this build has the CUDA renderer (built with nvcc).
 bool gpuCasterBuilt();

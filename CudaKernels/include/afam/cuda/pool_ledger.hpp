@@ -17,12 +17,12 @@ namespace afam {
 
 struct PoolStats {
   uint64_t frames = 0;
-  uint64_t hits = 0;            ///< acquire() of a model already resident
-  uint64_t uploads = 0;         ///< acquire() that needs the model's bytes copied to the device
+  uint64_t hits = 0;     ///< acquire() of a model already resident
+  uint64_t uploads = 0;  ///< acquire() that needs the model's bytes copied to the device
   uint64_t evictions = 0;
   uint64_t bytesUploaded = 0;
-  size_t residentBytes = 0;     ///< sum of resident allocations (aligned sizes)
-  size_t peakResidentBytes = 0; ///< never above capacity
+  size_t residentBytes = 0;      ///< sum of resident allocations (aligned sizes)
+  size_t peakResidentBytes = 0;  ///< never above capacity
   size_t residentModels = 0;
   size_t capacityBytes = 0;
 };
@@ -30,7 +30,7 @@ struct PoolStats {
 class PoolLedger {
  public:
   struct Placement {
-    size_t offset = 0;        ///< byte offset in the arena, a multiple of the alignment
+    size_t offset = 0;  ///< byte offset in the arena, a multiple of the alignment
     bool uploadNeeded = false;
   };
 
@@ -55,8 +55,8 @@ class PoolLedger {
  private:
   struct Entry {
     size_t offset = 0;
-    size_t size = 0;       // aligned size
-    size_t rawBytes = 0;   // requested size
+    size_t size = 0;      // aligned size
+    size_t rawBytes = 0;  // requested size
     uint64_t lastFrame = 0;
     std::list<uint64_t>::iterator lru;
   };
@@ -68,8 +68,8 @@ class PoolLedger {
   size_t alignment_;
   uint64_t frame_ = 0;
   std::unordered_map<uint64_t, Entry> entries_;
-  std::list<uint64_t> lru_;            // front: most recently used
-  std::map<size_t, size_t> free_;      // offset -> size, coalesced
+  std::list<uint64_t> lru_;        // front: most recently used
+  std::map<size_t, size_t> free_;  // offset -> size, coalesced
   std::vector<uint64_t> evictedThisFrame_;
   PoolStats stats_;
 };

@@ -7,6 +7,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <vector>
@@ -28,6 +29,14 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// The q-quantile (nearest rank) of v; 0 for none.
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t rank = size_t(std::ceil(q * double(v.size())));
+  return v[std::min(v.size() - 1, rank > 0 ? rank - 1 : 0)];
 }
 }  // namespace
 
@@ -88,6 +97,7 @@ int runReplay(int argc, char** argv) {
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend;
   uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0, poolPeak = 0;
+  int64_t standIns = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
@@ -98,6 +108,7 @@ int runReplay(int argc, char** argv) {
     rend.push_back(st.renderMs);
     hits += st.hits;
     misses += st.misses;
+    standIns += st.standInBlocks;
     bytes += st.bytesRead;
     cachePeak = std::max(cachePeak, st.cachePeakBytes);
     poolPeak = std::max(poolPeak, st.poolBytes);
@@ -109,10 +120,19 @@ int runReplay(int argc, char** argv) {
     if (!quiet)
       std::printf(
           "pov=%zu caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu misses=%llu "
-          "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld\n",
+          "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld stand_ins=%lld\n",
           i, st.cachingMs, st.renderMs, st.latencyMs, (unsigned long long)st.hits,
           (unsigned long long)st.misses, (unsigned long long)st.bytesRead, (long long)st.slots,
-          (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks);
+          (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks,
+          (long long)st.standInBlocks);
+  }
+  if (opts.missBudgetMs >= 0 && !poses.empty()) {  // the still frame once the path has ended
+    FrameSettings still = renderer.settings();
+    still.missBudgetMs = -1;
+    FrameStats st;
+    renderer.renderFrame(Camera::fromPose(poses.back(), size.first, size.second), still, st);
+    std::printf("still_frame caching_ms=%.3f latency_ms=%.3f stand_ins=%lld\n", st.cachingMs,
+                st.latencyMs, (long long)st.standInBlocks);
   }
   if (csv.is_open() && !csv.good()) throw IoError("replay: writing " + args.str("csv") + " failed");
   const double missRate = hits + misses ? double(misses) / double(hits + misses) : 0.0;
@@ -130,8 +150,10 @@ int runReplay(int argc, char** argv) {
   std::printf("hits=%llu misses=%llu bytes_read=%llu\n", (unsigned long long)hits,
               (unsigned long long)misses, (unsigned long long)bytes);
   std::printf(
-      "median_latency_ms=%.3f median_caching_ms=%.3f median_render_ms=%.3f miss_rate=%.4f\n",
-      median(lat), median(cach), median(rend), missRate);
+      "median_latency_ms=%.3f median_caching_ms=%.3f median_render_ms=%.3f miss_rate=%.4f "
+      "p95_latency_ms=%.3f stand_in_blocks=%lld\n",
+      median(lat), median(cach), median(rend), missRate, percentile(lat, 0.95),
+      (long long)standIns);
   rusage self{};
   ::getrusage(RUSAGE_SELF, &self);
   std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n",

@@ -27,13 +27,19 @@ inline const char* renderOptionsHelp() {
          "  --lod distance|screen  the paper's distance bands (default) or projected sample size\n"
          "  --pixel-budget P       screen policy: allowed projected sample spacing in pixels (1)\n"
          "  --no-culling           disable frustum and transfer-function culling\n"
-         "  --threads N            ray-casting threads (default: all cores)\n";
+         "  --threads N            ray-casting threads (default: all cores)\n"
+         "  --load-threads N       threads reading and decoding a frame's misses (default: all "
+         "cores)\n"
+         "  --miss-budget-ms M     wait at most M ms for misses; blocks still loading are drawn\n"
+         "                         from a resident coarser level (default: wait for all)\n";
 }
 
 inline const std::set<std::string>& renderValueOptions() {
-  static const std::set<std::string> s = {
-      "size",    "cache-blocks", "cache-bytes",  "prefetch", "storage-mbps", "sample-distance",
-      "shading", "lod",          "pixel-budget", "threads",  "trajectory"};
+  static const std::set<std::string> s = {"size",          "cache-blocks", "cache-bytes",
+                                          "prefetch",      "storage-mbps", "sample-distance",
+                                          "shading",       "lod",          "pixel-budget",
+                                          "threads",       "trajectory",   "load-threads",
+                                          "miss-budget-ms"};
   return s;
 }
 
@@ -50,6 +56,11 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   RenderOptions o;
   o.threads = int(a.integer("threads", 0));
   if (o.threads < 0) throw InvalidArgument("--threads must be >= 0");
+  o.loadThreads = int(a.integer("load-threads", 0));
+  if (o.loadThreads < 0) throw InvalidArgument("--load-threads must be >= 0");
+  o.missBudgetMs = a.real("miss-budget-ms", -1);
+  if (a.has("miss-budget-ms") && !(o.missBudgetMs >= 0))
+    throw InvalidArgument("--miss-budget-ms must be a number >= 0");
   o.sampleDistance = float(a.real("sample-distance", 0.005));
   if (!(o.sampleDistance > 0)) throw InvalidArgument("--sample-distance must be > 0");
   const std::string sh = a.str("shading", "on");

@@ -2,7 +2,8 @@
 # Peak memory of one pvbatch process encoding an 8-bit volume through the encoding filter
 # (Apps/pvbatch/afam_encode.py: ParaView's raw reader -> vtkAFAMEncoder), for each build given:
 # the builds before and after a change, measured in one sitting, with the files they write
-# compared byte for byte. The volume is Marschner-Lobb quantised to uint8 (SIZE^3, default 512).
+# compared byte for byte. The volume: the repository's HeadMRVolume made large to SIZE^3 uint8
+# (`afam enlarge` of the last build given; default 512).
 # Usage: Testing/Benchmarks/encode_filter_memory.sh WORK_DIR BUILD_DIR [BUILD_DIR ...]
 #        SIZE=512 ENCODE_OPTIONS="--error-bound 1e-2 --relative" ROUNDS=1
 set -euo pipefail
@@ -14,20 +15,11 @@ SIZE="${SIZE:-512}"
 ROUNDS="${ROUNDS:-1}"
 read -r -a OPTIONS <<<"${ENCODE_OPTIONS:---error-bound 1e-2 --relative}"
 mkdir -p "$WORK"
-volume="$WORK/mlq_${SIZE}x${SIZE}x${SIZE}_uint8.raw"
+volume="$WORK/headmr_${SIZE}x${SIZE}x${SIZE}_uint8.raw"
 if [ ! -f "$volume" ]; then
-  first="$(cd "$1" && pwd)"
-  "$first/Apps/afam" ml --size "$SIZE" "$WORK/ml_float.raw" >/dev/null
-  python3 - "$WORK/ml_float.raw" "$volume" <<'PY'
-import sys, numpy as np
-v = np.memmap(sys.argv[1], dtype="<f4", mode="r")
-out = np.memmap(sys.argv[2], dtype=np.uint8, mode="w+", shape=v.shape)
-step = 1 << 24
-for i in range(0, v.size, step):  # [0, 1] -> 0..255, a slab at a time
-    out[i:i + step] = np.clip(np.rint(v[i:i + step] * 255.0), 0, 255).astype(np.uint8)
-out.flush()
-PY
-  rm -f "$WORK/ml_float.raw"
+  last="$(cd "${!#}" && pwd)"  # the newest build has `afam enlarge`
+  "$last/Apps/afam" enlarge "$here/Testing/Data/volumes/HeadMRVolume_48x62x42_uint8.raw" "$volume" \
+    --dims "$SIZE,$SIZE,$SIZE" >/dev/null
 fi
 echo "volume $(basename "$volume") ($(stat -c %s "$volume") bytes), options ${OPTIONS[*]}, $(nproc) cores"
 outputs=()

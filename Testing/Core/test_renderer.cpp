@@ -363,3 +363,54 @@ TEST(Renderer, TargetsGoWithEachFrameAndTheCastersResultIntoItsStats) {
   EXPECT_EQ(recorded.renderFrame(cam, st).rgba, reference.rgba);
   EXPECT_TRUE(st.cast.messages.empty());
 }
+
+TEST(Renderer, AFrameWaitsNoLongerThanItsMissBudgetAndTheStillFrameIsExact) {
+  const auto file = afam_test::encodeMl(65, EncodingMode::Adaptive, 3, 8, 1e-3);
+  RenderOptions o = testOptions();
+  o.storageMBps = 0.5;  // slow storage: the finest level's misses take about a second
+  o.loadThreads = 4;
+  Renderer r(file, o);
+  const Camera c = testCamera(48);
+  FrameSettings coarse = r.settings(), fine = r.settings();
+  coarse.lod.forceLevel = 0;
+  fine.lod.forceLevel = file->partition().levels() - 1;
+  FrameStats st;
+  r.renderFrame(c, coarse, st);  // the coarsest level is resident from here on
+  EXPECT_EQ(st.standInBlocks, 0);
+
+  fine.missBudgetMs = 20;
+  const auto t0 = std::chrono::steady_clock::now();
+  r.renderFrame(c, fine, st);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GT(st.standInBlocks, 0) << "finest blocks still loading are drawn from level 0";
+  EXPECT_LT(st.cachingMs, 300) << "the frame waited " << st.cachingMs << " ms for its misses";
+  std::printf("[miss budget] stand-ins %lld, caching %.1f ms, frame %.1f ms\n",
+              static_cast<long long>(st.standInBlocks), st.cachingMs, ms);
+
+  fine.missBudgetMs = -1;  // the still frame: waits for every block
+  const ImageRGBA still = r.renderFrame(c, fine, st);
+  std::printf("[miss budget] the still frame waited %.1f ms\n", st.cachingMs);
+  EXPECT_EQ(st.standInBlocks, 0);
+  EXPECT_GT(st.cachingMs, 300)
+      << "the loads the budget left out were slow (the test discriminates)";
+  RenderOptions exact = testOptions();
+  Renderer fresh(file, exact);
+  FrameStats st2;
+  const ImageRGBA want = fresh.renderFrame(c, fine, st2);
+  ASSERT_EQ(still.rgba.size(), want.rgba.size());
+  for (size_t i = 0; i < want.rgba.size(); ++i) ASSERT_EQ(still.rgba[i], want.rgba[i]) << i;
+}
+
+TEST(Renderer, AnUnusableMissBudgetIsRefused) {
+  const auto file = afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-3);
+  Renderer r(file, testOptions());
+  FrameSettings s = r.settings();
+  s.missBudgetMs = std::nan("");
+  EXPECT_THROW(r.setFrameSettings(s), InvalidArgument);
+  std::vector<std::string> warnings;
+  const FrameSettings kept = acceptFrameSettings(s, r.settings(), warnings);
+  EXPECT_EQ(kept.missBudgetMs, -1);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("miss budget"), std::string::npos) << warnings[0];
+}

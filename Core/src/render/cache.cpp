@@ -167,6 +167,14 @@ bool LruCache::prefetch(int64_t entry) {
   return getIntact(entry, Purpose::Prefetch) != nullptr;
 }
 
+Payload LruCache::takeLoaded(int64_t entry) {
+  std::lock_guard<std::mutex> g(mutex_);
+  auto it = map_.find(entry);
+  if (it == map_.end()) return nullptr;
+  lru_.splice(lru_.begin(), lru_, it->second.pos);
+  return it->second.data;
+}
+
 bool LruCache::contains(int64_t entry) const {
   std::lock_guard<std::mutex> g(mutex_);
   return map_.count(entry) != 0;

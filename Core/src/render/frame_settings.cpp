@@ -86,11 +86,16 @@ std::string tableProblem(const FrameSettings& s) {
   return "transfer-function table size " + std::to_string(s.tfTableSize) + " is not in [2, 2^20]";
 }
 
+std::string missBudgetProblem(const FrameSettings& s) {
+  if (!std::isnan(s.missBudgetMs)) return {};
+  return "miss budget " + number(s.missBudgetMs) + " ms is not a number";
+}
+
 }  // namespace
 
 std::string frameSettingsProblem(const FrameSettings& s) {
-  for (const std::string& p :
-       {sampleDistanceProblem(s), blendModeProblem(s), lodProblem(s), tableProblem(s)})
+  for (const std::string& p : {sampleDistanceProblem(s), blendModeProblem(s), lodProblem(s),
+                               tableProblem(s), missBudgetProblem(s)})
     if (!p.empty()) return p;
   if (s.hasTransferFunction) return transferFunctionProblem(s.transferFunction);
   return {};
@@ -116,6 +121,10 @@ FrameSettings acceptFrameSettings(const FrameSettings& wanted, const FrameSettin
   if (const std::string p = tableProblem(wanted); !p.empty()) {
     s.tfTableSize = kept.tfTableSize;
     warnings.push_back(p + "; keeping " + std::to_string(kept.tfTableSize));
+  }
+  if (const std::string p = missBudgetProblem(wanted); !p.empty()) {
+    s.missBudgetMs = kept.missBudgetMs;
+    warnings.push_back(p + "; keeping " + number(kept.missBudgetMs) + " ms");
   }
   if (wanted.hasTransferFunction) {
     if (const std::string p = transferFunctionProblem(wanted.transferFunction); !p.empty()) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "afam/base/errors.hpp"
 #include "afam/predict/predictor_factory.hpp"
@@ -38,6 +39,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   setFrameSettings(settings);
   caster_ = std::make_unique<CpuCaster>(resources_.threads);
   cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
+  loader_ = std::make_unique<BlockLoader>(*cache_, resources_.loadThreads);
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
   prefetcher_ = std::make_unique<Prefetcher>();
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
@@ -129,18 +131,38 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.bind();
 }
 
-std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st) {
-  std::vector<int64_t> pins;
+std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st,
+                                            Clock::time_point deadline) {
+  std::vector<int64_t> pins, missing;
   pins.reserve(sel.visible.size());
-  for (const BlockRef& b : sel.visible) pins.push_back(b.entry);
+  for (const BlockRef& b : sel.visible) {
+    pins.push_back(b.entry);
+    if (!cache_->contains(b.entry) && !cache_->damage().isDamaged(b.entry))
+      missing.push_back(b.entry);
+  }
   cache_->setPinned(pins);
+  // Every miss is read and decoded by the load threads at once; the frame waits until they are
+  // all resident or its budget has run out.
+  loader_->request(missing, LruCache::Purpose::Frame);
+  loader_->waitFor(missing, deadline);
   const IntactLoader load = [this](int64_t entry) {
     return cache_->getIntact(entry, LruCache::Purpose::Frame);
   };
   std::vector<Placement> placed;
   placed.reserve(sel.visible.size());
+  const std::unordered_set<int64_t> missed(missing.begin(), missing.end());
   for (const BlockRef& b : sel.visible) {
-    if (auto data = load(b.entry)) {
+    if (loader_->pending(b.entry)) {
+      if (placeStandIn(b, placed)) {
+        st.standInBlocks++;
+        continue;
+      }
+      loader_->waitFor({b.entry}, Clock::time_point::max());  // nothing coarser to draw
+    }
+    // A miss loaded for this frame was counted as one; the frame takes it without a lookup.
+    Payload data = missed.count(b.entry) ? cache_->takeLoaded(b.entry) : nullptr;
+    if (!data) data = load(b.entry);
+    if (data) {
       placed.push_back(Placement{b, b, std::move(data)});
       continue;
     }
@@ -148,6 +170,22 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
     if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
   }
   return placed;
+}
+
+bool Renderer::placeStandIn(const BlockRef& block, std::vector<Placement>& placed) {
+  const Partition& p = file_->partition();
+  BlockRef up = block;
+  while (up.level > 0) {
+    up.ijk = p.parent(up.level, up.ijk);
+    up.level--;
+    up.entry = file_->entryIndex(up.level, up.ijk);
+    if (!cache_->contains(up.entry) || cache_->damage().isDamaged(up.entry)) continue;
+    if (auto data = cache_->getIntact(up.entry, LruCache::Purpose::Frame)) {
+      placed.push_back(Placement{up, block, std::move(data)});
+      return true;
+    }
+  }
+  return false;
 }
 
 FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset) {
@@ -202,7 +240,11 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   const Selection sel = select(camera);
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
-  const std::vector<Placement> placed = loadModels(sel, st);
+  const Clock::time_point deadline =
+      settings_.missBudgetMs < 0
+          ? Clock::time_point::max()
+          : t0 + std::chrono::microseconds(int64_t(std::min(settings_.missBudgetMs, 1e9) * 1e3));
+  const std::vector<Placement> placed = loadModels(sel, st, deadline);
   // One slot per model: a coarser model standing in for several damaged blocks is stored once
   // (the GPU pool keys its models by entry) and covers each of their regions.
   std::unordered_map<int64_t, int32_t> slotOf;

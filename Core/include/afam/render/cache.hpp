@@ -79,6 +79,9 @@ class LruCache {
   /// Returns true if a read happened; a damaged payload is recorded, not thrown.
   bool prefetch(int64_t entry);
   bool contains(int64_t entry) const;
+  /// A resident entry's payload, marked most recently used, without counting a lookup (the frame
+  /// takes a miss it had loaded for it, which the load counted); null when it is not resident.
+  Payload takeLoaded(int64_t entry);
 
   void setPinned(const std::vector<int64_t>& entries);
   void clearPinned();

@@ -29,6 +29,12 @@ struct FrameSettings {
   /// transfer function (a block the table makes transparent can still hold a ray's largest or
   /// smallest value, and counts in the mean).
   int blendMode = 0;
+  /// How long a frame waits for its misses, which the renderer's load threads read and decode all
+  /// at once. < 0 (default): until every selected block is resident (the exact frame). >= 0: at
+  /// most this many milliseconds; a block still loading is drawn from its nearest resident
+  /// coarser level and refined in the next frames (FrameStats::standInBlocks). A block with no
+  /// resident coarser level is always waited for.
+  double missBudgetMs = -1;
 };
 
 /// Why `tf` cannot be drawn, in words, or empty when it can: no colour or no opacity point, a

@@ -25,6 +25,7 @@
 
 #include "afam/format/afam_file.hpp"
 #include "afam/predict/predictor.hpp"
+#include "afam/render/block_loader.hpp"
 #include "afam/render/cache.hpp"
 #include "afam/render/damage.hpp"
 #include "afam/render/frame_caster.hpp"
@@ -43,6 +44,7 @@ namespace afam {
 /// new Renderer.
 struct RendererResources {
   int threads = 0;                ///< ray-casting threads (0 = all cores)
+  int loadThreads = 0;            ///< threads that read and decode a frame's misses (0 = all cores)
   CacheBudget cache{0, 200};      ///< the paper's 200 micro-models by default
   bool cold = false;              ///< drop the file from the OS page cache before each frame
   double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none
@@ -58,6 +60,10 @@ struct FrameStats {
   uint64_t prefetchedBlocks = 0,
            prefetchedBytes = 0;  ///< loaded by the prefetch thread during the frame
   CullCounts culled;
+  /// Blocks of the selection still loading when the frame's miss budget ran out
+  /// (FrameSettings::missBudgetMs), drawn from a resident coarser level; they are refined in the
+  /// next frames. 0: the frame is exact.
+  int64_t standInBlocks = 0;
   int64_t slots = 0;  ///< models in the FrameView
   uint64_t poolBytes = 0;
   /// The cache's resident bytes at the end of the frame, and the most it held during the frame
@@ -151,7 +157,9 @@ class Renderer {
   const FrameCaster& caster() const { return *caster_; }
 
  private:
-  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats);
+  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats,
+                                    std::chrono::steady_clock::time_point deadline);
+  bool placeStandIn(const BlockRef& block, std::vector<Placement>& placed);
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
   void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
 
@@ -160,6 +168,7 @@ class Renderer {
   FrameSettings settings_;
   LodSelector lod_;
   std::unique_ptr<LruCache> cache_;
+  std::unique_ptr<BlockLoader> loader_;  ///< after cache_: stops before the cache goes
   std::unique_ptr<Predictor> predictor_;
   std::unique_ptr<Prefetcher> prefetcher_;
   std::vector<Camera> history_;

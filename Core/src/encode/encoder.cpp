@@ -398,9 +398,9 @@ class LevelEncoder {
   }
 
   /// Lines of blocks of level l from `line` on (before endLine), until the batch holds ~24 M
-  /// samples (in a team of several processes ~1 M), at least one line. One process samples a
-  /// z-row (or the part of one in the range) at a time; a member of a team one line at a time.
-  /// Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
+  /// samples (in a team of several processes 256 K samples, 1 MB), at least one line. One process
+  /// samples a z-row (or the part of one in the range) at a time; a member of a team one line at a
+  /// time. Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
   /// progress callback, which the calling thread owns).
   Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();

@@ -20,7 +20,7 @@ class ModelSink {
   virtual void add(const ModelEntry& entry, const void* stored) = 0;
 };
 
-/// Keeps every model in memory (for the VTK filter and for tests).
+/// Keeps every model in memory (the tests use it to look at what an encode made).
 class InMemoryModels : public ModelSink {
  public:
   void begin(const VolumeHeader& h) override;

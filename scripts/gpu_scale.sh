@@ -41,7 +41,7 @@ echo "encode: $(( $(date +%s) - t0 )) s, $(grep -o 'bytes_out=[0-9]*\|ratio=[0-9
 "$afam" info "$work/scan.afam" | grep -E "kinds|level" | tail -4
 rm -f "$raw"  # the replays read the .afam file only
 head -c $(( frames * 12 )) "$traj" >"$work/path.dat"  # 12 bytes a pose
-printf '%-6s %-7s %12s %12s %12s %10s %10s %12s\n' size budget median_ms p95_ms first_ms misses stand_ins still_ms >"$logs/table.txt"
+printf '%-6s %-7s %12s %12s %12s %12s %10s %10s %12s\n' size budget median_ms caching_ms p95_ms first_ms misses stand_ins still_ms >"$logs/table.txt"
 for size in ${AFAM_SCALE_SIZES:-512 1024}; do
   for budget in ${AFAM_SCALE_BUDGETS:-exact 20}; do
     opt=(); [ "$budget" = exact ] || opt=(--miss-budget-ms "$budget")
@@ -51,8 +51,9 @@ for size in ${AFAM_SCALE_SIZES:-512 1024}; do
     first=$(grep -m1 '^pov=0 ' "$log" | grep -o 'latency_ms=[0-9.]*' | cut -d= -f2)
     misses=$(grep -o '^hits=[0-9]* misses=[0-9]*' "$log" | grep -o 'misses=[0-9]*' | cut -d= -f2)
     line=$(grep '^median_latency_ms=' "$log")
-    printf '%-6s %-7s %12s %12s %12s %10s %10s %12s\n' "$size" "$budget" \
+    printf '%-6s %-7s %12s %12s %12s %12s %10s %10s %12s\n' "$size" "$budget" \
       "$(grep -o 'median_latency_ms=[0-9.]*' <<<"$line" | cut -d= -f2)" \
+      "$(grep -o 'median_caching_ms=[0-9.]*' <<<"$line" | cut -d= -f2)" \
       "$(grep -o 'p95_latency_ms=[0-9.]*' <<<"$line" | cut -d= -f2)" "$first" "$misses" \
       "$(grep -o 'stand_in_blocks=[0-9]*' <<<"$line" | cut -d= -f2)" \
       "$(grep -o '^still_frame caching_ms=[0-9.]* latency_ms=[0-9.]*' "$log" | grep -o 'latency_ms=[0-9.]*' | cut -d= -f2)" \

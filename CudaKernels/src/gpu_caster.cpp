@@ -64,11 +64,19 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
   const size_t floats = size_t(w) * size_t(h) * 4;
   FrameView view = frame.view;
   view.maxDistance = targets.maxDistance;
-  if (failed_) {  // known to fail: not tried again, and the device depth is not read
+  std::vector<float> pool;  // the models side by side, only for a frame cast on the CPU after all
+  auto castOnCpu = [&] {
+    view.pool = frame.hostPool(pool);
     image.resize(w, h);
     renderCpu(view, image, threads_);
+  };
+  if (failed_) {  // known to fail: not tried again, and the device depth is not read
+    castOnCpu();
     return result;
   }
+  // The cached models themselves: the pool copies only those it does not hold yet.
+  const float* const* slotHost =
+      frame.slotHost.size() == size_t(frame.view.slotCount) ? frame.slotHost.data() : nullptr;
   std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
   const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
   const bool onDevice = targets.deviceRgba && floats <= targets.deviceRgbaFloats;
@@ -82,7 +90,7 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
   };
   try {
     if (onDevice) {
-      gpu_->renderToDevice(view, slotKeys, targets.deviceRgba, nullptr, depth);
+      gpu_->renderToDevice(view, slotKeys, targets.deviceRgba, nullptr, depth, slotHost);
       result.depthLimitedPixels = gpu_->lastTimes().depthLimitedPixels;
       image.width = w;
       image.height = h;
@@ -91,7 +99,7 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
     } else {
       limitsOnHost();
       image.resize(w, h);
-      gpu_->render(view, slotKeys, image.rgba.data());
+      gpu_->render(view, slotKeys, image.rgba.data(), nullptr, slotHost);
     }
     result.onGpu = true;
     const GpuFrameTimes& t = gpu_->lastTimes();
@@ -104,14 +112,12 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
     if (!warned_) result.messages.push_back(std::string(e.what()) + "; this frame on the CPU");
     warned_ = true;
     if (hostLimits.empty()) limitsOnHost();
-    image.resize(w, h);
-    renderCpu(view, image, threads_);
+    castOnCpu();
   } catch (const GpuError& e) {
     failed_ = true;
     result.messages.push_back(std::string("the GPU failed (") + e.what() +
                               "); this frame and the next ones on the CPU");
-    image.resize(w, h);
-    renderCpu(view, image, threads_);
+    castOnCpu();
   }
   if (!failed_) result.modelsUploaded = int64_t(poolStats().uploads - uploadsBefore);
   return result;

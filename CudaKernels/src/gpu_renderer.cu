@@ -178,6 +178,8 @@ struct GpuRenderer::Impl {
   /// Texture handles of this frame's raw slots on the device (creating missing textures; the
   /// copies into CUDA arrays are synchronous: this is the baseline, not the product path).
   const unsigned long long* textureHandles(const FrameView& v, const uint64_t* keys) {
+    if (v.slotCount > 0 && !v.pool)
+      throw InvalidArgument("GpuRenderer: the 3D-texture DS path reads the frame's host pool");
     const size_t n = size_t(std::max(v.slotCount, 1));
     if (n > handleCapacity) {
       AFAM_CUDA_CHECK(cudaStreamSynchronize(stream));
@@ -231,12 +233,12 @@ struct GpuRenderer::Impl {
   /// Makes every slot's model resident, uploads the frame tables and returns the device view.
   /// All copies are queued on `stream`; kernels queued after it see the data.
   FrameView upload(const FrameView& v, const uint64_t* keys, uint64_t* modelsUploaded,
-                   uint64_t* bytesUploaded) {
+                   uint64_t* bytesUploaded, const float* const* slotHost = nullptr) {
     if (v.camera.width < 1 || v.camera.height < 1)
       throw InvalidArgument("GpuRenderer: image size " + std::to_string(v.camera.width) + " x " +
                             std::to_string(v.camera.height) + " is empty");
-    if (v.slotCount > 0 && (!v.slots || !v.pool))
-      throw InvalidArgument("GpuRenderer: frame has slots but no slot table or pool");
+    if (v.slotCount > 0 && (!v.slots || (!v.pool && !slotHost)))
+      throw InvalidArgument("GpuRenderer: frame has slots but no slot table or model floats");
     const PoolStats before = pool.stats();
     pool.beginFrame();
     // Layout of the tables buffer.
@@ -271,8 +273,8 @@ struct GpuRenderer::Impl {
       FrameSlot slot = v.slots[s];
       const uint64_t floats = slotFloats(slot);
       const uint64_t key = keys ? keys[s] : defaultSlotKey(slot);
-      const size_t byteOffset =
-          pool.acquire(key, v.pool + slot.offset, size_t(floats) * sizeof(float));
+      const float* host = slotHost ? slotHost[s] : v.pool + slot.offset;
+      const size_t byteOffset = pool.acquire(key, host, size_t(floats) * sizeof(float));
       slot.offset = byteOffset / sizeof(float);
       slots[s] = slot;
     }
@@ -349,14 +351,16 @@ GpuModelPool& GpuRenderer::pool() { return impl_->pool; }
 const GpuModelPool& GpuRenderer::pool() const { return impl_->pool; }
 
 void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
-                         GpuFrameTimes* times) {
-  cast(view, slotKeys, nullptr, rgba, times, nullptr);
+                         GpuFrameTimes* times, const float* const* slotHost) {
+  cast(view, slotKeys, nullptr, rgba, times, nullptr, slotHost);
 }
 
 void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
-                                 GpuFrameTimes* times, const DeviceDepth* depth) {
+                                 GpuFrameTimes* times, const DeviceDepth* depth,
+                                 const float* const* slotHost) {
   if (!deviceRgba) throw InvalidArgument("renderToDevice: no device image");
-  cast(view, slotKeys, deviceRgba, nullptr, times, depth && depth->depth ? depth : nullptr);
+  cast(view, slotKeys, deviceRgba, nullptr, times, depth && depth->depth ? depth : nullptr,
+       slotHost);
 }
 
 namespace {
@@ -383,7 +387,8 @@ int64_t GpuRenderer::depthLimitsToHost(const DeviceDepth& depth, std::vector<flo
 }
 
 void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget,
-                       float* hostRgba, GpuFrameTimes* times, const DeviceDepth* depth) {
+                       float* hostRgba, GpuFrameTimes* times, const DeviceDepth* depth,
+                       const float* const* slotHost) {
   if (simulateFailure_)
     throw GpuError("CUDA error cudaErrorContextIsDestroyed (709): simulated loss of the context",
                    __FILE__, __LINE__, "cudaErrorContextIsDestroyed", 709);
@@ -394,7 +399,7 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   float* target = deviceTarget ? deviceTarget : reinterpret_cast<float*>(m.deviceImage);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
   GpuFrameTimes t;
-  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded);
+  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded, slotHost);
   if (depth) {  // the limits come from the device depth, not from view.maxDistance
     checkDepthSize(*depth, view.camera.width, view.camera.height);
     m.depthLimits(*depth, pixels);

@@ -414,3 +414,43 @@ TEST(Renderer, AnUnusableMissBudgetIsRefused) {
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("miss budget"), std::string::npos) << warnings[0];
 }
+
+namespace {
+
+/// Reads the cached models as a GPU caster does; records what the frame held.
+class ModelReadingCaster : public FrameCaster {
+ public:
+  CastResult cast(const PreparedFrame& frame, const FrameTargets& targets,
+                  ImageRGBA& image) override {
+    poolWasEmpty = frame.pool.empty() && frame.view.pool == nullptr;
+    slots = frame.view.slotCount;
+    for (size_t s = 0; s < frame.slotHost.size(); ++s)
+      sharesCachedModels = sharesCachedModels && frame.slotHost[s] == frame.models[s]->data();
+    return CpuCaster(2).cast(frame, targets, image);
+  }
+  bool castsOnGpu() const override { return false; }
+  std::string description() const override { return "test"; }
+  bool readsHostPool() const override { return false; }
+  bool poolWasEmpty = false, sharesCachedModels = true;
+  int32_t slots = 0;
+};
+
+}  // namespace
+
+TEST(Renderer, ACasterThatReadsTheCachedModelsGetsNoCopyOfThemAndTheSameImage) {
+  const auto file = afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-3);
+  const Camera c = testCamera(40);
+  Renderer copying(file, testOptions());
+  FrameStats st;
+  const ImageRGBA want = copying.renderFrame(c, st);
+  Renderer referencing(file, testOptions());
+  auto caster = std::make_unique<ModelReadingCaster>();
+  ModelReadingCaster* seen = caster.get();
+  referencing.setCaster(std::move(caster));
+  const ImageRGBA got = referencing.renderFrame(c, st);
+  EXPECT_TRUE(seen->poolWasEmpty);
+  EXPECT_TRUE(seen->sharesCachedModels);
+  EXPECT_GT(seen->slots, 0);
+  EXPECT_GT(st.poolBytes, 0u) << "the models' bytes are still counted";
+  EXPECT_EQ(got.rgba, want.rgba);
+}

@@ -10,6 +10,8 @@ CastResult CpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
                            ImageRGBA& image) {
   FrameView view = frame.view;
   view.maxDistance = targets.maxDistance;
+  std::vector<float> pool;
+  view.pool = frame.hostPool(pool);
   renderCpu(view, image, threads_);
   return CastResult{};
 }

@@ -21,11 +21,22 @@ static double msSince(Clock::time_point t0) {
 void PreparedFrame::bind() {
   view.slots = slots.data();
   view.slotCount = int32_t(slots.size());
-  view.pool = pool.data();
+  view.pool = pool.empty() ? nullptr : pool.data();
   view.cellSlot = cellSlot.data();
   for (int a = 0; a < 3; ++a) view.cellBounds[a] = cellBounds[a].data();
   view.tf = tf.data();
   view.tfSize = int32_t(tf.size() / 4);
+}
+
+const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
+  if (view.pool || slots.empty()) return view.pool;
+  uint64_t floats = 0;
+  for (size_t s = 0; s < slots.size(); ++s)
+    floats = std::max(floats, slots[s].offset + models[s]->size());
+  storage.resize(floats);
+  for (size_t s = 0; s < slots.size(); ++s)
+    std::memcpy(storage.data() + slots[s].offset, slotHost[s], models[s]->size() * sizeof(float));
+  return storage.data();
 }
 
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
@@ -108,6 +119,8 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.slots.clear();
   fr.pool.clear();
   fr.entries.clear();
+  fr.models.clear();
+  fr.slotHost.clear();
   // Opacity corrected for the sample distance once per frame, not per sample.
   fr.tf = tf_;
   const float ratio =
@@ -231,7 +244,7 @@ void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr
       for (int x = c0[0]; x < c1[0]; ++x) fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
 }
 
-void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) {
+void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, bool hostPool) {
   const auto t0 = Clock::now();
   // A file changed on disk ends this renderer's frames (FileChangedError): its cache holds blocks
   // of the old file, which must not be drawn beside blocks of the new one.
@@ -251,14 +264,17 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   uint64_t poolFloats = 0;
   for (const Placement& m : placed)
     if (slotOf.emplace(m.model.entry, -1).second) poolFloats += m.data->size();
-  fr.pool.resize(poolFloats);
+  if (hostPool) fr.pool.resize(poolFloats);
   fr.slots.reserve(slotOf.size());
   uint64_t offset = 0;
   for (const Placement& m : placed) {
     int32_t& slot = slotOf[m.model.entry];
     if (slot < 0) {
-      std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+      if (hostPool)
+        std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
       slot = addSlot(m.model, fr, offset);
+      fr.models.push_back(m.data);
+      fr.slotHost.push_back(m.data->data());
       offset += m.data->size();
     }
     fillCells(m.region, slot, fr);
@@ -268,7 +284,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st) 
   st.hits = after.hits - before.hits;
   st.misses = after.misses - before.misses;
   st.slots = int64_t(fr.slots.size());
-  st.poolBytes = fr.pool.size() * sizeof(float);
+  st.poolBytes = poolFloats * sizeof(float);
   st.damageReports = cache_->damage().takeReports();
   st.knownDamagedBlocks = int64_t(cache_->damage().count());
   st.cachingMs = msSince(t0);
@@ -302,7 +318,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
   if (resources_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
-  prepare(camera, fr, st);
+  prepare(camera, fr, st, caster_->readsHostPool());
   history_.push_back(camera);
   if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
   // Prefetch the predicted next view while this one renders. The prediction itself runs in the

@@ -77,6 +77,9 @@ class FrameCaster {
   virtual void* deviceStream() const { return nullptr; }
   /// In words: "CPU" or "NVIDIA H200 (sm_90, ...)".
   virtual std::string description() const = 0;
+  /// False when the caster reads each slot's floats from PreparedFrame::slotHost (the cached
+  /// models), so that the renderer leaves the frame's pool empty: no per-frame copy of the models.
+  virtual bool readsHostPool() const { return true; }
 };
 
 /// The CPU ray caster (renderCpu) on `threads` threads (0: all cores); ignores device targets.

@@ -85,12 +85,19 @@ struct FrameStats {
 struct PreparedFrame {
   FrameView view;
   std::vector<FrameSlot> slots;
+  /// The slots' floats side by side at their offsets; empty when the caster reads the cached
+  /// models themselves (FrameCaster::readsHostPool false: no per-frame copy of every model).
   std::vector<float> pool;
   std::vector<int32_t> cellSlot;
   std::array<std::vector<float>, 3> cellBounds;
   std::vector<float> tf;
   std::vector<int64_t> entries;  ///< file entries of the slots, slot order
-  void bind();                   ///< points view at the vectors above
+  /// The cached models of the slots, slot order (kept alive for the frame), and their floats.
+  std::vector<std::shared_ptr<const std::vector<float>>> models;
+  std::vector<const float*> slotHost;
+  void bind();  ///< points view at the vectors above (view.pool null while pool is empty)
+  /// view.pool, or, when the pool was left empty, the slots' floats copied into `storage`.
+  const float* hostPool(std::vector<float>& storage) const;
 };
 
 /// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
@@ -132,7 +139,12 @@ class Renderer {
   /// FrameView + pool. Fills stats' caching and damage fields. Throws FileChangedError when the
   /// file changed on disk since it was opened (checked first, and by every read): the renderer
   /// is then done, and a new one on the file opened again draws its new contents.
-  void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats);
+  void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats) {
+    prepare(camera, frame, stats, true);
+  }
+  /// The same; with hostPool false the frame references the cached models (models, slotHost)
+  /// and its pool stays empty.
+  void prepare(const Camera& camera, PreparedFrame& frame, FrameStats& stats, bool hostPool);
   /// One full frame: [drop OS cache if cold] prepare, start prefetch of the predicted next view,
   /// cast rays with the caster into `targets` (this frame's only), stop prefetch. Appends the
   /// camera to the prediction history; stats.cast says what the caster did. The image is on the

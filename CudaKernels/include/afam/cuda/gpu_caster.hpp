@@ -39,6 +39,8 @@ class GpuCaster : public FrameCaster {
   void* deviceStream() const override { return stream(); }
   /// "NVIDIA H200 (sm_90, ...)".
   std::string description() const override { return description_; }
+  /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident.
+  bool readsHostPool() const override { return false; }
 
   void* stream() const;
   /// True once a frame's CUDA work failed for another reason than memory (e.g. a lost context).

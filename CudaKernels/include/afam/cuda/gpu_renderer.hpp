@@ -62,15 +62,18 @@ class GpuRenderer {
   /// (width*height*4 floats, premultiplied, row 0 at the top, as castRay returns it).
   /// slotKeys[s] names slot s's model across frames (nullptr: a key derived from its kind, level,
   /// extent and size). Throws GpuOutOfMemory when the frame's models exceed the pool budget.
+  /// slotHost (optional): slot s's floats at slotHost[s] on the host instead of view.pool +
+  /// offset (a frame that references cached models, copied only when not resident here).
   void render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
-              GpuFrameTimes* times = nullptr);
+              GpuFrameTimes* times = nullptr, const float* const* slotHost = nullptr);
   /// As render(), but the image is cast into `deviceRgba` (device memory of width*height*4
   /// floats, e.g. an OpenGL buffer mapped into CUDA) and left there: nothing comes back to the
   /// host (downloadMs 0). The caller keeps `deviceRgba` valid until the call returns.
   /// `depth` (optional): per-pixel ray limits computed on the GPU from a device depth buffer
   /// (rayLimitFromDepth, the CPU's math), used in place of view.maxDistance.
   void renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
-                      GpuFrameTimes* times = nullptr, const DeviceDepth* depth = nullptr);
+                      GpuFrameTimes* times = nullptr, const DeviceDepth* depth = nullptr,
+                      const float* const* slotHost = nullptr);
   /// The same limits brought to the host (width * height floats, row 0 = top; a frame cast on the
   /// CPU after all). Returns the number of limited pixels.
   int64_t depthLimitsToHost(const DeviceDepth& depth, std::vector<float>& limits);
@@ -112,7 +115,7 @@ class GpuRenderer {
   /// Casts into deviceTarget (or the renderer's own device image when null), then copies the
   /// image to hostRgba when given.
   void cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget, float* hostRgba,
-            GpuFrameTimes* times, const DeviceDepth* depth);
+            GpuFrameTimes* times, const DeviceDepth* depth, const float* const* slotHost);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;

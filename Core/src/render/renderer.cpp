@@ -321,32 +321,32 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
   prepare(camera, fr, st, caster_->readsHostPool());
   history_.push_back(camera);
   if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
-  // Prefetch the predicted next view while this one renders. The prediction itself runs in the
-  // prefetch thread (off the frame's critical path); predictors that know the blocks directly
-  // (APPA's table, ForeCache's signature ranking) hand them over without a view selection.
+  // Prefetch the predicted next view while this one renders. The prediction runs in the prefetch
+  // thread (off the frame's critical path); predictors that know the blocks directly (APPA's
+  // table, ForeCache's signature ranking) hand them over without a view selection. The blocks
+  // are loaded by the load threads, most important first, until the frame is done.
   if (resources_.prefetch != "none") {
-    LruCache* cache = cache_.get();
+    BlockLoader* loader = loader_.get();
     const Renderer* self = this;
     const Predictor* predictor = predictor_.get();
-    prefetcher_->start([cache, self, predictor, history = history_](const std::atomic<bool>& stop,
-                                                                    uint64_t& loaded) {
-      std::vector<int64_t> entries;
-      if (!predictor->predictEntries(history, entries)) {
-        Camera next;
-        if (!predictor->predict(history, next)) return;
-        for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
-      }
-      for (int64_t e : entries) {
-        if (stop.load(std::memory_order_acquire)) return;
-        if (cache->prefetch(e)) ++loaded;
-      }
-    });
+    prefetcher_->start(
+        [loader, self, predictor, history = history_](const std::atomic<bool>& stop, uint64_t&) {
+          std::vector<int64_t> entries;
+          if (!predictor->predictEntries(history, entries)) {
+            Camera next;
+            if (!predictor->predict(history, next)) return;
+            for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
+          }
+          if (!stop.load(std::memory_order_acquire))
+            loader->request(entries, LruCache::Purpose::Prefetch);
+        });
   }
   const auto t0 = Clock::now();
   ImageRGBA image;
   st.cast = caster_->cast(fr, targets, image);
   st.renderMs = msSince(t0);
-  prefetcher_->finish();  // the paper's rendering_done: prefetching stops with the frame
+  prefetcher_->finish();      // the paper's rendering_done: prefetching stops with the frame
+  loader_->cancelPrefetch();  // (a load under way completes)
   cache_->clearPinned();
   for (std::string& r : cache_->damage().takeReports()) st.damageReports.push_back(std::move(r));
   st.knownDamagedBlocks = int64_t(cache_->damage().count());

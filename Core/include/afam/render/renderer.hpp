@@ -2,19 +2,23 @@
 // The out-of-core multi-resolution renderer of one .afam file (the paper's Algorithms 2-4).
 //
 // A Renderer is built from what owns memory and threads (RendererResources: the RAM cache, the
-// prefetch thread, ray-casting threads; and its FrameCaster, setCaster); what a person edits while
-// looking (FrameSettings: transfer function, shading, blend mode, sample distance, LOD) goes with
-// each frame, so an edit keeps the cache, the prefetcher's history and a GPU caster's model pool.
-// Where a frame's image goes and what stops its rays (FrameTargets) go with each frame too.
+// load threads, the prefetch thread, ray-casting threads; and its FrameCaster, setCaster); what a
+// person edits while looking (FrameSettings: transfer function, shading, blend mode, sample
+// distance, LOD, miss budget) goes with each frame, so an edit keeps the cache, the prefetcher's
+// history and a GPU caster's model pool. Where a frame's image goes and what stops its rays
+// (FrameTargets) go with each frame too.
 //
-// One frame:  prepare()  = LOD cut -> frustum and TF culling -> cache lookups (misses read from the
-//                          file) -> FrameView + float pool of the visible models     ("caching")
+// One frame:  prepare()  = LOD cut -> frustum and TF culling -> cache lookups; the misses read
+//                          and decoded by the load threads at once (BlockLoader), waited for up
+//                          to the miss budget, a coarser resident model standing in for a block
+//                          still loading -> FrameView over the visible models       ("caching")
 //             then the FrameCaster (the CPU's, or the CUDA path's GpuCaster) casts it into the
-//                          frame's targets while the prefetch thread loads the predicted next
-//                          view                                                     ("rendering")
+//                          frame's targets while the load threads fetch the predicted next
+//                          view's blocks                                            ("rendering")
 //             latency = caching + rendering.
-// A PreparedFrame owns every array its FrameView points to (host memory); a GPU caster copies them
-// and re-points the view.
+// A PreparedFrame holds the cached models it draws (no copy) and owns the other arrays its
+// FrameView points to (host memory); the CPU caster packs the models into one pool, a GPU caster
+// uploads those its pool does not hold.
 // The method follows the file: Adaptive-FAM / FAM files give spline slots, DS files raw slots.
 #pragma once
 

@@ -190,6 +190,7 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
   stats.BytesRead = frame.bytesRead;
   stats.DamagedBlocks = frame.damagedBlocks;
   stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
+  stats.StandInBlocks = frame.standInBlocks;
   stats.DamageReports = std::move(frame.damageReports);
   m.GiveUpFailedGpu();
   const afam::CastResult& cast = frame.cast;

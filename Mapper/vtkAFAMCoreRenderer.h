@@ -66,6 +66,8 @@ struct vtkAFAMFrameStats
   /// Damaged micro-models: in this frame's selection (drawn from another level), and known in the
   /// file so far; the reports of blocks first found damaged during this frame (each block once).
   int64_t DamagedBlocks = 0, KnownDamagedBlocks = 0;
+  /// Blocks drawn from a coarser level because they were still loading (the miss budget).
+  int64_t StandInBlocks = 0;
   std::vector<std::string> DamageReports;
   /// One sentence per unusable setting of the request: what was asked and what was kept.
   std::vector<std::string> SettingWarnings;

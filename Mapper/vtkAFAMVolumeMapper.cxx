@@ -167,6 +167,7 @@ struct vtkAFAMVolumeMapper::Frame
   int Width = 0, Height = 0;         // the renderer's part of the current tile
   int CastWidth = 0, CastHeight = 0; // the image Core casts (smaller for interactive frames)
   double Scale = 1;
+  bool Interactive = false; // the window asks for more than one frame a second
   afam::FrameMap Map;
   std::vector<float> Limits;
   bool DepthOnGpu = false; // the depth buffer may go to CUDA (the image does)
@@ -305,6 +306,7 @@ bool vtkAFAMVolumeMapper::PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& fra
   }
   // Interactive frames: a smaller image that fits the allotted time (see AutoAdjustImageScale).
   const double rate = renWin->GetDesiredUpdateRate();
+  frame.Interactive = rate > 1.0;
   if (this->AutoAdjustImageScale && rate > 1.0 && this->SecondsPerPixel > 0)
   {
     const double allotted = vol->GetAllocatedRenderTime();
@@ -398,6 +400,7 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   settings.lod.policy =
     this->LodPolicy == LOD_SCREEN_SPACE ? afam::LodPolicy::Screen : afam::LodPolicy::Distance;
   settings.lod.pixelBudget = this->LodPixelBudget;
+  settings.missBudgetMs = frame.Interactive ? this->InteractiveMissBudget : -1;
   // Composite, maximum, minimum and average intensity (VTK's numbering); other modes are drawn
   // composite, with one warning.
   const int blend = this->GetBlendMode();
@@ -545,6 +548,7 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
   this->LastDamagedBlocks = stats.DamagedBlocks;
   this->KnownDamagedBlocks = stats.KnownDamagedBlocks;
+  this->LastStandInBlocks = stats.StandInBlocks;
   // Blocks first found damaged in this frame: one warning (Core reads and reports each block only
   // once per file), the first few in full so that a truncated file does not flood the window.
   if (!stats.DamageReports.empty())
@@ -612,6 +616,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "AutoAdjustImageScale: " << this->AutoAdjustImageScale << "\n";
   os << indent << "MinimumImageScale: " << this->MinimumImageScale << "\n";
+  os << indent << "InteractiveMissBudget: " << this->InteractiveMissBudget << " ms\n";
   os << indent << "LastImageScale: " << this->LastImageScale << "\n";
   os << indent << "LastCachingTime: " << this->LastCachingTime << "\n";
   os << indent << "LastRenderTime: " << this->LastRenderTime << "\n";
@@ -631,6 +636,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastBytesRead: " << this->LastBytesRead << "\n";
   os << indent << "LastDamagedBlocks: " << this->LastDamagedBlocks << "\n";
   os << indent << "KnownDamagedBlocks: " << this->KnownDamagedBlocks << "\n";
+  os << indent << "LastStandInBlocks: " << this->LastStandInBlocks << "\n";
   os << indent << "LastUsedGpu: " << this->LastUsedGpu << "\n";
   os << indent << "LastUsedBlendMode: " << this->LastUsedBlendMode << "\n";
   os << indent << "LastGpuModelsUploaded: " << this->LastGpuModelsUploaded << "\n";

@@ -194,6 +194,15 @@ public:
   ///@}
 
   ///@{
+  /// Milliseconds an interactive frame waits for the micro-models it misses (read and decoded by
+  /// every core at once); a block still loading then is drawn from its nearest resident coarser
+  /// level and refined in the next frames. Still frames always wait for every block, so the image
+  /// after interaction is exact. Default 20; below 0: interactive frames wait for every block too.
+  vtkSetMacro(InteractiveMissBudget, double);
+  vtkGetMacro(InteractiveMissBudget, double);
+  ///@}
+
+  ///@{
   /// CPU threads for the CPU ray caster, 0 = all cores (default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -258,6 +267,9 @@ public:
   /// once with a vtkWarning naming the file, level and block, and never read again.
   vtkGetMacro(LastDamagedBlocks, vtkTypeInt64);
   vtkGetMacro(KnownDamagedBlocks, vtkTypeInt64);
+  /// Blocks of the last frame drawn from a coarser level because they were still loading when
+  /// its miss budget ran out (InteractiveMissBudget); 0: the frame is exact.
+  vtkGetMacro(LastStandInBlocks, vtkTypeInt64);
   /// Pixels of the last frame whose rays were cut short by opaque geometry.
   vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
   /// Image scale of the last frame (1 = full size; below 1 for interactive frames).
@@ -321,6 +333,7 @@ protected:
   int NumberOfThreads = 0;
   bool AutoAdjustImageScale = true;
   double MinimumImageScale = 0.25;
+  double InteractiveMissBudget = 20;
   double LastImageScale = 1;
   double SecondsPerPixel = 0; ///< running estimate of a frame's time per cast pixel
 
@@ -329,7 +342,7 @@ protected:
   double LastGpuUploadTime = -1, LastGpuKernelTime = -1, LastGpuDownloadTime = -1;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
-  vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0;
+  vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0, LastStandInBlocks = 0;
   bool LastUsedGpu = false;
   int LastUsedBlendMode = COMPOSITE_BLEND;
   vtkTypeInt64 LastGpuModelsUploaded = -1, NumberOfRendererBuilds = 0;

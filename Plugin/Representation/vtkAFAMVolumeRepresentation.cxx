@@ -232,6 +232,10 @@ void vtkAFAMVolumeRepresentation::SetMinimumImageScale(double v)
 {
   this->Mapper->SetMinimumImageScale(v);
 }
+void vtkAFAMVolumeRepresentation::SetInteractiveMissBudget(double v)
+{
+  this->Mapper->SetInteractiveMissBudget(v);
+}
 void vtkAFAMVolumeRepresentation::SetBlendMode(int v)
 {
   this->Mapper->SetBlendMode(v);

@@ -65,6 +65,7 @@ public:
   void SetNumberOfThreads(int);
   void SetAutoAdjustImageScale(bool);
   void SetMinimumImageScale(double);
+  void SetInteractiveMissBudget(double);
   void SetBlendMode(int);
   ///@}
 

@@ -142,6 +142,15 @@ print("interactive image scaling %s (minimum %s), last image scale %s" % (
     display.AFAMAutoAdjustImageScale, display.AFAMMinimumImageScale, scale))
 if display.AFAMAutoAdjustImageScale != 1 or abs(display.AFAMMinimumImageScale - 0.25) > 1e-12 or scale != 1.0:
     u.fail("interactive image scaling defaults or the still frame's scale are wrong")
+# Interactive frames wait 20 ms for their misses by default; still renders wait for every block.
+print("interactive miss budget %s ms" % display.AFAMInteractiveMissBudget)
+if abs(display.AFAMInteractiveMissBudget - 20) > 1e-12:
+    u.fail("the interactive miss budget's default is not 20 ms")
+display.AFAMInteractiveMissBudget = 5
+Render(view)
+if abs(display.AFAMInteractiveMissBudget - 5) > 1e-12:
+    u.fail("the interactive miss budget did not take 5 ms")
+display.AFAMInteractiveMissBudget = 20
 u.compare_with_baseline(png, "TestAFAMPipeline.png")
 
 # 4. Same place as ParaView's own Volume representation of the Wavelet, same view and colours: the

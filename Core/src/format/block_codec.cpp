@@ -24,29 +24,47 @@ struct Lattice {
 };
 
 /// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
-/// q[index] known when it returns.
+/// q[index] known when it returns. A neighbour outside the lattice reads 0.0; the sum is formed in
+/// one fixed order, so encoder and decoder predict bit for bit alike.
 template <typename Fn>
 void lorenzo(const Lattice& L, const double* q, int s, Fn&& fn) {
-  auto at = [&](int x, int y, int z) -> double {
-    return x < 0 || y < 0 || z < 0 ? 0.0 : q[size_t(L.index(x, y, z))];
-  };
+  const int64_t sx = s, sy = int64_t(s) * L.n[0], sz = int64_t(s) * L.n[0] * L.n[1];
   for (int z = 0; z < L.n[2]; z += s)
-    for (int y = 0; y < L.n[1]; y += s)
-      for (int x = 0; x < L.n[0]; x += s) {
-        const double p = at(x - s, y, z) + at(x, y - s, z) + at(x, y, z - s) - at(x - s, y - s, z) -
-                         at(x - s, y, z - s) - at(x, y - s, z - s) + at(x - s, y - s, z - s);
-        fn(L.index(x, y, z), p);
+    for (int y = 0; y < L.n[1]; y += s) {
+      const int64_t row = L.index(0, y, z);
+      const bool hasY = y >= s, hasZ = z >= s;
+      // x = 0: no neighbour below in x.
+      {
+        const double b = hasY ? q[row - sy] : 0.0, c = hasZ ? q[row - sz] : 0.0;
+        const double f = hasY && hasZ ? q[row - sy - sz] : 0.0;
+        fn(row, 0.0 + b + c - 0.0 - 0.0 - f + 0.0);
       }
+      if (hasY && hasZ) {  // every neighbour inside: the common case, no tests
+        for (int64_t i = row + sx; i < row + L.n[0]; i += sx)
+          fn(i, q[i - sx] + q[i - sy] + q[i - sz] - q[i - sx - sy] - q[i - sx - sz] -
+                    q[i - sy - sz] + q[i - sx - sy - sz]);
+        continue;
+      }
+      for (int64_t i = row + sx; i < row + L.n[0]; i += sx) {
+        const double a = q[i - sx];
+        const double b = hasY ? q[i - sy] : 0.0, c = hasZ ? q[i - sz] : 0.0;
+        const double d = hasY ? q[i - sx - sy] : 0.0, e = hasZ ? q[i - sx - sz] : 0.0;
+        fn(i, a + b + c - d - e - 0.0 + 0.0);
+      }
+    }
 }
 
 /// Prediction of the point at coordinate c (an odd multiple of s) along one axis of length len,
-/// from the known points at c -+ s and c -+ 3s; v(k) reads the point at coordinate k on that axis.
-template <typename V>
-double interpolate(int c, int s, int len, V&& v) {
-  const double b = v(c - s);
+/// from the known points at c -+ s and c -+ 3s; the point at coordinate k of that axis is
+/// line[k * stride].
+inline double interpolate(int c, int s, int len, const double* line, int64_t stride) {
+  const double b = line[int64_t(c - s) * stride];
   if (c + s >= len) return b;
-  const double d = v(c + s);
-  if (c - 3 * s >= 0 && c + 3 * s < len) return (-v(c - 3 * s) + 9 * b + 9 * d - v(c + 3 * s)) / 16;
+  const double d = line[int64_t(c + s) * stride];
+  if (c - 3 * s >= 0 && c + 3 * s < len)
+    return (-line[int64_t(c - 3 * s) * stride] + 9 * b + 9 * d -
+            line[int64_t(c + 3 * s) * stride]) /
+           16;
   return (b + d) / 2;
 }
 
@@ -56,23 +74,26 @@ void interpolation(const Lattice& L, const double* q, Fn&& fn) {
   int S = 1;
   while (2 * S <= maxn - 1) S *= 2;
   lorenzo(L, q, S, fn);
+  const int64_t strideY = L.n[0], strideZ = int64_t(L.n[0]) * L.n[1];
   for (int s = S / 2; s >= 1; s /= 2) {
     const int s2 = 2 * s;
     for (int z = 0; z < L.n[2]; z += s2)
-      for (int y = 0; y < L.n[1]; y += s2)
-        for (int x = s; x < L.n[0]; x += s2)
-          fn(L.index(x, y, z),
-             interpolate(x, s, L.n[0], [&](int k) { return q[size_t(L.index(k, y, z))]; }));
+      for (int y = 0; y < L.n[1]; y += s2) {
+        const int64_t row = L.index(0, y, z);
+        for (int x = s; x < L.n[0]; x += s2) fn(row + x, interpolate(x, s, L.n[0], q + row, 1));
+      }
     for (int z = 0; z < L.n[2]; z += s2)
-      for (int y = s; y < L.n[1]; y += s2)
+      for (int y = s; y < L.n[1]; y += s2) {
+        const int64_t row = L.index(0, y, z), column = L.index(0, 0, z);
         for (int x = 0; x < L.n[0]; x += s)
-          fn(L.index(x, y, z),
-             interpolate(y, s, L.n[1], [&](int k) { return q[size_t(L.index(x, k, z))]; }));
+          fn(row + x, interpolate(y, s, L.n[1], q + column + x, strideY));
+      }
     for (int z = s; z < L.n[2]; z += s2)
-      for (int y = 0; y < L.n[1]; y += s)
+      for (int y = 0; y < L.n[1]; y += s) {
+        const int64_t row = L.index(0, y, z), pillar = L.index(0, y, 0);
         for (int x = 0; x < L.n[0]; x += s)
-          fn(L.index(x, y, z),
-             interpolate(z, s, L.n[2], [&](int k) { return q[size_t(L.index(x, y, k))]; }));
+          fn(row + x, interpolate(z, s, L.n[2], q + pillar + x, strideZ));
+      }
   }
 }
 

@@ -12,6 +12,7 @@
 #include "afam/render/level_decode.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "raw_output.hpp"
 
 namespace afam::cli {
 
@@ -40,40 +41,21 @@ int runDecode(int argc, char** argv) {
   const LevelGrid grid = levelGrid(part, level);
   const Index3 od = grid.dims;
   const auto& start = grid.start;
-  const std::string out = args.positional()[1], tmp = out + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError(tmp + ": cannot create: " + std::strerror(errno));
+  const std::string out = args.positional()[1];
+  RawOutput file(out);
   ProgressBar bar("decode", args.has("progress"));
-  try {
-    std::vector<float> slab;
-    for (int kz = 0; kz < nb[2]; ++kz) {
-      const int nz = part.extent(level, {0, 0, kz}).samples[2];
-      const int64_t z0 = start[2][size_t(kz)];
-      const int64_t planes =
-          kz + 1 < nb[2] ? nz - 1 : nz;  // the shared plane goes with the next row
-      slab.resize(size_t(od[0] * od[1] * planes));
-      decodeLevelBox(*f, level, {0, 0, z0}, {od[0] - 1, od[1] - 1, z0 + planes - 1}, slab.data());
-      const size_t bytes = size_t(planes * od[0] * od[1]) * sizeof(float);
-      const off_t off = off_t(size_t(z0 * od[0] * od[1]) * sizeof(float));
-      const char* p = reinterpret_cast<const char*>(slab.data());
-      size_t done = 0;
-      while (done < bytes) {
-        const ssize_t w = ::pwrite(fd, p + done, bytes - done, off + off_t(done));
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) throw IoError(tmp + ": write failed: " + std::strerror(errno));
-        done += size_t(w);
-      }
-      bar(double(kz + 1) / double(nb[2]));
-    }
-    if (::fsync(fd) != 0 || ::close(fd) != 0)
-      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0)
-      throw IoError(out + ": cannot rename: " + std::strerror(errno));
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
+  std::vector<float> slab;
+  for (int kz = 0; kz < nb[2]; ++kz) {
+    const int nz = part.extent(level, {0, 0, kz}).samples[2];
+    const int64_t z0 = start[2][size_t(kz)];
+    const int64_t planes = kz + 1 < nb[2] ? nz - 1 : nz;  // the shared plane goes with the next row
+    slab.resize(size_t(od[0] * od[1] * planes));
+    decodeLevelBox(*f, level, {0, 0, z0}, {od[0] - 1, od[1] - 1, z0 + planes - 1}, slab.data());
+    file.writeAt(slab.data(), slab.size() * sizeof(float),
+                 uint64_t(z0 * od[0] * od[1]) * sizeof(float));
+    bar(double(kz + 1) / double(nb[2]));
   }
+  file.commit();
   bar.finish();
   std::printf("wrote %s: level %d, %lldx%lldx%lld float32\n", out.c_str(), level, (long long)od[0],
               (long long)od[1], (long long)od[2]);

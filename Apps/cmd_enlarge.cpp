@@ -15,24 +15,10 @@
 #include "afam/volume/sample_type.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "raw_output.hpp"
 #include "source_args.hpp"
 
 namespace afam::cli {
-
-namespace {
-
-void writeAll(int fd, const std::string& path, const void* data, size_t bytes) {
-  const char* p = static_cast<const char*>(data);
-  while (bytes > 0) {
-    const ssize_t w = ::write(fd, p, bytes);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) throw IoError(path + ": write failed: " + std::strerror(errno));
-    p += w;
-    bytes -= size_t(w);
-  }
-}
-
-}  // namespace
 
 int runEnlarge(int argc, char** argv) {
   Args args(argc, argv, {"dims", "noise", "seed", "threads"}, {"progress"});
@@ -83,10 +69,8 @@ int runEnlarge(int argc, char** argv) {
                           : int(std::max(1u, std::thread::hardware_concurrency()));
   const int64_t plane = target[0] * target[1];
   const int64_t chunk = std::max<int64_t>(1, (int64_t(8) << 20) / std::max<int64_t>(plane, 1));
-  const std::string tmp = out + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError(tmp + ": cannot create: " + std::strerror(errno));
-  try {
+  RawOutput file(out);
+  {
     // Each thread owns a source (its own cache of resampled planes) and one slab of a round.
     std::vector<EnlargedScanSource> sources;
     for (int t = 0; t < threads; ++t)
@@ -111,20 +95,12 @@ int runEnlarge(int argc, char** argv) {
       for (int t = 0; t < threads; ++t) {
         const int64_t z0 = z + t * chunk, nz = std::min(chunk, target[2] - z0);
         if (nz > 0)
-          writeAll(fd, tmp, bytes[size_t(t)].data(),
-                   size_t(plane * nz) * size_t(sampleTypeSize(type)));
+          file.append(bytes[size_t(t)].data(), size_t(plane * nz) * size_t(sampleTypeSize(type)));
       }
       bar(double(std::min(target[2], z + chunk * threads)) / double(target[2]));
     }
-    if (::fsync(fd) != 0 || ::close(fd) != 0)
-      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0)
-      throw IoError(out + ": cannot rename: " + std::strerror(errno));
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
   }
+  file.commit();
   std::printf("wrote %s: %lldx%lldx%lld %s from %s (%lldx%lldx%lld), noise sigma %.4g\n",
               out.c_str(), (long long)target[0], (long long)target[1], (long long)target[2],
               sampleTypeName(type), in.c_str(), (long long)dims[0], (long long)dims[1],

@@ -11,6 +11,7 @@
 #include "afam/volume/marschner_lobb.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "raw_output.hpp"
 
 namespace afam::cli {
 
@@ -43,39 +44,20 @@ int runMl(int argc, char** argv) {
     dims = {n, n, n};
   }
   const std::string out = args.positional()[0];
-  const std::string tmp = out + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw IoError(tmp + ": cannot create: " + std::strerror(errno));
-  try {
-    const int64_t plane = dims[0] * dims[1];
-    const int64_t chunk = std::max<int64_t>(1, (int64_t(16) << 20) / std::max<int64_t>(plane, 1));
-    std::vector<float> buf;
-    ProgressBar bar("ml", args.has("progress"));
-    MarschnerLobb ml;
-    for (int64_t z = 0; z < dims[2]; z += chunk) {
-      const int64_t nz = std::min(chunk, dims[2] - z);
-      buf.resize(size_t(plane * nz));
-      marschnerLobbSlab(ml, dims, z, nz, buf.data());
-      const char* p = reinterpret_cast<const char*>(buf.data());
-      size_t left = buf.size() * sizeof(float);
-      while (left > 0) {
-        const ssize_t w = ::write(fd, p, left);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) throw IoError(tmp + ": write failed: " + std::strerror(errno));
-        p += w;
-        left -= size_t(w);
-      }
-      bar(double(z + nz) / double(dims[2]));
-    }
-    if (::fsync(fd) != 0 || ::close(fd) != 0)
-      throw IoError(tmp + ": cannot flush: " + std::strerror(errno));
-    if (::rename(tmp.c_str(), out.c_str()) != 0)
-      throw IoError(out + ": cannot rename: " + std::strerror(errno));
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
+  RawOutput file(out);
+  const int64_t plane = dims[0] * dims[1];
+  const int64_t chunk = std::max<int64_t>(1, (int64_t(16) << 20) / std::max<int64_t>(plane, 1));
+  std::vector<float> buf;
+  ProgressBar bar("ml", args.has("progress"));
+  MarschnerLobb ml;
+  for (int64_t z = 0; z < dims[2]; z += chunk) {
+    const int64_t nz = std::min(chunk, dims[2] - z);
+    buf.resize(size_t(plane * nz));
+    marschnerLobbSlab(ml, dims, z, nz, buf.data());
+    file.append(buf.data(), buf.size() * sizeof(float));
+    bar(double(z + nz) / double(dims[2]));
   }
+  file.commit();
   std::printf("wrote %s: %lldx%lldx%lld float32\n", out.c_str(), (long long)dims[0],
               (long long)dims[1], (long long)dims[2]);
   return 0;

@@ -103,6 +103,7 @@ int runReplay(int argc, char** argv) {
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
     printDeviceMessages(st);
     for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
+    for (const std::string& r : st.loadErrors) std::fprintf(stderr, "warning: %s\n", r.c_str());
     lat.push_back(st.latencyMs);
     cach.push_back(st.cachingMs);
     rend.push_back(st.renderMs);

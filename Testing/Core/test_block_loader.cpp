@@ -3,6 +3,8 @@
 // prefetching, a deadline that returns what has not arrived, damage recorded, not thrown.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <numeric>
 
 #include "afam/render/block_loader.hpp"
@@ -87,4 +89,21 @@ TEST(BlockLoader, ADamagedBlockIsRecordedNotThrown) {
   EXPECT_FALSE(cache.contains(3));
   EXPECT_TRUE(cache.damage().isDamaged(3));
   EXPECT_TRUE(loader.takeErrors().empty());
+}
+
+TEST(BlockLoader, AFailedLoadIsKeptAsAMessageAndTheBlockIsNotResident) {
+  auto file = smallFile();
+  const std::string path = afam_test::tempPath("loader_truncated.afam");
+  auto copy = afam_test::damagedCopy(*file, path, {});  // an intact copy, opened
+  LruCache cache(copy, CacheBudget{});
+  BlockLoader loader(cache, 2);
+  ASSERT_EQ(::truncate(path.c_str(), off_t(copy->payloadOffset())), 0);  // changed on disk
+  loader.request({0, 1}, LruCache::Purpose::Frame);
+  EXPECT_EQ(loader.waitFor({0, 1}, Clock::time_point::max()), 0u);
+  EXPECT_FALSE(cache.contains(0));
+  const std::vector<std::string> errors = loader.takeErrors();
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].find(path), std::string::npos) << errors[0];
+  EXPECT_TRUE(loader.takeErrors().empty()) << "each message is handed out once";
+  EXPECT_EQ(loader.stats().failed, 2u);
 }

@@ -286,6 +286,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   st.slots = int64_t(fr.slots.size());
   st.poolBytes = poolFloats * sizeof(float);
   st.damageReports = cache_->damage().takeReports();
+  st.loadErrors = loader_->takeErrors();
   st.knownDamagedBlocks = int64_t(cache_->damage().count());
   st.cachingMs = msSince(t0);
 }

@@ -68,6 +68,10 @@ struct FrameStats {
   /// (FrameSettings::missBudgetMs), drawn from a resident coarser level; they are refined in the
   /// next frames. 0: the frame is exact.
   int64_t standInBlocks = 0;
+  /// Loads of the load threads that failed for another reason than damage (I/O, a file changed
+  /// on disk), one message each, handed out once; such a block is read again by the frame that
+  /// needs it, which then fails with the same error.
+  std::vector<std::string> loadErrors;
   int64_t slots = 0;  ///< models in the FrameView
   uint64_t poolBytes = 0;
   /// The cache's resident bytes at the end of the frame, and the most it held during the frame

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/eval/png_io.hpp"
 #include "afam/render/renderer.hpp"
 #include "afam/scene/camera.hpp"
 #include "cli.hpp"
@@ -42,7 +43,7 @@ double percentile(std::vector<double> v, double q) {
 
 int runReplay(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
-  values.insert({"csv", "frames", "device", "gpu-budget-mb"});
+  values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out"});
   Args args(argc, argv, values, {"cold", "no-culling", "quiet"});
   const char* usage =
       "afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B] "
@@ -68,6 +69,9 @@ int runReplay(int argc, char** argv) {
         "                         cache_bytes,cache_peak_bytes (resident in the cache at the end\n"
         "                         of the frame / at most during it; never above --cache-bytes)\n"
         "  --frames N             replay only the first N points of view\n"
+        "  --still-out IMG.png    after the path, render its last view once more waiting for\n"
+        "                         every block (the still frame; also printed with\n"
+        "                         --miss-budget-ms) and write it\n"
         "  --quiet                no per-view lines on stdout\n%s%s",
         usage, renderOptionsHelp(), deviceOptionHelp());
     return 0;
@@ -127,11 +131,13 @@ int runReplay(int argc, char** argv) {
           (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks,
           (long long)st.standInBlocks);
   }
-  if (opts.missBudgetMs >= 0 && !poses.empty()) {  // the still frame once the path has ended
+  if ((opts.missBudgetMs >= 0 || args.has("still-out")) && !poses.empty()) {  // the still frame
     FrameSettings still = renderer.settings();
     still.missBudgetMs = -1;
     FrameStats st;
-    renderer.renderFrame(Camera::fromPose(poses.back(), size.first, size.second), still, st);
+    const ImageRGBA image =
+        renderer.renderFrame(Camera::fromPose(poses.back(), size.first, size.second), still, st);
+    if (args.has("still-out")) writePng(args.str("still-out"), toRGB8(image));
     std::printf("still_frame caching_ms=%.3f latency_ms=%.3f stand_ins=%lld\n", st.cachingMs,
                 st.latencyMs, (long long)st.standInBlocks);
   }

@@ -29,6 +29,24 @@ endif ()
 run_ok(out ${AFAM} encode big1_96x124x84_uint8.raw big.afam --error-bound 1e-2 --relative)
 run_ok(out ${AFAM} verify big.afam --against big1_96x124x84_uint8.raw)
 
+# Moving through it with no time for misses on slow storage (blocks still loading are drawn from
+# resident coarser levels, Renderer.AFrameWaitsNoLongerThanItsMissBudget... counts them): the still
+# frame after the path equals a frame rendered fresh (the CPU caster, 0/255).
+run_ok(out ${AFAM} encode big1_96x124x84_uint8.raw levels.afam --error-bound 1e-2 --relative
+       --levels 3 --blocks 8)
+run_ok(out ${AFAM} trajectory dolly.dat --kind dolly)
+set(view --size 64 --lod screen --cache-blocks 0 --threads 2)
+run_ok(out ${AFAM} replay levels.afam --trajectory dolly.dat --frames 12 ${view} --storage-mbps 2
+       --miss-budget-ms 0 --quiet --still-out still.png)
+if (NOT out MATCHES "still_frame caching_ms=[0-9.]+ latency_ms=[0-9.]+ stand_ins=0")
+  message(FATAL_ERROR "replay with a miss budget: ${out}")
+endif ()
+run_ok(out ${AFAM} render levels.afam --trajectory dolly.dat --view 11 ${view} --out fresh.png)
+run_ok(out ${AFAM} compare still.png fresh.png)
+if (NOT out MATCHES "psnr=99")
+  message(FATAL_ERROR "the still frame differs from a fresh render of the same view: ${out}")
+endif ()
+
 run_fails("--dims X,Y,Z is required" ${AFAM} enlarge ${src} x.raw)
 run_fails("at least 2 samples" ${AFAM} enlarge ${src} x.raw --dims 1,8,8)
 run_fails("noise must be finite" ${AFAM} enlarge ${src} x.raw --dims 8,8,8 --noise -1)

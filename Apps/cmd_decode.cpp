@@ -1,11 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam decode FILE.afam --level K OUT.raw
-#include <fcntl.h>
-#include <unistd.h>
 
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"

@@ -1,13 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam enlarge IN OUT_XxYxZ_type.raw --dims X,Y,Z : a real scan made large (enlarged_scan.hpp),
 // written in the input's sample type, slab by slab on every core (atomic).
-#include <fcntl.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <thread>
 #include <vector>
 

@@ -1,11 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam ml --size N OUT.raw : a float32 Marschner-Lobb volume, written slab by slab (atomic).
-#include <fcntl.h>
-#include <unistd.h>
 
-#include <cerrno>
+#include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <vector>
 
 #include "afam/volume/marschner_lobb.hpp"

@@ -17,8 +17,9 @@ int runInfo(int argc, char** argv) {
     std::printf(
         "usage: %s\n\n"
         "Prints the header, per level the blocks, the representations (spline, samples, constant,\n"
-        "interpolant; how many coded), the bits per coded value, the NCP histogram (max NCP over\n"
-        "the axes), the stored bytes and the worst RMSE, then the file size, the size the paper's\n"
+        "interpolant; how many coded, and of those how many in the codec's integer forms), the\n"
+        "bits per coded value, the NCP histogram (max NCP over the axes), the stored bytes and\n"
+        "the worst RMSE, then the file size, the size the paper's\n"
         "layout would take for the same models, and the compression ratio against the raw input\n"
         "(when the file records its sample size) and against the float32 volume.\n"
         "Reads only the header and the index.\n",
@@ -46,7 +47,7 @@ int runInfo(int argc, char** argv) {
     std::map<int, int64_t> hist;
     uint64_t bytes = 0, paperL = 0;
     double maxRmse = 0, maxErr = 0;
-    int64_t complexCount = 0, kinds[4] = {0, 0, 0, 0}, coded = 0;
+    int64_t complexCount = 0, kinds[4] = {0, 0, 0, 0}, coded = 0, integer = 0;
     double codedBits = 0, codedValues = 0;
     const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
     for (int64_t i = s; i < e; ++i) {
@@ -57,6 +58,7 @@ int runInfo(int argc, char** argv) {
       ++kinds[int(m.kind)];
       if (m.coded) {
         ++coded;
+        integer += m.integerCoded;
         codedBits += 8.0 * double(m.storedSize);
         codedValues += double(m.size) / 4;
       }
@@ -75,9 +77,9 @@ int runInfo(int argc, char** argv) {
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
     std::printf(
         "\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld "
-        "bits_per_coded_value=%.3f\n",
+        "integer_form=%lld bits_per_coded_value=%.3f\n",
         (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3],
-        (long long)coded, codedValues > 0 ? codedBits / codedValues : 0.0);
+        (long long)coded, (long long)integer, codedValues > 0 ? codedBits / codedValues : 0.0);
     payload += bytes;
     paper += paperL;
   }

@@ -85,6 +85,65 @@ TEST(FormatVersions, VersionOneFileStillDecodesTheSameValues) {
       << "version-1 decode changed";
 }
 
+TEST(FormatVersions, DoubleFormPayloadsWrittenBeforeTheIntegerFormsDecodeTheSameBytes) {
+  auto f = AfamFile::open(kFormat + "mixed40_levels2_blocks2_v2_double.afam");
+  int coded = 0;
+  for (const ModelEntry& e : f->entries()) {
+    EXPECT_FALSE(e.integerCoded);
+    coded += e.coded;
+  }
+  EXPECT_EQ(coded, 9);
+  const uint32_t expected[2] = {0x7f34152du, 0xc67b8005u};  // that version's afam decode
+  for (int level = 0; level < 2; ++level) {
+    const Index3 dims = level == 0 ? Index3{21, 21, 21} : Index3{40, 40, 40};
+    std::vector<float> decoded(size_t(dims[0] * dims[1] * dims[2]));
+    decodeLevelBox(*f, level, {0, 0, 0}, {dims[0] - 1, dims[1] - 1, dims[2] - 1}, decoded.data());
+    EXPECT_EQ(crc32(decoded.data(), decoded.size() * sizeof(float)), expected[level])
+        << "level " << level << " decodes differently from the double forms' reader";
+  }
+}
+
+TEST(FormatVersions, IntegerFormsAreFlaggedInTheIndexAndAMismatchIsRefused) {
+  Index3 dims;
+  const std::vector<float> v = mixedVolume(dims);
+  ArraySource src(v.data(), dims);
+  const std::string path = scratch("integer.afam");
+  encodeVolume(src, mixedOptions(), path);
+  std::vector<char> b = readAll(path);
+  auto f = AfamFile::open(path);
+  int64_t flagged = -1;
+  for (size_t i = 0; i < f->entries().size(); ++i) {
+    const ModelEntry& e = f->entries()[i];
+    EXPECT_TRUE(e.coded || !e.integerCoded);
+    if (e.integerCoded && flagged < 0) flagged = int64_t(i);
+  }
+  ASSERT_GE(flagged, 0);
+  f.reset();
+  // Clear bit 9 of that entry (index entry at 1024 + 40 i, flags at +14) and fix the index and
+  // header checksums, as a writer that knew only the double forms would have flagged it.
+  const size_t at = 1024 + 40 * size_t(flagged) + 14;
+  b[at + 1] = char(b[at + 1] & ~0x02);
+  uint64_t entries;
+  std::memcpy(&entries, b.data() + 144, 8);
+  const uint32_t indexCrc = crc32(b.data() + 1024, size_t(entries) * 40);
+  std::memcpy(b.data() + 140, &indexCrc, 4);
+  const uint32_t headerCrc = crc32(b.data(), 1020);
+  std::memcpy(b.data() + 1020, &headerCrc, 4);
+  const std::string bad = scratch("integer_unflagged.afam");
+  writeAll(bad, b);
+  auto g = AfamFile::open(bad);
+  std::vector<float> out(g->entries()[size_t(flagged)].size / 4);
+  try {
+    g->readPayload(flagged, out.data());
+    ADD_FAILURE() << "an integer-form payload under a double-form flag was decoded";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("disagrees with the index"), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
+  std::remove(bad.c_str());
+}
+
 TEST(FormatVersions, VersionTwoHoldsEveryKindAndRoundTrips) {
   Index3 dims;
   const std::vector<float> v = mixedVolume(dims);

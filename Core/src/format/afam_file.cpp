@@ -106,15 +106,15 @@ static_assert(offsetof(FileHeader, headerChecksum) == 1020, "layout");
 // file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
 // against 169).
 struct IndexEntryV1 {
-  uint64_t offset;       // @0, 8 B
-  uint16_t ncp[3];       // @8, 6 B
-  uint16_t flags;        // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded; v1: 0. Other
-                         // bits: an unknown feature
-  float minValue;        // @16, 4 B
-  float maxValue;        // @20, 4 B
-  float rmse;            // @24, 4 B
-  float maxError;        // @28, 4 B
-  uint32_t checksum;     // @32, 4 B
+  uint64_t offset;    // @0, 8 B
+  uint16_t ncp[3];    // @8, 6 B
+  uint16_t flags;     // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded, bit 9 integer form; v1: 0.
+                      // Other bits: an unknown feature
+  float minValue;     // @16, 4 B
+  float maxValue;     // @20, 4 B
+  float rmse;         // @24, 4 B
+  float maxError;     // @28, 4 B
+  uint32_t checksum;  // @32, 4 B
   uint32_t storedBytes;  // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
                          // the NCP's floats)
 };
@@ -239,10 +239,12 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
                 const BlockExtent& e, const std::string& where, ModelEntry& m) {
   const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
   if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
-  if ((r.flags & ~uint16_t(0x1ff)) != 0)
+  if ((r.flags & ~uint16_t(0x3ff)) != 0)
     throw bad("unknown entry flags " + std::to_string(r.flags));
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
+  m.integerCoded = (r.flags & 0x200) != 0;
+  if (m.integerCoded && !m.coded) throw bad("integer form flagged on an uncoded payload");
   m.samples = e.samples;
   for (int a = 0; a < 3; ++a) {
     m.ncp[a] = r.ncp[a];
@@ -255,7 +257,7 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
   if (!m.coded && m.storedSize != uncodedBytes(m))
     throw bad("stored size " + std::to_string(m.storedSize) + " is not the " +
               std::to_string(uncodedBytes(m)) + " bytes of an uncoded " + blockKindName(m.kind));
-  if (m.coded && m.storedSize <= kCodedHeaderBytes)
+  if (m.coded && m.storedSize <= (m.integerCoded ? kIntegerCodedHeaderBytes : kCodedHeaderBytes))
     throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
 }
 
@@ -318,6 +320,8 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     float c;
     std::memcpy(&c, stored, 4);
     std::fill(out, out + count, c);
+  } else if (e.coded && e.integerCoded != payloadIsIntegerCoded(stored, e.storedSize)) {
+    throw FormatError(where + ": coded payload's predictor disagrees with the index's flags");
   } else if (e.kind == BlockKind::Interpolant) {
     thread_local std::vector<float> samples;
     thread_local BlockFitter fitter;
@@ -662,6 +666,7 @@ void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   end_ = alignUp(offset + bytes, kPayloadAlign);
   ModelEntry& m = entries_[slot];
   m = in;
+  m.integerCoded = in.coded && payloadIsIntegerCoded(static_cast<const uint8_t*>(stored), bytes);
   m.offset = offset;
   m.size = payloadBytes(in.ncp);
   m.checksum = crc;
@@ -692,7 +697,8 @@ void AfamWriter::commit() {
     r.rmse = m.rmse;
     r.maxError = m.maxError;
     r.checksum = m.checksum;
-    r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0));
+    r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
+                                    (m.integerCoded ? 0x200 : 0));
     r.storedBytes = static_cast<uint32_t>(m.storedSize);
     payloadSum += m.storedSize;
   }

@@ -76,7 +76,8 @@ struct ModelEntry {
   float minValue = 0, maxValue = 0, rmse = 0, maxError = 0;
   uint32_t checksum = 0;  ///< CRC32 of the stored bytes
   BlockKind kind = BlockKind::Spline;
-  bool coded = false;  ///< quantized, predicted and zstd-coded (block_codec.hpp)
+  bool coded = false;         ///< quantized, predicted and zstd-coded (block_codec.hpp)
+  bool integerCoded = false;  ///< coded with an integer form (index flag bit 9; set by the writer)
   uint64_t storedSize =
       0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
 };

@@ -10,20 +10,33 @@
 // everywhere (the maximum error the quantization can add). The encoder still measures the coded
 // model on the block's samples before accepting it.
 //
-// Predictors (double arithmetic in one fixed order, compiled without FMA contraction, so encoder
-// and decoder reconstruct bit-identical values):
+// Two forms of each predictor (payload byte 8 names the form):
+//   Integer forms (2 IntegerLorenzo, 3 IntegerInterpolation; written whenever they fit): every
+//            value is first quantized on its own, k = round(value / step) - base (base the
+//            values' middle in steps), and the predictors work on the integers k, exactly: a
+//            reconstruction is (base + k) * step, within step / 2 of its value whatever the
+//            predictor. Decoding needs no serial chain through floating-point sums: the inverse
+//            of Lorenzo is a prefix sum along x, y and z, and each interpolation pass reads only
+//            points known before it. They fit when every |k| < 2^26 (a spread of 2^27 steps).
+//   Double forms (0 Lorenzo, 1 Interpolation; the encoder's fallback beyond that spread, and
+//            every file written before the integer forms): the residual of a prediction from the
+//            values already reconstructed is quantized (reconstruction = prediction + code *
+//            step), in double arithmetic in one fixed order, compiled without FMA contraction, so
+//            encoder and decoder reconstruct bit-identical values.
+// The predictors:
 //   Lorenzo: from the seven lower neighbours of the unit cube (missing = 0); suits the small,
 //            smooth lattices of control points.
 //   Interpolation: multi-resolution. The points whose coordinates are all multiples of S (the
 //            largest power of two below the longest axis) are Lorenzo-predicted on their own
 //            lattice; then for s = S/2, ..., 1 the points at odd multiples of s are predicted along
 //            x, then y, then z from the known points at +-s (cubic (-a + 9b + 9c - d) / 16 where
-//            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour). Suits
-//            samples.
+//            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour; the integer
+//            forms round both down). Suits samples.
 // Codes are zigzag varints (1 byte when |code| < 64) compressed by zstd.
 //
-// Coded payload bytes: [0, 8) f64 step; [8] u8 predictor (0 Lorenzo, 1 interpolation);
-// [9, end) one zstd frame holding the varints, one per value, in the predictor's visiting order.
+// Coded payload bytes: [0, 8) f64 step; [8] u8 predictor; integer forms: [9, 17) i64 base; then
+// one zstd frame holding the varints, one per value, in the predictor's visiting order (raster
+// order for Lorenzo).
 #pragma once
 
 #include <cstddef>
@@ -34,13 +47,35 @@
 
 namespace afam {
 
-enum class Predictor : uint8_t { Lorenzo = 0, Interpolation = 1 };
+/// Payload byte 8: the predictor and its form (see above).
+enum class Predictor : uint8_t {
+  Lorenzo = 0,
+  Interpolation = 1,
+  IntegerLorenzo = 2,
+  IntegerInterpolation = 3
+};
 
-/// Bytes before the zstd frame in a coded payload.
+/// True for the integer forms (index flag bit 9 in a file: readers before them refuse the file).
+inline bool isIntegerForm(Predictor p) { return uint8_t(p) >= uint8_t(Predictor::IntegerLorenzo); }
+
+/// Bytes before the zstd frame in a coded payload: double forms (step, predictor), integer forms
+/// (step, predictor, base). The smallest coded payload is longer than kCodedHeaderBytes.
 constexpr size_t kCodedHeaderBytes = 9;
+constexpr size_t kIntegerCodedHeaderBytes = 17;
 
-/// Predicts, quantizes with `step` and codes `values` (n[0] * n[1] * n[2], x fastest). Returns
-/// false (and leaves `out` empty) when a residual code would exceed 2^50 (step far too small).
+/// Whether a stored coded payload names an integer form (what index flag bit 9 says of it).
+inline bool payloadIsIntegerCoded(const uint8_t* stored, size_t bytes) {
+  return bytes > kCodedHeaderBytes && isIntegerForm(Predictor(stored[8]));
+}
+
+/// The form to code `values` (count of them) with at `step`: the integer form of `family`
+/// (Lorenzo or Interpolation) when every value lies within 2^26 steps of the values' middle, else
+/// `family` itself.
+Predictor choosePredictorForm(const float* values, size_t count, double step, Predictor family);
+
+/// Predicts, quantizes with `step` and codes `values` (n[0] * n[1] * n[2], x fastest) with the
+/// predictor as given. Returns false (and leaves `out` empty) when a residual code would exceed
+/// 2^50 (step far too small), or, for an integer form, when the values do not fit it.
 /// `reconstructed` receives the decoded values (float), as decodeValues would produce them.
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
                   std::vector<uint8_t>& out, std::vector<float>& reconstructed);

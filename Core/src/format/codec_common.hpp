@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What both forms of the block codec (block_codec.cpp: double forms and the public functions;
+// integer_codec.cpp: integer forms) share: zstd contexts, the calling thread's scratch buffers,
+// zigzag varints and the payload's error messages. Internal to Core/src/format.
+#pragma once
+
+#include <zstd.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "afam/base/errors.hpp"
+#include "afam/format/partition.hpp"
+
+namespace afam::codec {
+
+struct CCtxDeleter {
+  void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
+};
+struct DCtxDeleter {
+  void operator()(ZSTD_DCtx* c) const { ZSTD_freeDCtx(c); }
+};
+
+inline ZSTD_CCtx* threadCCtx() {
+  thread_local std::unique_ptr<ZSTD_CCtx, CCtxDeleter> ctx(ZSTD_createCCtx());
+  return ctx.get();
+}
+
+inline ZSTD_DCtx* threadDCtx() {
+  thread_local std::unique_ptr<ZSTD_DCtx, DCtxDeleter> ctx(ZSTD_createDCtx());
+  return ctx.get();
+}
+
+/// A buffer of at least `count` T owned by the calling thread, its contents left as they were;
+/// `Tag` tells apart buffers of one type used at the same time.
+template <typename T, int Tag = 0>
+T* threadBuffer(size_t count) {
+  thread_local std::unique_ptr<T[]> buffer;
+  thread_local size_t capacity = 0;
+  if (capacity < count) {
+    buffer.reset(new T[count]);
+    capacity = count;
+  }
+  return buffer.get();
+}
+
+inline void putVarint(uint64_t u, std::vector<uint8_t>& out) {
+  while (u >= 0x80) {
+    out.push_back(uint8_t(u | 0x80));
+    u >>= 7;
+  }
+  out.push_back(uint8_t(u));
+}
+
+inline uint64_t zigzag(int64_t c) { return (uint64_t(c) << 1) ^ uint64_t(c >> 63); }
+
+/// Appends one zstd frame of `bytes` to out (after what out holds).
+inline void appendZstdFrame(const std::vector<uint8_t>& bytes, int level,
+                            std::vector<uint8_t>& out) {
+  const size_t head = out.size();
+  out.resize(head + ZSTD_compressBound(bytes.size()));
+  const size_t z = ZSTD_compressCCtx(threadCCtx(), out.data() + head, out.size() - head,
+                                     bytes.data(), bytes.size(), level);
+  if (ZSTD_isError(z)) throw Error(std::string("zstd: ") + ZSTD_getErrorName(z));
+  out.resize(head + z);
+}
+
+/// The error of a payload that does not decode: "<where>: coded payload <what>".
+inline FormatError badPayload(const char* where, const std::string& what) {
+  return FormatError(std::string(where) + ": coded payload " + what);
+}
+
+/// Decompresses the zstd frame [frame, frame + bytes) into the calling thread's buffer (`Tag`
+/// 0 of uint8_t) with at most `capacity` bytes, and `padding` zero bytes after what it holds;
+/// returns the buffer and sets `got`.
+inline const uint8_t* unpackFrame(const uint8_t* frame, size_t bytes, size_t capacity,
+                                  size_t padding, const char* where, size_t& got) {
+  const unsigned long long framed = ZSTD_getFrameContentSize(frame, bytes);
+  if (framed == ZSTD_CONTENTSIZE_ERROR)
+    throw badPayload(where, "does not decompress (not a zstd frame)");
+  if (framed != ZSTD_CONTENTSIZE_UNKNOWN && framed < capacity) capacity = size_t(framed);
+  uint8_t* out = threadBuffer<uint8_t>(capacity + padding);
+  got = ZSTD_decompressDCtx(threadDCtx(), out, capacity, frame, bytes);
+  if (ZSTD_isError(got))
+    throw badPayload(where, std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");
+  std::fill(out + got, out + got + padding, uint8_t(0));
+  return out;
+}
+
+struct Lattice {
+  Int3 n;
+  int64_t index(int x, int y, int z) const { return (int64_t(z) * n[1] + y) * n[0] + x; }
+};
+
+/// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
+/// q[index] known when it returns. A neighbour outside the lattice reads 0.0; the sum is formed in
+/// one fixed order, so encoder and decoder predict bit for bit alike.
+template <typename T, typename Fn>
+inline void lorenzo(const Lattice& L, const T* q, int s, Fn&& fn) {
+  const int64_t sx = s, sy = int64_t(s) * L.n[0], sz = int64_t(s) * L.n[0] * L.n[1];
+  for (int z = 0; z < L.n[2]; z += s)
+    for (int y = 0; y < L.n[1]; y += s) {
+      const int64_t row = L.index(0, y, z);
+      const bool hasY = y >= s, hasZ = z >= s;
+      // x = 0: no neighbour below in x.
+      {
+        const T b = hasY ? q[row - sy] : T(0), c = hasZ ? q[row - sz] : T(0);
+        const T f = hasY && hasZ ? q[row - sy - sz] : T(0);
+        fn(row, T(0) + b + c - T(0) - T(0) - f + T(0));
+      }
+      if (hasY && hasZ) {  // every neighbour inside: the common case, no tests
+        for (int64_t i = row + sx; i < row + L.n[0]; i += sx)
+          fn(i, q[i - sx] + q[i - sy] + q[i - sz] - q[i - sx - sy] - q[i - sx - sz] -
+                    q[i - sy - sz] + q[i - sx - sy - sz]);
+        continue;
+      }
+      for (int64_t i = row + sx; i < row + L.n[0]; i += sx) {
+        const T a = q[i - sx];
+        const T b = hasY ? q[i - sy] : T(0), c = hasZ ? q[i - sz] : T(0);
+        const T d = hasY ? q[i - sx - sy] : T(0), e = hasZ ? q[i - sx - sz] : T(0);
+        fn(i, a + b + c - d - e - T(0) + T(0));
+      }
+    }
+}
+
+/// The coarsest lattice spacing S of the interpolation predictor.
+inline int coarsestSpacing(Int3 n) {
+  const int maxn = std::max({n[0], n[1], n[2]});
+  int S = 1;
+  while (2 * S <= maxn - 1) S *= 2;
+  return S;
+}
+
+}  // namespace afam::codec

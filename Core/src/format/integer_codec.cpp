@@ -1,0 +1,256 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "integer_codec.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "codec_common.hpp"
+
+namespace afam::codec {
+
+namespace {
+
+// The integers live in uint32 words: sums wrap (defined behaviour whatever a damaged payload
+// holds) and, as every |k| of a valid payload is below 2^26, equal the exact integer sums.
+using Word = uint32_t;
+constexpr int32_t kLimit = 1 << 26;  // |k| < kLimit
+static_assert((-17 >> 1) == -9, "arithmetic right shift: the predictions round down");
+
+inline Word cubic(Word a, Word b, Word c, Word d) {
+  return Word(int32_t(9u * (b + c) - a - d + 8u) >> 4);
+}
+inline Word linear(Word b, Word c) { return Word(int32_t(b + c + 1u) >> 1); }
+
+/// How the point at coordinate c (an odd multiple of s) of an axis of length len is predicted.
+enum class Fit { One, Linear, Cubic };
+inline Fit fitAt(int c, int s, int len) {
+  if (c + s >= len) return Fit::One;
+  return c - 3 * s >= 0 && c + 3 * s < len ? Fit::Cubic : Fit::Linear;
+}
+
+/// Predictions of `count` points spaced `step` apart starting at `at`, from their neighbours
+/// `off` elements away in the predicted direction (at -+ off, and at -+ 3 off for a cubic).
+void predictRows(Fit fit, const Word* at, int64_t off, int64_t step, int count, Word* pred) {
+  if (step == 1) {  // the finest passes, most of the points: contiguous, vectorized
+    const Word* m1 = at - off;
+    if (fit == Fit::Cubic) {
+      const Word *m3 = at - 3 * off, *p1 = at + off, *p3 = at + 3 * off;
+      for (int j = 0; j < count; ++j) pred[j] = cubic(m3[j], m1[j], p1[j], p3[j]);
+    } else if (fit == Fit::Linear) {
+      const Word* p1 = at + off;
+      for (int j = 0; j < count; ++j) pred[j] = linear(m1[j], p1[j]);
+    } else {
+      std::copy(m1, m1 + count, pred);
+    }
+    return;
+  }
+  for (int j = 0; j < count; ++j) {
+    const Word* p = at + j * step;
+    pred[j] = fit == Fit::Cubic    ? cubic(p[-3 * off], p[-off], p[off], p[3 * off])
+              : fit == Fit::Linear ? linear(p[-off], p[off])
+                                   : p[-off];
+  }
+}
+
+/// Walks the interpolation predictor's points in its visiting order, a run at a time:
+/// op(first, step, count, pred) handles the points first, first + step, ... (count of them) whose
+/// predictions are pred[0, count); a run's predictions read only points of earlier runs.
+template <typename Op>
+void interpolationRuns(Int3 n, const Word* k, Op&& op) {
+  const Lattice L{n};
+  const int S = coarsestSpacing(n);
+  lorenzo(L, k, S, [&](int64_t i, Word p) { op(i, int64_t(1), 1, &p); });
+  Word* pred = threadBuffer<Word, 3>(size_t(std::max({n[0], n[1], n[2]})));
+  const int64_t sy = n[0], sz = int64_t(n[0]) * n[1];
+  for (int s = S / 2; s >= 1; s /= 2) {
+    const int s2 = 2 * s;
+    const int xs = (n[0] + s - 1) / s;  // points of a row at spacing s
+    for (int z = 0; z < n[2]; z += s2)  // along x: the points at odd multiples of s
+      for (int y = 0; y < n[1]; y += s2) {
+        const Word* row = k + L.index(0, y, z);
+        int count = 0;
+        for (int x = s; x < n[0]; x += s2)
+          predictRows(fitAt(x, s, n[0]), row + x, s, 1, 1, pred + count++);
+        if (count) op(L.index(s, y, z), int64_t(s2), count, pred);
+      }
+    for (int z = 0; z < n[2]; z += s2)  // along y: whole rows at spacing s
+      for (int y = s; y < n[1]; y += s2) {
+        const Word* at = k + L.index(0, y, z);
+        predictRows(fitAt(y, s, n[1]), at, s * sy, s, xs, pred);
+        op(L.index(0, y, z), int64_t(s), xs, pred);
+      }
+    for (int z = s; z < n[2]; z += s2)  // along z
+      for (int y = 0; y < n[1]; y += s) {
+        const Word* at = k + L.index(0, y, z);
+        predictRows(fitAt(z, s, n[2]), at, s * sz, s, xs, pred);
+        op(L.index(0, y, z), int64_t(s), xs, pred);
+      }
+  }
+}
+
+/// Lorenzo's residual of every point at once: the mixed difference along x, y and z (outside
+/// points 0), in place; lorenzoSums inverts it (prefix sums along each axis).
+void lorenzoDifferences(Int3 n, Word* r) {
+  const int64_t sy = n[0], sz = int64_t(n[0]) * n[1];
+  for (int64_t z = n[2] - 1; z >= 1; --z)
+    for (int64_t i = 0; i < sz; ++i) r[z * sz + i] -= r[(z - 1) * sz + i];
+  for (int64_t z = 0; z < n[2]; ++z)
+    for (int64_t y = n[1] - 1; y >= 1; --y)
+      for (int64_t x = 0; x < sy; ++x) r[z * sz + y * sy + x] -= r[z * sz + (y - 1) * sy + x];
+  for (int64_t row = 0; row < int64_t(n[1]) * n[2]; ++row)
+    for (int64_t x = sy - 1; x >= 1; --x) r[row * sy + x] -= r[row * sy + x - 1];
+}
+
+void lorenzoSums(Int3 n, Word* r) {
+  const int64_t sy = n[0], sz = int64_t(n[0]) * n[1];
+  const int64_t rows = int64_t(n[1]) * n[2];
+  int64_t row = 0;
+  for (; row + 4 <= rows; row += 4) {  // four rows at once: four independent chains of adds
+    Word *p0 = r + row * sy, *p1 = p0 + sy, *p2 = p1 + sy, *p3 = p2 + sy;
+    for (int64_t x = 1; x < sy; ++x) {
+      p0[x] += p0[x - 1];
+      p1[x] += p1[x - 1];
+      p2[x] += p2[x - 1];
+      p3[x] += p3[x - 1];
+    }
+  }
+  for (; row < rows; ++row) {
+    Word* p = r + row * sy;
+    for (int64_t x = 1; x < sy; ++x) p[x] += p[x - 1];
+  }
+  for (int64_t z = 0; z < n[2]; ++z)
+    for (int64_t y = 1; y < n[1]; ++y) {
+      Word* p = r + z * sz + y * sy;
+      const Word* q = p - sy;
+      for (int64_t x = 0; x < sy; ++x) p[x] += q[x];
+    }
+  for (int64_t z = 1; z < n[2]; ++z) {
+    Word* p = r + z * sz;
+    const Word* q = p - sz;
+    for (int64_t i = 0; i < sz; ++i) p[i] += q[i];
+  }
+}
+
+/// The residuals of the zstd-decompressed varints v (got bytes, zero padding after them) into r.
+void readVarints(const uint8_t* v, size_t got, size_t count, Word* r, const char* where) {
+  constexpr size_t kRun = 64;  // values between two bounds checks; padding covers 5 bytes each
+  size_t pos = 0;
+  for (size_t i = 0; i < count;) {
+    if (pos > got) throw badPayload(where, "ends inside a residual");
+    uint64_t w[2];
+    std::memcpy(w, v + pos, 16);
+    if (i + 16 <= count && ((w[0] | w[1]) & 0x8080808080808080ull) == 0) {
+      for (int j = 0; j < 16; ++j) {  // 16 one-byte codes: the common case, vectorized
+        const uint32_t u = v[pos + size_t(j)];
+        r[i + size_t(j)] = (u >> 1) ^ (0u - (u & 1));
+      }
+      i += 16;
+      pos += 16;
+      continue;
+    }
+    for (const size_t end = std::min(count, i + kRun); i < end; ++i) {
+      uint32_t u = v[pos++];
+      if (u >= 0x80) {  // |code| >= 64: up to 5 bytes
+        u &= 0x7f;
+        for (int shift = 7;; shift += 7) {
+          const uint32_t b = v[pos++];
+          if (shift == 28 && b > 0x0f) throw badPayload(where, "holds an absurd residual");
+          u |= (b & 0x7f) << shift;
+          if (b < 0x80) break;
+        }
+      }
+      r[i] = (u >> 1) ^ (0u - (u & 1));
+    }
+  }
+  if (pos > got) throw badPayload(where, "ends inside a residual");
+  if (pos < got)
+    throw badPayload(where, "has " + std::to_string(got - pos) + " bytes after its last residual");
+}
+
+/// out = (base + k) * step for every k, after checking every k lies in the range an encoder
+/// writes and every value is a finite float.
+void toFloats(const Word* k, size_t count, int64_t base, double step, float* out,
+              const char* where) {
+  uint32_t outside = 0;
+  for (size_t i = 0; i < count; ++i) outside |= uint32_t(k[i] + (kLimit - 1)) > 2u * (kLimit - 1);
+  if (outside) throw badPayload(where, "decodes beyond its range");
+  for (size_t i = 0; i < count; ++i) out[i] = integerValue(base, int32_t(k[i]), step);
+  if ((std::fabs(double(base)) + kLimit) * step >
+      std::numeric_limits<float>::max())  // only then can one be
+    for (size_t i = 0; i < count; ++i)
+      if (!std::isfinite(out[i])) throw badPayload(where, "decodes to a value beyond float32");
+}
+
+}  // namespace
+
+bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
+                     std::vector<int32_t>& k) {
+  if (count == 0) return false;
+  const auto [lo, hi] = std::minmax_element(values, values + count);
+  if (!std::isfinite(*lo) || !std::isfinite(*hi)) return false;
+  const double middle = std::nearbyint((double(*lo) + double(*hi)) / 2 / step);
+  if (!(std::fabs(middle) < 4503599627370496.0)) return false;  // 2^52
+  base = int64_t(middle);
+  k.resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    const double q = std::nearbyint(double(values[i]) / step) - middle;
+    if (!(std::fabs(q) < kLimit)) return false;
+    k[i] = int32_t(q);
+  }
+  return true;
+}
+
+void integerResiduals(Predictor p, Int3 n, const std::vector<int32_t>& k,
+                      std::vector<int32_t>& residuals) {
+  residuals.resize(k.size());
+  Word* r = reinterpret_cast<Word*>(residuals.data());
+  if (p == Predictor::IntegerLorenzo) {
+    std::memcpy(r, k.data(), k.size() * sizeof(Word));
+    lorenzoDifferences(n, r);
+    return;
+  }
+  const Word* kw = reinterpret_cast<const Word*>(k.data());
+  size_t pos = 0;
+  interpolationRuns(n, kw, [&](int64_t first, int64_t step, int count, const Word* pred) {
+    for (int j = 0; j < count; ++j) r[pos++] = kw[first + j * step] - pred[j];
+  });
+}
+
+void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
+  if (bytes < kIntegerCodedHeaderBytes + 1) throw badPayload(where, "shorter than its header");
+  double step;
+  int64_t base;
+  std::memcpy(&step, data, 8);
+  std::memcpy(&base, data + 9, 8);
+  if (!(base > -(int64_t(1) << 52) && base < (int64_t(1) << 52)))
+    throw badPayload(where, "has an invalid base");
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  size_t got = 0;
+  const uint8_t* varints =
+      unpackFrame(data + kIntegerCodedHeaderBytes, bytes - kIntegerCodedHeaderBytes, count * 5,
+                  5 * 64 + 8, where, got);
+  Word* r = threadBuffer<Word, 1>(count);
+  readVarints(varints, got, count, r, where);
+  Word* k = r;
+  if (Predictor(data[8]) == Predictor::IntegerLorenzo) {
+    lorenzoSums(n, k);
+  } else {
+    k = threadBuffer<Word, 2>(count);
+    size_t pos = 0;
+    interpolationRuns(n, k, [&](int64_t first, int64_t stride, int run, const Word* pred) {
+      Word* at = k + first;
+      const Word* res = r + pos;
+      if (stride == 1)
+        for (int j = 0; j < run; ++j) at[j] = pred[j] + res[j];
+      else
+        for (int j = 0; j < run; ++j) at[j * stride] = pred[j] + res[j];
+      pos += size_t(run);
+    });
+  }
+  toFloats(k, count, base, step, out, where);
+}
+
+}  // namespace afam::codec

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The integer forms of the block codec (block_codec.hpp says what they are): quantization of each
+// value on its own, the predictors on the integers, and decoding in passes without a serial chain
+// (varints, then prefix sums or interpolation passes, then the conversion to float), each a loop
+// the compiler vectorizes. Internal to Core/src/format; block_codec.cpp dispatches to it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "afam/format/block_codec.hpp"
+
+namespace afam::codec {
+
+/// Quantizes every value on its own: k = round(value / step) - base, base the middle of the
+/// values in steps. False when a value is not finite or some |k| >= 2^26.
+bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
+                     std::vector<int32_t>& k);
+
+/// What a reader reconstructs from k: float((base + k) * step); base + k is formed as
+/// double(base) + double(k), exact as both lie below 2^53 (and vectorizable).
+inline float integerValue(int64_t base, int32_t k, double step) {
+  return static_cast<float>((double(base) + double(k)) * step);
+}
+
+/// The residuals of k under an integer predictor, in the predictor's visiting order.
+void integerResiduals(Predictor p, Int3 n, const std::vector<int32_t>& k,
+                      std::vector<int32_t>& residuals);
+
+/// Codes the values of an integer predictor: header, then the residuals' zstd frame.
+void packInteger(Predictor p, double step, int64_t base, const std::vector<int32_t>& residuals,
+                 int zstdLevel, std::vector<uint8_t>& out);
+
+/// Decodes an integer-form payload (data[8] names an integer predictor) into out.
+void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);
+
+}  // namespace afam::codec

@@ -18,7 +18,13 @@
 #     replayed inside a vtkRenderWindow by BenchAFAMRenderLoop at 512^2 and 1024^2, cold (page
 #     cache evicted before every frame) and warm, and by `afam replay --device gpu` on the same
 #     file, views, sizes, cache budget (AFAM_VTK_CACHE_MB, default 220) and GPU pool;
-#     AFAM_VTK_FRAMES limits the views, AFAM_VTK_SIZES ("512 1024") sets the window sizes.
+#     AFAM_VTK_FRAMES limits the views, AFAM_VTK_SIZES ("512 1024") sets the window sizes;
+#   - with "scale" in AFAM_VTK_PARTS (default "images ml": the two parts above): the repository's
+#     HeadMRVolume made large (`afam enlarge`, AFAM_VTK_SCALE_DIMS, default 1204,1480,1264 uint8,
+#     noise 2.5) and encoded at 1e-2 relative, replayed cold with screen-space LOD and a host
+#     cache of AFAM_VTK_SCALE_CACHE_MB (1000) by BenchAFAMRenderLoop and `afam replay`, beside VTK's
+#     own GPU ray caster on the raw samples (BenchVTKRawVolume): AFAM_VTK_SCALE_FRAMES (400) views
+#     at AFAM_VTK_SCALE_SIZE^2 (1024).
 # The programs' OpenGL is NVIDIA's own on the GPU (AFAM_VTK_GLX=nvidia, default) or Mesa's llvmpipe
 # (AFAM_VTK_GLX=mesa). Logs and CSVs go to $OUT when set; a table is printed last.
 set -uo pipefail
@@ -116,7 +122,10 @@ status() { printf '%-44s %s\n' "$1" "$2" | tee -a "$summary"; }
 failed=0
 echo "GPU: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null | head -1); GLX vendor $__GLX_VENDOR_LIBRARY_NAME"
 
+part() { [[ " ${AFAM_VTK_PARTS:-images ml} " == *" $1 "* ]]; }
+
 # --- Image tests: CPU (baselines), then AFAM_TEST_DEVICE=gpu (GPU used, GPU frame = CPU frame).
+if part images; then
 mkdir -p "$work/images"
 image_test() {  # image_test NAME DEVICE ARGS...
   local name="$1" device="$2"; shift 2
@@ -144,8 +153,9 @@ done
 image_test "VolumeMapper --device gpu" ctest "$bin/TestAFAMVolumeMapper" --device gpu -V "$baselines/TestAFAMVolumeMapper.png" -T "$work/images"
 image_test "README example" auto "$bin/AFAMRenderFile" "$root/Testing/Data/format/ml17_levels2_blocks2_v1.afam" --check
 grep -h "^\[vtk gpu-vs-cpu\]" "$work/images/"*_gpu.log
+fi
 
-# --- The volume and the camera path.
+# --- The camera path, then the volume.
 afam="$bin/afam"
 n="${AFAM_VTK_N:-1024}"
 cache_mb="${AFAM_VTK_CACHE_MB:-220}"
@@ -158,6 +168,11 @@ source "$root/scripts/trajectories.sh"
 afam_trajectories "$afam" "$work/trajectories" >"$work/trajectories.txt" || { echo "no trajectory"; exit 1; }
 traj="$AFAM_TRAJ_DIR/user_1.dat"
 status "camera path" "$(cat "$work/trajectories.txt")"
+value() { sed -n "s/.*$1=\([^ ]*\).*/\1/p" <<<"$2" | tail -1; }
+table="$work/table.md"
+: >"$table"
+interop=(); [ "${AFAM_VTK_GLX:-nvidia}" = nvidia ] && interop=(--require-interop)
+if part ml; then
 file="$work/ml${n}.afam"
 if [ ! -f "$file" ]; then
   t0=$(date +%s)
@@ -169,8 +184,6 @@ if [ ! -f "$file" ]; then
 fi
 
 # --- Inside the VTK render loop vs afam replay, same file, views, size, cache and GPU pool.
-value() { sed -n "s/.*$1=\([^ ]*\).*/\1/p" <<<"$2" | tail -1; }
-table="$work/table.md"
 {
   echo "| size | regime | image to the window | VTK Render() ms | mapper ms | cast ms (host) | GPU kernel ms | caching ms | copies ms (download + depth + draw) | fps | first frame ms | afam replay ms | VTK / replay | bar |"
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
@@ -179,7 +192,6 @@ table="$work/table.md"
 # with the image through the host (the fallback, for comparison), warm off screen (no swap to
 # the X server), and warm with an opaque plane through the volume (the depth buffer read each frame;
 # the replay beside it has no plane).
-interop=(); [ "${AFAM_VTK_GLX:-nvidia}" = nvidia ] && interop=(--require-interop)
 for size in ${AFAM_VTK_SIZES:-512 1024}; do
   for regime in warm cold host offscreen plane; do
     cold=(); [ $regime = cold ] && cold=(--cold)
@@ -210,12 +222,56 @@ for size in ${AFAM_VTK_SIZES:-512 1024}; do
     echo "| ${size}^2 | $regime | $path | ${vc:-?} | $(value median_mapper_ms "$v") | $(value median_kernel_ms "$v") | $(value median_gpu_kernel_ms "$v") | $(value median_caching_ms "$v") | $(value median_copies_ms "$v") ($(value median_gpu_download_ms "$v") + $(value median_depth_read_ms "$v") + $(value median_draw_ms "$v")) | $(value fps "$v") | $(value first_frame_ms "$h") | ${r:-?} | $ratio | $bar |" >>"$table"
   done
 done
+echo "ML ${n}^3, user_1 ${AFAM_VTK_FRAMES:-all} views, cache ${cache_mb} MB and GPU pool ${cache_mb} MB both sides, medians (VTK: frames after the first)" >>"$table"
+fi
+
+# --- At scale: a real scan made large, the plugin's mapper against VTK's own GPU ray caster on
+# the raw samples, in the same kind of window, on the same views (issue 27's bars).
+if part scale; then
+  sdims="${AFAM_VTK_SCALE_DIMS:-1204,1480,1264}"
+  sframes="${AFAM_VTK_SCALE_FRAMES:-400}"
+  ssize="${AFAM_VTK_SCALE_SIZE:-1024}"
+  scache="${AFAM_VTK_SCALE_CACHE_MB:-1000}"
+  raw="$work/scan_${sdims//,/x}_uint8.raw"
+  sfile="$work/scan_${sdims//,/x}.afam"
+  t0=$(date +%s)
+  [ -f "$raw" ] || "$afam" enlarge "$root/Testing/Data/volumes/HeadMRVolume_48x62x42_uint8.raw" \
+    "$raw" --dims "$sdims" --noise 2.5 >"$work/enlarge.log" 2>&1 || { tail -3 "$work/enlarge.log"; exit 1; }
+  [ -f "$sfile" ] || "$afam" encode "$raw" "$sfile" --error-bound 1e-2 --relative --quiet \
+    >"$work/scan_encode.log" 2>&1 || { tail -3 "$work/scan_encode.log"; exit 1; }
+  status "scan ${sdims} uint8 enlarged + encoded" "$(( $(date +%s) - t0 )) s, $(stat -c %s "$sfile") bytes at 1e-2 relative"
+  "$afam" info "$sfile" | grep -E "kinds|compression" >"$work/scan_info.txt"
+  tag="scale_${ssize}"
+  "$bin/BenchAFAMRenderLoop" "$sfile" --trajectory "$traj" --size "$ssize" --device gpu --require-gpu \
+    "${interop[@]}" --lod screen --cold --cache-mb "$scache" --frames "$sframes" \
+    --csv "$work/vtk_$tag.csv" >"$work/vtk_$tag.log" 2>&1 || { failed=1; tail -3 "$work/vtk_$tag.log"; }
+  "$afam" replay "$sfile" --trajectory "$traj" --size "$ssize,$ssize" --device gpu --lod screen --cold \
+    --cache-bytes "$((scache * 1000000))" --cache-blocks 0 --frames "$sframes" --quiet \
+    --csv "$work/replay_$tag.csv" >"$work/replay_$tag.log" 2>&1 || { failed=1; tail -3 "$work/replay_$tag.log"; }
+  "$bin/BenchVTKRawVolume" "$raw" --trajectory "$traj" --size "$ssize" --frames "$sframes" --cold \
+    --csv "$work/raw_$tag.csv" >"$work/raw_$tag.log" 2>&1 || { failed=1; tail -3 "$work/raw_$tag.log"; }
+  v=$(grep "median_render_call_ms=" "$work/vtk_$tag.log" | tail -1)
+  h=$(grep "^vtk_render_loop" "$work/vtk_$tag.log" | tail -1)
+  r=$(grep "median_latency_ms=" "$work/replay_$tag.log" | tail -1)
+  w=$(grep "^vtk_raw_volume" "$work/raw_$tag.log" | tail -1)
+  ours=$(value median_render_call_ms "$v"); theirs=$(value median_render_call_ms "$w")
+  first=$(value first_frame_ms "$h"); theirfirst=$(value first_image_ms "$w")
+  {
+    echo
+    echo "Scan ${sdims} uint8 ($(grep -o 'compression_ratio=[0-9.]*' "$work/scan_info.txt")), user_1 ${sframes} views at ${ssize}^2, cold, screen-space LOD, ${scache} MB host cache:"
+    echo "| renderer | median ms | p95 ms | first image ms | frames on the GPU / through interop |"
+    echo "|---|---|---|---|---|"
+    echo "| vtkAFAMVolumeMapper in a VTK window | $ours | $(value p95_render_call_ms "$v") | $first | $(value gpu_frames "$h") / $(value interop_frames "$h") of $(value povs "$h") |"
+    echo "| afam replay --device gpu | $(value median_latency_ms "$r") | $(value p95_latency_ms "$r") | - | - |"
+    echo "| VTK's GPU ray caster on the raw samples | $theirs | $(value p95_render_call_ms "$w") | $theirfirst (read $(value load_ms "$w") + first render $(value first_render_ms "$w")) | - |"
+    echo "Bars: per frame <= 1.5x VTK's: $(awk -v a="$ours" -v b="$theirs" 'BEGIN { if (b > 0) printf "%.2fx %s", a / b, (a <= 1.5 * b ? "met" : "NOT met"); else print "?" }'); first image >= 10x sooner: $(awk -v a="$first" -v b="$theirfirst" 'BEGIN { if (a > 0) printf "%.1fx %s", b / a, (b >= 10 * a ? "met" : "NOT met"); else print "?" }'); median <= 33 ms, p95 <= 100 ms, first image <= 500 ms."
+  } >>"$table"
+fi
 grep -hE "^gl: OpenGL (renderer|version)" "$work"/vtk_*.log | sort -u
 
 echo
 echo "================ gpu_vtk_check summary ================"
 echo "GPU: $(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null | head -1); programs at $(cat "$prefix/vtk/COMMIT"); GLX $__GLX_VENDOR_LIBRARY_NAME"
 cat "$summary"
-echo "ML ${n}^3, user_1 ${AFAM_VTK_FRAMES:-all} views, cache ${cache_mb} MB and GPU pool ${cache_mb} MB both sides, medians (VTK: frames after the first):"
 cat "$table"
 [ $failed -eq 0 ]

@@ -5,13 +5,13 @@
 # builds the programs there with CUDA against ParaView's VTK used as a plain VTK (no ParaView
 # library linked), and packs them with everything they load into gpu-vtk/ (git-ignored):
 #   gpu-vtk/zstd/          Debian's zstd and its libraries, uncompressed (the GPU machine has none)
-#   gpu-vtk/bin.tar.zst    the C++ VTK image tests, BenchAFAMRenderLoop, AFAMRenderFile and the
+#   gpu-vtk/bin.tar.zst    the C++ VTK image tests, BenchAFAMRenderLoop, BenchVTKRawVolume, AFAMRenderFile and the
 #                          `afam` command line, with their `ldd` closure but glibc and libstdc++,
 #                          flat under the names the loader asks for (unpacks to bin/ and lib/)
 #   gpu-vtk/x.tar.zst      Xvfb, xkbcomp, the xkb data and Mesa's GLX library and swrast DRI
 #                          driver (Xvfb's GLX needs them), with their closure (bin/, lib/, dri/, xkb/)
 # Each bundle travels in its own device call (64 MiB carried per call, the repository included);
-# zstd -19 with a 128 MiB window (--long=27) finds the eight programs' common CUDA and Core code.
+# zstd -19 with a 128 MiB window (--long=27) finds the nine programs' common CUDA and Core code.
 #   scripts/gpu_vtk_pack.sh [BUILD_DIR]          (default build-gpu-vtk)
 # AFAM_VTK_DIR: the folder of vtk-config.cmake (default Debian ParaView's own VTK); AFAM_JOBS
 # (default 2); CMAKE_CUDA_ARCHITECTURES 90 (H100/H200); nvcc from /usr/local/cuda/bin unless
@@ -25,7 +25,7 @@ export CUDACXX="${CUDACXX:-/usr/local/cuda/bin/nvcc}"
 level="${AFAM_PACK_ZSTD_LEVEL:-19}"
 programs=(Testing/VTK/TestAFAMVolumeMapper Testing/VTK/TestAFAMDepthCompositing
   Testing/VTK/TestAFAMBlendModes Testing/VTK/TestAFAMFrameSettings Testing/VTK/TestAFAMMapperFileName
-  Testing/VTK/BenchAFAMRenderLoop Examples/AFAMRenderFile Apps/afam)
+  Testing/VTK/BenchAFAMRenderLoop Testing/VTK/BenchVTKRawVolume Examples/AFAMRenderFile Apps/afam)
 
 # --- Build (only what the GPU machine runs).
 launcher=()

@@ -4,23 +4,25 @@
 // renders, so that the two can be set side by side on the same file, views and image size.
 //   BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N] [--frames K]
 //     [--device cpu|gpu] [--require-gpu] [--require-interop] [--host-draw] [--offscreen] [--cold]
-//     [--plane] [--cache-mb MB] [--csv OUT.csv]
+//     [--plane] [--lod bands|screen] [--cache-mb MB] [--csv OUT.csv]
 // Each point of view becomes the VTK camera that casts the same rays as Core's Camera::fromPose
 // (exact for cubic volumes); the transfer function is Core's preset over the file's value range,
-// the LOD the paper's distance bands, sample distance 0.005 and opacity unit 0.01 in the
-// normalised frame, shading on: `afam replay`'s defaults. A square window of --size pixels.
+// the LOD the paper's distance bands (--lod screen: screen-space LOD), sample distance 0.005 and
+// opacity unit 0.01 in the normalised frame, shading on: `afam replay`'s defaults. A square window
+// of --size pixels.
 // --cold evicts the file from the OS page cache before every frame (`afam replay --cold`).
 // Per frame: the whole window->Render() (with glFinish), the mapper's own time, its ray casting
 // ("kernel": upload, cast and image readback on the GPU, as the host sees it), caching, the
 // OpenGL round trips (depth read, the image's draw), and the GPU's own upload, kernel and
 // download times (CUDA events; -1 on the CPU). "copies" = download + depth read + draw.
-// Medians last, in one line of name=value pairs.
+// Medians (and the 95th percentile of the whole call) last, in one line of name=value pairs.
 // --require-gpu: exit status 1 unless every frame was cast on the GPU.
 // --require-interop: exit status 1 unless every frame after the first went from the GPU to the
 // window through CUDA-OpenGL interop. --host-draw: the mapper's GpuImageInterop off (the image
 // comes back to the host and is uploaded). --offscreen: the window renders off screen (no swap to
 // the X server). --plane: an opaque plane through the volume's centre (normal z), so that every
 // frame reads the depth buffer for depth compositing.
+#include "BenchRenderLoopScene.h"
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
 
@@ -62,7 +64,7 @@ struct Options
   std::string File, Trajectory, Csv;
   int Orbit = 0, Size = 512, Frames = 0;
   bool Gpu = false, RequireGpu = false, RequireInterop = false, HostDraw = false, Offscreen = false;
-  bool Cold = false, Plane = false;
+  bool Cold = false, Plane = false, ScreenLod = false;
   double CacheMB = 512;
 };
 
@@ -82,6 +84,8 @@ bool Parse(int argc, char* argv[], Options& o)
       o.Frames = std::atoi(argv[++i]);
     else if (a == "--device" && hasValue)
       o.Gpu = std::string(argv[++i]) == "gpu";
+    else if (a == "--lod" && hasValue)
+      o.ScreenLod = std::string(argv[++i]) == "screen";
     else if (a == "--cache-mb" && hasValue)
       o.CacheMB = std::atof(argv[++i]);
     else if (a == "--csv" && hasValue)
@@ -110,64 +114,11 @@ bool Parse(int argc, char* argv[], Options& o)
   {
     std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
                  "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--require-interop] "
-                 "[--host-draw] [--offscreen] [--cold] [--plane] "
+                 "[--host-draw] [--offscreen] [--cold] [--plane] [--lod bands|screen] "
                  "[--cache-mb MB] [--csv OUT.csv]\n";
     return false;
   }
   return true;
-}
-
-double Median(std::vector<double> v)
-{
-  if (v.empty())
-  {
-    return 0;
-  }
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-// The VTK camera that casts Core's rays for `pose`: the normalised frame [-1, 1]^3 is the data box
-// (centre `c`, half extents `h`), so the eye maps by c + h * eye and the view angle is Core's.
-void PlaceCamera(vtkCamera* camera,
-  const afam::Pose& pose,
-  const double c[3],
-  const double h[3],
-  int size)
-{
-  const afam::Camera core = afam::Camera::fromPose(pose, size, size);
-  double eye[3], focal[3];
-  for (int a = 0; a < 3; ++a)
-  {
-    eye[a] = c[a] + h[a] * core.eye[a];
-    focal[a] = c[a] + h[a] * (core.eye[a] + core.forward[a]);
-  }
-  camera->SetPosition(eye);
-  camera->SetFocalPoint(focal);
-  camera->SetViewUp(core.up[0], core.up[1], core.up[2]);
-  camera->SetViewAngle(2.0 * std::atan(core.tanHalfY) * 180.0 / 3.14159265358979323846);
-}
-
-// Core's preset transfer function over [lo, hi] as VTK functions; the opacity unit distance in
-// world units (`unit` = world length of one normalised unit).
-void SetPresetTransferFunction(vtkVolumeProperty* property, double lo, double hi, double unit)
-{
-  const afam::TransferFunction tf = afam::TransferFunction::preset(lo, hi);
-  vtkNew<vtkColorTransferFunction> color;
-  for (const auto& p : tf.colors)
-  {
-    color->AddRGBPoint(p.value, p.r, p.g, p.b);
-  }
-  vtkNew<vtkPiecewiseFunction> opacity;
-  for (const auto& p : tf.opacities)
-  {
-    opacity->AddPoint(p.value, p.alpha);
-  }
-  property->SetColor(color);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(tf.referenceDistance * unit);
-  property->ShadeOn();
 }
 
 // Seconds to milliseconds, keeping -1 (not cast on the GPU) as -1.
@@ -214,7 +165,14 @@ int main(int argc, char* argv[])
   reader->SetFileName(o.File.c_str());
   vtkNew<vtkAFAMVolumeMapper> mapper;
   mapper->SetInputConnection(reader->GetOutputPort());
-  mapper->SetLodPolicyToDistanceBands();
+  if (o.ScreenLod)
+  {
+    mapper->SetLodPolicyToScreenSpace();
+  }
+  else
+  {
+    mapper->SetLodPolicyToDistanceBands();
+  }
   mapper->SetCacheBudgetMB(o.CacheMB);
   mapper->SetRenderDevice(
     o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
@@ -357,7 +315,7 @@ int main(int argc, char* argv[])
   std::printf("median_render_call_ms=%.3f median_mapper_ms=%.3f median_kernel_ms=%.3f "
               "median_caching_ms=%.3f median_copies_ms=%.3f median_depth_read_ms=%.3f "
               "median_draw_ms=%.3f median_gpu_upload_ms=%.3f median_gpu_kernel_ms=%.3f "
-              "median_gpu_download_ms=%.3f fps=%.1f\n",
+              "median_gpu_download_ms=%.3f fps=%.1f p95_render_call_ms=%.3f\n",
     renderCall,
     Median(series["mapper"]),
     Median(series["kernel"]),
@@ -368,7 +326,8 @@ int main(int argc, char* argv[])
     Median(series["gpu_upload"]),
     Median(series["gpu_kernel"]),
     Median(series["gpu_download"]),
-    renderCall > 0 ? 1e3 / renderCall : 0.0);
+    renderCall > 0 ? 1e3 / renderCall : 0.0,
+    Quantile(series["render_call"], 0.95));
   if (o.RequireGpu && onGpu != frames.size())
   {
     std::cerr << "BenchAFAMRenderLoop: --require-gpu and only " << onGpu << " of " << frames.size()

@@ -98,11 +98,18 @@ int VtkType(afam::SampleType type)
       return VTK_UNSIGNED_SHORT;
     case afam::SampleType::Int32:
       return VTK_INT;
+    case afam::SampleType::UInt32:
+      return VTK_UNSIGNED_INT;
+    case afam::SampleType::Int64:
+      return VTK_LONG_LONG;
+    case afam::SampleType::UInt64:
+      return VTK_UNSIGNED_LONG_LONG;
     case afam::SampleType::Float32:
       return VTK_FLOAT;
-    default:
+    case afam::SampleType::Float64:
       return VTK_DOUBLE;
   }
+  return VTK_DOUBLE;
 }
 
 // The raw file's samples, as they are on disk, in a new image (origin 0, spacing 1: what

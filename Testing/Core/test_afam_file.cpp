@@ -291,10 +291,10 @@ TEST_F(CorruptFile, BadMagic) {
 
 TEST_F(CorruptFile, UnknownVersion) {
   const std::string w = expectFormatError(path_, [](std::vector<char>& b) {
-    const uint32_t v = 3;
+    const uint32_t v = 4;
     std::memcpy(&b[8], &v, 4);
   });
-  EXPECT_NE(w.find("version 3"), std::string::npos) << w;
+  EXPECT_NE(w.find("version 4"), std::string::npos) << w;
 }
 
 TEST_F(CorruptFile, HeaderChecksum) {

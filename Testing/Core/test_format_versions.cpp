@@ -17,21 +17,15 @@
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
 
+#include "file_bytes.hpp"
+
 using namespace afam;
+using afam_test::readAll;
+using afam_test::writeAll;
 
 namespace {
 
 const std::string kFormat = std::string(AFAM_TEST_DATA_DIR) + "/format/";
-
-std::vector<char> readAll(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeAll(const std::string& path, const std::vector<char>& b) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(b.data(), std::streamsize(b.size()));
-}
 
 std::string scratch(const std::string& name) {
   return ::testing::TempDir() + "afam_format_" + std::to_string(::getpid()) + "_" + name;

@@ -16,6 +16,7 @@
 #include "afam/format/block_codec.hpp"
 #include "afam/format/temporary_file.hpp"
 #include "afam/spline/fit.hpp"
+#include "file_layout.hpp"
 
 namespace afam {
 
@@ -25,108 +26,6 @@ namespace afam {
 #endif
 
 namespace {
-
-constexpr char kMagic[8] = {'A', 'F', 'A', 'M', '\r', '\n', '\x1a', '\n'};
-constexpr uint32_t kVersion = 2;  // written; version 1 is still read
-constexpr uint32_t kEndianTag = 0x01020304u;
-constexpr uint64_t kAlign = 64;        // start of the payload area
-constexpr uint32_t kPayloadAlign = 4;  // payload offsets (float32 arrays, uploaded unchanged)
-constexpr int kMaxLevels = 16;
-
-// On-disk header of versions 1 and 2 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
-// each member's byte offset and size beside it (@offset, size), checked by the static_asserts
-// below.
-struct FileHeader {
-  char magic[8];                 // @0, 8 B
-  uint32_t version;              // @8, 4 B
-  uint32_t endianTag;            // @12, 4 B
-  uint32_t headerSize;           // @16, 4 B
-  uint32_t entrySize;            // @20, 4 B
-  int64_t dims[3];               // @24, 24 B
-  double origin[3];              // @48, 24 B
-  double spacing[3];             // @72, 24 B
-  double valueMin;               // @96, 8 B
-  double valueMax;               // @104, 8 B
-  double errorBound;             // @112, 8 B
-  int32_t levels;                // @120, 4 B
-  int32_t blocksPerAxis;         // @124, 4 B
-  int32_t degree;                // @128, 4 B
-  int32_t fixedNcp;              // @132, 4 B
-  uint8_t mode;                  // @136, 1 B
-  uint8_t relativeBound;         // @137, 1 B
-  uint8_t levelSampling;         // @138, 1 B; LevelSampling: 0 point (older files), 1 box
-  uint8_t sourceBytesPerSample;  // @139, 1 B; bytes of one sample of the encoded input (0: unknown)
-  uint32_t indexChecksum;        // @140, 4 B
-  uint64_t entryCount;           // @144, 8 B
-  uint64_t indexOffset;          // @152, 8 B
-  uint64_t payloadOffset;        // @160, 8 B
-  uint64_t fileSize;             // @168, 8 B
-  char scalarName[64];           // @176, 64 B
-  int32_t levelBlocks[kMaxLevels][3];  // @240, 192 B
-  uint64_t totalPayloadBytes;          // @432, 8 B
-  uint32_t payloadAlignment;           // @440, 4 B; a power of two in [4, 4096] that every payload
-                                       // offset is a multiple of
-  uint8_t reserved1[576];              // @444, 576 B
-  uint32_t headerChecksum;             // @1020, 4 B; CRC32 of bytes [0, 1020)
-};
-static_assert(sizeof(FileHeader) == 1024, "header size");
-static_assert(offsetof(FileHeader, version) == 8, "layout");
-static_assert(offsetof(FileHeader, endianTag) == 12, "layout");
-static_assert(offsetof(FileHeader, headerSize) == 16, "layout");
-static_assert(offsetof(FileHeader, entrySize) == 20, "layout");
-static_assert(offsetof(FileHeader, dims) == 24, "layout");
-static_assert(offsetof(FileHeader, origin) == 48, "layout");
-static_assert(offsetof(FileHeader, spacing) == 72, "layout");
-static_assert(offsetof(FileHeader, valueMin) == 96, "layout");
-static_assert(offsetof(FileHeader, valueMax) == 104, "layout");
-static_assert(offsetof(FileHeader, errorBound) == 112, "layout");
-static_assert(offsetof(FileHeader, levels) == 120, "layout");
-static_assert(offsetof(FileHeader, blocksPerAxis) == 124, "layout");
-static_assert(offsetof(FileHeader, degree) == 128, "layout");
-static_assert(offsetof(FileHeader, fixedNcp) == 132, "layout");
-static_assert(offsetof(FileHeader, mode) == 136, "layout");
-static_assert(offsetof(FileHeader, relativeBound) == 137, "layout");
-static_assert(offsetof(FileHeader, levelSampling) == 138, "layout");
-static_assert(offsetof(FileHeader, sourceBytesPerSample) == 139, "layout");
-static_assert(offsetof(FileHeader, indexChecksum) == 140, "layout");
-static_assert(offsetof(FileHeader, entryCount) == 144, "layout");
-static_assert(offsetof(FileHeader, indexOffset) == 152, "layout");
-static_assert(offsetof(FileHeader, payloadOffset) == 160, "layout");
-static_assert(offsetof(FileHeader, fileSize) == 168, "layout");
-static_assert(offsetof(FileHeader, scalarName) == 176, "layout");
-static_assert(offsetof(FileHeader, levelBlocks) == 240, "layout");
-static_assert(offsetof(FileHeader, totalPayloadBytes) == 432, "layout");
-static_assert(offsetof(FileHeader, payloadAlignment) == 440, "layout");
-static_assert(offsetof(FileHeader, reserved1) == 444, "layout");
-static_assert(offsetof(FileHeader, headerChecksum) == 1020, "layout");
-
-// On-disk index entry, version 1: 40 bytes, each member's offset and size beside it. Level, block
-// ijk, samples and degree are implied by the entry's position (the index is complete and ordered)
-// and the header; the payload size by the NCP. Keeping the entry this small is what makes the
-// file smaller than the paper's layout even for the smallest models (NCP 3: 108 + 40 bytes
-// against 169).
-struct IndexEntryV1 {
-  uint64_t offset;    // @0, 8 B
-  uint16_t ncp[3];    // @8, 6 B
-  uint16_t flags;     // @14, 2 B; v2: bits 0-7 BlockKind, bit 8 coded, bit 9 integer form; v1: 0.
-                      // Other bits: an unknown feature
-  float minValue;     // @16, 4 B
-  float maxValue;     // @20, 4 B
-  float rmse;         // @24, 4 B
-  float maxError;     // @28, 4 B
-  uint32_t checksum;  // @32, 4 B
-  uint32_t storedBytes;  // @36, 4 B; v2: payload bytes on disk; v1: 0 (the payload is
-                         // the NCP's floats)
-};
-static_assert(sizeof(IndexEntryV1) == 40, "entry size");
-static_assert(offsetof(IndexEntryV1, ncp) == 8, "layout");
-static_assert(offsetof(IndexEntryV1, flags) == 14, "layout");
-static_assert(offsetof(IndexEntryV1, minValue) == 16, "layout");
-static_assert(offsetof(IndexEntryV1, maxValue) == 20, "layout");
-static_assert(offsetof(IndexEntryV1, rmse) == 24, "layout");
-static_assert(offsetof(IndexEntryV1, maxError) == 28, "layout");
-static_assert(offsetof(IndexEntryV1, checksum) == 32, "layout");
-static_assert(offsetof(IndexEntryV1, storedBytes) == 36, "layout");
 
 struct CrcTables {
   uint32_t t[8][256];
@@ -145,7 +44,9 @@ const CrcTables& crcTables() {
   return tables;
 }
 
-uint64_t alignUp(uint64_t v, uint64_t a = kAlign) { return (v + a - 1) / a * a; }
+}  // namespace
+
+namespace layout {
 
 std::string sysError() { return std::strerror(errno); }
 
@@ -181,20 +82,6 @@ void pwriteAll(int fd, const void* data, uint64_t bytes, uint64_t offset, const 
     }
     done += static_cast<uint64_t>(r);
   }
-}
-
-// Checked product of three non-negative ints times 4 (payload bytes); false on overflow.
-template <typename Int>
-bool checkedPayloadBytes(const Int ncp[3], uint64_t& out) {
-  uint64_t v = 4;
-  for (int a = 0; a < 3; ++a) {
-    if (ncp[a] < 1) return false;
-    const uint64_t f = static_cast<uint64_t>(ncp[a]);
-    if (v > std::numeric_limits<uint64_t>::max() / f) return false;
-    v *= f;
-  }
-  out = v;
-  return true;
 }
 
 /// NCP and degree a model of this kind must have on one axis of n samples.
@@ -236,10 +123,11 @@ uint64_t uncodedBytes(const ModelEntry& m) {
 }
 
 void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
-                const BlockExtent& e, const std::string& where, ModelEntry& m) {
+                const BlockExtent& e, const std::string& where, ModelEntry& m,
+                uint16_t extraFlags) {
   const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
   if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
-  if ((r.flags & ~uint16_t(0x3ff)) != 0)
+  if ((r.flags & ~uint16_t(0x3ff | extraFlags)) != 0)
     throw bad("unknown entry flags " + std::to_string(r.flags));
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
@@ -261,7 +149,162 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
     throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
 }
 
-}  // namespace
+void parseVolumeHeader(const FileHeader& h, const std::string& path, VolumeHeader& vh,
+                       Partition& partition) {
+  const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
+  for (int a = 0; a < 3; ++a) {
+    if (h.dims[a] < 1 || h.dims[a] > std::numeric_limits<int32_t>::max())
+      throw bad("absurd dimension " + std::to_string(h.dims[a]) + " on axis " + std::to_string(a));
+    vh.dims[a] = h.dims[a];
+    vh.origin[a] = h.origin[a];
+    vh.spacing[a] = h.spacing[a];
+  }
+  if (h.levels < 1 || h.levels > kMaxLevels)
+    throw bad("absurd level count " + std::to_string(h.levels));
+  if (h.blocksPerAxis < 1 || h.blocksPerAxis > 65535)
+    throw bad("absurd blocks per axis " + std::to_string(h.blocksPerAxis));
+  if (h.degree < 1 || h.degree > 5)
+    throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
+  if (h.mode > static_cast<uint8_t>(EncodingMode::Downsampled))
+    throw bad("unknown encoding mode " + std::to_string(h.mode));
+  vh.valueMin = h.valueMin;
+  vh.valueMax = h.valueMax;
+  vh.levels = h.levels;
+  vh.blocksPerAxis = h.blocksPerAxis;
+  vh.degree = h.degree;
+  vh.errorBound = h.errorBound;
+  vh.relativeBound = h.relativeBound != 0;
+  vh.mode = static_cast<EncodingMode>(h.mode);
+  if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
+    throw bad("unknown level sampling " + std::to_string(h.levelSampling));
+  vh.sampling = static_cast<LevelSampling>(h.levelSampling);
+  vh.sourceBytesPerSample = h.sourceBytesPerSample;
+  vh.fixedNcp = h.fixedNcp;
+  vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
+
+  partition = Partition(vh.dims, vh.levels, vh.blocksPerAxis);
+  const Partition& part = partition;
+  for (int l = 0; l < vh.levels; ++l) {
+    const Int3 b = part.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a)
+      if (h.levelBlocks[l][a] != b[a])
+        throw bad("blocks per axis of level " + std::to_string(l) + " disagree with the partition");
+  }
+}
+
+std::vector<int64_t> levelStarts(const Partition& partition, int levels) {
+  std::vector<int64_t> start(static_cast<size_t>(levels) + 1, 0);
+  for (int l = 0; l < levels; ++l)
+    start[static_cast<size_t>(l) + 1] = start[static_cast<size_t>(l)] + partition.blockCount(l);
+  return start;
+}
+
+size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
+                         const Partition& partition, const std::vector<int64_t>& levelStart,
+                         const ModelEntry& in) {
+  const auto bad = [&](const std::string& what) {
+    return InvalidArgument(path + ": " + Partition::blockName(in.level, in.block) + what);
+  };
+  if (in.level < 0 || in.level >= vh.levels)
+    throw InvalidArgument(path + ": level " + std::to_string(in.level) + " out of range");
+  const Int3 b = partition.blocksPerAxis(in.level);
+  for (int a = 0; a < 3; ++a)
+    if (in.block[a] < 0 || in.block[a] >= b[a]) throw bad(" out of range");
+  const BlockExtent e = partition.extent(in.level, in.block);
+  if (in.samples != e.samples) throw bad(": samples disagree with the partition");
+  const std::string problem = modelProblem(in, vh.mode, vh.degree, e);
+  if (!problem.empty()) throw bad(": " + problem);
+  const uint64_t bytes = in.storedSize;
+  if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
+               : bytes != uncodedBytes(in))
+    throw bad(": stored size " + std::to_string(bytes) + " invalid");
+  return static_cast<size_t>(levelStart[static_cast<size_t>(in.level)] +
+                             partition.linearIndex(in.level, in.block));
+}
+
+IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
+  IndexEntryV1 r;
+  std::memset(&r, 0, sizeof r);
+  r.offset = m.offset;
+  for (int a = 0; a < 3; ++a) r.ncp[a] = static_cast<uint16_t>(m.ncp[a]);
+  r.minValue = m.minValue;
+  r.maxValue = m.maxValue;
+  r.rmse = m.rmse;
+  r.maxError = m.maxError;
+  r.checksum = m.checksum;
+  r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
+                                  (m.integerCoded ? 0x200 : 0) | extraFlags);
+  r.storedBytes = static_cast<uint32_t>(m.storedSize);
+  return r;
+}
+
+FileHeader makeFileHeader(const VolumeHeader& vh, const Partition& partition, uint32_t version) {
+  FileHeader h;
+  std::memset(&h, 0, sizeof h);
+  std::memcpy(h.magic, kMagic, 8);
+  h.version = version;
+  h.endianTag = kEndianTag;
+  h.headerSize = sizeof(FileHeader);
+  h.entrySize = sizeof(IndexEntryV1);
+  for (int a = 0; a < 3; ++a) {
+    h.dims[a] = vh.dims[a];
+    h.origin[a] = vh.origin[a];
+    h.spacing[a] = vh.spacing[a];
+  }
+  h.valueMin = vh.valueMin;
+  h.valueMax = vh.valueMax;
+  h.errorBound = vh.errorBound;
+  h.levels = vh.levels;
+  h.blocksPerAxis = vh.blocksPerAxis;
+  h.degree = vh.degree;
+  h.fixedNcp = vh.fixedNcp;
+  h.mode = static_cast<uint8_t>(vh.mode);
+  h.relativeBound = vh.relativeBound ? 1 : 0;
+  h.levelSampling = static_cast<uint8_t>(vh.sampling);
+  h.sourceBytesPerSample = static_cast<uint8_t>(std::min(vh.sourceBytesPerSample, 255));
+  std::strncpy(h.scalarName, vh.scalarName.c_str(), sizeof h.scalarName - 1);
+  for (int l = 0; l < vh.levels; ++l) {
+    const Int3 b = partition.blocksPerAxis(l);
+    for (int a = 0; a < 3; ++a) h.levelBlocks[l][a] = b[a];
+  }
+  h.payloadAlignment = kPayloadAlign;
+  return h;
+}
+
+void abandonTemporary(int& fd, std::string& tmpPath) {
+  if (fd >= 0) ::close(fd);
+  fd = -1;
+  ::unlink(tmpPath.c_str());
+  tmpPath.clear();
+}
+
+void renameIntoPlace(int& fd, std::string& tmpPath, const std::string& path) {
+  try {
+    if (::fsync(fd) != 0) throw IoError(tmpPath + ": fsync failed: " + sysError());
+    // Rename while the descriptor (and so the lock) is still held: a closed, unlocked temporary
+    // file would look abandoned to another writer's removeStaleTemporaries.
+    if (::rename(tmpPath.c_str(), path.c_str()) != 0)
+      throw IoError(path + ": cannot rename the temporary file onto it: " + sysError());
+    ::close(fd);  // the data is already on disk (fsync); nothing is left to fail
+    fd = -1;
+  } catch (...) {
+    abandonTemporary(fd, tmpPath);
+    throw;
+  }
+  // Make the rename durable: fsync the directory (best effort).
+  const size_t slash = path.find_last_of('/');
+  const std::string dir =
+      slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    ::fsync(dfd);
+    ::close(dfd);
+  }
+}
+
+}  // namespace layout
+
+using namespace layout;
 
 uint32_t crc32(const void* data, size_t bytes, uint32_t crc) {
   const auto& T = crcTables().t;
@@ -371,7 +414,7 @@ AfamFile::~AfamFile() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
+std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path, int64_t step) {
   std::shared_ptr<AfamFile> f(new AfamFile());
   f->path_ = path;
   f->fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -396,9 +439,9 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   preadAll(f->fd_, &h, sizeof h, 0, path, "header");
   if (std::memcmp(h.magic, kMagic, 8) != 0) throw bad("not an .afam file (bad magic)");
   if (h.endianTag != kEndianTag) throw bad("unsupported byte order (endianness tag mismatch)");
-  if (h.version != 1 && h.version != kVersion)
+  if (h.version != 1 && h.version != kVersion && h.version != kRunVersion)
     throw bad("unsupported format version " + std::to_string(h.version) +
-              " (this reader knows versions 1 and " + std::to_string(kVersion) + ")");
+              " (this reader knows versions 1, 2 and 3)");
   if (crc32(&h, offsetof(FileHeader, headerChecksum)) != h.headerChecksum)
     throw bad("header checksum mismatch (header damaged)");
   if (h.headerSize != sizeof(FileHeader) || h.entrySize != sizeof(IndexEntryV1))
@@ -407,53 +450,24 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
       (h.payloadAlignment & (h.payloadAlignment - 1)) != 0)
     throw bad("payload alignment " + std::to_string(h.payloadAlignment) +
               " is not a power of two in [4, 4096]");
+
+  parseVolumeHeader(h, path, f->header_, f->partition_);
+  f->version_ = h.version;
+  const VolumeHeader& vh = f->header_;
+  const Partition& part = f->partition_;
+  f->levelStart_ = levelStarts(part, vh.levels);
+  if (h.version == kRunVersion) {
+    openRunStep(*f, h, step);
+    return f;
+  }
+  if (step != 0)
+    throw InvalidArgument(path + ": step " + std::to_string(step) + " of a file of one step");
   if (h.fileSize != f->fileSize_)
     throw bad(h.fileSize > f->fileSize_
                   ? "truncated: " + std::to_string(f->fileSize_) + " bytes, header says " +
                         std::to_string(h.fileSize)
                   : "file has " + std::to_string(f->fileSize_) + " bytes, header says " +
                         std::to_string(h.fileSize) + " (trailing garbage)");
-
-  VolumeHeader& vh = f->header_;
-  for (int a = 0; a < 3; ++a) {
-    if (h.dims[a] < 1 || h.dims[a] > std::numeric_limits<int32_t>::max())
-      throw bad("absurd dimension " + std::to_string(h.dims[a]) + " on axis " + std::to_string(a));
-    vh.dims[a] = h.dims[a];
-    vh.origin[a] = h.origin[a];
-    vh.spacing[a] = h.spacing[a];
-  }
-  if (h.levels < 1 || h.levels > kMaxLevels)
-    throw bad("absurd level count " + std::to_string(h.levels));
-  if (h.blocksPerAxis < 1 || h.blocksPerAxis > 65535)
-    throw bad("absurd blocks per axis " + std::to_string(h.blocksPerAxis));
-  if (h.degree < 1 || h.degree > 5)
-    throw bad("degree " + std::to_string(h.degree) + " outside [1, 5]");
-  if (h.mode > static_cast<uint8_t>(EncodingMode::Downsampled))
-    throw bad("unknown encoding mode " + std::to_string(h.mode));
-  vh.valueMin = h.valueMin;
-  vh.valueMax = h.valueMax;
-  vh.levels = h.levels;
-  vh.blocksPerAxis = h.blocksPerAxis;
-  vh.degree = h.degree;
-  vh.errorBound = h.errorBound;
-  vh.relativeBound = h.relativeBound != 0;
-  vh.mode = static_cast<EncodingMode>(h.mode);
-  if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
-    throw bad("unknown level sampling " + std::to_string(h.levelSampling));
-  vh.sampling = static_cast<LevelSampling>(h.levelSampling);
-  vh.sourceBytesPerSample = h.sourceBytesPerSample;
-  vh.fixedNcp = h.fixedNcp;
-  vh.scalarName.assign(h.scalarName, strnlen(h.scalarName, sizeof h.scalarName));
-  f->version_ = h.version;
-
-  f->partition_ = Partition(vh.dims, vh.levels, vh.blocksPerAxis);
-  const Partition& part = f->partition_;
-  for (int l = 0; l < vh.levels; ++l) {
-    const Int3 b = part.blocksPerAxis(l);
-    for (int a = 0; a < 3; ++a)
-      if (h.levelBlocks[l][a] != b[a])
-        throw bad("blocks per axis of level " + std::to_string(l) + " disagree with the partition");
-  }
   const uint64_t expected = static_cast<uint64_t>(part.totalBlockCount());
   if (h.entryCount != expected)
     throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
@@ -474,12 +488,6 @@ std::shared_ptr<const AfamFile> AfamFile::open(const std::string& path) {
   preadAll(f->fd_, raw.data(), indexBytes, h.indexOffset, path, "index");
   if (crc32(raw.data(), indexBytes) != h.indexChecksum)
     throw bad("index checksum mismatch (index damaged)");
-
-  f->levelStart_.resize(static_cast<size_t>(vh.levels) + 1);
-  f->levelStart_[0] = 0;
-  for (int l = 0; l < vh.levels; ++l)
-    f->levelStart_[static_cast<size_t>(l) + 1] =
-        f->levelStart_[static_cast<size_t>(l)] + part.blockCount(l);
 
   f->entries_.resize(raw.size());
   uint64_t payloadSum = 0;
@@ -635,28 +643,9 @@ void AfamWriter::add(const ModelEntry& in, const float* payload) {
 }
 
 void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
-  if (in.level < 0 || in.level >= header_.levels)
-    throw InvalidArgument(path_ + ": level " + std::to_string(in.level) + " out of range");
-  const Int3 b = partition_.blocksPerAxis(in.level);
-  for (int a = 0; a < 3; ++a)
-    if (in.block[a] < 0 || in.block[a] >= b[a])
-      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
-                            " out of range");
-  const BlockExtent e = partition_.extent(in.level, in.block);
-  if (in.samples != e.samples)
-    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
-                          ": samples disagree with the partition");
-  const std::string problem = modelProblem(in, header_.mode, header_.degree, e);
-  if (!problem.empty())
-    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + ": " + problem);
+  const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
   const uint64_t bytes = in.storedSize;
-  if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
-               : bytes != uncodedBytes(in))
-    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
-                          ": stored size " + std::to_string(bytes) + " invalid");
   const uint32_t crc = crc32(stored, bytes);
-  const size_t slot = static_cast<size_t>(levelStart_[static_cast<size_t>(in.level)] +
-                                          partition_.linearIndex(in.level, in.block));
   std::lock_guard<std::mutex> lock(mutex_);
   if (committed_) throw InvalidArgument(path_ + ": add() after commit()");
   if (present_[slot])
@@ -688,87 +677,24 @@ void AfamWriter::commit() {
   uint64_t payloadSum = 0;
   for (size_t i = 0; i < entries_.size(); ++i) {
     const ModelEntry& m = entries_[i];
-    IndexEntryV1& r = raw[i];
-    std::memset(&r, 0, sizeof r);
-    r.offset = m.offset;
-    for (int a = 0; a < 3; ++a) r.ncp[a] = static_cast<uint16_t>(m.ncp[a]);
-    r.minValue = m.minValue;
-    r.maxValue = m.maxValue;
-    r.rmse = m.rmse;
-    r.maxError = m.maxError;
-    r.checksum = m.checksum;
-    r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
-                                    (m.integerCoded ? 0x200 : 0));
-    r.storedBytes = static_cast<uint32_t>(m.storedSize);
+    raw[i] = rawEntry(m, 0);
     payloadSum += m.storedSize;
   }
   const uint64_t indexBytes = raw.size() * sizeof(IndexEntryV1);
   const uint64_t fileSize = end_;
-  FileHeader h;
-  std::memset(&h, 0, sizeof h);
-  std::memcpy(h.magic, kMagic, 8);
-  h.version = kVersion;
-  h.endianTag = kEndianTag;
-  h.headerSize = sizeof(FileHeader);
-  h.entrySize = sizeof(IndexEntryV1);
-  for (int a = 0; a < 3; ++a) {
-    h.dims[a] = header_.dims[a];
-    h.origin[a] = header_.origin[a];
-    h.spacing[a] = header_.spacing[a];
-  }
-  h.valueMin = header_.valueMin;
-  h.valueMax = header_.valueMax;
-  h.errorBound = header_.errorBound;
-  h.levels = header_.levels;
-  h.blocksPerAxis = header_.blocksPerAxis;
-  h.degree = header_.degree;
-  h.fixedNcp = header_.fixedNcp;
-  h.mode = static_cast<uint8_t>(header_.mode);
-  h.relativeBound = header_.relativeBound ? 1 : 0;
-  h.levelSampling = static_cast<uint8_t>(header_.sampling);
-  h.sourceBytesPerSample = static_cast<uint8_t>(std::min(header_.sourceBytesPerSample, 255));
+  FileHeader h = makeFileHeader(header_, partition_, kVersion);
   h.indexChecksum = crc32(raw.data(), indexBytes);
   h.entryCount = raw.size();
   h.indexOffset = sizeof(FileHeader);
   h.payloadOffset = payloadOffset_;
   h.fileSize = fileSize;
-  std::strncpy(h.scalarName, header_.scalarName.c_str(), sizeof h.scalarName - 1);
-  for (int l = 0; l < header_.levels; ++l) {
-    const Int3 b = partition_.blocksPerAxis(l);
-    for (int a = 0; a < 3; ++a) h.levelBlocks[l][a] = b[a];
-  }
   h.totalPayloadBytes = payloadSum;
-  h.payloadAlignment = kPayloadAlign;
   h.headerChecksum = crc32(&h, offsetof(FileHeader, headerChecksum));
-  try {
-    if (::ftruncate(fd_, static_cast<off_t>(fileSize)) != 0)
-      throw IoError(tmpPath_ + ": cannot set file size: " + sysError());
+  commitTemporary(fd_, tmpPath_, path_, fileSize, [&] {
     pwriteAll(fd_, raw.data(), indexBytes, sizeof(FileHeader), tmpPath_);
     pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
-    if (::fsync(fd_) != 0) throw IoError(tmpPath_ + ": fsync failed: " + sysError());
-    // Rename while the descriptor (and so the lock) is still held: a closed, unlocked temporary
-    // file would look abandoned to another writer's removeStaleTemporaries.
-    if (::rename(tmpPath_.c_str(), path_.c_str()) != 0)
-      throw IoError(path_ + ": cannot rename the temporary file onto it: " + sysError());
-    ::close(fd_);  // the data is already on disk (fsync); nothing is left to fail
-    fd_ = -1;
-  } catch (...) {
-    if (fd_ >= 0) ::close(fd_);
-    fd_ = -1;
-    ::unlink(tmpPath_.c_str());
-    tmpPath_.clear();
-    throw;
-  }
+  });
   committed_ = true;
-  // Make the rename durable: fsync the directory (best effort).
-  const size_t slash = path_.find_last_of('/');
-  const std::string dir =
-      slash == std::string::npos ? "." : (slash == 0 ? "/" : path_.substr(0, slash));
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
 }
 
 }  // namespace afam

@@ -80,6 +80,12 @@ struct ModelEntry {
   bool integerCoded = false;  ///< coded with an integer form (index flag bit 9; set by the writer)
   uint64_t storedSize =
       0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
+  /// Version 3 (a run of steps): the model is the same block's model of an earlier step,
+  /// unchanged (a reference); ownerStep is the step whose payload holds it (the entry's own step
+  /// when it is not a reference). offset, sizes, kind, NCP and checksum are the owner's; minValue
+  /// to maxError are measured on this step's samples.
+  bool reference = false;
+  int64_t ownerStep = 0;
 };
 
 /// The decoded control points of a stored payload (entry.storedSize bytes) into out
@@ -108,11 +114,18 @@ uint64_t paperModelBytes(const Int3& ncp, const Int3& degree);
 /// cannot be read. Readers claim such files and let AfamFile::open say what is wrong with them.
 bool startsWithAfamMagic(const std::string& path);
 
-class AfamFile {  // read-only; opening reads only header and index
+class AfamFile;
+namespace layout {
+struct FileHeader;
+void openRunStep(AfamFile& file, const FileHeader& header, int64_t step);
+}  // namespace layout
+
+class AfamFile {  // read-only; opening reads only header and index (of one step)
  public:
   /// Throws FormatError (not an .afam file, damaged) or IoError (cannot open/read), each message
-  /// naming the path and the problem.
-  static std::shared_ptr<const AfamFile> open(const std::string& path);
+  /// naming the path and the problem. `step`: which time step's models entries() holds (a file
+  /// of version 1 or 2 has one step); InvalidArgument when the file has no such step.
+  static std::shared_ptr<const AfamFile> open(const std::string& path, int64_t step = 0);
   ~AfamFile();
   AfamFile(const AfamFile&) = delete;
   AfamFile& operator=(const AfamFile&) = delete;
@@ -122,6 +135,12 @@ class AfamFile {  // read-only; opening reads only header and index
   const Partition& partition() const { return partition_; }
   const std::vector<ModelEntry>& entries() const { return entries_; }
   uint32_t version() const { return version_; }
+  /// Time steps of the file (1 before version 3), the one opened, and their time values.
+  int64_t stepCount() const { return static_cast<int64_t>(stepTimes_.size()); }
+  int64_t step() const { return step_; }
+  const std::vector<double>& stepTimes() const { return stepTimes_; }
+  /// Version 3: a block's model stays independent at least every keyInterval() steps.
+  int keyInterval() const { return keyInterval_; }
   /// Index of the entry of block ijk at a level; -1 if the level or block is out of range.
   int64_t entryIndex(int level, Int3 ijk) const;
   /// First entry of a level (entries of a level are contiguous, x fastest).
@@ -155,6 +174,10 @@ class AfamFile {  // read-only; opening reads only header and index
   Partition partition_;
   std::vector<ModelEntry> entries_;
   std::vector<int64_t> levelStart_;
+  std::vector<double> stepTimes_{0.0};
+  int64_t step_ = 0;
+  int keyInterval_ = 1;
+  friend void layout::openRunStep(AfamFile& file, const layout::FileHeader& header, int64_t step);
 };
 
 /// Writes header + index + payloads to PATH.tmp-XXXXXX, then fsync + rename on commit(): atomic.

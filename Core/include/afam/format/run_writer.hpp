@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Writes a run of time steps of one grid as one version-3 .afam file (docs/FORMAT.md, "Version
+// 3"), atomically: everything goes to PATH.tmp-XXXXXX, which commit() fsyncs and renames onto
+// PATH; a writer destroyed or killed before that leaves PATH as it was (temporary_file.hpp).
+// Steps come one after another: beginStep(time), every block of every level once (its payload,
+// or a reference to the same block's model of the step before, unchanged), endStep(). The
+// encoder asks previousModel() whether the step before's model still meets the bound on a
+// block's new samples.
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "afam/format/afam_file.hpp"
+#include "afam/format/run_layout.hpp"
+
+namespace afam {
+
+class RunWriter {
+ public:
+  /// `header` describes the grid and the coding (its range is the run's, as docs/FORMAT.md says);
+  /// keyInterval K >= 1: a block refers to earlier steps through at most K - 1 references
+  /// (canReference() says when one more is allowed); absoluteBound: the bound in data units.
+  RunWriter(const std::string& path, const VolumeHeader& header, int keyInterval,
+            double absoluteBound);
+  ~RunWriter();
+  RunWriter(const RunWriter&) = delete;
+  RunWriter& operator=(const RunWriter&) = delete;
+
+  /// Starts the next step at `time` (greater than the step before's). InvalidArgument otherwise.
+  void beginStep(double time);
+  /// A model in its stored form (entry.storedSize bytes), as AfamWriter::addStored. Thread-safe.
+  void addStored(const ModelEntry& entryWithoutOffsets, const void* stored);
+  /// The block's model of the step before, unchanged; `entry` gives level, block and the error
+  /// and range measured on this step's samples. InvalidArgument at step 0, or when
+  /// canReference() is false for the block. Thread-safe.
+  void addReference(const ModelEntry& entry);
+  /// Ends the step: every block must have been added. valueMin/valueMax: the step's samples.
+  void endStep(float valueMin, float valueMax);
+  /// Writes the step table and the commit slot, fsyncs and renames onto the path.
+  void commit();
+
+  /// Steps ended so far.
+  int64_t stepsDone() const { return static_cast<int64_t>(rows_.size()) - (inStep_ ? 1 : 0); }
+  const Partition& partition() const { return partition_; }
+  /// Whether the current step may refer to the step before for this block (not the first step,
+  /// and the block's chain of references stays shorter than the key interval).
+  bool canReference(int level, Int3 block) const;
+  /// The step before's model of a block: its entry (the owner's payload fields) and decoded
+  /// control points. Thread-safe; false at the first step.
+  bool previousModel(int level, Int3 block, ModelEntry& entry, std::vector<float>& control) const;
+
+ private:
+  size_t slotOf(const ModelEntry& in) const;
+  std::string path_, tmpPath_;
+  int fd_ = -1;
+  bool committed_ = false, inStep_ = false;
+  VolumeHeader header_;
+  Partition partition_;
+  std::vector<int64_t> levelStart_;
+  int keyInterval_;
+  double absoluteBound_;
+  std::vector<StepRow> rows_;
+  std::vector<ModelEntry> current_, previous_;  ///< this step's and the step before's entries
+  std::vector<int> depth_, previousDepth_;      ///< references behind each block (0: stored)
+  std::vector<uint8_t> present_;
+  uint64_t end_ = 0, payloadSum_ = 0;
+  mutable std::mutex mutex_;
+};
+
+}  // namespace afam

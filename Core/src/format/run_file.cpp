@@ -1,0 +1,342 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Format version 3, a run of time steps in one file (docs/FORMAT.md): reading one step's models
+// (AfamFile::open(path, step) comes here after the header) and RunWriter.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include "afam/base/errors.hpp"
+#include "afam/format/block_codec.hpp"
+#include "afam/format/run_layout.hpp"
+#include "afam/format/run_writer.hpp"
+#include "afam/format/temporary_file.hpp"
+#include "file_layout.hpp"
+
+namespace afam {
+
+namespace {
+
+constexpr uint16_t kReferenceFlag = 1u << 10;  // flags bits 10-11: 1 reference
+constexpr uint16_t kTemporalMask = 3u << 10;
+constexpr size_t kEntryBytes = sizeof(layout::IndexEntryV1);
+
+}  // namespace
+
+namespace layout {
+
+namespace {
+
+/// Checks of the header fields version 3 gives a meaning, and the commit record they point to.
+CommitRecord readCommit(const AfamFile& f, const FileHeader& h, int fd) {
+  const std::string& path = f.path();
+  const auto bad = [&](const std::string& what) { return FormatError(path + ": " + what); };
+  if (h.entryCount != static_cast<uint64_t>(f.partition().totalBlockCount()))
+    throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
+              std::to_string(f.partition().totalBlockCount()) + " blocks of the partition");
+  if (h.keyInterval < 1) throw bad("key interval 0");
+  if (h.boundKind != 0)
+    throw bad("bound kind " + std::to_string(h.boundKind) + " is not read by this version");
+  if (h.missingKind != 0)
+    throw bad("missing-value kind " + std::to_string(h.missingKind) +
+              " is not read by this version");
+  if (f.fileSize() < kRunStepsOffset) throw bad("truncated: no commit slots");
+  uint8_t slots[2 * kCommitSlotBytes];
+  preadAll(fd, slots, sizeof slots, kCommitSlotsOffset, path, "commit slots");
+  const CommitRecord r = chooseCommit(slots, slots + kCommitSlotBytes, path).record;
+  if (r.committedSize > f.fileSize())
+    throw bad("truncated: " + std::to_string(f.fileSize()) + " bytes, the commit says " +
+              std::to_string(r.committedSize));
+  if (r.stepCount == 0 || r.stepCount > r.committedSize / 32 ||
+      r.stepTableOffset < kRunStepsOffset || r.stepTableOffset % 8 != 0 ||
+      r.stepTableOffset + stepTableBytes(r.stepCount) != r.committedSize)
+    throw bad("commit slot inconsistent (" + std::to_string(r.stepCount) +
+              " steps, step table at " + std::to_string(r.stepTableOffset) + ", " +
+              std::to_string(r.committedSize) + " bytes committed)");
+  return r;
+}
+
+/// Step s's index, checked against its CRC.
+std::vector<IndexEntryV1> readStepIndex(int fd, const std::string& path, const StepRow& row,
+                                        uint64_t entries, int64_t s) {
+  std::vector<IndexEntryV1> raw(entries);
+  preadAll(fd, raw.data(), entries * kEntryBytes, row.indexOffset, path,
+           "index of step " + std::to_string(s));
+  if (crc32(raw.data(), entries * kEntryBytes) != row.indexChecksum)
+    throw FormatError(path + ": index of step " + std::to_string(s) +
+                      " checksum mismatch (index damaged)");
+  return raw;
+}
+
+}  // namespace
+
+void openRunStep(AfamFile& f, const FileHeader& h, int64_t step) {
+  const std::string& path = f.path_;
+  const CommitRecord commit = readCommit(f, h, f.fd_);
+  std::vector<uint8_t> table(stepTableBytes(commit.stepCount));
+  preadAll(f.fd_, table.data(), table.size(), commit.stepTableOffset, path, "step table");
+  const uint64_t E = h.entryCount;
+  const std::vector<StepRow> rows = decodeStepTable(table.data(), commit.stepCount,
+                                                    commit.stepTableOffset, E * kEntryBytes, path);
+  if (step < 0 || step >= static_cast<int64_t>(rows.size()))
+    throw InvalidArgument(path + ": step " + std::to_string(step) + " of a run of " +
+                          std::to_string(rows.size()) + " steps");
+  f.stepTimes_.clear();
+  for (const StepRow& r : rows) f.stepTimes_.push_back(r.time);
+  f.step_ = step;
+  f.keyInterval_ = static_cast<int>(std::min<uint32_t>(h.keyInterval, 1u << 30));
+  f.payloadOffset_ = kRunStepsOffset;
+  std::map<int64_t, std::vector<IndexEntryV1>> indices;  // the steps a reference walks through
+  const auto index = [&](int64_t s) -> const std::vector<IndexEntryV1>& {
+    auto it = indices.find(s);
+    if (it == indices.end())
+      it = indices.emplace(s, readStepIndex(f.fd_, path, rows[size_t(s)], E, s)).first;
+    return it->second;
+  };
+  const VolumeHeader& vh = f.header_;
+  const Partition& part = f.partition_;
+  f.entries_.resize(E);
+  int level = 0;
+  for (size_t i = 0; i < E; ++i) {
+    while (static_cast<int64_t>(i) >= f.levelStart_[static_cast<size_t>(level) + 1]) ++level;
+    const Int3 ijk =
+        part.blockFromLinear(level, static_cast<int64_t>(i) - f.levelStart_[size_t(level)]);
+    const std::string where = path + ": step " + std::to_string(step) + ", index entry " +
+                              std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
+    const IndexEntryV1& own = index(step)[i];
+    // Walk back through references to the entry that holds the payload.
+    int64_t owner = step;
+    while ((index(owner)[i].flags & kTemporalMask) == kReferenceFlag) {
+      const IndexEntryV1& r = index(owner)[i];
+      if (owner == 0 || rows[size_t(owner)].keyStep)
+        throw FormatError(where + ": a reference at step " + std::to_string(owner) +
+                          (owner == 0 ? ", the first" : ", a key step"));
+      if (r.offset != 0 || r.storedBytes != 0 || r.checksum != 0)
+        throw FormatError(where + ": a reference with a payload");
+      if (step - owner + 1 >= static_cast<int64_t>(h.keyInterval))
+        throw FormatError(where + ": references run past the key interval " +
+                          std::to_string(h.keyInterval));
+      --owner;
+    }
+    const IndexEntryV1& held = index(owner)[i];
+    if ((held.flags & kTemporalMask) != 0)
+      throw FormatError(where + ": in-time coding " + std::to_string((held.flags >> 10) & 3) +
+                        " is not read by this version");
+    ModelEntry& m = f.entries_[i];
+    m.level = level;
+    m.block = ijk;
+    parseEntry(held, 3, vh, part.extent(level, ijk), where, m);
+    const uint64_t end = rows[size_t(owner)].indexOffset;
+    if (held.offset < kRunStepsOffset || held.offset % h.payloadAlignment != 0 ||
+        held.offset > end || m.storedSize > end - held.offset)
+      throw FormatError(where + ": payload [" + std::to_string(held.offset) + ", +" +
+                        std::to_string(m.storedSize) + ") lies outside step " +
+                        std::to_string(owner) + "'s payloads or is misaligned");
+    m.offset = held.offset;
+    m.checksum = held.checksum;
+    m.reference = owner != step;
+    m.ownerStep = owner;
+    m.minValue = own.minValue;
+    m.maxValue = own.maxValue;
+    m.rmse = own.rmse;
+    m.maxError = own.maxError;
+  }
+}
+
+}  // namespace layout
+
+using namespace layout;
+
+RunWriter::RunWriter(const std::string& path, const VolumeHeader& header, int keyInterval,
+                     double absoluteBound)
+    : path_(path), header_(header), keyInterval_(keyInterval), absoluteBound_(absoluteBound) {
+  if (keyInterval < 1)
+    throw InvalidArgument("run writer: key interval " + std::to_string(keyInterval) + " < 1");
+  if (header.degree < 1 || header.degree > 5)
+    throw InvalidArgument("run writer: degree " + std::to_string(header.degree) +
+                          " outside [1, 5]");
+  if (header.levels < 1 || header.levels > kMaxLevels)
+    throw InvalidArgument("run writer: levels outside [1, 16]");
+  partition_ = Partition(header.dims, header.levels, header.blocksPerAxis);
+  if (partition_.totalBlockCount() > (int64_t(1) << 31))
+    throw InvalidArgument("run writer: more than 2^31 micro-blocks");
+  levelStart_ = levelStarts(partition_, header.levels);
+  end_ = kRunStepsOffset;
+  removeStaleTemporaries(path);
+  fd_ = createLockedTemporary(path, tmpPath_);
+}
+
+RunWriter::~RunWriter() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !tmpPath_.empty()) ::unlink(tmpPath_.c_str());
+}
+
+size_t RunWriter::slotOf(const ModelEntry& in) const {
+  if (in.level < 0 || in.level >= header_.levels)
+    throw InvalidArgument(path_ + ": level " + std::to_string(in.level) + " out of range");
+  const Int3 b = partition_.blocksPerAxis(in.level);
+  for (int a = 0; a < 3; ++a)
+    if (in.block[a] < 0 || in.block[a] >= b[a])
+      throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) +
+                            " out of range");
+  return static_cast<size_t>(levelStart_[size_t(in.level)] +
+                             partition_.linearIndex(in.level, in.block));
+}
+
+void RunWriter::beginStep(double time) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_ || inStep_)
+    throw InvalidArgument(path_ + ": beginStep inside a step or after commit");
+  if (!std::isfinite(time) || (!rows_.empty() && !(time > rows_.back().time)))
+    throw InvalidArgument(
+        path_ + ": step time " + std::to_string(time) + " does not follow " +
+        (rows_.empty() ? std::string("(none)") : std::to_string(rows_.back().time)));
+  const size_t E = static_cast<size_t>(partition_.totalBlockCount());
+  current_.assign(E, ModelEntry{});
+  depth_.assign(E, 0);
+  present_.assign(E, 0);
+  StepRow row;
+  row.time = time;
+  rows_.push_back(row);  // completed by endStep
+  inStep_ = true;
+}
+
+void RunWriter::addStored(const ModelEntry& in, const void* stored) {
+  const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
+  const uint64_t bytes = in.storedSize;
+  const uint32_t crc = crc32(stored, bytes);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!inStep_) throw InvalidArgument(path_ + ": addStored outside a step");
+  if (present_[slot])
+    throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
+  const uint64_t offset = end_;
+  pwriteAll(fd_, stored, bytes, offset, tmpPath_);
+  end_ = alignUp(offset + bytes, kPayloadAlign);
+  payloadSum_ += bytes;
+  ModelEntry& m = current_[slot];
+  m = in;
+  m.integerCoded = in.coded && payloadIsIntegerCoded(static_cast<const uint8_t*>(stored), bytes);
+  m.offset = offset;
+  m.size = payloadBytes(in.ncp);
+  m.checksum = crc;
+  m.reference = false;
+  m.ownerStep = static_cast<int64_t>(rows_.size()) - 1;
+  depth_[slot] = 0;
+  present_[slot] = 1;
+}
+
+bool RunWriter::canReference(int level, Int3 block) const {
+  ModelEntry probe;
+  probe.level = level;
+  probe.block = block;
+  const size_t slot = slotOf(probe);
+  return !previous_.empty() && previousDepth_[slot] + 1 < keyInterval_;
+}
+
+void RunWriter::addReference(const ModelEntry& in) {
+  const size_t slot = slotOf(in);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!inStep_) throw InvalidArgument(path_ + ": addReference outside a step");
+  const std::string name = Partition::blockName(in.level, in.block);
+  if (present_[slot]) throw InvalidArgument(path_ + ": " + name + " added twice");
+  if (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_)
+    throw InvalidArgument(path_ + ": " + name + " cannot refer to the step before (" +
+                          (previous_.empty() ? std::string("first step")
+                                             : "key interval " + std::to_string(keyInterval_)) +
+                          ")");
+  ModelEntry& m = current_[slot];
+  m = previous_[slot];  // the owner's payload, kind and NCP
+  m.minValue = in.minValue;
+  m.maxValue = in.maxValue;
+  m.rmse = in.rmse;
+  m.maxError = in.maxError;
+  m.reference = true;
+  depth_[slot] = previousDepth_[slot] + 1;
+  present_[slot] = 1;
+}
+
+bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
+                              std::vector<float>& control) const {
+  if (previous_.empty()) return false;
+  ModelEntry probe;
+  probe.level = level;
+  probe.block = block;
+  entry = previous_.at(slotOf(probe));
+  std::vector<uint8_t> stored(entry.storedSize);
+  preadAll(fd_, stored.data(), stored.size(), entry.offset, tmpPath_, "a previous payload");
+  control.resize(entry.size / sizeof(float));
+  decodeStoredPayload(entry, stored.data(), control.data(),
+                      path_ + ": " + Partition::blockName(level, block));
+  return true;
+}
+
+void RunWriter::endStep(float valueMin, float valueMax) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!inStep_) throw InvalidArgument(path_ + ": endStep outside a step");
+  std::vector<IndexEntryV1> raw(current_.size());
+  bool key = true;
+  for (size_t i = 0; i < current_.size(); ++i) {
+    if (!present_[i]) {
+      int level = 0;
+      while (static_cast<int64_t>(i) >= levelStart_[size_t(level) + 1]) ++level;
+      throw InvalidArgument(
+          path_ + ": step " + std::to_string(rows_.size() - 1) + " without " +
+          Partition::blockName(
+              level, partition_.blockFromLinear(level, int64_t(i) - levelStart_[size_t(level)])));
+    }
+    const ModelEntry& m = current_[i];
+    raw[i] = rawEntry(m, m.reference ? kReferenceFlag : 0);
+    if (m.reference) {
+      raw[i].offset = 0;
+      raw[i].storedBytes = 0;
+      raw[i].checksum = 0;
+      key = false;
+    }
+  }
+  StepRow& row = rows_.back();
+  row.indexOffset = alignUp(end_, 8);
+  row.indexChecksum = crc32(raw.data(), raw.size() * kEntryBytes);
+  row.keyStep = key;
+  row.valueMin = valueMin;
+  row.valueMax = valueMax;
+  pwriteAll(fd_, raw.data(), raw.size() * kEntryBytes, row.indexOffset, tmpPath_);
+  end_ = row.indexOffset + raw.size() * kEntryBytes;
+  previous_.swap(current_);
+  previousDepth_.swap(depth_);
+  inStep_ = false;
+}
+
+void RunWriter::commit() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (committed_) return;
+  if (inStep_ || rows_.empty())
+    throw InvalidArgument(path_ + ": commit " + (inStep_ ? "inside a step" : "without a step"));
+  const std::vector<uint8_t> table = encodeStepTable(rows_);
+  CommitRecord r;
+  r.generation = 1;
+  r.stepCount = rows_.size();
+  r.stepTableOffset = alignUp(end_, 8);
+  r.committedSize = r.stepTableOffset + table.size();
+  r.totalPayloadBytes = payloadSum_;
+  FileHeader h = makeFileHeader(header_, partition_, kRunVersion);
+  h.entryCount = static_cast<uint64_t>(partition_.totalBlockCount());
+  h.keyInterval = static_cast<uint32_t>(keyInterval_);
+  h.absoluteBound = absoluteBound_;
+  h.headerChecksum = crc32(&h, offsetof(FileHeader, headerChecksum));
+  const auto slotA = encodeCommitSlot(r);
+  const std::array<uint8_t, kCommitSlotBytes> slotB{};
+  commitTemporary(fd_, tmpPath_, path_, r.committedSize, [&] {
+    pwriteAll(fd_, table.data(), table.size(), r.stepTableOffset, tmpPath_);
+    pwriteAll(fd_, &h, sizeof h, 0, tmpPath_);
+    pwriteAll(fd_, slotA.data(), slotA.size(), kCommitSlotsOffset, tmpPath_);
+    pwriteAll(fd_, slotB.data(), slotB.size(), kCommitSlotsOffset + kCommitSlotBytes, tmpPath_);
+  });
+  committed_ = true;
+}
+
+}  // namespace afam

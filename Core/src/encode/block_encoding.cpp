@@ -358,9 +358,38 @@ void storeDownsampled(const BlockExtent& e, BlockTask& t) {
   std::vector<float>().swap(t.samples);
 }
 
+namespace {
+
+/// A run's block whose model at the step before still meets the bound on its samples: stored as a
+/// reference to it (no payload), its error measured on these samples.
+bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  ModelEntry previous;
+  FitResult model;
+  if (!c.opt.previous || !bounded(c.opt.mode) ||
+      !c.opt.previous->model(c.level, t.ijk, previous, model))
+    return false;
+  const ErrorStats es = fitter.error(t.samples.data(), e.samples, model);
+  if (!(es.rmse <= c.bound)) return false;
+  ModelEntry& m = t.entry;
+  m.kind = previous.kind;
+  m.coded = previous.coded;
+  m.integerCoded = previous.integerCoded;
+  m.ncp = previous.ncp;
+  m.degree = previous.degree;
+  m.reference = true;
+  setError(t, es);
+  t.stored.clear();
+  m.storedSize = 0;
+  return true;
+}
+
+}  // namespace
+
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
-    if (c.opt.compact && bounded(c.opt.mode)) {
+    if (referPrevious(c, e, fitter, t)) {
+      // the step before's model, unchanged
+    } else if (c.opt.compact && bounded(c.opt.mode)) {
       encodeCompact(c, e, fitter, t);
     } else {
       FitResult fr;

@@ -487,6 +487,14 @@ class LevelEncoder {
 
 }  // namespace
 
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax) {
+  const Partition part(source.dims(), 1, 1);
+  EncoderOptions opt;
+  const EncodeProgress progress(part, opt);
+  SoloTeam solo;
+  scanValueRange(source, part, progress, solo, vmin, vmax);
+}
+
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
   SoloTeam solo;
   return encodeVolume(source, opt, sink, solo);

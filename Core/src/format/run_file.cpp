@@ -311,9 +311,9 @@ void RunWriter::endStep(float valueMin, float valueMax) {
   inStep_ = false;
 }
 
-void RunWriter::commit() {
+uint64_t RunWriter::commit() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (committed_) return;
+  if (committed_) return committedSize_;
   if (inStep_ || rows_.empty())
     throw InvalidArgument(path_ + ": commit " + (inStep_ ? "inside a step" : "without a step"));
   const std::vector<uint8_t> table = encodeStepTable(rows_);
@@ -337,6 +337,8 @@ void RunWriter::commit() {
     pwriteAll(fd_, slotB.data(), slotB.size(), kCommitSlotsOffset + kCommitSlotBytes, tmpPath_);
   });
   committed_ = true;
+  committedSize_ = r.committedSize;
+  return committedSize_;
 }
 
 }  // namespace afam

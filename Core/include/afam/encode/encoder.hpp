@@ -42,9 +42,20 @@
 #include "afam/encode/ncp_search.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/spline/fit.hpp"
 #include "afam/volume/volume_source.hpp"
 
 namespace afam {
+
+/// The models of the step before, for coding a run of steps in time (encode_run.hpp): a block
+/// whose model there still meets the bound on its new samples is stored as a reference to it.
+class PreviousStep {
+ public:
+  virtual ~PreviousStep() = default;
+  /// The step before's model of a block (its entry and decoded control points); false when the
+  /// block may not refer to it (the key interval). Called from the encoder's worker threads.
+  virtual bool model(int level, Int3 block, ModelEntry& entry, FitResult& model) const = 0;
+};
 
 struct EncoderOptions {
   int levels = 0;         ///< 0: from the volume's dimensions (defaultPartition)
@@ -66,7 +77,13 @@ struct EncoderOptions {
   /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
   /// (encodeVolume then throws afam::Cancelled; nothing is written).
   std::function<bool(double fraction)> progress;
+  /// Bounded modes: the step before of a run (encode_run.hpp); nullptr for one volume.
+  const PreviousStep* previous = nullptr;
 };
+
+/// The value range of a volume (one pass unless the source knows it); NumericError naming the
+/// first sample that is NaN or Inf.
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax);
 
 struct LevelStats {
   int64_t blocks = 0;         ///< micro-blocks of the level

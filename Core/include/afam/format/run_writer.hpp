@@ -39,8 +39,9 @@ class RunWriter {
   void addReference(const ModelEntry& entry);
   /// Ends the step: every block must have been added. valueMin/valueMax: the step's samples.
   void endStep(float valueMin, float valueMax);
-  /// Writes the step table and the commit slot, fsyncs and renames onto the path.
-  void commit();
+  /// Writes the step table and the commit slot, fsyncs and renames onto the path; returns the
+  /// file's size in bytes.
+  uint64_t commit();
 
   /// Steps ended so far.
   int64_t stepsDone() const { return static_cast<int64_t>(rows_.size()) - (inStep_ ? 1 : 0); }
@@ -66,7 +67,7 @@ class RunWriter {
   std::vector<ModelEntry> current_, previous_;  ///< this step's and the step before's entries
   std::vector<int> depth_, previousDepth_;      ///< references behind each block (0: stored)
   std::vector<uint8_t> present_;
-  uint64_t end_ = 0, payloadSum_ = 0;
+  uint64_t end_ = 0, payloadSum_ = 0, committedSize_ = 0;
   mutable std::mutex mutex_;
 };
 

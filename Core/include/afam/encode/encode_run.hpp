@@ -1,0 +1,40 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A run of time steps of one grid encoded into one file (format version 3, docs/FORMAT.md), each
+// step coded in time: a block whose model at the step before still meets the bound on the new
+// step's samples is stored as a reference to it (no payload, nothing to read or decode again);
+// every other block is encoded as for one volume. The bound holds on every block of every step,
+// measured against what a reader decodes; a relative bound is relative to the range of the whole
+// run. Every keyInterval steps at the latest a block is stored on its own, so that a block at any
+// step decodes from one payload reached through at most keyInterval - 1 references.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/volume_source.hpp"
+
+namespace afam {
+
+struct RunOptions {
+  std::vector<double> times;  ///< one per step, strictly increasing; empty: 0, 1, 2, ...
+  int keyInterval = 16;       ///< K >= 1
+};
+
+struct RunStats {
+  std::vector<EncodeStats> steps;
+  std::vector<int64_t> references;    ///< per step, blocks stored as references
+  double valueMin = 0, valueMax = 0;  ///< of the whole run
+  double bound = 0;                   ///< absolute RMSE bound every block meets
+  uint64_t bytesOut = 0;
+  double seconds = 0;
+};
+
+/// Encodes `steps` (at least one; every one of the first's dims, origin and spacing) into `path`,
+/// atomically. Throws InvalidArgument naming the step and what differs, or the times; otherwise
+/// as encodeVolume. One step is written as a version-3 file of one step (the command line writes
+/// a single volume as version 2 through encodeVolume).
+RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
+                   const RunOptions& run, const std::string& path);
+
+}  // namespace afam

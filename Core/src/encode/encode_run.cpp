@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/encode/encode_run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "afam/base/errors.hpp"
+#include "afam/format/run_writer.hpp"
+
+namespace afam {
+
+namespace {
+
+/// The first place where step k's grid differs from step 0's, or empty.
+std::string gridDifference(VolumeSource& first, VolumeSource& step) {
+  std::ostringstream d;
+  const Index3 a = first.dims(), b = step.dims();
+  if (a != b) {
+    d << "dims " << b[0] << "x" << b[1] << "x" << b[2] << " differ from the first step's " << a[0]
+      << "x" << a[1] << "x" << a[2];
+  } else if (first.origin() != step.origin()) {
+    d << "origin differs from the first step's";
+  } else if (first.spacing() != step.spacing()) {
+    d << "spacing differs from the first step's";
+  } else if (first.bytesPerVoxel() != step.bytesPerVoxel()) {
+    d << "sample type (" << step.bytesPerVoxel() << " bytes) differs from the first step's ("
+      << first.bytesPerVoxel() << " bytes)";
+  }
+  return d.str();
+}
+
+/// Where one step's models go: the run writer, references included.
+class StepSink : public ModelSink {
+ public:
+  StepSink(std::unique_ptr<RunWriter>& writer, const std::string& path, const VolumeHeader& run,
+           int keyInterval, double bound, double time)
+      : writer_(writer),
+        path_(path),
+        run_(run),
+        keyInterval_(keyInterval),
+        bound_(bound),
+        time_(time) {}
+  void begin(const VolumeHeader& h) override {
+    if (!writer_) {
+      VolumeHeader header = h;  // the step's partition, with the run's range and bound
+      header.valueMin = run_.valueMin;
+      header.valueMax = run_.valueMax;
+      header.errorBound = run_.errorBound;
+      header.relativeBound = run_.relativeBound;
+      writer_ = std::make_unique<RunWriter>(path_, header, keyInterval_, bound_);
+    }
+    stepMin_ = h.valueMin;
+    stepMax_ = h.valueMax;
+    writer_->beginStep(time_);
+  }
+  void add(const ModelEntry& e, const void* stored) override {
+    if (e.reference) {
+      writer_->addReference(e);
+      ++references;
+    } else {
+      writer_->addStored(e, stored);
+    }
+  }
+  void end() { writer_->endStep(float(stepMin_), float(stepMax_)); }
+  int64_t references = 0;
+
+ private:
+  std::unique_ptr<RunWriter>& writer_;
+  std::string path_;
+  VolumeHeader run_;
+  int keyInterval_;
+  double bound_, time_, stepMin_ = 0, stepMax_ = 0;
+};
+
+/// The step before's models, read back from the run being written.
+class WrittenStep : public PreviousStep {
+ public:
+  explicit WrittenStep(const RunWriter& writer) : writer_(writer) {}
+  bool model(int level, Int3 block, ModelEntry& entry, FitResult& model) const override {
+    if (!writer_.canReference(level, block)) return false;
+    if (!writer_.previousModel(level, block, entry, model.control)) return false;
+    model.ncp = entry.ncp;
+    model.degree = entry.degree;
+    return true;
+  }
+
+ private:
+  const RunWriter& writer_;
+};
+
+}  // namespace
+
+RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
+                   const RunOptions& run, const std::string& path) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (steps.empty()) throw InvalidArgument("encode: a run needs at least one step");
+  if (run.keyInterval < 1)
+    throw InvalidArgument("encode: key interval " + std::to_string(run.keyInterval) + " < 1");
+  std::vector<double> times = run.times;
+  if (times.empty())
+    for (size_t k = 0; k < steps.size(); ++k) times.push_back(double(k));
+  if (times.size() != steps.size())
+    throw InvalidArgument("encode: " + std::to_string(times.size()) + " time values for " +
+                          std::to_string(steps.size()) + " steps");
+  for (size_t k = 0; k < steps.size(); ++k) {
+    if (!std::isfinite(times[k]) || (k > 0 && !(times[k] > times[k - 1])))
+      throw InvalidArgument("encode: time values must increase: step " + std::to_string(k) +
+                            " has " + std::to_string(times[k]));
+    const std::string d = gridDifference(*steps[0], *steps[k]);
+    if (!d.empty())
+      throw InvalidArgument("encode: step " + std::to_string(k) + " (" + steps[k]->name() +
+                            "): " + d);
+  }
+  RunStats stats;
+  stats.valueMin = std::numeric_limits<double>::infinity();
+  stats.valueMax = -stats.valueMin;
+  for (VolumeSource* s : steps) {
+    double lo, hi;
+    volumeValueRange(*s, lo, hi);
+    stats.valueMin = std::min(stats.valueMin, lo);
+    stats.valueMax = std::max(stats.valueMax, hi);
+  }
+  stats.bound = options.relativeBound ? options.errorBound * (stats.valueMax - stats.valueMin)
+                                      : options.errorBound;
+  VolumeHeader runHeader;
+  runHeader.valueMin = stats.valueMin;
+  runHeader.valueMax = stats.valueMax;
+  runHeader.errorBound = options.errorBound;
+  runHeader.relativeBound = options.relativeBound;
+  EncoderOptions stepOptions = options;  // every step held to the run's bound, in data units
+  stepOptions.errorBound = stats.bound;
+  stepOptions.relativeBound = false;
+  std::unique_ptr<RunWriter> writer;
+  std::unique_ptr<WrittenStep> previous;
+  for (size_t k = 0; k < steps.size(); ++k) {
+    StepSink sink(writer, path, runHeader, run.keyInterval, stats.bound, times[k]);
+    stepOptions.previous = previous.get();
+    stats.steps.push_back(encodeVolume(*steps[k], stepOptions, sink));
+    sink.end();
+    stats.references.push_back(sink.references);
+    if (!previous) previous = std::make_unique<WrittenStep>(*writer);
+  }
+  stats.bytesOut = writer->commit();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
+}  // namespace afam

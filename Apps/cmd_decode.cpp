@@ -13,19 +13,20 @@
 namespace afam::cli {
 
 int runDecode(int argc, char** argv) {
-  Args args(argc, argv, {"level"}, {"progress"});
-  const char* usage = "afam decode FILE.afam --level K OUT.raw";
+  Args args(argc, argv, {"level", "step"}, {"progress"});
+  const char* usage = "afam decode FILE.afam [--level K] [--step S] OUT.raw";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
         "Evaluates every micro-model of level K (0 = coarsest; default the finest) on its sample\n"
         "grid and writes the level's grid as little-endian float32, x fastest, blocks joined on\n"
-        "their shared boundary samples. Streams one row of blocks at a time. Prints the dims.\n",
+        "their shared boundary samples. Streams one row of blocks at a time. Prints the dims.\n"
+        "--step S: time step S of a run (default 0).\n",
         usage);
     return 0;
   }
   args.expectPositional(2, usage);
-  auto f = AfamFile::open(args.positional()[0]);
+  auto f = AfamFile::open(args.positional()[0], args.integer("step", 0));
   const VolumeHeader& h = f->header();
   const Partition& part = f->partition();
   const int level = int(args.integer("level", h.levels - 1));

@@ -13,14 +13,15 @@ namespace afam::cli {
 int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
-             "search", "spacing", "window"},
+             "search", "spacing", "window", "times", "key-interval"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
-      "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd OUT.afam [--dims X,Y,Z]\n"
+      "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
       "       [--type int8|uint8|int16|uint16|int32|uint32|int64|uint64|float32|float64]\n"
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
-      "fast|exhaustive]";
+      "fast|exhaustive]\n"
+      "       [--times T0,T1,...] [--key-interval K]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -32,6 +33,14 @@ int runEncode(int argc, char** argv) {
         "(.nrrd, .nhdr) and MetaImage (.mha, .mhd), raw or gzip/zlib-compressed, whose header "
         "gives\n"
         "dims, type, spacing and origin (stored in the .afam header).\n\n"
+        "Several inputs are consecutive time steps of one run (a shell glob expands sorted, as\n"
+        "ParaView sorts a file series), written as one file (format version 3) coded in time: a\n"
+        "block whose model at the step before still meets the bound on its new samples refers to\n"
+        "it and stores nothing. Every step must have the first's grid. A relative bound is\n"
+        "relative to the range of the whole run.\n"
+        "  --times T0,T1,...  the steps' time values, increasing (default 0, 1, 2, ...)\n"
+        "  --key-interval K   a block is stored on its own at least every K steps, so that any\n"
+        "                     step decodes from one payload (default 16)\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
@@ -58,9 +67,7 @@ int runEncode(int argc, char** argv) {
         usage);
     return 0;
   }
-  args.expectPositional(2, usage);
-  const InputVolume input = openInput(args.positional()[0], args);
-  VolumeSource* source = input.source.get();
+  if (args.positional().size() < 2) args.expectPositional(2, usage);
   EncoderOptions opt;
   opt.levels = int(args.integer("levels", 0));
   opt.blocksPerAxis = int(args.integer("blocks", 0));
@@ -82,6 +89,11 @@ int runEncode(int argc, char** argv) {
     opt.search = SearchMethod::Exhaustive;
   else
     throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
+  if (args.positional().size() > 2) return encodeRunCommand(args, opt);
+  if (args.has("times") || args.has("key-interval"))
+    throw InvalidArgument("--times and --key-interval need several inputs (a run of steps)");
+  const InputVolume input = openInput(args.positional()[0], args);
+  VolumeSource* source = input.source.get();
   ProgressBar bar("encode", args.has("progress"));
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);

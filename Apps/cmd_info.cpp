@@ -10,6 +10,22 @@
 
 namespace afam::cli {
 
+namespace {
+
+/// A run's steps: their count, key interval, and per step its time and references.
+void printSteps(const AfamFile& f) {
+  std::printf("steps=%lld key_interval=%d\n", (long long)f.stepCount(), f.keyInterval());
+  for (int64_t s = 0; s < f.stepCount(); ++s) {
+    const auto step = AfamFile::open(f.path(), s);
+    int64_t references = 0;
+    for (const ModelEntry& e : step->entries()) references += e.reference;
+    std::printf("step=%lld time=%.9g references=%lld of %zu\n", (long long)s,
+                f.stepTimes()[size_t(s)], (long long)references, step->entries().size());
+  }
+}
+
+}  // namespace
+
 int runInfo(int argc, char** argv) {
   Args args(argc, argv, {}, {});
   const char* usage = "afam info FILE.afam";
@@ -22,6 +38,8 @@ int runInfo(int argc, char** argv) {
         "the worst RMSE, then the file size, the size the paper's\n"
         "layout would take for the same models, and the compression ratio against the raw input\n"
         "(when the file records its sample size) and against the float32 volume.\n"
+        "A run of time steps (version 3) also prints steps=N, the key interval and, per step, its\n"
+        "time and how many blocks refer to the step before; the rest describes step 0.\n"
         "Reads only the header and the index.\n",
         usage);
     return 0;
@@ -32,6 +50,7 @@ int runInfo(int argc, char** argv) {
   const Partition& part = f->partition();
   std::printf("file=%s version=%u bytes=%llu\n", f->path().c_str(), f->version(),
               (unsigned long long)f->fileSize());
+  if (f->version() >= 3) printSteps(*f);
   std::printf("dims=%lldx%lldx%lld scalar=%s range=[%.9g, %.9g]\n", (long long)h.dims[0],
               (long long)h.dims[1], (long long)h.dims[2], h.scalarName.c_str(), h.valueMin,
               h.valueMax);

@@ -13,7 +13,16 @@ int runDecode(int argc, char** argv);      // afam decode FILE.afam --level K OU
 int runEnlarge(int argc, char** argv);     // afam enlarge IN OUT.raw --dims X,Y,Z
 int runTrajectory(int argc, char** argv);  // afam trajectory OUT.dat [--kind orbit|dolly|walk]
 
+class Args;
 }  // namespace afam::cli
+
+namespace afam {
+struct EncoderOptions;
+namespace cli {
+/// afam encode with more than one input: a run of steps (Apps/cmd_encode_run.cpp).
+int encodeRunCommand(const Args& args, const EncoderOptions& options);
+}  // namespace cli
+}  // namespace afam
 
 // Optional commands, each defined in its own Apps/cmd_*.cpp (compiled when the file exists).
 int runCondition(int argc, char** argv);      // Apps/cmd_condition.cpp

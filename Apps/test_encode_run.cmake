@@ -1,0 +1,58 @@
+# SPDX-License-Identifier: BSD-3-Clause
+# `afam encode IN0 IN1 ... OUT`: a run of steps in one file (format version 3) that `afam info`
+# lists and `afam decode --step` decodes; a step identical to the one before refers to it and
+# decodes to the same bytes; bad runs are refused and leave nothing (run by ctest with
+# -DAFAM=<exe> -DWORK=<dir> -DVOLUMES=<Testing/Data/volumes>).
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+include("${CMAKE_CURRENT_LIST_DIR}/cli_test_helpers.cmake")  # run_ok, run_fails
+
+set(src "${VOLUMES}/HeadMRVolume_48x62x42_uint8.raw")
+run_ok(out ${AFAM} enlarge ${src} a_64x80x56_uint8.raw --dims 64,80,56 --seed 1)
+run_ok(out ${AFAM} enlarge ${src} b_64x80x56_uint8.raw --dims 64,80,56 --seed 2)
+run_ok(out ${AFAM} encode a_64x80x56_uint8.raw a_64x80x56_uint8.raw b_64x80x56_uint8.raw run.afam
+       --error-bound 1e-2 --relative --times 0,0.5,1.5 --key-interval 4)
+if (NOT out MATCHES "step=1 time=0.5 input=a_64x80x56_uint8.raw blocks=([0-9]+) references=([0-9]+) payload_bytes=0 ")
+  message(FATAL_ERROR "the repeated step was not stored as references: ${out}")
+endif ()
+if (NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2)
+  message(FATAL_ERROR "step 1: ${CMAKE_MATCH_2} references of ${CMAKE_MATCH_1} blocks")
+endif ()
+if (NOT out MATCHES "steps=3 key_interval=4 bound=2.55 \\(relative to the run\\)")
+  message(FATAL_ERROR "run summary: ${out}")
+endif ()
+run_ok(out ${AFAM} info run.afam)
+if (NOT out MATCHES "version=3" OR NOT out MATCHES "steps=3 key_interval=4"
+    OR NOT out MATCHES "step=1 time=0.5 references=" OR NOT out MATCHES "step=2 time=1.5 references=0 ")
+  message(FATAL_ERROR "afam info of a run: ${out}")
+endif ()
+run_ok(out ${AFAM} decode run.afam --step 0 s0.raw)
+run_ok(out ${AFAM} decode run.afam --step 1 s1.raw)
+run_ok(out ${AFAM} decode run.afam --step 2 s2.raw)
+file(SHA256 "${WORK}/s0.raw" h0)
+file(SHA256 "${WORK}/s1.raw" h1)
+file(SHA256 "${WORK}/s2.raw" h2)
+if (NOT h0 STREQUAL h1 OR h0 STREQUAL h2)
+  message(FATAL_ERROR "steps 0 and 1 (the same input) should decode alike, step 2 not")
+endif ()
+# One input keeps today's file (version 2), byte for byte what a single encode writes.
+run_ok(out ${AFAM} encode a_64x80x56_uint8.raw one.afam --error-bound 1e-2 --relative)
+run_ok(out ${AFAM} info one.afam)
+if (NOT out MATCHES "version=2" OR out MATCHES "steps=")
+  message(FATAL_ERROR "one input: ${out}")
+endif ()
+
+run_fails("step 3 of a run of 3 steps" ${AFAM} decode run.afam --step 3 x.raw)
+run_fails("step 1 of a file of one step" ${AFAM} decode one.afam --step 1 x.raw)
+run_fails("time values must increase: step 1" ${AFAM} encode a_64x80x56_uint8.raw
+          b_64x80x56_uint8.raw bad.afam --times 1,1)
+run_fails("2 time values for 3 steps" ${AFAM} encode a_64x80x56_uint8.raw b_64x80x56_uint8.raw
+          a_64x80x56_uint8.raw bad.afam --times 0,1)
+run_fails("step 1 \\(HeadMRVolume\\): dims 48x62x42 differ from the first step's 64x80x56"
+          ${AFAM} encode a_64x80x56_uint8.raw ${src} bad.afam)
+run_fails("need several inputs" ${AFAM} encode a_64x80x56_uint8.raw bad.afam --times 0)
+run_fails("cannot open" ${AFAM} encode a_64x80x56_uint8.raw missing_64x80x56_uint8.raw bad.afam)
+file(GLOB left "${WORK}/bad.afam*")
+if (left)
+  message(FATAL_ERROR "a refused run left ${left}")
+endif ()

@@ -26,6 +26,8 @@ const Command kCommands[] = {
     {"decode", afam::cli::runDecode, "decode one level to a float32 raw volume"},
     {"enlarge", afam::cli::runEnlarge,
      "a real scan made large: resampled with noise at the new resolution"},
+    {"simulate", afam::cli::runSimulate,
+     "a simulation's run (Gray-Scott reaction-diffusion), one raw file a step"},
     {"trajectory", afam::cli::runTrajectory,
      "write a generated camera path (orbit, dolly, exploration walk)"},
 #ifdef AFAM_HAVE_CMD_CONDITION

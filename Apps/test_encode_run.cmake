@@ -35,6 +35,17 @@ file(SHA256 "${WORK}/s2.raw" h2)
 if (NOT h0 STREQUAL h1 OR h0 STREQUAL h2)
   message(FATAL_ERROR "steps 0 and 1 (the same input) should decode alike, step 2 not")
 endif ()
+run_ok(out ${AFAM} verify run.afam --against a_64x80x56_uint8.raw a_64x80x56_uint8.raw
+       b_64x80x56_uint8.raw)
+if (NOT out MATCHES "step=0 time=0 damaged=0 level=[0-9]+ rmse=[0-9.e-]+ max_error=[0-9.e-]+\n"
+    OR NOT out MATCHES "step=2 time=1.5 damaged=0 level=")
+  message(FATAL_ERROR "afam verify of a run: ${out}")
+endif ()
+run_fails("1 of 3 steps damaged or above the bound" ${AFAM} verify run.afam --against
+          a_64x80x56_uint8.raw b_64x80x56_uint8.raw b_64x80x56_uint8.raw)
+run_fails("2 inputs for a run of 3 steps" ${AFAM} verify run.afam --against a_64x80x56_uint8.raw
+          b_64x80x56_uint8.raw)
+
 # One input keeps today's file (version 2), byte for byte what a single encode writes.
 run_ok(out ${AFAM} encode a_64x80x56_uint8.raw one.afam --error-bound 1e-2 --relative)
 run_ok(out ${AFAM} info one.afam)

@@ -84,16 +84,17 @@ vtkAFAMCoreRenderer::vtkAFAMCoreRenderer()
 
 vtkAFAMCoreRenderer::~vtkAFAMCoreRenderer() = default;
 
-void vtkAFAMCoreRenderer::Open(const std::string& path)
+void vtkAFAMCoreRenderer::Open(const std::string& path, long long step)
 {
-  if (this->Impl->File && path == this->OpenPath)
+  if (this->Impl->File && path == this->OpenPath && step == this->OpenStep)
   {
     return;
   }
   this->Close();
-  this->Impl->File = afam::AfamFile::open(path); // throws afam::Error naming the file
+  this->Impl->File = afam::AfamFile::open(path, step); // throws afam::Error naming the file
   this->Impl->Damage = std::make_shared<afam::DamageLog>();
   this->OpenPath = path;
+  this->OpenStep = step;
 }
 
 void vtkAFAMCoreRenderer::Close()

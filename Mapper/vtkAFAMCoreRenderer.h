@@ -78,8 +78,10 @@ class vtkAFAMCoreRenderer
 public:
   vtkAFAMCoreRenderer();
   ~vtkAFAMCoreRenderer();
-  /// Opens (or keeps) the .afam file; throws afam::Error with a readable message.
-  void Open(const std::string& path);
+  /// Opens (or keeps) the .afam file at a time step (0 for a file of one step); throws
+  /// afam::Error with a readable message. Another step of the same run opens anew (its cache,
+  /// prefetch thread and GPU pool are built again).
+  void Open(const std::string& path, long long step = 0);
   /// Forgets the open file, its renderer (cache, prefetch thread, GPU pool) and damage log.
   void Close();
   const std::string& Path() const
@@ -109,6 +111,7 @@ private:
   struct Internals;
   std::unique_ptr<Internals> Impl;
   std::string OpenPath;
+  long long OpenStep = 0;
 };
 
 #endif

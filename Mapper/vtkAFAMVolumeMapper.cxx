@@ -65,6 +65,7 @@ int vtkAFAMVolumeMapper::FillInputPortInformation(int, vtkInformation* info)
 
 std::string vtkAFAMVolumeMapper::ResolveFileName()
 {
+  this->ResolvedStep = this->TimeStep;
   if (this->FileName && *this->FileName)
   {
     return this->FileName;
@@ -73,8 +74,9 @@ std::string vtkAFAMVolumeMapper::ResolveFileName()
   {
     this->UpdateInformation();
     this->GetInputAlgorithm()->Update();
-    return vtkAFAMModelTree::FileName(
-      vtkMultiBlockDataSet::SafeDownCast(this->GetInputDataObject(0, 0)));
+    auto* tree = vtkMultiBlockDataSet::SafeDownCast(this->GetInputDataObject(0, 0));
+    this->ResolvedStep = vtkAFAMModelTree::Step(tree); // the step the pipeline's time chose
+    return vtkAFAMModelTree::FileName(tree);
   }
   return {};
 }
@@ -90,7 +92,7 @@ bool vtkAFAMVolumeMapper::EnsureOpen()
   }
   try
   {
-    this->Core->Open(path);
+    this->Core->Open(path, this->ResolvedStep);
   }
   catch (const std::exception& e)
   {
@@ -141,7 +143,7 @@ double* vtkAFAMVolumeMapper::GetBounds()
     }
     try
     {
-      this->Core->Open(path);
+      this->Core->Open(path, this->ResolvedStep);
     }
     catch (const std::exception&)
     {
@@ -187,7 +189,8 @@ bool vtkAFAMVolumeMapper::RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAF
     // file is drawn again); this frame opens it as it is now, with one message either way.
     try
     {
-      this->Core->Open(this->ResolveFileName());
+      const std::string path = this->ResolveFileName();
+      this->Core->Open(path, this->ResolvedStep);
       this->LastOpenError.clear();
     }
     catch (const std::exception& e)
@@ -606,6 +609,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "TimeStep: " << this->TimeStep << "\n";
   os << indent << "LodPolicy: " << this->LodPolicy << "\n";
   os << indent << "LodPixelBudget: " << this->LodPixelBudget << "\n";
   os << indent << "CacheBudgetMB: " << this->CacheBudgetMB << "\n";

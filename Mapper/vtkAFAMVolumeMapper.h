@@ -72,6 +72,10 @@ public:
   /// FileName alone is enough: no input connection is needed.
   vtkSetFilePathMacro(FileName);
   vtkGetFilePathMacro(FileName);
+  /// The time step of a run of steps (format version 3) drawn when FileName is set (default 0;
+  /// with an input connection, the step the input's time chose). Another step opens anew.
+  vtkSetClampMacro(TimeStep, vtkTypeInt64, 0, VTK_TYPE_INT64_MAX);
+  vtkGetMacro(TimeStep, vtkTypeInt64);
   ///@}
 
   enum LodPolicies
@@ -293,7 +297,8 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
 
   /// The file to use now: FileName, else the input's field data. Empty when none.
-  std::string ResolveFileName();
+  std::string ResolveFileName(); // also sets ResolvedStep (the input tree's time step)
+  long long ResolvedStep = 0;
   /// Opens the file in Core when it changed; false (and an error, once per distinct error) when
   /// it cannot.
   bool EnsureOpen();
@@ -321,6 +326,7 @@ protected:
   void RecordStatistics(const Frame& frame, const vtkAFAMFrameStats& stats);
 
   char* FileName = nullptr;
+  vtkTypeInt64 TimeStep = 0;
   int LodPolicy = LOD_SCREEN_SPACE;
   double LodPixelBudget = 1.0;
   double CacheBudgetMB = 512;

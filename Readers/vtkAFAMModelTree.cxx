@@ -140,7 +140,8 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
   int piece,
   int numPieces,
   vtkMultiBlockDataSet* out,
-  const std::function<void(double)>& progress)
+  const std::function<void(double)>& progress,
+  long long step)
 {
   out->Initialize();
   const int levels = partition.levels();
@@ -216,6 +217,7 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
   AddTuple<vtkTypeInt64Array, vtkTypeInt64>(
     fd, DimensionsArray, { header.dims[0], header.dims[1], header.dims[2] });
   AddTuple<vtkDoubleArray, double>(fd, ValueRangeArray, { header.valueMin, header.valueMax });
+  AddTuple<vtkTypeInt64Array, vtkTypeInt64>(fd, StepArray, { static_cast<vtkTypeInt64>(step) });
   if (progress)
   {
     progress(1.0);
@@ -230,4 +232,14 @@ std::string vtkAFAMModelTree::FileName(vtkMultiBlockDataSet* tree)
   }
   auto* s = vtkStringArray::SafeDownCast(tree->GetFieldData()->GetAbstractArray(FileNameArray));
   return (s && s->GetNumberOfValues() > 0) ? s->GetValue(0) : std::string();
+}
+
+long long vtkAFAMModelTree::Step(vtkMultiBlockDataSet* tree)
+{
+  if (!tree)
+  {
+    return 0;
+  }
+  auto* a = vtkTypeInt64Array::SafeDownCast(tree->GetFieldData()->GetAbstractArray(StepArray));
+  return (a && a->GetNumberOfTuples() > 0) ? static_cast<long long>(a->GetValue(0)) : 0;
 }

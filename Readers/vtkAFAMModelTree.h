@@ -34,6 +34,7 @@ constexpr const char* EntryArray = "AFAM_EntryIndex";          // leaves: index 
 constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves: decoded control points
 constexpr const char* StoredBytesArray = "AFAM_StoredBytes";   // leaves: bytes in the file
 constexpr const char* DimensionsArray = "AFAM_Dimensions";     // root: volume samples per axis
+constexpr const char* StepArray = "AFAM_Step";                 // root: time step of a run
 
 /// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A
 /// level's leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays
@@ -48,10 +49,13 @@ void Build(const afam::VolumeHeader& header,
   int piece,
   int numPieces,
   vtkMultiBlockDataSet* out,
-  const std::function<void(double)>& progress);
+  const std::function<void(double)>& progress,
+  long long step = 0);
 
 /// The .afam path stored in a multiblock built by Build (empty when there is none).
 std::string FileName(vtkMultiBlockDataSet* tree);
+/// The time step of the run the tree describes (0 for a file of one step, or no tree).
+long long Step(vtkMultiBlockDataSet* tree);
 }
 
 #endif

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -89,6 +90,37 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   return afamName ? 1 : 0;
 }
 
+namespace
+{
+// The step a pipeline's UPDATE_TIME_STEP asks for: the last whose time is not after it (the
+// first before every step), as ParaView's file series do.
+long long StepAtTime(const std::vector<double>& times, vtkInformation* info)
+{
+  if (times.size() < 2 || !info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+  {
+    return 0;
+  }
+  const double t = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+  const auto after = std::upper_bound(times.begin(), times.end(), t + 1e-12 * std::abs(t));
+  return after == times.begin() ? 0 : static_cast<long long>(after - times.begin()) - 1;
+}
+
+// A run's time steps and range on an output's information (nothing for one step).
+void SetTimeSteps(vtkInformation* info, const std::vector<double>& times)
+{
+  if (times.size() < 2)
+  {
+    info->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    info->Remove(vtkStreamingDemandDrivenPipeline::TIME_RANGE());
+    return;
+  }
+  info->Set(
+    vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
+  const double range[2] = { times.front(), times.back() };
+  info->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+}
+}
+
 int vtkAFAMReader::RequestInformation(vtkInformation*,
   vtkInformationVector**,
   vtkInformationVector* outV)
@@ -100,6 +132,16 @@ int vtkAFAMReader::RequestInformation(vtkInformation*,
   }
   // Pieces are groups of coarsest blocks (see vtkAFAMModelTree::Build).
   outV->GetInformationObject(0)->Set(CAN_HANDLE_PIECE_REQUEST(), 1);
+  try
+  {
+    const std::vector<double> times = afam::AfamFile::open(this->FileName)->stepTimes();
+    SetTimeSteps(outV->GetInformationObject(0), times);
+    SetTimeSteps(outV->GetInformationObject(1), times);
+  }
+  catch (const std::exception&)
+  {
+    // Reported by RequestData.
+  }
   // Port 1: the decoded level's grid, or an empty extent when no level is asked for.
   vtkInformation* imageInfo = outV->GetInformationObject(1);
   int whole[6] = { 0, -1, 0, -1, 0, -1 };
@@ -146,22 +188,37 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
   }
   try
   {
-    // Opening reads and validates the header and the index only, never a payload.
-    auto file = afam::AfamFile::open(this->FileName);
+    // Opening reads and validates the header and the index only, never a payload. A run opens at
+    // the step the pipeline's time asks for.
+    const long long step = StepAtTime(afam::AfamFile::open(this->FileName)->stepTimes(), outInfo);
+    auto file =
+      step == 0 ? afam::AfamFile::open(this->FileName) : afam::AfamFile::open(this->FileName, step);
+    if (file->stepCount() > 1)
+    {
+      output->GetInformation()->Set(
+        vtkDataObject::DATA_TIME_STEP(), file->stepTimes()[static_cast<size_t>(step)]);
+    }
     const bool decode = this->DecodeLevel >= 0;
     const double treeShare = decode ? 0.1 : 1.0; // progress: the index is cheap, decoding is not
-    vtkAFAMModelTree::Build(file->header(),
+    vtkAFAMModelTree::Build(
+      file->header(),
       file->partition(),
       file->entries(),
       file->path(),
       piece,
       numPieces,
       output,
-      [this, treeShare](double f) { this->UpdateProgress(treeShare * f); });
+      [this, treeShare](double f) { this->UpdateProgress(treeShare * f); },
+      step);
     vtkImageData* image = vtkImageData::GetData(outV, 1);
     if (image)
     {
       image->Initialize();
+    }
+    if (image && file->stepCount() > 1)
+    {
+      image->GetInformation()->Set(
+        vtkDataObject::DATA_TIME_STEP(), file->stepTimes()[static_cast<size_t>(step)]);
     }
     if (decode && image)
     {

@@ -48,10 +48,12 @@ int vtkAFAMVolumeRepresentation::RequestData(vtkInformation* request,
 {
   vtkMath::UninitializeBounds(this->DataBounds);
   this->FileName.clear();
+  long long step = 0;
   if (inputVector[0]->GetNumberOfInformationObjects() == 1)
   {
     auto* tree = vtkMultiBlockDataSet::GetData(inputVector[0], 0);
     this->FileName = vtkAFAMModelTree::FileName(tree);
+    step = vtkAFAMModelTree::Step(tree); // the step of a run the view's time chose
     if (this->FileName.empty())
     {
       vtkErrorMacro(<< "The input is not an Adaptive-FAM model set (no "
@@ -63,6 +65,7 @@ int vtkAFAMVolumeRepresentation::RequestData(vtkInformation* request,
   const bool renders = !controller || controller->GetLocalProcessId() == 0;
   this->RendersHere = renders && !this->FileName.empty();
   this->Mapper->SetFileName(this->RendersHere ? this->FileName.c_str() : nullptr);
+  this->Mapper->SetTimeStep(step);
   this->Actor->SetVisibility(this->GetVisibility() && this->RendersHere);
   if (!this->FileName.empty())
   {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Fuzz target: the .afam reader. AfamFile::open (header, index), then readPayload of every entry
-// and the decoding of each payload, then one level decoded as a whole.
+// and the decoding of each payload, then one level decoded as a whole; for a run of steps, the
+// same again at its last step.
 // Input: one control byte (which checksums to recompute after mutation, afam_checksums.hpp),
 // then the file's bytes. Any exception of the afam error types is a clean refusal; anything else
 // (a crash, a sanitizer report, another exception type) is a finding.
@@ -51,6 +52,25 @@ void decodeCoarsestLevel(const afam::AfamFile& file) {
                        out.data());
 }
 
+/// Every entry read and decoded, then (when all were) the coarsest level as a whole.
+void readAll(const afam::AfamFile& file) {
+  std::vector<float> samples;
+  bool allRead = true;
+  for (int64_t i = 0; i < static_cast<int64_t>(file.entries().size()); ++i) {
+    try {
+      decodeEntry(file, i, samples);
+    } catch (const afam::Error&) {
+      allRead = false;
+    }
+  }
+  if (allRead) {
+    try {
+      decodeCoarsestLevel(file);
+    } catch (const afam::Error&) {
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -65,18 +85,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const afam::Error&) {
     return 0;
   }
-  std::vector<float> samples;
-  bool allRead = true;
-  for (int64_t i = 0; i < static_cast<int64_t>(file->entries().size()); ++i) {
+  readAll(*file);
+  if (file->stepCount() > 1) {  // a run: its last step too, references walked back
     try {
-      decodeEntry(*file, i, samples);
-    } catch (const afam::Error&) {
-      allRead = false;
-    }
-  }
-  if (allRead) {
-    try {
-      decodeCoarsestLevel(*file);
+      readAll(*afam::AfamFile::open(path, file->stepCount() - 1));
     } catch (const afam::Error&) {
     }
   }

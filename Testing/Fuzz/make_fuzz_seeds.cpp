@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "afam/base/hash.hpp"
+#include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 
@@ -57,6 +58,27 @@ Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, i
   return b;
 }
 
+// A run of three steps of Marschner-Lobb (the second the first again: references), as one file.
+Bytes encodedRun(const std::string& scratch) {
+  const afam::Index3 dims{7, 6, 5};
+  std::vector<float> a(static_cast<size_t>(dims[0] * dims[1] * dims[2])), b;
+  afam::marschnerLobbSlab(afam::MarschnerLobb{}, dims, 0, dims[2], a.data());
+  b = a;
+  for (float& v : b) v = 1.5f - v;
+  afam::ArraySource sa(a.data(), dims), sb(b.data(), dims);
+  afam::EncoderOptions o;
+  o.levels = 2;
+  o.blocksPerAxis = 2;
+  o.errorBound = 1e-2;
+  o.threads = 1;
+  afam::RunOptions r;
+  r.keyInterval = 2;
+  afam::encodeRun({&sa, &sa, &sb}, o, r, scratch);
+  Bytes bytes = readFile(scratch);
+  std::remove(scratch.c_str());
+  return bytes;
+}
+
 void afamSeeds(const std::string& out) {
   const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
   using M = afam::EncodingMode;
@@ -76,6 +98,9 @@ void afamSeeds(const std::string& out) {
     writeSeed(dir, std::string(c.name) + "-fixall", 7, b);  // checksums recomputed after mutation
     writeSeed(dir, std::string(c.name) + "-asis", 0, b);    // checksums left as mutated
   }
+  const Bytes run = encodedRun(scratch);  // format version 3, references included
+  writeSeed(dir, "run-fixall", 7, run);
+  writeSeed(dir, "run-asis", 0, run);
 }
 
 Bytes floatBytes(const std::vector<float>& f) {

@@ -13,7 +13,7 @@ namespace afam::cli {
 int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
-             "search", "spacing", "window", "times", "key-interval"},
+             "search", "spacing", "window", "times", "key-interval", "append"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
@@ -21,7 +21,8 @@ int runEncode(int argc, char** argv) {
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
-      "       [--times T0,T1,...] [--key-interval K]";
+      "       [--times T0,T1,...] [--key-interval K]\n"
+      "       afam encode --append STEP RUN.afam [--times T] [--threads T]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -40,7 +41,11 @@ int runEncode(int argc, char** argv) {
         "relative to the range of the whole run.\n"
         "  --times T0,T1,...  the steps' time values, increasing (default 0, 1, 2, ...)\n"
         "  --key-interval K   a block is stored on its own at least every K steps, so that any\n"
-        "                     step decodes from one payload (default 16)\n\n"
+        "                     step decodes from one payload (default 16)\n"
+        "  --append STEP      add STEP to the run RUN.afam in place, as a running simulation\n"
+        "                     would; a kill at any moment leaves the run with its old or new\n"
+        "                     steps. --times T: its time (default the last step's + 1); the\n"
+        "                     run's partition and bound apply\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
@@ -67,7 +72,8 @@ int runEncode(int argc, char** argv) {
         usage);
     return 0;
   }
-  if (args.positional().size() < 2) args.expectPositional(2, usage);
+  if (args.has("append")) args.expectPositional(1, usage);
+  if (!args.has("append") && args.positional().size() < 2) args.expectPositional(2, usage);
   EncoderOptions opt;
   opt.levels = int(args.integer("levels", 0));
   opt.blocksPerAxis = int(args.integer("blocks", 0));
@@ -89,6 +95,7 @@ int runEncode(int argc, char** argv) {
     opt.search = SearchMethod::Exhaustive;
   else
     throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
+  if (args.has("append")) return appendStepCommand(args, opt);
   if (args.positional().size() > 2) return encodeRunCommand(args, opt);
   if (args.has("times") || args.has("key-interval"))
     throw InvalidArgument("--times and --key-interval need several inputs (a run of steps)");

@@ -2,6 +2,7 @@
 // afam encode IN0 IN1 ... OUT.afam: the inputs as consecutive time steps of one run, coded in
 // time (encode_run.hpp), written as format version 3.
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -65,6 +66,29 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
       s.valueMin, s.valueMax, s.seconds, (unsigned long long)bytesIn,
       (unsigned long long)s.bytesOut, double(bytesIn) / double(s.bytesOut),
       (unsigned long long)payload);
+  return 0;
+}
+
+int appendStepCommand(const Args& args, const EncoderOptions& opt) {
+  const std::string run = args.positional()[0];
+  const InputVolume input = openInput(args.str("append"), args);
+  double time = std::numeric_limits<double>::quiet_NaN();
+  if (args.has("times")) {
+    const std::vector<double> times = parseTimes(args.str("times"));
+    if (times.size() != 1) throw InvalidArgument("--times: one time value for the appended step");
+    time = times[0];
+  }
+  if (args.has("key-interval"))
+    throw InvalidArgument("--key-interval is the run's: it cannot change when appending");
+  const RunStats s = appendStep(*input.source, time, opt, run);
+  if (args.has("quiet")) return 0;
+  const EncodeStats& st = s.steps[0];
+  std::printf(
+      "appended %s -> %s: blocks=%lld references=%lld payload_bytes=%llu max_block_rmse=%.6g "
+      "bound=%.6g bytes_out=%llu seconds=%.3f\n",
+      args.str("append").c_str(), run.c_str(), (long long)st.blocks, (long long)s.references[0],
+      (unsigned long long)st.payloadBytes, st.maxRmse, s.bound, (unsigned long long)s.bytesOut,
+      s.seconds);
   return 0;
 }
 

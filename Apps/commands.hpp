@@ -22,6 +22,8 @@ struct EncoderOptions;
 namespace cli {
 /// afam encode with more than one input: a run of steps (Apps/cmd_encode_run.cpp).
 int encodeRunCommand(const Args& args, const EncoderOptions& options);
+/// afam encode --append STEP RUN.afam (Apps/cmd_encode_run.cpp).
+int appendStepCommand(const Args& args, const EncoderOptions& options);
 }  // namespace cli
 }  // namespace afam
 

@@ -46,6 +46,33 @@ run_fails("1 of 3 steps damaged or above the bound" ${AFAM} verify run.afam --ag
 run_fails("2 inputs for a run of 3 steps" ${AFAM} verify run.afam --against a_64x80x56_uint8.raw
           b_64x80x56_uint8.raw)
 
+# Appending a step in place, as a running simulation would.
+# (b again after b: every block refers to the step before)
+run_ok(out ${AFAM} encode --append b_64x80x56_uint8.raw run.afam --times 4)
+if (NOT out MATCHES "appended b_64x80x56_uint8.raw -> run.afam: blocks=([0-9]+) references=([0-9]+) payload_bytes=0 ")
+  message(FATAL_ERROR "append: ${out}")
+endif ()
+if (NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2)
+  message(FATAL_ERROR "appending the last step again: ${CMAKE_MATCH_2} references of ${CMAKE_MATCH_1}")
+endif ()
+run_ok(out ${AFAM} info run.afam)
+if (NOT out MATCHES "steps=4 key_interval=4" OR NOT out MATCHES "step=3 time=4 references=")
+  message(FATAL_ERROR "afam info after the append: ${out}")
+endif ()
+run_ok(out ${AFAM} verify run.afam --against a_64x80x56_uint8.raw a_64x80x56_uint8.raw
+       b_64x80x56_uint8.raw b_64x80x56_uint8.raw)
+run_ok(out ${AFAM} encode --append a_64x80x56_uint8.raw run.afam)
+if (NOT out MATCHES "references=0 payload_bytes=[1-9]")
+  message(FATAL_ERROR "appending another step: ${out}")
+endif ()
+run_ok(out ${AFAM} info run.afam)
+if (NOT out MATCHES "step=4 time=5 references=")
+  message(FATAL_ERROR "the default time of an appended step: ${out}")
+endif ()
+run_fails("time 3.000000 does not follow 5.000000" ${AFAM} encode --append a_64x80x56_uint8.raw
+          run.afam --times 3)
+run_fails("dims differ from the run's" ${AFAM} encode --append ${src} run.afam)
+
 # One input keeps today's file (version 2), byte for byte what a single encode writes.
 run_ok(out ${AFAM} encode a_64x80x56_uint8.raw one.afam --error-bound 1e-2 --relative)
 run_ok(out ${AFAM} info one.afam)
@@ -53,8 +80,9 @@ if (NOT out MATCHES "version=2" OR out MATCHES "steps=")
   message(FATAL_ERROR "one input: ${out}")
 endif ()
 
-run_fails("step 3 of a run of 3 steps" ${AFAM} decode run.afam --step 3 x.raw)
+run_fails("step 5 of a run of 5 steps" ${AFAM} decode run.afam --step 5 x.raw)
 run_fails("step 1 of a file of one step" ${AFAM} decode one.afam --step 1 x.raw)
+run_fails("appending needs a run" ${AFAM} encode --append b_64x80x56_uint8.raw one.afam)
 run_fails("time values must increase: step 1" ${AFAM} encode a_64x80x56_uint8.raw
           b_64x80x56_uint8.raw bad.afam --times 1,1)
 run_fails("2 time values for 3 steps" ${AFAM} encode a_64x80x56_uint8.raw b_64x80x56_uint8.raw

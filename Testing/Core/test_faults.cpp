@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <set>
@@ -72,13 +73,14 @@ struct Child {
   bool exitedWith(int code) const { return WIFEXITED(status) && WEXITSTATUS(status) == code; }
 };
 
-// Starts `afam encode raw out ...`; stdout and stderr go to `log`. fileSizeLimit > 0 sets
+// Starts `afam encode ARGS...` (startAfam) or `afam encode raw out ...` (startEncode); stdout and
+// stderr go to `log`. fileSizeLimit > 0 sets
 // RLIMIT_FSIZE in the child and ignores SIGXFSZ, so a write past it fails with EFBIG.
 // Float payloads: the file grows block by block over the whole encode, so every kill moment is met
 // (compact payloads, or per-axis NCP on this smooth volume, make a file too small to be caught
 // part-way on a fast machine).
-Child startEncode(const std::string& raw, const std::string& out, const std::string& log,
-                  rlim_t fileSizeLimit = 0) {
+Child startAfam(const std::vector<std::string>& args, const std::string& log,
+                rlim_t fileSizeLimit = 0) {
   Child c;
   c.pid = ::fork();
   if (c.pid == 0) {
@@ -90,12 +92,20 @@ Child startEncode(const std::string& raw, const std::string& out, const std::str
       const rlimit limit{fileSizeLimit, fileSizeLimit};
       ::setrlimit(RLIMIT_FSIZE, &limit);
     }
-    ::execl(AFAM_EXE, AFAM_EXE, "encode", raw.c_str(), out.c_str(), "--levels", "3", "--blocks",
-            "8", "--error-bound", "1e-4", "--float-payloads", "--isotropic-ncp", "--threads", "2",
-            "--quiet", static_cast<char*>(nullptr));
+    std::vector<char*> argv{const_cast<char*>(AFAM_EXE), const_cast<char*>("encode")};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(AFAM_EXE, argv.data());
     ::_exit(127);
   }
   return c;
+}
+
+Child startEncode(const std::string& raw, const std::string& out, const std::string& log,
+                  rlim_t fileSizeLimit = 0) {
+  return startAfam({raw, out, "--levels", "3", "--blocks", "8", "--error-bound", "1e-4",
+                    "--float-payloads", "--isotropic-ncp", "--threads", "2", "--quiet"},
+                   log, fileSizeLimit);
 }
 
 void wait(Child& c) { ASSERT_EQ(::waitpid(c.pid, &c.status, 0), c.pid); }
@@ -179,6 +189,89 @@ TEST(Fault, Kill9DuringEncodeLeavesTheOldFileAndTheNextEncodeRemovesTheLeftovers
   EXPECT_EQ(off_t(file->fileSize()), finalSize);
   for (int64_t i = 0; i < int64_t(file->entries().size()); ++i)
     EXPECT_NO_THROW(file->readPayload(i));
+}
+
+namespace {
+
+off_t fileSize(const std::string& path) {
+  struct stat s {};
+  return ::stat(path.c_str(), &s) == 0 ? s.st_size : -1;
+}
+
+}  // namespace
+
+TEST(Fault, Kill9DuringAppendLeavesTheRunWithItsOldOrItsNewSteps) {
+  // A run of two steps of Marschner-Lobb 96^3 and, to append, the field turned upside down (no
+  // block can refer to the step before): float payloads, so that the file grows all along.
+  const std::string a = writeMlRaw(96, "step_a");
+  std::vector<char> flipped = slurp(a);
+  for (size_t i = 0; i + 4 <= flipped.size(); i += 4) {
+    float v;
+    std::memcpy(&v, &flipped[i], 4);
+    v = 1.0f - v;
+    std::memcpy(&flipped[i], &v, 4);
+  }
+  const std::string b = afam_test::scratchPath("step_b_96x96x96_float32.raw");
+  std::ofstream(b, std::ios::binary).write(flipped.data(), std::streamsize(flipped.size()));
+  const std::string original = afam_test::scratchPath("run_original.afam");
+  const std::string run = afam_test::scratchPath("run.afam");
+  const std::string log = afam_test::scratchPath("append.log");
+  const std::vector<std::string> coding{
+      "--levels",      "3",    "--blocks",         "8",
+      "--error-bound", "1e-4", "--float-payloads", "--isotropic-ncp",
+      "--threads",     "2",    "--quiet"};
+  std::vector<std::string> make{a, a, original};
+  make.insert(make.end(), coding.begin(), coding.end());
+  Child made = startAfam(make, log);
+  wait(made);
+  ASSERT_TRUE(made.exitedWith(0)) << "encoding the run failed";
+  const std::vector<char> oldBytes = slurp(original);
+  std::vector<std::string> append{"--append", b, run};
+  append.insert(append.end(), coding.begin(), coding.end());
+  // The full append, for its final size: the kill moments are fractions of what it adds.
+  std::ofstream(run, std::ios::binary).write(oldBytes.data(), std::streamsize(oldBytes.size()));
+  Child full = startAfam(append, log);
+  wait(full);
+  ASSERT_TRUE(full.exitedWith(0)) << "appending failed";
+  const off_t oldSize = off_t(oldBytes.size()), newSize = fileSize(run);
+  ASSERT_GT(newSize, oldSize + 100000);
+  int caught = 0;
+  for (int trial = 0; trial < 10; ++trial) {
+    std::ofstream(run, std::ios::binary | std::ios::trunc)
+        .write(oldBytes.data(), std::streamsize(oldBytes.size()));
+    const off_t at = oldSize + off_t(double(newSize - oldSize) * (0.05 + 0.1 * trial));
+    Child c = startAfam(append, log);
+    off_t seen = -1;
+    for (;;) {
+      const off_t now = fileSize(run);
+      if (now >= at) {
+        ::kill(c.pid, SIGKILL);
+        wait(c);
+        seen = now;
+        break;
+      }
+      if (::waitpid(c.pid, &c.status, WNOHANG) == c.pid) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    caught += seen >= 0 && c.killed();
+    const auto f = AfamFile::open(run);
+    const int64_t steps = f->stepCount();
+    EXPECT_TRUE(steps == 2 || steps == 3) << "trial " << trial << ": " << steps << " steps";
+    for (int64_t s = 0; s < steps; ++s) {
+      const auto step = AfamFile::open(run, s);
+      for (int64_t i = 0; i < int64_t(step->entries().size()); ++i)
+        EXPECT_NO_THROW(step->readPayload(i)) << "trial " << trial << ", step " << s;
+    }
+    std::printf(
+        "[fault] append killed at %lld of %lld..%lld bytes: %lld steps, every payload read\n",
+        (long long)seen, (long long)oldSize, (long long)newSize, (long long)steps);
+  }
+  EXPECT_GE(caught, 5) << "most appends must be caught part-way for the test to mean something";
+  // An append after a killed one cuts off what the killed one wrote and adds its step.
+  Child next = startAfam(append, log);
+  wait(next);
+  ASSERT_TRUE(next.exitedWith(0));
+  EXPECT_EQ(AfamFile::open(run)->stepCount(), 3);
 }
 
 TEST(Fault, FullDiskDuringEncodeIsAClearErrorAndLeavesNoPartialFile) {

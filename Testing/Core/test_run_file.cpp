@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -193,5 +194,62 @@ TEST(RunFile, UncommittedBytesAreIgnoredAndDamageIsRefused) {
   b[table + 3] = char(b[table + 3] ^ 0x40);
   writeAll(path, b);
   EXPECT_NE(openError(path, 0).find("step table checksum mismatch"), std::string::npos);
+  std::remove(path.c_str());
+}
+
+TEST(RunFile, AppendedStepsCountOnceCommittedAndAnUnfinishedAppendIsCutOff) {
+  const VolumeHeader h = gridHeader();
+  const std::string path = threeStepRun("append.afam");
+  const std::vector<char> before = readAll(path);
+  {  // an append that does not commit (an exception, a kill): the file keeps its three steps
+    std::unique_ptr<RunWriter> w = RunWriter::append(path);
+    EXPECT_EQ(w->stepsDone(), 3);
+    writeStep(*w, h, 3, [](int level, int64_t i) { return level == 1 && i == 0; });
+    EXPECT_THROW(RunWriter::append(path), IoError) << "one appender at a time";
+    EXPECT_EQ(AfamFile::open(path)->stepCount(), 3);
+  }
+  EXPECT_EQ(readAll(path), before) << "what the unfinished append wrote was cut off";
+  std::unique_ptr<RunWriter> w = RunWriter::append(path);
+  EXPECT_THROW(w->beginStep(0.5), InvalidArgument) << "time 0.5 does not follow 0.5";
+  // Step 3 refers to step 2 for blocks 0 and 3 of level 1. Block 1 of step 2 is already two
+  // references from its payload: the key interval 3 lets it refer no further; block 2, one.
+  EXPECT_FALSE(w->canReference(1, w->partition().blockFromLinear(1, 1)));
+  EXPECT_TRUE(w->canReference(1, w->partition().blockFromLinear(1, 2)));
+  writeStep(*w, h, 3, [](int level, int64_t i) { return level == 1 && (i == 0 || i == 3); });
+  w->commit();
+  auto f = AfamFile::open(path, 3);
+  EXPECT_EQ(f->stepCount(), 4);
+  EXPECT_EQ(f->stepTimes().back(), 0.75);
+  const int64_t first = f->levelStart(1);
+  EXPECT_EQ(f->readPayload(first + 0)[0], 20.0f) << "block 0: step 2's payload";
+  EXPECT_EQ(f->entries()[size_t(first)].ownerStep, 2);
+  EXPECT_EQ(f->readPayload(first + 1)[0], 31.0f) << "block 1: stored again at step 3";
+  EXPECT_EQ(AfamFile::open(path, 1)->readPayload(first + 1)[0], 0.0f + 1) << "steps before intact";
+  uint64_t generationB;
+  const std::vector<char> after = readAll(path);
+  std::memcpy(&generationB, after.data() + 1024 + 64, 8);
+  EXPECT_EQ(generationB, 2u) << "the append wrote the second commit slot";
+  std::remove(path.c_str());
+}
+
+TEST(RunFile, AppendingToAFileOfOneStepIsRefused) {
+  InMemoryModels mem;
+  const VolumeHeader h = gridHeader();
+  RunWriter probe(scratch("unused.afam"), h, 2, 1.0);  // only for the partition
+  const Partition& p = probe.partition();
+  mem.begin(h);
+  for (int level = 0; level < h.levels; ++level)
+    for (int64_t i = 0; i < p.blockCount(level); ++i) {
+      const ModelEntry m = constantModel(p, h.degree, level, p.blockFromLinear(level, i), 1.0f);
+      mem.add(m, &m.minValue);
+    }
+  const std::string path = scratch("one_step.afam");
+  mem.write(path);
+  try {
+    RunWriter::append(path);
+    ADD_FAILURE() << "appended to a file of one step";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("appending needs a run"), std::string::npos) << e.what();
+  }
   std::remove(path.c_str());
 }

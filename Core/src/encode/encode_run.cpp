@@ -149,4 +149,42 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   return stats;
 }
 
+RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& options,
+                    const std::string& path) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<RunWriter> writer = RunWriter::append(path);
+  const VolumeHeader& h = writer->header();
+  std::string difference;
+  if (step.dims() != h.dims)
+    difference = "dims differ from the run's";
+  else if (step.origin() != h.origin)
+    difference = "origin differs from the run's";
+  else if (step.spacing() != h.spacing)
+    difference = "spacing differs from the run's";
+  if (!difference.empty())
+    throw InvalidArgument("encode --append: " + step.name() + ": " + difference + " (" + path +
+                          ")");
+  if (std::isnan(time)) time = writer->lastTime() + 1;
+  RunStats stats;
+  stats.valueMin = h.valueMin;
+  stats.valueMax = h.valueMax;
+  stats.bound = writer->absoluteBound();
+  EncoderOptions stepOptions = options;  // the run's partition, coding and bound
+  stepOptions.levels = h.levels;
+  stepOptions.blocksPerAxis = h.blocksPerAxis;
+  stepOptions.degree = h.degree;
+  stepOptions.mode = h.mode;
+  stepOptions.errorBound = stats.bound;
+  stepOptions.relativeBound = false;
+  WrittenStep previous(*writer);
+  stepOptions.previous = &previous;
+  StepSink sink(writer, path, h, 0, stats.bound, time);
+  stats.steps.push_back(encodeVolume(step, stepOptions, sink));
+  sink.end();
+  stats.references.push_back(sink.references);
+  stats.bytesOut = writer->commit();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return stats;
+}
+
 }  // namespace afam

@@ -2,6 +2,7 @@
 // Format version 3, a run of time steps in one file (docs/FORMAT.md): reading one step's models
 // (AfamFile::open(path, step) comes here after the header) and RunWriter.
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 
 #include "afam/base/errors.hpp"
@@ -172,8 +174,63 @@ RunWriter::RunWriter(const std::string& path, const VolumeHeader& header, int ke
 }
 
 RunWriter::~RunWriter() {
+  if (appending_) {  // the file keeps its committed steps; what this writer added is cut off
+    // Only a writer that holds the lock and knows the committed size cuts anything.
+    if (fd_ >= 0 && !committed_ && committedSize_ > 0)
+      (void)::ftruncate(fd_, static_cast<off_t>(committedSize_));
+    if (fd_ >= 0) ::close(fd_);
+    return;
+  }
   if (fd_ >= 0) ::close(fd_);
   if (!committed_ && !tmpPath_.empty()) ::unlink(tmpPath_.c_str());
+}
+
+double RunWriter::lastTime() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return rows_.empty() ? std::numeric_limits<double>::quiet_NaN() : rows_.back().time;
+}
+
+std::unique_ptr<RunWriter> RunWriter::append(const std::string& path) {
+  const int64_t steps = AfamFile::open(path)->stepCount();
+  const auto last = AfamFile::open(path, steps - 1);
+  if (last->version() != kRunVersion)
+    throw InvalidArgument(path + ": format version " + std::to_string(last->version()) +
+                          " holds one step; appending needs a run (encode its steps as one)");
+  std::unique_ptr<RunWriter> w(new RunWriter());
+  w->path_ = w->tmpPath_ = path;  // writes and their messages go to the file itself
+  w->header_ = last->header();
+  w->partition_ = last->partition();
+  w->levelStart_ = levelStarts(w->partition_, w->header_.levels);
+  w->keyInterval_ = last->keyInterval();
+  w->appending_ = true;
+  w->fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (w->fd_ < 0) throw IoError(path + ": cannot open to append: " + sysError());
+  if (::flock(w->fd_, LOCK_EX | LOCK_NB) != 0)
+    throw IoError(path + ": another writer is appending to it");
+  FileHeader h{};
+  preadAll(w->fd_, &h, sizeof h, 0, path, "header");
+  w->absoluteBound_ = h.absoluteBound;
+  uint8_t slots[2 * kCommitSlotBytes];
+  preadAll(w->fd_, slots, sizeof slots, kCommitSlotsOffset, path, "commit slots");
+  const CommitChoice choice = chooseCommit(slots, slots + kCommitSlotBytes, path);
+  const CommitRecord& r = choice.record;
+  std::vector<uint8_t> table(stepTableBytes(r.stepCount));
+  preadAll(w->fd_, table.data(), table.size(), r.stepTableOffset, path, "step table");
+  w->rows_ = decodeStepTable(table.data(), r.stepCount, r.stepTableOffset,
+                             h.entryCount * kEntryBytes, path);
+  // What an append that did not commit left after the committed bytes goes.
+  if (::ftruncate(w->fd_, static_cast<off_t>(r.committedSize)) != 0)
+    throw IoError(path + ": cannot cut off an unfinished append: " + sysError());
+  w->committedSize_ = r.committedSize;
+  w->end_ = r.committedSize;
+  w->payloadSum_ = r.totalPayloadBytes;
+  w->generation_ = r.generation;
+  w->nextSlot_ = choice.nextSlot;
+  w->previous_ = last->entries();
+  w->previousDepth_.resize(w->previous_.size());
+  for (size_t i = 0; i < w->previous_.size(); ++i)
+    w->previousDepth_[i] = static_cast<int>(steps - 1 - w->previous_[i].ownerStep);
+  return w;
 }
 
 size_t RunWriter::slotOf(const ModelEntry& in) const {
@@ -311,11 +368,35 @@ void RunWriter::endStep(float valueMin, float valueMax) {
   inStep_ = false;
 }
 
+uint64_t RunWriter::commitAppend() {
+  // New step table after everything, on disk before the slot that points to it.
+  const std::vector<uint8_t> table = encodeStepTable(rows_);
+  CommitRecord r;
+  r.generation = generation_ + 1;
+  r.stepCount = rows_.size();
+  r.stepTableOffset = alignUp(end_, 8);
+  r.committedSize = r.stepTableOffset + table.size();
+  r.totalPayloadBytes = payloadSum_;
+  pwriteAll(fd_, table.data(), table.size(), r.stepTableOffset, path_);
+  if (::fsync(fd_) != 0) throw IoError(path_ + ": fsync failed: " + sysError());
+  const auto slot = encodeCommitSlot(r);
+  pwriteAll(fd_, slot.data(), slot.size(),
+            kCommitSlotsOffset + kCommitSlotBytes * uint64_t(nextSlot_), path_);
+  committed_ = true;  // from here on nothing is cut off: the slot may already be on disk
+  committedSize_ = r.committedSize;
+  const bool synced = ::fsync(fd_) == 0;
+  ::close(fd_);  // releases the lock
+  fd_ = -1;
+  if (!synced) throw IoError(path_ + ": fsync of the commit slot failed: " + sysError());
+  return committedSize_;
+}
+
 uint64_t RunWriter::commit() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (committed_) return committedSize_;
   if (inStep_ || rows_.empty())
     throw InvalidArgument(path_ + ": commit " + (inStep_ ? "inside a step" : "without a step"));
+  if (appending_) return commitAppend();
   const std::vector<uint8_t> table = encodeStepTable(rows_);
   CommitRecord r;
   r.generation = 1;

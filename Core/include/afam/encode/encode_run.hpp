@@ -37,4 +37,12 @@ struct RunStats {
 RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
                    const RunOptions& run, const std::string& path);
 
+/// Appends `step` to the run at `path` in place (RunWriter::append: a kill at any moment leaves
+/// the run with its old or its new steps), coded in time against the run's last step and held to
+/// the bound the run was encoded with. `time`: NaN for the last step's time + 1. Throws
+/// InvalidArgument when the step's grid is not the run's (naming what differs) or the time does
+/// not follow, and as RunWriter::append for a file that is not a run.
+RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& options,
+                    const std::string& path);
+
 }  // namespace afam

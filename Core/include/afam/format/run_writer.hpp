@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -25,6 +26,13 @@ class RunWriter {
   /// (canReference() says when one more is allowed); absoluteBound: the bound in data units.
   RunWriter(const std::string& path, const VolumeHeader& header, int keyInterval,
             double absoluteBound);
+  /// Opens an existing run to append steps to it in place (docs/FORMAT.md, "Commit slots"): the
+  /// bytes of an earlier append that did not commit are cut off first, new payloads, indexes and
+  /// the step table go after the committed bytes, and commit() makes them count by writing the
+  /// older commit slot last, so that a writer killed at any moment leaves the file with its old or
+  /// its new steps. One appender at a time (an exclusive lock; IoError when held). InvalidArgument
+  /// for a file of version 1 or 2 (one step: encode the steps as a run), FormatError when damaged.
+  static std::unique_ptr<RunWriter> append(const std::string& path);
   ~RunWriter();
   RunWriter(const RunWriter&) = delete;
   RunWriter& operator=(const RunWriter&) = delete;
@@ -45,6 +53,10 @@ class RunWriter {
 
   /// Steps ended so far.
   int64_t stepsDone() const { return static_cast<int64_t>(rows_.size()) - (inStep_ ? 1 : 0); }
+  const VolumeHeader& header() const { return header_; }
+  double absoluteBound() const { return absoluteBound_; }
+  /// The time of the last step begun (NaN before the first).
+  double lastTime() const;
   const Partition& partition() const { return partition_; }
   /// Whether the current step may refer to the step before for this block (not the first step,
   /// and the block's chain of references stays shorter than the key interval).
@@ -54,15 +66,20 @@ class RunWriter {
   bool previousModel(int level, Int3 block, ModelEntry& entry, std::vector<float>& control) const;
 
  private:
+  RunWriter() = default;
   size_t slotOf(const ModelEntry& in) const;
+  uint64_t commitAppend();
   std::string path_, tmpPath_;
   int fd_ = -1;
   bool committed_ = false, inStep_ = false;
   VolumeHeader header_;
   Partition partition_;
   std::vector<int64_t> levelStart_;
-  int keyInterval_;
-  double absoluteBound_;
+  int keyInterval_ = 1;
+  double absoluteBound_ = 0;
+  bool appending_ = false;   ///< writes go to the file itself (append) rather than a temporary one
+  uint64_t generation_ = 0;  ///< of the commit in force (append)
+  int nextSlot_ = 1;         ///< the commit slot an append writes
   std::vector<StepRow> rows_;
   std::vector<ModelEntry> current_, previous_;  ///< this step's and the step before's entries
   std::vector<int> depth_, previousDepth_;      ///< references behind each block (0: stored)

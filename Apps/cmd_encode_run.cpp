@@ -41,6 +41,10 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
   for (size_t k = 0; k + 1 < pos.size(); ++k) {
     inputs.push_back(openInput(pos[k], args));
     steps.push_back(inputs.back().source.get());
+    if (inputs.back().typeName != inputs.front().typeName)
+      throw InvalidArgument("encode: step " + std::to_string(k) + " (" + pos[k] +
+                            "): sample type " + inputs.back().typeName +
+                            " differs from the first step's " + inputs.front().typeName);
   }
   RunOptions run;
   if (args.has("times")) run.times = parseTimes(args.str("times"));

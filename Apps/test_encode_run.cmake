@@ -89,6 +89,11 @@ run_fails("2 time values for 3 steps" ${AFAM} encode a_64x80x56_uint8.raw b_64x8
           a_64x80x56_uint8.raw bad.afam --times 0,1)
 run_fails("step 1 \\(HeadMRVolume\\): dims 48x62x42 differ from the first step's 64x80x56"
           ${AFAM} encode a_64x80x56_uint8.raw ${src} bad.afam)
+run_ok(out ${AFAM} decode one.afam float_64x80x56_float32.raw)
+run_fails("step 1 \\(float_64x80x56_float32.raw\\): sample type float32 differs from the first step's uint8"
+          ${AFAM} encode a_64x80x56_uint8.raw float_64x80x56_float32.raw bad.afam)
+run_fails("samples of 4 bytes differ from the run's 1" ${AFAM} encode --append
+          float_64x80x56_float32.raw run.afam)
 run_fails("need several inputs" ${AFAM} encode a_64x80x56_uint8.raw bad.afam --times 0)
 run_fails("cannot open" ${AFAM} encode a_64x80x56_uint8.raw missing_64x80x56_uint8.raw bad.afam)
 file(GLOB left "${WORK}/bad.afam*")

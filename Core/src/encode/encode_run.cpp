@@ -161,6 +161,9 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
     difference = "origin differs from the run's";
   else if (step.spacing() != h.spacing)
     difference = "spacing differs from the run's";
+  else if (h.sourceBytesPerSample != 0 && step.bytesPerVoxel() != h.sourceBytesPerSample)
+    difference = "samples of " + std::to_string(step.bytesPerVoxel()) +
+                 " bytes differ from the run's " + std::to_string(h.sourceBytesPerSample);
   if (!difference.empty())
     throw InvalidArgument("encode --append: " + step.name() + ": " + difference + " (" + path +
                           ")");

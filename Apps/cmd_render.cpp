@@ -53,7 +53,7 @@ int runRender(int argc, char** argv) {
   if (view < 0 || view >= (long long)poses.size())
     throw InvalidArgument("--view " + std::to_string(view) + " outside [0, " +
                           std::to_string(poses.size()) + ")");
-  auto file = AfamFile::open(args.positional()[0]);
+  auto file = AfamFile::open(args.positional()[0], args.integer("step", 0));
   Renderer renderer(file, opts);
   const DeviceChoice device =
       useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));

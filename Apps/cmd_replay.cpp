@@ -87,7 +87,7 @@ int runReplay(int argc, char** argv) {
     if (n < 1) throw InvalidArgument("--frames must be >= 1");
     if (size_t(n) < poses.size()) poses.resize(size_t(n));
   }
-  auto file = AfamFile::open(args.positional()[0]);
+  auto file = AfamFile::open(args.positional()[0], args.integer("step", 0));
   Renderer renderer(file, opts);
   const DeviceChoice device =
       useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));

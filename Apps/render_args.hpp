@@ -14,6 +14,7 @@ namespace afam::cli {
 
 inline const char* renderOptionsHelp() {
   return "  --size W,H             image size (or N for N x N; default 256,256)\n"
+         "  --step K               time step K of a run of steps (default 0)\n"
          "  --cache-blocks N       RAM cache budget in micro-models (default 200, the paper's)\n"
          "  --cache-bytes B        RAM cache budget in bytes (instead of, or with, "
          "--cache-blocks)\n"
@@ -35,11 +36,11 @@ inline const char* renderOptionsHelp() {
 }
 
 inline const std::set<std::string>& renderValueOptions() {
-  static const std::set<std::string> s = {"size",          "cache-blocks", "cache-bytes",
-                                          "prefetch",      "storage-mbps", "sample-distance",
-                                          "shading",       "lod",          "pixel-budget",
-                                          "threads",       "trajectory",   "load-threads",
-                                          "miss-budget-ms"};
+  static const std::set<std::string> s = {"size",           "cache-blocks", "cache-bytes",
+                                          "prefetch",       "storage-mbps", "sample-distance",
+                                          "shading",        "lod",          "pixel-budget",
+                                          "threads",        "trajectory",   "load-threads",
+                                          "miss-budget-ms", "step"};
   return s;
 }
 

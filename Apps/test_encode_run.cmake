@@ -73,6 +73,23 @@ run_fails("time 3.000000 does not follow 5.000000" ${AFAM} encode --append a_64x
           run.afam --times 3)
 run_fails("dims differ from the run's" ${AFAM} encode --append ${src} run.afam)
 
+# A step of a run rendered: step 1 (a again, references) as step 0, step 2 (b) not.
+run_ok(out ${AFAM} trajectory orbit.dat --kind orbit)
+foreach (k 0 1 2)
+  run_ok(out ${AFAM} render run.afam --trajectory orbit.dat --view 3 --size 48 --step ${k}
+         --out step${k}.png)
+endforeach ()
+run_ok(out ${AFAM} compare step0.png step1.png)
+if (NOT out MATCHES "psnr=99")
+  message(FATAL_ERROR "step 1 (references to step 0) renders differently: ${out}")
+endif ()
+run_ok(out ${AFAM} compare step0.png step2.png)
+if (out MATCHES "psnr=99")
+  message(FATAL_ERROR "steps 0 and 2 (different inputs) render alike")
+endif ()
+run_ok(out ${AFAM} replay run.afam --trajectory orbit.dat --frames 3 --size 32 --step 2 --quiet)
+run_fails("step 9 of a run of" ${AFAM} render run.afam --trajectory orbit.dat --step 9 --out x.png)
+
 # One input keeps today's file (version 2), byte for byte what a single encode writes.
 run_ok(out ${AFAM} encode a_64x80x56_uint8.raw one.afam --error-bound 1e-2 --relative)
 run_ok(out ${AFAM} info one.afam)

@@ -190,9 +190,12 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
   {
     // Opening reads and validates the header and the index only, never a payload. A run opens at
     // the step the pipeline's time asks for.
-    const long long step = StepAtTime(afam::AfamFile::open(this->FileName)->stepTimes(), outInfo);
-    auto file =
-      step == 0 ? afam::AfamFile::open(this->FileName) : afam::AfamFile::open(this->FileName, step);
+    auto file = afam::AfamFile::open(this->FileName);
+    const long long step = StepAtTime(file->stepTimes(), outInfo);
+    if (step != 0)
+    {
+      file = afam::AfamFile::open(this->FileName, step);
+    }
     if (file->stepCount() > 1)
     {
       output->GetInformation()->Set(

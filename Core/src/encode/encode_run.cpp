@@ -2,6 +2,7 @@
 #include "afam/encode/encode_run.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -32,6 +33,32 @@ std::string gridDifference(VolumeSource& first, VolumeSource& step) {
   }
   return d.str();
 }
+
+/// A step whose range the run's first pass already found: the encoder does not read it again for
+/// that (VolumeSource::knownRange).
+class RangedStep : public VolumeSource {
+ public:
+  RangedStep(VolumeSource& s, double lo, double hi) : s_(s), lo_(lo), hi_(hi) {}
+  Index3 dims() const override { return s_.dims(); }
+  std::array<double, 3> origin() const override { return s_.origin(); }
+  std::array<double, 3> spacing() const override { return s_.spacing(); }
+  std::string name() const override { return s_.name(); }
+  void readSlab(int64_t z0, int64_t zCount, float* out) override { s_.readSlab(z0, zCount, out); }
+  void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override {
+    s_.readRows(z0, zCount, y0, yCount, out);
+  }
+  bool knownRange(double& lo, double& hi) const override {
+    lo = lo_;
+    hi = hi_;
+    return true;
+  }
+  int bytesPerVoxel() const override { return s_.bytesPerVoxel(); }
+  bool readsOnCallingThread() const override { return s_.readsOnCallingThread(); }
+
+ private:
+  VolumeSource& s_;
+  double lo_, hi_;
+};
 
 /// Where one step's models go: the run writer, references included.
 class StepSink : public ModelSink {
@@ -118,9 +145,12 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   RunStats stats;
   stats.valueMin = std::numeric_limits<double>::infinity();
   stats.valueMax = -stats.valueMin;
+  std::vector<RangedStep> ranged;  // each step's range, read once
+  ranged.reserve(steps.size());
   for (VolumeSource* s : steps) {
     double lo, hi;
     volumeValueRange(*s, lo, hi);
+    ranged.emplace_back(*s, lo, hi);
     stats.valueMin = std::min(stats.valueMin, lo);
     stats.valueMax = std::max(stats.valueMax, hi);
   }
@@ -139,7 +169,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   for (size_t k = 0; k < steps.size(); ++k) {
     StepSink sink(writer, path, runHeader, run.keyInterval, stats.bound, times[k]);
     stepOptions.previous = previous.get();
-    stats.steps.push_back(encodeVolume(*steps[k], stepOptions, sink));
+    stats.steps.push_back(encodeVolume(ranged[k], stepOptions, sink));
     sink.end();
     stats.references.push_back(sink.references);
     if (!previous) previous = std::make_unique<WrittenStep>(*writer);

@@ -28,7 +28,6 @@
 
 #include "afam/format/afam_file.hpp"
 #include "afam/scene/camera.hpp"
-#include "afam/scene/trajectory_gen.hpp"
 #include "afam/scene/transfer_function.hpp"
 
 #include "vtkActor.h"
@@ -59,12 +58,10 @@
 
 namespace
 {
-struct Options
+struct Options : PathOptions
 {
-  std::string File, Trajectory, Csv;
-  int Orbit = 0, Size = 512, Frames = 0;
   bool Gpu = false, RequireGpu = false, RequireInterop = false, HostDraw = false, Offscreen = false;
-  bool Cold = false, Plane = false, ScreenLod = false;
+  bool Plane = false, ScreenLod = false;
   double CacheMB = 512;
 };
 
@@ -74,22 +71,14 @@ bool Parse(int argc, char* argv[], Options& o)
   {
     const std::string a = argv[i];
     const bool hasValue = i + 1 < argc;
-    if (a == "--trajectory" && hasValue)
-      o.Trajectory = argv[++i];
-    else if (a == "--orbit" && hasValue)
-      o.Orbit = std::atoi(argv[++i]);
-    else if (a == "--size" && hasValue)
-      o.Size = std::atoi(argv[++i]);
-    else if (a == "--frames" && hasValue)
-      o.Frames = std::atoi(argv[++i]);
-    else if (a == "--device" && hasValue)
+    if (ParsePathOption(argc, argv, i, o))
+      continue;
+    if (a == "--device" && hasValue)
       o.Gpu = std::string(argv[++i]) == "gpu";
     else if (a == "--lod" && hasValue)
       o.ScreenLod = std::string(argv[++i]) == "screen";
     else if (a == "--cache-mb" && hasValue)
       o.CacheMB = std::atof(argv[++i]);
-    else if (a == "--csv" && hasValue)
-      o.Csv = argv[++i];
     else if (a == "--require-gpu")
       o.RequireGpu = true;
     else if (a == "--require-interop")
@@ -100,17 +89,13 @@ bool Parse(int argc, char* argv[], Options& o)
       o.Offscreen = true;
     else if (a == "--plane")
       o.Plane = true;
-    else if (a == "--cold")
-      o.Cold = true;
-    else if (a[0] != '-' && o.File.empty())
-      o.File = a;
     else
     {
       std::cerr << "BenchAFAMRenderLoop: unknown or incomplete argument '" << a << "'\n";
       return false;
     }
   }
-  if (o.File.empty() || (o.Trajectory.empty() == (o.Orbit < 1)) || o.Size < 16 || o.Size > 8192)
+  if (!PathOptionsComplete(o))
   {
     std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
                  "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--require-interop] "
@@ -147,18 +132,13 @@ int main(int argc, char* argv[])
   std::shared_ptr<const afam::AfamFile> file;
   try
   {
-    poses = o.Trajectory.empty() ? afam::orbitTrajectory(o.Orbit, 1.5, 60.0, 0.0, 1.0)
-                                 : afam::loadTrajectory(o.Trajectory);
+    poses = LoadPoses(o);
     file = afam::AfamFile::open(o.File);
   }
   catch (const std::exception& e)
   {
     std::cerr << "BenchAFAMRenderLoop: " << e.what() << "\n";
     return 2;
-  }
-  if (o.Frames > 0 && static_cast<size_t>(o.Frames) < poses.size())
-  {
-    poses.resize(static_cast<size_t>(o.Frames));
   }
 
   vtkNew<vtkAFAMReader> reader;
@@ -178,9 +158,10 @@ int main(int argc, char* argv[])
     o.Gpu ? vtkAFAMVolumeMapper::DEVICE_GPU : vtkAFAMVolumeMapper::DEVICE_CPU);
   mapper->SetGpuImageInterop(!o.HostDraw);
   const double* b = mapper->GetBounds();
-  const double c[3] = { 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]) };
-  const double h[3] = { 0.5 * (b[1] - b[0]), 0.5 * (b[3] - b[2]), 0.5 * (b[5] - b[4]) };
-  const double unit = std::cbrt(h[0] * h[1] * h[2]);
+  const VolumeBox box = BoxOf(b);
+  const double* c = box.Centre;
+  const double* h = box.Half;
+  const double unit = box.Unit;
   if (!(unit > 0))
   {
     std::cerr << "BenchAFAMRenderLoop: " << o.File << " has an empty volume box\n";

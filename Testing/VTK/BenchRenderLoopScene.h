@@ -7,6 +7,7 @@
 #define BenchRenderLoopScene_h
 
 #include "afam/scene/camera.hpp"
+#include "afam/scene/trajectory_gen.hpp"
 #include "afam/scene/transfer_function.hpp"
 
 #include "vtkCamera.h"
@@ -17,10 +18,83 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 namespace
 {
+// What both benchmarks take: the input, the camera path, the window's size, the frames to render,
+// a cold start and the CSV file.
+struct PathOptions
+{
+  std::string File, Trajectory, Csv;
+  int Orbit = 0, Size = 512, Frames = 0;
+  bool Cold = false;
+};
+
+// Takes argv[i] (with its value, advancing i) when it is one of PathOptions' arguments; false
+// when it is not.
+bool ParsePathOption(int argc, char* argv[], int& i, PathOptions& o)
+{
+  const std::string a = argv[i];
+  const bool hasValue = i + 1 < argc;
+  if (a == "--trajectory" && hasValue)
+    o.Trajectory = argv[++i];
+  else if (a == "--orbit" && hasValue)
+    o.Orbit = std::atoi(argv[++i]);
+  else if (a == "--size" && hasValue)
+    o.Size = std::atoi(argv[++i]);
+  else if (a == "--frames" && hasValue)
+    o.Frames = std::atoi(argv[++i]);
+  else if (a == "--csv" && hasValue)
+    o.Csv = argv[++i];
+  else if (a == "--cold")
+    o.Cold = true;
+  else if (a[0] != '-' && o.File.empty())
+    o.File = a;
+  else
+    return false;
+  return true;
+}
+
+// An input, exactly one camera path and a size in [16, 8192].
+bool PathOptionsComplete(const PathOptions& o)
+{
+  return !o.File.empty() && (o.Trajectory.empty() != (o.Orbit < 1)) && o.Size >= 16 &&
+    o.Size <= 8192;
+}
+
+// The points of view of --trajectory or --orbit, the first --frames of them. Throws afam::Error.
+std::vector<afam::Pose> LoadPoses(const PathOptions& o)
+{
+  std::vector<afam::Pose> poses = o.Trajectory.empty()
+    ? afam::orbitTrajectory(o.Orbit, 1.5, 60.0, 0.0, 1.0)
+    : afam::loadTrajectory(o.Trajectory);
+  if (o.Frames > 0 && static_cast<size_t>(o.Frames) < poses.size())
+  {
+    poses.resize(static_cast<size_t>(o.Frames));
+  }
+  return poses;
+}
+
+// The volume's box from its bounds: centre, half extents and the normalised frame's unit length.
+struct VolumeBox
+{
+  double Centre[3], Half[3], Unit;
+};
+VolumeBox BoxOf(const double b[6])
+{
+  VolumeBox box;
+  for (int a = 0; a < 3; ++a)
+  {
+    box.Centre[a] = 0.5 * (b[2 * a] + b[2 * a + 1]);
+    box.Half[a] = 0.5 * (b[2 * a + 1] - b[2 * a]);
+  }
+  box.Unit = std::cbrt(box.Half[0] * box.Half[1] * box.Half[2]);
+  return box;
+}
+
 double Median(std::vector<double> v)
 {
   if (v.empty())

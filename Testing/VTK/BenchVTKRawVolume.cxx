@@ -14,7 +14,6 @@
 #include "BenchRenderLoopScene.h"
 
 #include "afam/base/errors.hpp"
-#include "afam/scene/trajectory_gen.hpp"
 #include "afam/volume/sample_type.hpp"
 #include "afam/volume/volume_source.hpp"
 
@@ -41,40 +40,19 @@
 
 namespace
 {
-struct Options
-{
-  std::string File, Trajectory, Csv;
-  int Orbit = 0, Size = 512, Frames = 0;
-  bool Cold = false;
-};
+using Options = PathOptions;
 
 bool Parse(int argc, char* argv[], Options& o)
 {
   for (int i = 1; i < argc; ++i)
   {
-    const std::string a = argv[i];
-    const bool hasValue = i + 1 < argc;
-    if (a == "--trajectory" && hasValue)
-      o.Trajectory = argv[++i];
-    else if (a == "--orbit" && hasValue)
-      o.Orbit = std::atoi(argv[++i]);
-    else if (a == "--size" && hasValue)
-      o.Size = std::atoi(argv[++i]);
-    else if (a == "--frames" && hasValue)
-      o.Frames = std::atoi(argv[++i]);
-    else if (a == "--csv" && hasValue)
-      o.Csv = argv[++i];
-    else if (a == "--cold")
-      o.Cold = true;
-    else if (a[0] != '-' && o.File.empty())
-      o.File = a;
-    else
+    if (!ParsePathOption(argc, argv, i, o))
     {
-      std::cerr << "BenchVTKRawVolume: unknown or incomplete argument '" << a << "'\n";
+      std::cerr << "BenchVTKRawVolume: unknown or incomplete argument '" << argv[i] << "'\n";
       return false;
     }
   }
-  if (o.File.empty() || (o.Trajectory.empty() == (o.Orbit < 1)) || o.Size < 16 || o.Size > 8192)
+  if (!PathOptionsComplete(o))
   {
     std::cerr << "usage: BenchVTKRawVolume IN_XxYxZ_type.raw (--trajectory T.dat | --orbit N) "
                  "[--size N (16..8192)] [--frames K] [--cold] [--csv OUT.csv]\n";
@@ -167,8 +145,7 @@ int main(int argc, char* argv[])
   double range[2];
   try
   {
-    poses = o.Trajectory.empty() ? afam::orbitTrajectory(o.Orbit, 1.5, 60.0, 0.0, 1.0)
-                                 : afam::loadTrajectory(o.Trajectory);
+    poses = LoadPoses(o);
     image = ReadRaw(o.File, o.Cold);
     image->GetPointData()->GetScalars()->GetRange(range);
   }
@@ -179,14 +156,11 @@ int main(int argc, char* argv[])
   }
   const double loadMs =
     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  if (o.Frames > 0 && static_cast<size_t>(o.Frames) < poses.size())
-  {
-    poses.resize(static_cast<size_t>(o.Frames));
-  }
   const double* b = image->GetBounds();
-  const double c[3] = { 0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]) };
-  const double h[3] = { 0.5 * (b[1] - b[0]), 0.5 * (b[3] - b[2]), 0.5 * (b[5] - b[4]) };
-  const double unit = std::cbrt(h[0] * h[1] * h[2]);
+  const VolumeBox box = BoxOf(b);
+  const double* c = box.Centre;
+  const double* h = box.Half;
+  const double unit = box.Unit;
   if (!(unit > 0))
   {
     std::cerr << "BenchVTKRawVolume: " << o.File << " has an empty volume box\n";

@@ -58,10 +58,11 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
     bytesIn += st.bytesIn;
     payload += st.payloadBytes;
     std::printf(
-        "step=%zu time=%.9g input=%s blocks=%lld references=%lld payload_bytes=%llu "
-        "max_block_rmse=%.6g seconds=%.3f\n",
+        "step=%zu time=%.9g input=%s blocks=%lld references=%lld residuals=%lld "
+        "payload_bytes=%llu max_block_rmse=%.6g seconds=%.3f\n",
         k, run.times.empty() ? double(k) : run.times[k], pos[k].c_str(), (long long)st.blocks,
-        (long long)s.references[k], (unsigned long long)st.payloadBytes, st.maxRmse, st.seconds);
+        (long long)s.references[k], (long long)s.residuals[k], (unsigned long long)st.payloadBytes,
+        st.maxRmse, st.seconds);
   }
   std::printf(
       "steps=%zu key_interval=%d bound=%.6g%s value_range=[%.6g, %.6g] seconds=%.3f\n"
@@ -88,11 +89,11 @@ int appendStepCommand(const Args& args, const EncoderOptions& opt) {
   if (args.has("quiet")) return 0;
   const EncodeStats& st = s.steps[0];
   std::printf(
-      "appended %s -> %s: blocks=%lld references=%lld payload_bytes=%llu max_block_rmse=%.6g "
-      "bound=%.6g bytes_out=%llu seconds=%.3f\n",
+      "appended %s -> %s: blocks=%lld references=%lld residuals=%lld payload_bytes=%llu "
+      "max_block_rmse=%.6g bound=%.6g bytes_out=%llu seconds=%.3f\n",
       args.str("append").c_str(), run.c_str(), (long long)st.blocks, (long long)s.references[0],
-      (unsigned long long)st.payloadBytes, st.maxRmse, s.bound, (unsigned long long)s.bytesOut,
-      s.seconds);
+      (long long)s.residuals[0], (unsigned long long)st.payloadBytes, st.maxRmse, s.bound,
+      (unsigned long long)s.bytesOut, s.seconds);
   return 0;
 }
 

@@ -20,9 +20,6 @@ namespace {
 // block whose error budget is not spent gains nothing from it. Factors of 2 sqrt(3) x budget (the
 // step whose uniform rounding error alone would spend it), tried from the largest.
 constexpr double kFitShare = 0.9;
-constexpr double kStepFactors[] = {4.0, 3.2,  2.6, 2.1,  1.7, 1.4, 1.15,
-                                   1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
-constexpr int kZstdLevel = 15;
 
 template <typename T>
 std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
@@ -48,16 +45,6 @@ ErrorStats compare(const Model& model, const std::vector<float>& s) {
   }
   es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
   return es;
-}
-
-void setError(BlockTask& t, const ErrorStats& es) {
-  ModelEntry& m = t.entry;
-  t.rmse = es.rmse;
-  t.maxError = es.maxError;
-  m.minValue = float(es.minValue);
-  m.maxValue = float(es.maxValue);
-  m.rmse = float(es.rmse);
-  m.maxError = float(es.maxError);
 }
 
 /// The block's samples themselves as a degree-1 spline with NCP = n per axis: its implied knots
@@ -124,25 +111,6 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
   setError(t, fr.error);
   t.stored = bytesOf(fr.control);
   m.storedSize = t.stored.size();
-}
-
-/// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
-/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails. The
-/// largest is tried first (a block that passes there costs one evaluation); the last call that
-/// returned true is the answer's.
-template <typename Passes>
-int largestPassingStep(Passes&& passes) {
-  const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
-  if (passes(kStepFactors[0])) return 0;
-  int fail = 0, pass = n;  // kStepFactors[fail] fails; [pass] passes (n: none known to)
-  while (pass - fail > 1) {
-    const int mid = (pass + fail) / 2;
-    if (passes(kStepFactors[mid]))
-      pass = mid;
-    else
-      fail = mid;
-  }
-  return pass < n ? pass : -1;
 }
 
 /// A candidate stored form of the block.
@@ -335,6 +303,16 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
 
 }  // namespace
 
+void setError(BlockTask& t, const ErrorStats& es) {
+  ModelEntry& m = t.entry;
+  t.rmse = es.rmse;
+  t.maxError = es.maxError;
+  m.minValue = float(es.minValue);
+  m.maxValue = float(es.maxValue);
+  m.rmse = float(es.rmse);
+  m.maxError = float(es.maxError);
+}
+
 void storeDownsampled(const BlockExtent& e, BlockTask& t) {
   ModelEntry& m = t.entry;
   for (int a = 0; a < 3; ++a) {
@@ -362,12 +340,8 @@ namespace {
 
 /// A run's block whose model at the step before still meets the bound on its samples: stored as a
 /// reference to it (no payload), its error measured on these samples.
-bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
-  ModelEntry previous;
-  FitResult model;
-  if (!c.opt.previous || !bounded(c.opt.mode) ||
-      !c.opt.previous->model(c.level, t.ijk, previous, model))
-    return false;
+bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
+                   const ModelEntry& previous, const FitResult& model, BlockTask& t) {
   const ErrorStats es = fitter.error(t.samples.data(), e.samples, model);
   if (!(es.rmse <= c.bound)) return false;
   ModelEntry& m = t.entry;
@@ -387,10 +361,16 @@ bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
 
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
-    if (referPrevious(c, e, fitter, t)) {
+    // A run's step: the block's model at the step before, when the key interval allows.
+    ModelEntry previous;
+    FitResult model;
+    const bool inTime = c.opt.previous && bounded(c.opt.mode) &&
+                        c.opt.previous->model(c.level, t.ijk, previous, model);
+    if (inTime && referPrevious(c, e, fitter, previous, model, t)) {
       // the step before's model, unchanged
     } else if (c.opt.compact && bounded(c.opt.mode)) {
       encodeCompact(c, e, fitter, t);
+      if (inTime) codeResidualIfSmaller(c, e, fitter, previous, model, t);
     } else {
       FitResult fr;
       fitBlock(c, e, fitter, c.bound, t, fr);

@@ -41,8 +41,43 @@ struct FitContext {
   std::string sourceName;
 };
 
+// Quantization steps of coded payloads, as factors of 2 sqrt(3) x the error budget (the step whose
+// uniform rounding error alone would spend it), tried from the largest: a larger step is fewer
+// bits, and a block whose error budget is not spent gains nothing from it.
+constexpr double kStepFactors[] = {4.0, 3.2,  2.6, 2.1,  1.7, 1.4, 1.15,
+                                   1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
+constexpr int kZstdLevel = 15;
+
+/// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
+/// bisection over the ladder (the error grows with the step); -1 when even the smallest fails. The
+/// largest is tried first (a block that passes there costs one evaluation); the last call that
+/// returned true is the answer's.
+template <typename Passes>
+int largestPassingStep(Passes&& passes) {
+  const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
+  if (passes(kStepFactors[0])) return 0;
+  int fail = 0, pass = n;  // kStepFactors[fail] fails; [pass] passes (n: none known to)
+  while (pass - fail > 1) {
+    const int mid = (pass + fail) / 2;
+    if (passes(kStepFactors[mid]))
+      pass = mid;
+    else
+      fail = mid;
+  }
+  return pass < n ? pass : -1;
+}
+
+/// The entry's error and value range from the stored model's error on the block's samples.
+void setError(BlockTask& t, const ErrorStats& es);
+
 /// DS: the samples with their ghost layer are the payload (float32, uncoded).
 void storeDownsampled(const BlockExtent& e, BlockTask& t);
+
+/// A run's block coded as a residual on the step before's model (`before`, `model`: its entry and
+/// control points as a reader decodes them): replaces t's stored form when the residual meets the
+/// bound on t.samples, checked on what a reader decodes, in fewer bytes (residual_coding.cpp).
+bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
+                           const ModelEntry& before, const FitResult& model, BlockTask& t);
 
 /// Fits and stores one block of a spline mode (entry, stored bytes, statistics of the task).
 /// Throws NumericError naming the block when its samples cannot be fitted.

@@ -88,12 +88,15 @@ class StepSink : public ModelSink {
     if (e.reference) {
       writer_->addReference(e);
       ++references;
+    } else if (e.residual) {
+      writer_->addResidual(e, stored);
+      ++residuals;
     } else {
       writer_->addStored(e, stored);
     }
   }
   void end() { writer_->endStep(float(stepMin_), float(stepMax_)); }
-  int64_t references = 0;
+  int64_t references = 0, residuals = 0;
 
  private:
   std::unique_ptr<RunWriter>& writer_;
@@ -172,6 +175,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
     stats.steps.push_back(encodeVolume(ranged[k], stepOptions, sink));
     sink.end();
     stats.references.push_back(sink.references);
+    stats.residuals.push_back(sink.residuals);
     if (!previous) previous = std::make_unique<WrittenStep>(*writer);
   }
   stats.bytesOut = writer->commit();
@@ -215,6 +219,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   stats.steps.push_back(encodeVolume(step, stepOptions, sink));
   sink.end();
   stats.references.push_back(sink.references);
+  stats.residuals.push_back(sink.residuals);
   stats.bytesOut = writer->commit();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;

@@ -569,6 +569,10 @@ void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];
   const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
+  if (e.residual) {  // its chain of payloads in time
+    decodeChain(fd_, path_, e, chain(entry), static_cast<float*>(out));
+    return;
+  }
   if (e.storedSize == e.size) {  // uncoded floats: read in place
     preadAll(fd_, out, e.size, e.offset, path_,
              "payload of " + Partition::blockName(e.level, e.block));
@@ -585,6 +589,12 @@ void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
     throw FormatError(path_ + ": payload checksum mismatch at " +
                       Partition::blockName(e.level, e.block));
   decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
+}
+
+const std::vector<PayloadPart>& AfamFile::chain(int64_t entry) const {
+  static const std::vector<PayloadPart> none;
+  const auto it = chains_.find(entry);
+  return it == chains_.end() ? none : it->second;
 }
 
 std::vector<float> AfamFile::readPayload(int64_t entry) const {

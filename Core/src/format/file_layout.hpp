@@ -172,6 +172,12 @@ void parseVolumeHeader(const FileHeader& h, const std::string& path, VolumeHeade
 size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
                          const Partition& partition, const std::vector<int64_t>& levelStart,
                          const ModelEntry& in);
+/// The model of a residual entry into out (entry.size bytes): each payload of its chain (the
+/// independent one first) read, checked against its CRC and decoded, the residuals added to the
+/// first in order (payload_chain.cpp). FormatError naming the path, block and step of a damaged
+/// payload.
+void decodeChain(int fd, const std::string& path, const ModelEntry& e,
+                 const std::vector<PayloadPart>& chain, float* out);
 /// The on-disk entry of a model, `extraFlags` or-ed into its flags.
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags);
 /// A header with the volume's description, the partition and `version` (checksum not set).

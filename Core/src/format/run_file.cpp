@@ -25,6 +25,7 @@ namespace afam {
 namespace {
 
 constexpr uint16_t kReferenceFlag = 1u << 10;  // flags bits 10-11: 1 reference
+constexpr uint16_t kResidualFlag = 2u << 10;   // 2 residual
 constexpr uint16_t kTemporalMask = 3u << 10;
 constexpr size_t kEntryBytes = sizeof(layout::IndexEntryV1);
 
@@ -75,6 +76,85 @@ std::vector<IndexEntryV1> readStepIndex(int fd, const std::string& path, const S
   return raw;
 }
 
+/// The payload of one block's entry (independent or a residual) checked against the step that
+/// holds it: inside that step's payloads and aligned.
+PayloadPart payloadPart(const IndexEntryV1& r, const ModelEntry& parsed, const StepRow& row,
+                        int64_t s, uint32_t alignment, const std::string& where) {
+  const uint64_t end = row.indexOffset;
+  if (r.offset < kRunStepsOffset || r.offset % alignment != 0 || r.offset > end ||
+      parsed.storedSize > end - r.offset)
+    throw FormatError(where + ": payload [" + std::to_string(r.offset) + ", +" +
+                      std::to_string(parsed.storedSize) + ") lies outside step " +
+                      std::to_string(s) + "'s payloads or is misaligned");
+  PayloadPart p;
+  p.offset = r.offset;
+  p.storedSize = parsed.storedSize;
+  p.checksum = r.checksum;
+  p.coded = parsed.coded;
+  p.integerCoded = parsed.integerCoded;
+  p.step = s;
+  return p;
+}
+
+/// Resolves block i at `step` through time: references skipped (the model is the step before's),
+/// residuals collected, down to the independent payload; at most K - 1 steps back. Fills m's
+/// kind, NCP, sizes and payload (the last residual's, with the chain) from what it finds.
+template <typename IndexOf>
+void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileHeader& h,
+                   int64_t step, size_t i, const BlockExtent& extent, const VolumeHeader& vh,
+                   const std::string& where, ModelEntry& m, std::vector<PayloadPart>& chain) {
+  std::vector<PayloadPart> parts;  // newest first
+  ModelEntry parsed;
+  bool kindKnown = false;
+  int64_t owner = -1;  // the step of the newest payload
+  for (int64_t s = step;; --s) {
+    const IndexEntryV1& r = index(s)[i];
+    const uint16_t inTime = r.flags & kTemporalMask;
+    if (inTime == kTemporalMask)
+      throw FormatError(where + ": in-time coding 3 at step " + std::to_string(s));
+    if (inTime != 0 && (s == 0 || rows[size_t(s)].keyStep))
+      throw FormatError(where + ": " + (inTime == kReferenceFlag ? "a reference" : "a residual") +
+                        " at step " + std::to_string(s) +
+                        (s == 0 ? ", the first" : ", a key step"));
+    if (inTime != 0 && step - s + 1 >= static_cast<int64_t>(h.keyInterval))
+      throw FormatError(where + ": coding in time runs past the key interval " +
+                        std::to_string(h.keyInterval));
+    if (inTime == kReferenceFlag) {
+      if (r.offset != 0 || r.storedBytes != 0 || r.checksum != 0)
+        throw FormatError(where + ": a reference with a payload");
+      continue;
+    }
+    ModelEntry e;
+    parseEntry(r, 3, vh, extent, where, e, kTemporalMask);
+    if (inTime == kResidualFlag && e.kind == BlockKind::Constant)
+      throw FormatError(where + ": a residual on a constant at step " + std::to_string(s));
+    if (kindKnown && (e.kind != parsed.kind || e.ncp != parsed.ncp))
+      throw FormatError(where + ": step " + std::to_string(s) + "'s " + blockKindName(e.kind) +
+                        " does not match the residual on it");
+    if (!kindKnown) owner = s;
+    parsed = e;
+    kindKnown = true;
+    parts.push_back(payloadPart(r, e, rows[size_t(s)], s, h.payloadAlignment, where));
+    if (inTime == 0) break;
+  }
+  const PayloadPart newest = parts.front();
+  m.kind = parsed.kind;
+  m.ncp = parsed.ncp;
+  m.degree = parsed.degree;
+  m.samples = parsed.samples;
+  m.size = parsed.size;
+  m.coded = newest.coded;
+  m.integerCoded = newest.integerCoded;
+  m.storedSize = newest.storedSize;
+  m.offset = newest.offset;
+  m.checksum = newest.checksum;
+  m.reference = owner != step;
+  m.ownerStep = owner;
+  m.residual = parts.size() > 1;
+  m.chainLength = static_cast<uint32_t>(parts.size());
+  chain.assign(parts.rbegin(), parts.rend());
+}
+
 }  // namespace
 
 void openRunStep(AfamFile& f, const FileHeader& h, int64_t step) {
@@ -103,6 +183,8 @@ void openRunStep(AfamFile& f, const FileHeader& h, int64_t step) {
   const VolumeHeader& vh = f.header_;
   const Partition& part = f.partition_;
   f.entries_.resize(E);
+  f.chains_.clear();
+  std::vector<PayloadPart> chain;
   int level = 0;
   for (size_t i = 0; i < E; ++i) {
     while (static_cast<int64_t>(i) >= f.levelStart_[static_cast<size_t>(level) + 1]) ++level;
@@ -111,38 +193,11 @@ void openRunStep(AfamFile& f, const FileHeader& h, int64_t step) {
     const std::string where = path + ": step " + std::to_string(step) + ", index entry " +
                               std::to_string(i) + " (" + Partition::blockName(level, ijk) + ")";
     const IndexEntryV1& own = index(step)[i];
-    // Walk back through references to the entry that holds the payload.
-    int64_t owner = step;
-    while ((index(owner)[i].flags & kTemporalMask) == kReferenceFlag) {
-      const IndexEntryV1& r = index(owner)[i];
-      if (owner == 0 || rows[size_t(owner)].keyStep)
-        throw FormatError(where + ": a reference at step " + std::to_string(owner) +
-                          (owner == 0 ? ", the first" : ", a key step"));
-      if (r.offset != 0 || r.storedBytes != 0 || r.checksum != 0)
-        throw FormatError(where + ": a reference with a payload");
-      if (step - owner + 1 >= static_cast<int64_t>(h.keyInterval))
-        throw FormatError(where + ": references run past the key interval " +
-                          std::to_string(h.keyInterval));
-      --owner;
-    }
-    const IndexEntryV1& held = index(owner)[i];
-    if ((held.flags & kTemporalMask) != 0)
-      throw FormatError(where + ": in-time coding " + std::to_string((held.flags >> 10) & 3) +
-                        " is not read by this version");
     ModelEntry& m = f.entries_[i];
     m.level = level;
     m.block = ijk;
-    parseEntry(held, 3, vh, part.extent(level, ijk), where, m);
-    const uint64_t end = rows[size_t(owner)].indexOffset;
-    if (held.offset < kRunStepsOffset || held.offset % h.payloadAlignment != 0 ||
-        held.offset > end || m.storedSize > end - held.offset)
-      throw FormatError(where + ": payload [" + std::to_string(held.offset) + ", +" +
-                        std::to_string(m.storedSize) + ") lies outside step " +
-                        std::to_string(owner) + "'s payloads or is misaligned");
-    m.offset = held.offset;
-    m.checksum = held.checksum;
-    m.reference = owner != step;
-    m.ownerStep = owner;
+    resolveInTime(index, rows, h, step, i, part.extent(level, ijk), vh, where, m, chain);
+    if (m.residual) f.chains_[static_cast<int64_t>(i)] = chain;
     m.minValue = own.minValue;
     m.maxValue = own.maxValue;
     m.rmse = own.rmse;
@@ -227,9 +282,15 @@ std::unique_ptr<RunWriter> RunWriter::append(const std::string& path) {
   w->generation_ = r.generation;
   w->nextSlot_ = choice.nextSlot;
   w->previous_ = last->entries();
-  w->previousDepth_.resize(w->previous_.size());
-  for (size_t i = 0; i < w->previous_.size(); ++i)
-    w->previousDepth_[i] = static_cast<int>(steps - 1 - w->previous_[i].ownerStep);
+  const size_t E = w->previous_.size();
+  w->previousChains_.resize(E);
+  w->previousDepth_.resize(E);
+  for (size_t i = 0; i < E; ++i) {  // depth: steps back to the independent payload
+    w->previousChains_[i] = last->chain(static_cast<int64_t>(i));
+    const ModelEntry& m = w->previous_[i];
+    const int64_t base = m.residual ? w->previousChains_[i].front().step : m.ownerStep;
+    w->previousDepth_[i] = static_cast<int>(steps - 1 - base);
+  }
   return w;
 }
 
@@ -255,6 +316,7 @@ void RunWriter::beginStep(double time) {
         (rows_.empty() ? std::string("(none)") : std::to_string(rows_.back().time)));
   const size_t E = static_cast<size_t>(partition_.totalBlockCount());
   current_.assign(E, ModelEntry{});
+  currentChains_.assign(E, {});
   depth_.assign(E, 0);
   present_.assign(E, 0);
   StepRow row;
@@ -263,12 +325,11 @@ void RunWriter::beginStep(double time) {
   inStep_ = true;
 }
 
-void RunWriter::addStored(const ModelEntry& in, const void* stored) {
-  const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
+ModelEntry& RunWriter::writePayload(size_t slot, const ModelEntry& in, const void* stored,
+                                    const char* what) {
   const uint64_t bytes = in.storedSize;
   const uint32_t crc = crc32(stored, bytes);
-  std::lock_guard<std::mutex> lock(mutex_);
-  if (!inStep_) throw InvalidArgument(path_ + ": addStored outside a step");
+  if (!inStep_) throw InvalidArgument(path_ + ": " + what + " outside a step");
   if (present_[slot])
     throw InvalidArgument(path_ + ": " + Partition::blockName(in.level, in.block) + " added twice");
   const uint64_t offset = end_;
@@ -282,9 +343,18 @@ void RunWriter::addStored(const ModelEntry& in, const void* stored) {
   m.size = payloadBytes(in.ncp);
   m.checksum = crc;
   m.reference = false;
+  m.residual = false;
+  m.chainLength = 1;
   m.ownerStep = static_cast<int64_t>(rows_.size()) - 1;
-  depth_[slot] = 0;
   present_[slot] = 1;
+  return m;
+}
+
+void RunWriter::addStored(const ModelEntry& in, const void* stored) {
+  const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
+  std::lock_guard<std::mutex> lock(mutex_);
+  writePayload(slot, in, stored, "addStored");
+  depth_[slot] = 0;
 }
 
 bool RunWriter::canReference(int level, Int3 block) const {
@@ -308,6 +378,7 @@ void RunWriter::addReference(const ModelEntry& in) {
                           ")");
   ModelEntry& m = current_[slot];
   m = previous_[slot];  // the owner's payload, kind and NCP
+  currentChains_[slot] = previousChains_[slot];
   m.minValue = in.minValue;
   m.maxValue = in.maxValue;
   m.rmse = in.rmse;
@@ -317,6 +388,30 @@ void RunWriter::addReference(const ModelEntry& in) {
   present_[slot] = 1;
 }
 
+void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
+  const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
+  const std::string name = Partition::blockName(in.level, in.block);
+  if (!in.coded) throw InvalidArgument(path_ + ": " + name + ": a residual must be coded");
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (inStep_ && (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_))
+    throw InvalidArgument(path_ + ": " + name + " cannot be coded on the step before");
+  const ModelEntry& before = inStep_ ? previous_[slot] : in;
+  if (before.kind == BlockKind::Constant || before.kind != in.kind || before.ncp != in.ncp)
+    throw InvalidArgument(path_ + ": " + name + ": a residual's kind and NCP must be the step " +
+                          "before's (" + blockKindName(before.kind) + ")");
+  ModelEntry& m = writePayload(slot, in, stored, "addResidual");
+  m.residual = true;
+  std::vector<PayloadPart>& chain = currentChains_[slot];
+  chain = previousChains_[slot];
+  if (chain.empty())  // the step before's model is one payload: the chain's first
+    chain.push_back(PayloadPart{before.offset, before.storedSize, before.checksum, before.coded,
+                                before.integerCoded, before.ownerStep});
+  chain.push_back(
+      PayloadPart{m.offset, m.storedSize, m.checksum, true, m.integerCoded, m.ownerStep});
+  m.chainLength = static_cast<uint32_t>(chain.size());
+  depth_[slot] = previousDepth_[slot] + 1;
+}
+
 bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
                               std::vector<float>& control) const {
   if (previous_.empty()) return false;
@@ -324,9 +419,13 @@ bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
   probe.level = level;
   probe.block = block;
   entry = previous_.at(slotOf(probe));
+  control.resize(entry.size / sizeof(float));
+  if (entry.residual) {
+    decodeChain(fd_, tmpPath_, entry, previousChains_.at(slotOf(probe)), control.data());
+    return true;
+  }
   std::vector<uint8_t> stored(entry.storedSize);
   preadAll(fd_, stored.data(), stored.size(), entry.offset, tmpPath_, "a previous payload");
-  control.resize(entry.size / sizeof(float));
   decodeStoredPayload(entry, stored.data(), control.data(),
                       path_ + ": " + Partition::blockName(level, block));
   return true;
@@ -347,7 +446,8 @@ void RunWriter::endStep(float valueMin, float valueMax) {
               level, partition_.blockFromLinear(level, int64_t(i) - levelStart_[size_t(level)])));
     }
     const ModelEntry& m = current_[i];
-    raw[i] = rawEntry(m, m.reference ? kReferenceFlag : 0);
+    raw[i] = rawEntry(m, m.reference ? kReferenceFlag : m.residual ? kResidualFlag : 0);
+    if (m.residual) key = false;
     if (m.reference) {
       raw[i].offset = 0;
       raw[i].storedBytes = 0;
@@ -364,6 +464,7 @@ void RunWriter::endStep(float valueMin, float valueMax) {
   pwriteAll(fd_, raw.data(), raw.size() * kEntryBytes, row.indexOffset, tmpPath_);
   end_ = row.indexOffset + raw.size() * kEntryBytes;
   previous_.swap(current_);
+  previousChains_.swap(currentChains_);
   previousDepth_.swap(depth_);
   inStep_ = false;
 }

@@ -2,10 +2,12 @@
 // A run of time steps of one grid encoded into one file (format version 3, docs/FORMAT.md), each
 // step coded in time: a block whose model at the step before still meets the bound on the new
 // step's samples is stored as a reference to it (no payload, nothing to read or decode again);
-// every other block is encoded as for one volume. The bound holds on every block of every step,
-// measured against what a reader decodes; a relative bound is relative to the range of the whole
-// run. Every keyInterval steps at the latest a block is stored on its own, so that a block at any
-// step decodes from one payload reached through at most keyInterval - 1 references.
+// every other block is encoded as for one volume and, when a coded residual on the step before's
+// model meets the bound in fewer bytes, stored as that residual instead. The bound holds on every
+// block of every step, measured against what a reader decodes; a relative bound is relative to the
+// range of the whole run. Every keyInterval steps at the latest a block is stored on its own, so
+// that a block at any step decodes from at most keyInterval payloads (one, and the residuals of up
+// to keyInterval - 1 steps after it).
 #pragma once
 
 #include <string>
@@ -24,6 +26,7 @@ struct RunOptions {
 struct RunStats {
   std::vector<EncodeStats> steps;
   std::vector<int64_t> references;    ///< per step, blocks stored as references
+  std::vector<int64_t> residuals;     ///< per step, blocks stored as residuals on the step before
   double valueMin = 0, valueMax = 0;  ///< of the whole run
   double bound = 0;                   ///< absolute RMSE bound every block meets
   uint64_t bytesOut = 0;

@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "afam/format/file_identity.hpp"
@@ -65,6 +66,14 @@ struct VolumeHeader {
 enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2, Interpolant = 3 };
 const char* blockKindName(BlockKind kind);
 
+/// One stored payload of a model decoded from several (a residual chain in time, version 3).
+struct PayloadPart {
+  uint64_t offset = 0, storedSize = 0;
+  uint32_t checksum = 0;
+  bool coded = false, integerCoded = false;
+  int64_t step = 0;  ///< the step whose payloads hold it
+};
+
 struct ModelEntry {
   int level = 0;
   Int3 block{};
@@ -86,6 +95,12 @@ struct ModelEntry {
   /// to maxError are measured on this step's samples.
   bool reference = false;
   int64_t ownerStep = 0;
+  /// Version 3: a residual (in-time coding 2): the model is the step before's decoded model plus
+  /// the decoded payload (a coded difference of the same kind and NCP); offset, storedSize and
+  /// checksum are the newest residual's, and AfamFile::chain() lists every payload it decodes
+  /// from (chainLength of them), the independent one first.
+  bool residual = false;
+  uint32_t chainLength = 1;
 };
 
 /// The decoded control points of a stored payload (entry.storedSize bytes) into out
@@ -141,6 +156,9 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   const std::vector<double>& stepTimes() const { return stepTimes_; }
   /// Version 3: a block's model stays independent at least every keyInterval() steps.
   int keyInterval() const { return keyInterval_; }
+  /// The payloads a residual entry decodes from, the independent one first (entries() says which
+  /// are residuals); empty for an entry of one payload.
+  const std::vector<PayloadPart>& chain(int64_t entry) const;
   /// Index of the entry of block ijk at a level; -1 if the level or block is out of range.
   int64_t entryIndex(int level, Int3 ijk) const;
   /// First entry of a level (entries of a level are contiguous, x fastest).
@@ -175,6 +193,7 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   std::vector<ModelEntry> entries_;
   std::vector<int64_t> levelStart_;
   std::vector<double> stepTimes_{0.0};
+  std::unordered_map<int64_t, std::vector<PayloadPart>> chains_;  ///< of residual entries
   int64_t step_ = 0;
   int keyInterval_ = 1;
   friend void layout::openRunStep(AfamFile& file, const layout::FileHeader& header, int64_t step);

@@ -2,10 +2,10 @@
 // Writes a run of time steps of one grid as one version-3 .afam file (docs/FORMAT.md, "Version
 // 3"), atomically: everything goes to PATH.tmp-XXXXXX, which commit() fsyncs and renames onto
 // PATH; a writer destroyed or killed before that leaves PATH as it was (temporary_file.hpp).
-// Steps come one after another: beginStep(time), every block of every level once (its payload,
-// or a reference to the same block's model of the step before, unchanged), endStep(). The
-// encoder asks previousModel() whether the step before's model still meets the bound on a
-// block's new samples.
+// Steps come one after another: beginStep(time), every block of every level once (its payload, a
+// reference to the same block's model of the step before, unchanged, or a coded residual on that
+// model), endStep(). The encoder codes a block against previousModel(), the step before's model
+// as a reader decodes it.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +45,11 @@ class RunWriter {
   /// and range measured on this step's samples. InvalidArgument at step 0, or when
   /// canReference() is false for the block. Thread-safe.
   void addReference(const ModelEntry& entry);
+  /// A coded residual on the step before's model of the block (docs/FORMAT.md, in-time coding 2):
+  /// the block's model at this step is that model, decoded, plus this payload decoded; `entry`
+  /// has the step before's kind and NCP. InvalidArgument when canReference() is false, the kind
+  /// or NCP differ, the model before is a constant or the payload is not coded. Thread-safe.
+  void addResidual(const ModelEntry& entry, const void* stored);
   /// Ends the step: every block must have been added. valueMin/valueMax: the step's samples.
   void endStep(float valueMin, float valueMax);
   /// Writes the step table and the commit slot, fsyncs and renames onto the path; returns the
@@ -68,6 +73,8 @@ class RunWriter {
  private:
   RunWriter() = default;
   size_t slotOf(const ModelEntry& in) const;
+  /// Writes a model's payload after the step's others and fills its entry (under the lock).
+  ModelEntry& writePayload(size_t slot, const ModelEntry& in, const void* stored, const char* what);
   uint64_t commitAppend();
   std::string path_, tmpPath_;
   int fd_ = -1;
@@ -82,7 +89,8 @@ class RunWriter {
   int nextSlot_ = 1;         ///< the commit slot an append writes
   std::vector<StepRow> rows_;
   std::vector<ModelEntry> current_, previous_;  ///< this step's and the step before's entries
-  std::vector<int> depth_, previousDepth_;      ///< references behind each block (0: stored)
+  std::vector<int> depth_, previousDepth_;      ///< steps back to each block's independent payload
+  std::vector<std::vector<PayloadPart>> currentChains_, previousChains_;  ///< of residuals
   std::vector<uint8_t> present_;
   uint64_t end_ = 0, payloadSum_ = 0, committedSize_ = 0;
   mutable std::mutex mutex_;

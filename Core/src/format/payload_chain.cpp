@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A model decoded from a chain of payloads in time (format version 3, in-time coding 2): the
+// independent payload, then each step's coded residual added in order. The reader and the run
+// writer (which codes the next step against what a reader will decode) both come here, so that
+// both sum the same floats in the same order.
+#include <cstring>
+#include <vector>
+
+#include "afam/base/errors.hpp"
+#include "file_layout.hpp"
+
+namespace afam {
+namespace layout {
+
+namespace {
+
+/// One part's stored bytes, read and checked against its CRC.
+const uint8_t* readPart(int fd, const std::string& path, const ModelEntry& e, const PayloadPart& p,
+                        std::vector<uint8_t>& buffer) {
+  const std::string block = Partition::blockName(e.level, e.block);
+  buffer.resize(p.storedSize);
+  preadAll(fd, buffer.data(), p.storedSize, p.offset, path,
+           "payload of " + block + " at step " + std::to_string(p.step));
+  if (crc32(buffer.data(), p.storedSize) != p.checksum)
+    throw FormatError(path + ": payload checksum mismatch at " + block + " of step " +
+                      std::to_string(p.step));
+  return buffer.data();
+}
+
+}  // namespace
+
+void decodeChain(int fd, const std::string& path, const ModelEntry& e,
+                 const std::vector<PayloadPart>& chain, float* out) {
+  if (chain.size() < 2) throw InvalidArgument(path + ": decodeChain of a model of one payload");
+  thread_local std::vector<uint8_t> stored;
+  thread_local std::vector<float> residual;
+  const size_t count = e.size / sizeof(float);
+  residual.resize(count);
+  for (size_t k = 0; k < chain.size(); ++k) {
+    const PayloadPart& p = chain[k];
+    ModelEntry part = e;  // the model's kind and NCP, this payload's coding
+    part.coded = p.coded;
+    part.integerCoded = p.integerCoded;
+    part.storedSize = p.storedSize;
+    const std::string where = path + ": " + Partition::blockName(e.level, e.block) +
+                              " of step " + std::to_string(p.step);
+    const uint8_t* bytes = readPart(fd, path, e, p, stored);
+    decodeStoredPayload(part, bytes, k == 0 ? out : residual.data(), where);
+    if (k == 0) continue;
+    for (size_t i = 0; i < count; ++i) out[i] = out[i] + residual[i];
+  }
+}
+
+}  // namespace layout
+}  // namespace afam

@@ -1,0 +1,179 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Residuals in time (format version 3, in-time coding 2): a block that changes a little from one
+// step to the next is stored as a coded difference to the step before's decoded model. Every
+// step meets the bound as a reader decodes it, no chain runs past the key interval, a damaged
+// payload of a chain is named with its step, and an appended step continues the chains.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "afam/base/errors.hpp"
+#include "afam/encode/encode_run.hpp"
+#include "afam/format/afam_file.hpp"
+#include "afam/render/level_decode.hpp"
+
+using namespace afam;
+
+namespace {
+
+std::string scratch(const std::string& name) {
+  return ::testing::TempDir() + "afam_residual_" + std::to_string(::getpid()) + "_" + name;
+}
+
+const Index3 kDims{36, 32, 28};
+
+/// Step k of a field that drifts everywhere, slowly: waves whose phase moves by `drift` a step
+/// (about a tenth of the bound's worth of change), plus fixed noise (so the models spend their
+/// budget and a reference to the step before rarely stays within it).
+std::vector<float> drifting(int k, double drift = 0.02) {
+  std::vector<float> v(size_t(kDims[0] * kDims[1] * kDims[2]));
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0, 0.3f);
+  size_t i = 0;
+  for (int64_t z = 0; z < kDims[2]; ++z)
+    for (int64_t y = 0; y < kDims[1]; ++y)
+      for (int64_t x = 0; x < kDims[0]; ++x, ++i)
+        v[i] = float(50 + 20 * std::sin(0.21 * x + drift * k) * std::cos(0.17 * y - 0.13 * z) +
+                     10 * std::sin(0.3 * z + 0.5 * drift * k)) +
+               noise(rng);
+  return v;
+}
+
+double decodedRmse(const AfamFile& f, const std::vector<float>& truth) {
+  std::vector<float> out(truth.size());
+  decodeLevelBox(f, f.header().levels - 1, {0, 0, 0}, {kDims[0] - 1, kDims[1] - 1, kDims[2] - 1},
+                 out.data());
+  double sum = 0;
+  for (size_t i = 0; i < out.size(); ++i) sum += double(out[i] - truth[i]) * (out[i] - truth[i]);
+  return std::sqrt(sum / double(out.size()));
+}
+
+struct Series {
+  std::vector<std::vector<float>> data;
+  std::vector<ArraySource> sources;
+  std::vector<VolumeSource*> steps;
+  explicit Series(int count) {
+    for (int k = 0; k < count; ++k) data.push_back(drifting(k));
+    for (const auto& d : data) sources.emplace_back(d.data(), kDims);
+    for (auto& s : sources) steps.push_back(&s);
+  }
+};
+
+EncoderOptions options() {
+  EncoderOptions opt;
+  opt.errorBound = 1e-2;
+  opt.relativeBound = true;
+  opt.levels = 2;
+  opt.blocksPerAxis = 3;
+  return opt;
+}
+
+}  // namespace
+
+TEST(ResidualCoding, ADriftingRunIsCodedInResidualsWithinTheBoundAndTheKeyInterval) {
+  Series series(7);
+  RunOptions run;
+  run.keyInterval = 4;
+  const std::string path = scratch("drifting.afam");
+  const RunStats st = encodeRun(series.steps, options(), run, path);
+  int64_t residuals = 0;
+  for (size_t s = 1; s < st.residuals.size(); ++s) residuals += st.residuals[s];
+  EXPECT_EQ(st.residuals[0], 0);
+  EXPECT_EQ(st.residuals[4], 0) << "step 4 is a key step (K = 4)";
+  EXPECT_GT(residuals, 20) << "most changed blocks are residuals";
+  for (int64_t s = 0; s < 7; ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    auto f = AfamFile::open(path, s);
+    int64_t found = 0;
+    for (size_t i = 0; i < f->entries().size(); ++i) {
+      const ModelEntry& e = f->entries()[i];
+      const auto& chain = f->chain(int64_t(i));
+      found += e.residual && !e.reference;
+      EXPECT_LE(e.rmse, st.bound * (1 + 1e-6));
+      EXPECT_LE(e.chainLength, uint32_t(run.keyInterval)) << "at most K payloads";
+      if (e.residual) {
+        ASSERT_EQ(chain.size(), e.chainLength);
+        EXPECT_GE(chain.size(), 2u);
+        EXPECT_EQ(chain.back().offset, e.offset) << "the newest payload last";
+        EXPECT_LE(s - chain.front().step, run.keyInterval - 1);
+        for (size_t k = 1; k < chain.size(); ++k) EXPECT_GT(chain[k].step, chain[k - 1].step);
+      } else {
+        EXPECT_TRUE(chain.empty());
+      }
+    }
+    EXPECT_EQ(found, st.residuals[size_t(s)]);
+    EXPECT_LE(decodedRmse(*f, series.data[size_t(s)]), st.bound);
+  }
+  // Against one file per step at the same bound in data units.
+  EncoderOptions absolute = options();
+  absolute.errorBound = st.bound;
+  absolute.relativeBound = false;
+  uint64_t separate = 0, inRun = 0;
+  for (size_t k = 0; k < 7; ++k) {
+    const std::string one = scratch("one.afam");
+    separate += encodeVolume(series.sources[k], absolute, one).payloadBytes;
+    inRun += st.steps[k].payloadBytes;
+    std::remove(one.c_str());
+  }
+  EXPECT_LT(double(inRun), 0.7 * double(separate))
+      << inRun << " payload bytes against " << separate << " in seven files";
+  std::remove(path.c_str());
+}
+
+TEST(ResidualCoding, ADamagedPayloadOfAChainIsNamedWithItsStep) {
+  Series series(3);
+  RunOptions run;
+  run.keyInterval = 8;
+  const std::string path = scratch("damaged.afam");
+  encodeRun(series.steps, options(), run, path);
+  auto f = AfamFile::open(path, 2);
+  int64_t victim = -1;
+  for (size_t i = 0; i < f->entries().size() && victim < 0; ++i)
+    if (f->entries()[i].residual && f->chain(int64_t(i)).front().step == 0) victim = int64_t(i);
+  ASSERT_GE(victim, 0) << "a block coded on step 0 through residuals";
+  const PayloadPart base = f->chain(victim).front();
+  f.reset();
+  {
+    std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekg(std::streamoff(base.offset + base.storedSize / 2));
+    char c = 0;
+    io.read(&c, 1);
+    c = char(c ^ 0x5a);
+    io.seekp(std::streamoff(base.offset + base.storedSize / 2));
+    io.write(&c, 1);
+  }
+  auto damaged = AfamFile::open(path, 2);  // the indexes are intact
+  std::vector<float> out(damaged->entries()[size_t(victim)].size / 4);
+  try {
+    damaged->readPayload(victim, out.data());
+    FAIL() << "a damaged payload decoded";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("checksum mismatch"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("of step 0"), std::string::npos) << e.what();
+  }
+  std::remove(path.c_str());
+}
+
+TEST(ResidualCoding, AnAppendedStepContinuesTheChains) {
+  Series series(4);
+  RunOptions run;
+  run.keyInterval = 6;
+  const std::string path = scratch("append.afam");
+  const std::vector<VolumeSource*> first(series.steps.begin(), series.steps.begin() + 3);
+  const RunStats st = encodeRun(first, options(), run, path);
+  const RunStats added = appendStep(series.sources[3], 3.0, options(), path);
+  EXPECT_GT(added.residuals[0], 0);
+  auto f = AfamFile::open(path, 3);
+  ASSERT_EQ(f->stepCount(), 4);
+  uint32_t longest = 0;
+  for (const ModelEntry& e : f->entries()) longest = std::max(longest, e.chainLength);
+  EXPECT_EQ(longest, 4u) << "residuals at steps 1, 2 and 3 on step 0's payload";
+  EXPECT_LE(decodedRmse(*f, series.data[3]), st.bound);
+  std::remove(path.c_str());
+}

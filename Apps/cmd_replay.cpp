@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B]
 //   [--prefetch none|linear|appa|forecache|lstm] [--cold] [--storage-mbps R] [--csv OUT.csv]
+//   [--steps FIRST:LAST] [--view K]
 // Replays a recorded trajectory through the out-of-core renderer and reports, per point of view,
 // caching time, rendering time, input latency, hits, misses, bytes read and culled blocks; the
 // last line is  median_latency_ms=<x> median_caching_ms=<y> median_render_ms=<z> miss_rate=<m>.
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -39,11 +41,57 @@ double percentile(std::vector<double> v, double q) {
   const size_t rank = size_t(std::ceil(q * double(v.size())));
   return v[std::min(v.size() - 1, rank > 0 ? rank - 1 : 0)];
 }
+/// `--steps FIRST:LAST`: which step each view draws, and moving the renderer there (keeping
+/// what it holds) with the step after it in the direction of play as the next one.
+class StepPlayback {
+ public:
+  StepPlayback(const std::string& path, const std::string& spec, const AfamFile& file)
+      : path_(path) {
+    if (spec.empty()) return;
+    const size_t colon = spec.find(':');
+    if (colon == std::string::npos)
+      throw InvalidArgument("--steps wants FIRST:LAST, got \"" + spec + "\"");
+    first_ = std::stoll(spec.substr(0, colon));
+    last_ = std::stoll(spec.substr(colon + 1));
+    const int64_t n = file.stepCount();
+    if (first_ < 0 || last_ < 0 || first_ >= n || last_ >= n)
+      throw InvalidArgument("--steps " + spec + " outside the " + std::to_string(n) + " steps of " +
+                            path);
+    active_ = true;
+  }
+  bool active() const { return active_; }
+  /// The step view i draws.
+  int64_t stepOf(size_t i) const {
+    const int64_t span = std::llabs(last_ - first_) + 1, k = int64_t(i % size_t(span));
+    return last_ >= first_ ? first_ + k : first_ - k;
+  }
+  std::shared_ptr<const AfamFile> open(size_t i) const { return AfamFile::open(path_, stepOf(i)); }
+  /// Moves the renderer to view i's step (the file prefetched as the next one when it is that
+  /// step) and names the step after it; returns the milliseconds spent opening steps.
+  double moveTo(Renderer& renderer, size_t i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const int64_t s = stepOf(i);
+    if (renderer.file().step() != s) {
+      renderer.setStep(next_ && next_->step() == s ? next_ : AfamFile::open(path_, s));
+    }
+    const int64_t after = stepOf(i + 1);
+    if (after != s && (!next_ || next_->step() != after)) next_ = AfamFile::open(path_, after);
+    renderer.setNextStep(after != s ? next_ : nullptr);
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+ private:
+  std::string path_;
+  int64_t first_ = 0, last_ = 0;
+  bool active_ = false;
+  std::shared_ptr<const AfamFile> next_;
+};
+
 }  // namespace
 
 int runReplay(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
-  values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out"});
+  values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out", "steps", "view"});
   Args args(argc, argv, values, {"cold", "no-culling", "quiet"});
   const char* usage =
       "afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B] "
@@ -72,6 +120,14 @@ int runReplay(int argc, char** argv) {
         "  --still-out IMG.png    after the path, render its last view once more waiting for\n"
         "                         every block (the still frame; also printed with\n"
         "                         --miss-budget-ms) and write it\n"
+        "  --steps FIRST:LAST     a run's playback: view i draws step FIRST + i, back to FIRST\n"
+        "                         after LAST (LAST < FIRST plays backwards); the renderer keeps\n"
+        "                         its cache and GPU pool across steps and loads the next step's\n"
+        "                         blocks of the view while a step is shown. Opening a step is\n"
+        "                         part of its frame's caching time\n"
+        "  --view K               every frame from the trajectory's point of view K (playback\n"
+        "                         with a still camera); --frames sets how many (default: as many\n"
+        "                         as the trajectory has)\n"
         "  --quiet                no per-view lines on stdout\n%s%s",
         usage, renderOptionsHelp(), deviceOptionHelp());
     return 0;
@@ -87,7 +143,18 @@ int runReplay(int argc, char** argv) {
     if (n < 1) throw InvalidArgument("--frames must be >= 1");
     if (size_t(n) < poses.size()) poses.resize(size_t(n));
   }
-  auto file = AfamFile::open(args.positional()[0], args.integer("step", 0));
+  if (args.has("view")) {
+    const long long k = args.integer("view", 0);
+    if (k < 0 || size_t(k) >= poses.size())
+      throw InvalidArgument("--view " + std::to_string(k) + " outside the trajectory's " +
+                            std::to_string(poses.size()) + " points of view");
+    const Pose still = poses[size_t(k)];
+    std::fill(poses.begin(), poses.end(), still);
+  }
+  const std::string path = args.positional()[0];
+  auto file = AfamFile::open(path, args.integer("step", 0));
+  StepPlayback playback(path, args.str("steps", ""), *file);
+  if (playback.active()) file = playback.open(0);
   Renderer renderer(file, opts);
   const DeviceChoice device =
       useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));
@@ -104,7 +171,10 @@ int runReplay(int argc, char** argv) {
   int64_t standIns = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
+    const double openMs = playback.active() ? playback.moveTo(renderer, i) : 0.0;
     renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
+    st.cachingMs += openMs;
+    st.latencyMs += openMs;
     printDeviceMessages(st);
     for (const std::string& r : st.damageReports) std::fprintf(stderr, "warning: %s\n", r.c_str());
     for (const std::string& r : st.loadErrors) std::fprintf(stderr, "warning: %s\n", r.c_str());
@@ -124,12 +194,14 @@ int runReplay(int argc, char** argv) {
           << ',' << st.cacheBytes << ',' << st.cachePeakBytes << '\n';
     if (!quiet)
       std::printf(
-          "pov=%zu caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu misses=%llu "
-          "bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld stand_ins=%lld\n",
-          i, st.cachingMs, st.renderMs, st.latencyMs, (unsigned long long)st.hits,
-          (unsigned long long)st.misses, (unsigned long long)st.bytesRead, (long long)st.slots,
-          (long long)st.culled.frustumBlocks, (long long)st.culled.tfBlocks,
-          (long long)st.standInBlocks);
+          "pov=%zu step=%lld caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu "
+          "misses=%llu bytes_read=%llu visible=%lld frustum_culled=%lld tf_culled=%lld "
+          "stand_ins=%lld cache_bytes=%llu\n",
+          i, (long long)renderer.file().step(), st.cachingMs, st.renderMs, st.latencyMs,
+          (unsigned long long)st.hits, (unsigned long long)st.misses,
+          (unsigned long long)st.bytesRead, (long long)st.slots, (long long)st.culled.frustumBlocks,
+          (long long)st.culled.tfBlocks, (long long)st.standInBlocks,
+          (unsigned long long)st.cacheBytes);
   }
   if ((opts.missBudgetMs >= 0 || args.has("still-out")) && !poses.empty()) {  // the still frame
     FrameSettings still = renderer.settings();

@@ -89,6 +89,23 @@ if (out MATCHES "psnr=99")
 endif ()
 run_ok(out ${AFAM} replay run.afam --trajectory orbit.dat --frames 3 --size 32 --step 2 --quiet)
 run_fails("step 9 of a run of" ${AFAM} render run.afam --trajectory orbit.dat --step 9 --out x.png)
+# Playback with a still camera, twice over the run: the second pass reads nothing (the cache
+# keeps every step's models), and a step that refers to the one before misses nothing.
+run_ok(out ${AFAM} replay run.afam --trajectory orbit.dat --steps 0:4 --view 3 --frames 10
+       --size 32 --cache-blocks 0)
+if (NOT out MATCHES "pov=4 step=4 " OR NOT out MATCHES "pov=9 step=4 "
+    OR NOT out MATCHES "pov=1 step=1 [^\n]* misses=0 ")
+  message(FATAL_ERROR "playback: ${out}")
+endif ()
+foreach (pov 5 6 7 8 9)
+  if (NOT out MATCHES "pov=${pov} step=[0-4] [^\n]* misses=0 bytes_read=0 ")
+    message(FATAL_ERROR "the second pass of the playback read again (view ${pov}): ${out}")
+  endif ()
+endforeach ()
+run_ok(out ${AFAM} replay run.afam --trajectory orbit.dat --steps 4:0 --view 3 --frames 5
+       --size 32 --quiet)
+run_fails("--steps 0:9 outside the 5 steps" ${AFAM} replay run.afam --trajectory orbit.dat
+          --steps 0:9)
 
 # One input keeps today's file (version 2), byte for byte what a single encode writes.
 run_ok(out ${AFAM} encode a_64x80x56_uint8.raw one.afam --error-bound 1e-2 --relative)

@@ -12,6 +12,7 @@
 struct vtkAFAMCoreRenderer::Internals
 {
   std::shared_ptr<const afam::AfamFile> File;
+  std::shared_ptr<const afam::AfamFile> Next; // the step likely drawn next (a run's playback)
   std::unique_ptr<afam::Renderer> Renderer;
   // What Renderer was built from; per-frame settings are not part of it (setFrameSettings).
   afam::RendererResources Resources;
@@ -86,9 +87,36 @@ vtkAFAMCoreRenderer::~vtkAFAMCoreRenderer() = default;
 
 void vtkAFAMCoreRenderer::Open(const std::string& path, long long step)
 {
-  if (this->Impl->File && path == this->OpenPath && step == this->OpenStep)
+  Internals& m = *this->Impl;
+  if (m.File && path == this->OpenPath && step == this->OpenStep)
   {
     return;
+  }
+  if (m.File && m.Renderer && path == this->OpenPath && this->OpenStep != step)
+  {
+    // Another step of the same run: the renderer keeps its cache, load threads and GPU pool, so
+    // what the steps share is neither read nor decoded nor uploaded again; the step after it in
+    // the direction of play is loaded while this one is shown.
+    std::shared_ptr<const afam::AfamFile> next =
+      (m.Next && m.Next->step() == step) ? m.Next : afam::AfamFile::open(path, step);
+    try
+    {
+      m.Renderer->setStep(next);
+    }
+    catch (const afam::InvalidArgument&)
+    {
+      next = nullptr; // not the same file on disk any more: start over below
+    }
+    if (next)
+    {
+      const long long ahead = step + (step < this->OpenStep ? -1 : 1);
+      m.Next =
+        (ahead >= 0 && ahead < next->stepCount()) ? afam::AfamFile::open(path, ahead) : nullptr;
+      m.Renderer->setNextStep(m.Next);
+      m.File = next;
+      this->OpenStep = step;
+      return;
+    }
   }
   this->Close();
   this->Impl->File = afam::AfamFile::open(path, step); // throws afam::Error naming the file
@@ -102,6 +130,7 @@ void vtkAFAMCoreRenderer::Close()
   this->Impl->Gpu = nullptr;
   this->Impl->Renderer.reset(); // its prefetch thread stops before the file goes
   this->Impl->File.reset();
+  this->Impl->Next.reset();
   this->Impl->Damage.reset();
   this->OpenPath.clear();
 }

@@ -77,8 +77,8 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
   // The cached models themselves: the pool copies only those it does not hold yet.
   const float* const* slotHost =
       frame.slotHost.size() == size_t(frame.view.slotCount) ? frame.slotHost.data() : nullptr;
-  std::vector<uint64_t> keys(frame.entries.begin(), frame.entries.end());
-  const uint64_t* slotKeys = keys.size() == size_t(frame.view.slotCount) ? keys.data() : nullptr;
+  const uint64_t* slotKeys =
+      frame.keys.size() == size_t(frame.view.slotCount) ? frame.keys.data() : nullptr;
   const bool onDevice = targets.deviceRgba && floats <= targets.deviceRgbaFloats;
   const DeviceDepth* depth = targets.deviceDepth.depth ? &targets.deviceDepth : nullptr;
   const uint64_t uploadsBefore = poolStats().uploads;

@@ -87,7 +87,7 @@ TEST(BlockLoader, ADamagedBlockIsRecordedNotThrown) {
   EXPECT_EQ(loader.waitFor({2, 3, 4}, Clock::time_point::max()), 0u);
   EXPECT_TRUE(cache.contains(2));
   EXPECT_FALSE(cache.contains(3));
-  EXPECT_TRUE(cache.damage().isDamaged(3));
+  EXPECT_TRUE(cache.isDamaged(3));
   EXPECT_TRUE(loader.takeErrors().empty());
 }
 

@@ -160,7 +160,7 @@ TEST(Damage, PrefetchSkipsAndRecordsDamagedBlocks) {
   LruCache cache(d.damaged, CacheBudget{});
   EXPECT_FALSE(cache.prefetch(d.e1));  // damaged: read once, recorded, nothing cached
   EXPECT_EQ(cache.stats().blocksRead, 0u);
-  EXPECT_TRUE(cache.damage().isDamaged(d.e1));
+  EXPECT_TRUE(cache.isDamaged(d.e1));
   EXPECT_EQ(cache.damage().takeReports().size(), 1u);
   EXPECT_FALSE(cache.prefetch(d.e1));
   EXPECT_EQ(cache.getIntact(d.e1), nullptr);

@@ -15,6 +15,7 @@
 #include "afam/encode/encode_run.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
+#include "moving_blob.hpp"
 
 using namespace afam;
 
@@ -26,22 +27,7 @@ std::string scratch(const std::string& name) {
 
 const Index3 kDims{40, 36, 30};
 
-/// Step k of a slowly evolving field: a smooth background that never changes and a blob that
-/// moves along x with k (only the blocks it crosses change), plus fixed noise.
-std::vector<float> evolving(int k) {
-  std::vector<float> v(size_t(kDims[0] * kDims[1] * kDims[2]));
-  std::mt19937 rng(7);
-  std::normal_distribution<float> noise(0, 0.2f);
-  size_t i = 0;
-  for (int64_t z = 0; z < kDims[2]; ++z)
-    for (int64_t y = 0; y < kDims[1]; ++y)
-      for (int64_t x = 0; x < kDims[0]; ++x, ++i) {
-        const double cx = 8 + 3.0 * k,
-                     r2 = (x - cx) * (x - cx) + (y - 10) * (y - 10) + (z - 8) * (z - 8);
-        v[i] = float(20 + 5 * std::sin(0.1 * x + 0.07 * y) + 40 * std::exp(-r2 / 20)) + noise(rng);
-      }
-  return v;
-}
+std::vector<float> evolving(int k) { return afam_test::movingBlob(kDims, k); }
 
 /// The RMSE of step s's finest level as a reader decodes it, against its samples.
 double decodedRmse(const std::string& path, int64_t s, const std::vector<float>& truth) {
@@ -57,17 +43,12 @@ double decodedRmse(const std::string& path, int64_t s, const std::vector<float>&
 }  // namespace
 
 TEST(EncodeRun, UnchangedBlocksAreReferencesAndEveryStepMeetsTheBound) {
-  std::vector<std::vector<float>> data;
-  std::vector<ArraySource> sources;
-  for (int k = 0; k < 5; ++k) data.push_back(evolving(k));
-  for (const auto& d : data) sources.emplace_back(d.data(), kDims);
-  std::vector<VolumeSource*> steps;
-  for (auto& s : sources) steps.push_back(&s);
-  EncoderOptions opt;
-  opt.errorBound = 1e-2;
-  opt.relativeBound = true;
-  opt.levels = 2;
-  opt.blocksPerAxis = 4;
+  afam_test::InMemoryRun series(kDims,
+                                {evolving(0), evolving(1), evolving(2), evolving(3), evolving(4)});
+  const std::vector<std::vector<float>>& data = series.data;
+  std::vector<ArraySource>& sources = series.sources;
+  const std::vector<VolumeSource*>& steps = series.steps;
+  const EncoderOptions opt = afam_test::runTestOptions(4);
   RunOptions run;
   run.keyInterval = 3;
   run.times = {0, 0.5, 1, 1.5, 2};

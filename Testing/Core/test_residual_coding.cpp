@@ -17,6 +17,7 @@
 #include "afam/encode/encode_run.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
+#include "moving_blob.hpp"
 
 using namespace afam;
 
@@ -54,30 +55,19 @@ double decodedRmse(const AfamFile& f, const std::vector<float>& truth) {
   return std::sqrt(sum / double(out.size()));
 }
 
-struct Series {
-  std::vector<std::vector<float>> data;
-  std::vector<ArraySource> sources;
-  std::vector<VolumeSource*> steps;
-  explicit Series(int count) {
-    for (int k = 0; k < count; ++k) data.push_back(drifting(k));
-    for (const auto& d : data) sources.emplace_back(d.data(), kDims);
-    for (auto& s : sources) steps.push_back(&s);
-  }
-};
-
-EncoderOptions options() {
-  EncoderOptions opt;
-  opt.errorBound = 1e-2;
-  opt.relativeBound = true;
-  opt.levels = 2;
-  opt.blocksPerAxis = 3;
-  return opt;
+/// `count` steps of the drifting field.
+std::vector<std::vector<float>> drift(int count) {
+  std::vector<std::vector<float>> out;
+  for (int k = 0; k < count; ++k) out.push_back(drifting(k));
+  return out;
 }
+
+EncoderOptions options() { return afam_test::runTestOptions(3); }
 
 }  // namespace
 
 TEST(ResidualCoding, ADriftingRunIsCodedInResidualsWithinTheBoundAndTheKeyInterval) {
-  Series series(7);
+  afam_test::InMemoryRun series(kDims, drift(7));
   RunOptions run;
   run.keyInterval = 4;
   const std::string path = scratch("drifting.afam");
@@ -127,7 +117,7 @@ TEST(ResidualCoding, ADriftingRunIsCodedInResidualsWithinTheBoundAndTheKeyInterv
 }
 
 TEST(ResidualCoding, ADamagedPayloadOfAChainIsNamedWithItsStep) {
-  Series series(3);
+  afam_test::InMemoryRun series(kDims, drift(3));
   RunOptions run;
   run.keyInterval = 8;
   const std::string path = scratch("damaged.afam");
@@ -161,7 +151,7 @@ TEST(ResidualCoding, ADamagedPayloadOfAChainIsNamedWithItsStep) {
 }
 
 TEST(ResidualCoding, AnAppendedStepContinuesTheChains) {
-  Series series(4);
+  afam_test::InMemoryRun series(kDims, drift(4));
   RunOptions run;
   run.keyInterval = 6;
   const std::string path = scratch("append.afam");

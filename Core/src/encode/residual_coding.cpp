@@ -80,12 +80,12 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   const int best = largestPassingStep(passes);
   if (best < 0) return false;
   std::vector<uint8_t> bytes;
-  if (!encodeValues(delta.data(), model.ncp, 2 * std::sqrt(3.0) * budget * kStepFactors[best],
-                    form, kZstdLevel, bytes, q) ||
+  if (!encodeValues(delta.data(), model.ncp, 2 * std::sqrt(3.0) * budget * kStepFactors[best], form,
+                    kZstdLevel, bytes, q) ||
       bytes.size() >= t.stored.size())
     return false;
-  const FitResult decoded =
-      applyResidual(before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));
+  const FitResult decoded = applyResidual(
+      before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));
   const ErrorStats es = fitter.error(s.data(), n, decoded);
   if (!(es.rmse <= c.bound)) return false;
   ModelEntry& m = t.entry;

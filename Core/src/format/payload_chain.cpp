@@ -42,8 +42,8 @@ void decodeChain(int fd, const std::string& path, const ModelEntry& e,
     part.coded = p.coded;
     part.integerCoded = p.integerCoded;
     part.storedSize = p.storedSize;
-    const std::string where = path + ": " + Partition::blockName(e.level, e.block) +
-                              " of step " + std::to_string(p.step);
+    const std::string where =
+        path + ": " + Partition::blockName(e.level, e.block) + " of step " + std::to_string(p.step);
     const uint8_t* bytes = readPart(fd, path, e, p, stored);
     decodeStoredPayload(part, bytes, k == 0 ? out : residual.data(), where);
     if (k == 0) continue;

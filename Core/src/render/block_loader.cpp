@@ -19,6 +19,7 @@ BlockLoader::~BlockLoader() {
     quit_ = true;
     frameQueue_.clear();
     prefetchQueue_.clear();
+    stepQueue_.clear();
   }
   work_.notify_all();
   for (std::thread& t : workers_) t.join();
@@ -58,6 +59,14 @@ size_t BlockLoader::waitFor(const std::vector<int64_t>& entries, Clock::time_poi
   return pendingOf(entries);
 }
 
+bool BlockLoader::waitIdle(Clock::time_point deadline) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return done_.wait_until(lock, deadline, [this] {
+    return frameQueue_.empty() && prefetchQueue_.empty() && stepQueue_.empty() &&
+           loading_.empty() && !stepLoading_;
+  });
+}
+
 bool BlockLoader::pending(int64_t entry) const {
   std::lock_guard<std::mutex> lock(mutex_);
   return queued_.count(entry) || loading_.count(entry);
@@ -68,6 +77,16 @@ void BlockLoader::cancelPrefetch() {
   for (const int64_t e : prefetchQueue_) queued_.erase(e);
   prefetchQueue_.clear();
   done_.notify_all();
+}
+
+void BlockLoader::requestStep(std::shared_ptr<const AfamFile> step,
+                              const std::vector<int64_t>& entries) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    step_ = std::move(step);
+    stepQueue_.assign(entries.begin(), entries.end());
+  }
+  work_.notify_all();
 }
 
 std::vector<std::string> BlockLoader::takeErrors() {
@@ -82,11 +101,34 @@ BlockLoaderStats BlockLoader::stats() const {
   return stats_;
 }
 
+void BlockLoader::loadOtherStep(std::unique_lock<std::mutex>& lock) {
+  const int64_t entry = stepQueue_.front();
+  stepQueue_.pop_front();
+  const std::shared_ptr<const AfamFile> step = step_;
+  ++stepLoading_;
+  lock.unlock();
+  try {
+    cache_.prefetch(step, entry);
+  } catch (const std::exception&) {
+    // the step's frame reads it again and reports what is wrong
+  }
+  lock.lock();
+  --stepLoading_;
+  stats_.stepLoads++;
+  done_.notify_all();
+}
+
 void BlockLoader::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
-    work_.wait(lock, [this] { return quit_ || !frameQueue_.empty() || !prefetchQueue_.empty(); });
+    work_.wait(lock, [this] {
+      return quit_ || !frameQueue_.empty() || !prefetchQueue_.empty() || !stepQueue_.empty();
+    });
     if (quit_) return;
+    if (frameQueue_.empty() && prefetchQueue_.empty()) {
+      loadOtherStep(lock);
+      continue;
+    }
     const bool frame = !frameQueue_.empty();
     std::deque<int64_t>& queue = frame ? frameQueue_ : prefetchQueue_;
     const int64_t entry = queue.front();

@@ -29,7 +29,7 @@ void LruCache::setBandwidthCap(double bytesPerSecond) {
 
 void LruCache::dropOsCache() const {
 #if defined(POSIX_FADV_DONTNEED)
-  (void)::posix_fadvise(file_->nativeHandle(), 0, 0, POSIX_FADV_DONTNEED);
+  (void)::posix_fadvise(current()->nativeHandle(), 0, 0, POSIX_FADV_DONTNEED);
 #endif
 }
 
@@ -52,14 +52,34 @@ void LruCache::throttle(uint64_t bytes, Clock::time_point readStart) {
   }
 }
 
-Payload LruCache::load(int64_t entry) {
-  const ModelEntry& e = file_->entries().at(size_t(entry));
+LruCache::FilePtr LruCache::current() const {
+  std::lock_guard<std::mutex> g(mutex_);
+  return file_;
+}
+
+void LruCache::setFile(std::shared_ptr<const AfamFile> step) {
+  if (!step) throw InvalidArgument("cache: no file");
+  const FilePtr now = current();
+  // Steps of one run on disk: the same file (device and inode: payloads committed to it are never
+  // moved or rewritten, so a model key means the same model in both) and the same partition.
+  if (step->path() != now->path() || step->identity().device != now->identity().device ||
+      step->identity().inode != now->identity().inode ||
+      step->entries().size() != now->entries().size() || step->header().dims != now->header().dims)
+    throw InvalidArgument("cache: " + step->path() + " (step " + std::to_string(step->step()) +
+                          ") is not a step of " + now->path());
+  std::lock_guard<std::mutex> g(mutex_);
+  file_ = std::move(step);
+  pinned_.clear();
+}
+
+Payload LruCache::load(const AfamFile& f, int64_t entry) {
+  const ModelEntry& e = f.entries().at(size_t(entry));
   auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
   const auto t0 = Clock::now();
   try {
-    file_->readPayload(entry, data->data());
+    f.readPayload(entry, data->data());
   } catch (const FormatError& ex) {
-    damage_->record(*file_, entry, ex.what());
+    damage_->record(f, entry, ex.what());
     throw;
   }
   throttle(e.size, t0);
@@ -82,7 +102,7 @@ bool LruCache::makeRoom(uint64_t bytes, bool mayEvictPinned) {
     auto it = lru_.end();
     while (!fits() && it != lru_.begin()) {
       --it;
-      const int64_t key = *it;
+      const uint64_t key = *it;
       if (pass == 0 && pinned_.count(key)) continue;
       auto node = map_.find(key);
       resident_ -= node->second.bytes;
@@ -95,9 +115,14 @@ bool LruCache::makeRoom(uint64_t bytes, bool mayEvictPinned) {
 }
 
 Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
+  return getFrom(current(), entry, purpose, wasHit);
+}
+
+Payload LruCache::getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool* wasHit) {
+  const uint64_t key = modelKey(f->entries().at(size_t(entry)));
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
-    auto it = map_.find(entry);
+    auto it = map_.find(key);
     if (it != map_.end()) {
       if (purpose == Purpose::Frame) {
         stats_.hits++;
@@ -106,37 +131,37 @@ Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
       if (wasHit) *wasHit = true;
       return it->second.data;
     }
-    if (!loading_.count(entry)) break;
+    if (!loading_.count(key)) break;
     loaded_.wait(lock);  // another thread is reading it
   }
-  if (damage_->isDamaged(entry)) {  // found damaged before: not read again
-    const ModelEntry& e = file_->entries().at(size_t(entry));
-    throw FormatError(file_->path() + ": " + Partition::blockName(e.level, e.block) +
+  if (damage_->isDamaged(*f, entry)) {  // found damaged before: not read again
+    const ModelEntry& e = f->entries().at(size_t(entry));
+    throw FormatError(f->path() + ": " + Partition::blockName(e.level, e.block) +
                       " is damaged (its checksum failed before)");
   }
   if (purpose == Purpose::Frame) stats_.misses++;
   if (wasHit) *wasHit = false;
-  loading_.insert(entry);
+  loading_.insert(key);
   lock.unlock();
   Payload data;
   try {
-    data = load(entry);
+    data = load(*f, entry);
   } catch (...) {
     lock.lock();
-    loading_.erase(entry);
+    loading_.erase(key);
     loaded_.notify_all();
     throw;
   }
   lock.lock();
-  loading_.erase(entry);
+  loading_.erase(key);
   const uint64_t bytes = data->size() * sizeof(float);
   if (purpose == Purpose::Prefetch) {
     stats_.prefetchLoads++;
     stats_.prefetchBytes += bytes;
   }
   if (makeRoom(bytes, purpose == Purpose::Frame)) {
-    lru_.push_front(entry);
-    map_[entry] = Node{data, bytes, lru_.begin()};
+    lru_.push_front(key);
+    map_[key] = Node{data, bytes, lru_.begin(), entry};
     resident_ += bytes;
     peakResident_ = std::max(peakResident_, resident_);
   } else if (purpose == Purpose::Frame) {
@@ -149,41 +174,53 @@ Payload LruCache::get(int64_t entry, Purpose purpose, bool* wasHit) {
 }
 
 Payload LruCache::getIntact(int64_t entry, Purpose purpose) {
-  if (damage_->isDamaged(entry)) return nullptr;
+  return getIntactFrom(current(), entry, purpose);
+}
+
+Payload LruCache::getIntactFrom(const FilePtr& f, int64_t entry, Purpose purpose) {
+  if (damage_->isDamaged(*f, entry)) return nullptr;
   try {
-    return get(entry, purpose);
+    return getFrom(f, entry, purpose, nullptr);
   } catch (const FormatError&) {
-    if (damage_->isDamaged(entry)) return nullptr;  // recorded by load(), here or in another thread
+    if (damage_->isDamaged(*f, entry)) return nullptr;  // recorded by load(), here or elsewhere
     throw;
   }
 }
 
-bool LruCache::prefetch(int64_t entry) {
+bool LruCache::prefetch(int64_t entry) { return prefetch(current(), entry); }
+
+bool LruCache::prefetch(const FilePtr& step, int64_t entry) {
+  const uint64_t key = modelKey(step->entries().at(size_t(entry)));
   {
     std::lock_guard<std::mutex> g(mutex_);
-    if (map_.count(entry) || loading_.count(entry)) return false;
+    if (map_.count(key) || loading_.count(key)) return false;
   }
-  if (damage_->isDamaged(entry)) return false;
-  return getIntact(entry, Purpose::Prefetch) != nullptr;
+  if (damage_->isDamaged(*step, entry)) return false;
+  return getIntactFrom(step, entry, Purpose::Prefetch) != nullptr;
 }
 
 Payload LruCache::takeLoaded(int64_t entry) {
+  const uint64_t key = modelKey(current()->entries().at(size_t(entry)));
   std::lock_guard<std::mutex> g(mutex_);
-  auto it = map_.find(entry);
+  auto it = map_.find(key);
   if (it == map_.end()) return nullptr;
   lru_.splice(lru_.begin(), lru_, it->second.pos);
   return it->second.data;
 }
 
 bool LruCache::contains(int64_t entry) const {
+  const uint64_t key = modelKey(current()->entries().at(size_t(entry)));
   std::lock_guard<std::mutex> g(mutex_);
-  return map_.count(entry) != 0;
+  return map_.count(key) != 0;
 }
 
+bool LruCache::isDamaged(int64_t entry) const { return damage_->isDamaged(*current(), entry); }
+
 void LruCache::setPinned(const std::vector<int64_t>& entries) {
+  const FilePtr f = current();
   std::lock_guard<std::mutex> g(mutex_);
   pinned_.clear();
-  pinned_.insert(entries.begin(), entries.end());
+  for (const int64_t e : entries) pinned_.insert(modelKey(f->entries().at(size_t(e))));
 }
 
 void LruCache::clearPinned() {
@@ -220,7 +257,9 @@ uint64_t LruCache::residentBlocks() const {
 
 std::vector<int64_t> LruCache::lruOrder() const {
   std::lock_guard<std::mutex> g(mutex_);
-  return std::vector<int64_t>(lru_.begin(), lru_.end());
+  std::vector<int64_t> out;
+  for (const uint64_t key : lru_) out.push_back(map_.at(key).entry);
+  return out;
 }
 
 }  // namespace afam

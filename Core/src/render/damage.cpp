@@ -5,14 +5,16 @@
 
 namespace afam {
 
-bool DamageLog::isDamaged(int64_t entry) const {
+bool DamageLog::isDamaged(const AfamFile& file, int64_t entry) const {
+  const uint64_t key = modelKey(file.entries().at(size_t(entry)));
   std::lock_guard<std::mutex> g(mutex_);
-  return damaged_.count(entry) != 0;
+  return damaged_.count(key) != 0;
 }
 
 bool DamageLog::record(const AfamFile& file, int64_t entry, const std::string& message) {
+  const uint64_t key = modelKey(file.entries().at(size_t(entry)));
   std::lock_guard<std::mutex> g(mutex_);
-  if (!damaged_.insert(entry).second) return false;
+  if (!damaged_.insert(key).second) return false;
   pending_.push_back(message +
                      "; this micro-model is skipped and its region drawn from the nearest "
                      "intact level (`afam verify " +
@@ -30,13 +32,6 @@ std::vector<std::string> DamageLog::takeReports() {
 size_t DamageLog::count() const {
   std::lock_guard<std::mutex> g(mutex_);
   return damaged_.size();
-}
-
-std::vector<int64_t> DamageLog::entries() const {
-  std::lock_guard<std::mutex> g(mutex_);
-  std::vector<int64_t> out(damaged_.begin(), damaged_.end());
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 namespace {

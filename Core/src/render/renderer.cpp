@@ -119,6 +119,7 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.slots.clear();
   fr.pool.clear();
   fr.entries.clear();
+  fr.keys.clear();
   fr.models.clear();
   fr.slotHost.clear();
   // Opacity corrected for the sample distance once per frame, not per sample.
@@ -150,8 +151,7 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   pins.reserve(sel.visible.size());
   for (const BlockRef& b : sel.visible) {
     pins.push_back(b.entry);
-    if (!cache_->contains(b.entry) && !cache_->damage().isDamaged(b.entry))
-      missing.push_back(b.entry);
+    if (!cache_->contains(b.entry) && !cache_->isDamaged(b.entry)) missing.push_back(b.entry);
   }
   cache_->setPinned(pins);
   // Every miss is read and decoded by the load threads at once; the frame waits until they are
@@ -192,7 +192,7 @@ bool Renderer::placeStandIn(const BlockRef& block, std::vector<Placement>& place
     up.ijk = p.parent(up.level, up.ijk);
     up.level--;
     up.entry = file_->entryIndex(up.level, up.ijk);
-    if (!cache_->contains(up.entry) || cache_->damage().isDamaged(up.entry)) continue;
+    if (!cache_->contains(up.entry) || cache_->isDamaged(up.entry)) continue;
     if (auto data = cache_->getIntact(up.entry, LruCache::Purpose::Frame)) {
       placed.push_back(Placement{up, block, std::move(data)});
       return true;
@@ -227,6 +227,7 @@ FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset
 int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
   fr.slots.push_back(modelSlot(*file_, model, offset));
   fr.entries.push_back(model.entry);
+  fr.keys.push_back(modelKey(file_->entries()[size_t(model.entry)]));
   return int32_t(fr.slots.size() - 1);
 }
 
@@ -291,6 +292,19 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   st.cachingMs = msSince(t0);
 }
 
+void Renderer::setStep(std::shared_ptr<const AfamFile> step) {
+  if (!step) throw InvalidArgument("renderer: no file");
+  if (step == file_) return;
+  cache_->setFile(step);  // checks that it is a step of the same run
+  file_ = std::move(step);
+}
+
+void Renderer::setNextStep(std::shared_ptr<const AfamFile> next) {
+  if (next && (next->path() != file_->path() || next->entries().size() != file_->entries().size()))
+    throw InvalidArgument("renderer: the next step is not a step of " + file_->path());
+  next_ = std::move(next);
+}
+
 void Renderer::setCaster(std::unique_ptr<FrameCaster> caster) {
   caster_ = caster ? std::move(caster) : std::make_unique<CpuCaster>(resources_.threads);
 }
@@ -342,6 +356,9 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
             loader->request(entries, LruCache::Purpose::Prefetch);
         });
   }
+  // The next step's models of this view, loaded while this step is shown (after every load this
+  // frame and its prefetching ask for; they go on after the frame).
+  if (next_ && next_ != file_) loader_->requestStep(next_, fr.entries);
   const auto t0 = Clock::now();
   ImageRGBA image;
   st.cast = caster_->cast(fr, targets, image);

@@ -103,6 +103,12 @@ struct ModelEntry {
   uint32_t chainLength = 1;
 };
 
+/// The identity of a decoded model in its file, across every step of a run: the offset of its
+/// (newest) payload. Steps that share a model (a reference) give it the same key, and no two
+/// different models of one file share one (payloads never overlap and are never moved, by
+/// appends either), so caches keyed by it serve every step of a run.
+inline uint64_t modelKey(const ModelEntry& e) { return e.offset; }
+
 /// The decoded control points of a stored payload (entry.storedSize bytes) into out
 /// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
 void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out,
@@ -175,6 +181,9 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   /// One fstat and one stat; renderers call it once per frame, before reading.
   void checkUnchanged() const;
   int nativeHandle() const { return fd_; }  ///< POSIX fd, for posix_fadvise in benchmarks
+  /// The file's device, inode, size and time when opened (steps of one run on disk share device
+  /// and inode; an append changes only size and time).
+  const FileIdentity& identity() const { return identity_; }
   uint64_t fileSize() const { return fileSize_; }
   uint64_t payloadOffset() const { return payloadOffset_; }
 

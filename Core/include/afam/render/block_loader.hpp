@@ -16,6 +16,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -28,6 +29,7 @@ namespace afam {
 
 struct BlockLoaderStats {
   uint64_t frameLoads = 0, prefetchLoads = 0, failed = 0;
+  uint64_t stepLoads = 0;  ///< requestStep's, tried
 };
 
 class BlockLoader {
@@ -44,10 +46,17 @@ class BlockLoader {
   /// Waits until none of `entries` is queued or loading, or until `deadline`. Returns how many
   /// still are.
   size_t waitFor(const std::vector<int64_t>& entries, Clock::time_point deadline);
+  /// Waits until nothing is queued or loading (every queue, requestStep's included), or until
+  /// `deadline`; true when idle.
+  bool waitIdle(Clock::time_point deadline);
   /// True while the entry is queued or being loaded.
   bool pending(int64_t entry) const;
-  /// Drops the prefetch requests not started yet.
+  /// Drops the prefetch requests not started yet (not those of requestStep).
   void cancelPrefetch();
+  /// Queues `entries` of another step of the run (the next one, while this one is shown), served
+  /// after every frame and prefetch request, replacing what an earlier call queued and was not
+  /// started; they stay queued when a frame ends (LruCache::prefetch(step, entry) loads them).
+  void requestStep(std::shared_ptr<const AfamFile> step, const std::vector<int64_t>& entries);
   /// Messages of loads that failed (other than damage), each handed out once.
   std::vector<std::string> takeErrors();
   BlockLoaderStats stats() const;
@@ -55,12 +64,15 @@ class BlockLoader {
 
  private:
   void run();
+  void loadOtherStep(std::unique_lock<std::mutex>& lock);       // one of stepQueue_, lock held
   size_t pendingOf(const std::vector<int64_t>& entries) const;  // under the lock
 
   LruCache& cache_;
   mutable std::mutex mutex_;
   std::condition_variable work_, done_;
-  std::deque<int64_t> frameQueue_, prefetchQueue_;
+  std::deque<int64_t> frameQueue_, prefetchQueue_, stepQueue_;
+  std::shared_ptr<const AfamFile> step_;  ///< the file stepQueue_'s entries are of
+  int stepLoading_ = 0;                   ///< requestStep loads under way
   std::unordered_set<int64_t> queued_, loading_;
   std::vector<std::string> errors_;
   BlockLoaderStats stats_;

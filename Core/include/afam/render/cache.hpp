@@ -25,6 +25,12 @@
 // Damage: a load whose payload fails its checksum (FormatError) records the entry in the cache's
 // DamageLog; getIntact() and prefetch() never read a recorded entry again (damage.hpp).
 //
+// Time steps: models are kept by their modelKey, which steps of a run share where a block did
+// not change (a reference). setFile() moves the cache to another step of the same run: what the
+// new step shares with what is resident stays resident and hits, nothing is dropped, and the
+// budgets hold across the run. The entries of the API are those of the current step's file;
+// prefetch(step, entry) loads from another step (the next one, while this one is shown).
+//
 // Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
 // the lock, and a block being loaded by one thread is waited for, not read twice.
 #pragma once
@@ -78,7 +84,14 @@ class LruCache {
   /// Prefetch: loads the entry if absent (never evicting pinned blocks) and not known damaged.
   /// Returns true if a read happened; a damaged payload is recorded, not thrown.
   bool prefetch(int64_t entry);
+  /// Prefetch from another step of the run (a file setFile() would take).
+  bool prefetch(const std::shared_ptr<const AfamFile>& step, int64_t entry);
   bool contains(int64_t entry) const;
+  /// Whether the entry's model is known to be damaged (DamageLog).
+  bool isDamaged(int64_t entry) const;
+  /// Moves to another step of the same run (the same path and partition; InvalidArgument
+  /// otherwise), keeping every resident model. Not while a frame is prepared.
+  void setFile(std::shared_ptr<const AfamFile> step);
   /// A resident entry's payload, marked most recently used, without counting a lookup (the frame
   /// takes a miss it had loaded for it, which the load counted); null when it is not resident.
   Payload takeLoaded(int64_t entry);
@@ -96,7 +109,8 @@ class LruCache {
   /// then restarts from the bytes resident now. Never above the byte budget.
   uint64_t takePeakResidentBytes();
   uint64_t residentBlocks() const;
-  /// Entries from most to least recently used (tests).
+  /// The entries the resident models were loaded for (of whichever step), from most to least
+  /// recently used (tests).
   std::vector<int64_t> lruOrder() const;
   const CacheBudget& budget() const { return budget_; }
   const AfamFile& file() const { return *file_; }
@@ -107,9 +121,14 @@ class LruCache {
   struct Node {
     Payload data;
     uint64_t bytes = 0;
-    std::list<int64_t>::iterator pos;
+    std::list<uint64_t>::iterator pos;
+    int64_t entry = 0;  ///< what it was loaded for (lruOrder)
   };
-  Payload load(int64_t entry);                         // read + throttle, outside the lock
+  using FilePtr = std::shared_ptr<const AfamFile>;
+  FilePtr current() const;  // the current step's file
+  Payload getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool* wasHit);
+  Payload getIntactFrom(const FilePtr& f, int64_t entry, Purpose purpose);
+  Payload load(const AfamFile& f, int64_t entry);      // read + throttle, outside the lock
   bool makeRoom(uint64_t bytes, bool mayEvictPinned);  // under the lock
   void throttle(uint64_t bytes, std::chrono::steady_clock::time_point readStart);
 
@@ -118,9 +137,9 @@ class LruCache {
   std::shared_ptr<DamageLog> damage_;
   mutable std::mutex mutex_;
   std::condition_variable loaded_;
-  std::list<int64_t> lru_;  // front = most recent
-  std::unordered_map<int64_t, Node> map_;
-  std::unordered_set<int64_t> loading_, pinned_;
+  std::list<uint64_t> lru_;  // model keys, front = most recent
+  std::unordered_map<uint64_t, Node> map_;
+  std::unordered_set<uint64_t> loading_, pinned_;
   uint64_t resident_ = 0;
   uint64_t peakResident_ = 0;  // for takePeakResidentBytes
   CacheStats stats_;

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Damaged micro-models: a payload whose checksum fails (or that does not decode) is never drawn.
 //
-// DamageLog remembers, for one open file, the entries found damaged: each is read once, reported
-// once (one sentence naming the file, the level and the block) and then skipped by frame loads and
-// prefetching alike. Thread-safe (the frame thread and the prefetch thread both record).
+// DamageLog remembers, for one file (every step of a run), the models found damaged, by their
+// modelKey: each is read once, reported once (one sentence naming the file, the level and the
+// block) and then skipped by frame loads and prefetching alike. Thread-safe (the frame thread and
+// the load threads both record).
 //
 // replaceDamaged() decides what is drawn in a damaged block's region instead, the same for every
 // ray caster because it runs while the frame is prepared: the nearest intact coarser model (its
@@ -28,19 +29,19 @@ namespace afam {
 
 class DamageLog {
  public:
-  bool isDamaged(int64_t entry) const;
-  /// Records a damaged entry with the reader's message. Returns true the first time only; the
-  /// report (message plus what is drawn instead and how to list every damaged block) is queued
-  /// for takeReports().
+  /// Whether the model of the entry (of `file`, a step of the run the log is for) is damaged.
+  bool isDamaged(const AfamFile& file, int64_t entry) const;
+  /// Records the entry's model as damaged with the reader's message. Returns true the first time
+  /// only; the report (message plus what is drawn instead and how to list every damaged block)
+  /// is queued for takeReports().
   bool record(const AfamFile& file, int64_t entry, const std::string& message);
   /// Reports not yet handed out, oldest first; each report is handed out once.
   std::vector<std::string> takeReports();
   size_t count() const;
-  std::vector<int64_t> entries() const;  ///< sorted
 
  private:
   mutable std::mutex mutex_;
-  std::unordered_set<int64_t> damaged_;
+  std::unordered_set<uint64_t> damaged_;  ///< model keys
   std::vector<std::string> pending_;
 };
 

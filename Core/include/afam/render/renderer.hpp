@@ -100,6 +100,9 @@ struct PreparedFrame {
   std::array<std::vector<float>, 3> cellBounds;
   std::vector<float> tf;
   std::vector<int64_t> entries;  ///< file entries of the slots, slot order
+  /// modelKey of the slots' models, slot order: a GPU caster's pool keeps models by them, so that
+  /// the steps of a run share what they share.
+  std::vector<uint64_t> keys;
   /// The cached models of the slots, slot order (kept alive for the frame), and their floats.
   std::vector<std::shared_ptr<const std::vector<float>>> models;
   std::vector<const float*> slotHost;
@@ -128,6 +131,7 @@ class Renderer {
   /// preset when none was given).
   const FrameSettings& settings() const { return settings_; }
   LruCache& cache() { return *cache_; }
+  BlockLoader& loader() { return *loader_; }
   const std::vector<float>& tfTable() const { return tf_; }
   double tfLo() const { return tfLo_; }
   double tfHi() const { return tfHi_; }
@@ -168,6 +172,15 @@ class Renderer {
   ImageRGBA renderFrame(const Camera& camera, const FrameSettings& settings, FrameStats& stats,
                         const float* maxDistance = nullptr);
 
+  /// Draws another step of the same run (AfamFile::open(path, step)) from the next frame on,
+  /// keeping the cache, the load threads, the prefetcher's history and the caster's model pool:
+  /// the models the steps share are neither read nor decoded nor uploaded again (modelKey).
+  /// InvalidArgument for a file that is not a step of this run. Not while a frame renders.
+  void setStep(std::shared_ptr<const AfamFile> step);
+  /// The step likely shown next (the next one in playback, or the one before when playing
+  /// backwards; null: none): each frame queues its view's models of that step for the load
+  /// threads, after everything the frame itself asks for.
+  void setNextStep(std::shared_ptr<const AfamFile> next);
   /// Casts the frames from now on with `caster` (the CUDA path's makeGpuCaster plugs in here);
   /// nullptr: the CPU's (CpuCaster on resources().threads, the default). The renderer owns it: a
   /// GPU caster's model pool then holds this file's models only.
@@ -183,7 +196,7 @@ class Renderer {
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
   void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
 
-  std::shared_ptr<const AfamFile> file_;
+  std::shared_ptr<const AfamFile> file_, next_;  ///< the step drawn, the one likely next
   RendererResources resources_;
   FrameSettings settings_;
   LodSelector lod_;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -94,6 +95,30 @@ TEST(FormatVersions, DoubleFormPayloadsWrittenBeforeTheIntegerFormsDecodeTheSame
     decodeLevelBox(*f, level, {0, 0, 0}, {dims[0] - 1, dims[1] - 1, dims[2] - 1}, decoded.data());
     EXPECT_EQ(crc32(decoded.data(), decoded.size() * sizeof(float)), expected[level])
         << "level " << level << " decodes differently from the double forms' reader";
+  }
+}
+
+TEST(FormatVersions, ARunWithResidualsAndReferencesDecodesTheSameBytes) {
+  const std::string path = kFormat + "gs24_run5_levels2_blocks2_v3.afam";
+  const uint32_t expected[5] = {0xfd661dd3u, 0x7c0424adu, 0x7c0424adu, 0xfde4d4d6u, 0x6d4d14e1u};
+  const int residuals[5] = {0, 9, 0, 9, 0}, references[5] = {0, 0, 9, 0, 0};
+  for (int64_t s = 0; s < 5; ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    auto f = AfamFile::open(path, s);
+    ASSERT_EQ(f->stepCount(), 5);
+    int r = 0, refs = 0;
+    uint32_t longest = 0;
+    for (const ModelEntry& e : f->entries()) {
+      r += e.residual && !e.reference;
+      refs += e.reference;
+      longest = std::max(longest, e.chainLength);
+    }
+    EXPECT_EQ(r, residuals[s]);
+    EXPECT_EQ(refs, references[s]);
+    EXPECT_EQ(longest, s == 3 ? 3u : s == 4 ? 1u : uint32_t(std::min<int64_t>(s, 1) + 1));
+    std::vector<float> decoded(size_t(24 * 24 * 24));
+    decodeLevelBox(*f, 1, {0, 0, 0}, {23, 23, 23}, decoded.data());
+    EXPECT_EQ(crc32(decoded.data(), decoded.size() * sizeof(float)), expected[s]);
   }
 }
 

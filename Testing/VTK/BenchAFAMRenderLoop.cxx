@@ -4,7 +4,8 @@
 // renders, so that the two can be set side by side on the same file, views and image size.
 //   BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N] [--frames K]
 //     [--device cpu|gpu] [--require-gpu] [--require-interop] [--host-draw] [--offscreen] [--cold]
-//     [--plane] [--lod bands|screen] [--cache-mb MB] [--csv OUT.csv]
+//     [--plane] [--lod bands|screen] [--cache-mb MB] [--steps FIRST:LAST] [--view K]
+//     [--csv OUT.csv]
 // Each point of view becomes the VTK camera that casts the same rays as Core's Camera::fromPose
 // (exact for cubic volumes); the transfer function is Core's preset over the file's value range,
 // the LOD the paper's distance bands (--lod screen: screen-space LOD), sample distance 0.005 and
@@ -22,6 +23,9 @@
 // comes back to the host and is uploaded). --offscreen: the window renders off screen (no swap to
 // the X server). --plane: an opaque plane through the volume's centre (normal z), so that every
 // frame reads the depth buffer for depth compositing.
+// --steps FIRST:LAST plays a run: frame i draws step FIRST + i (back to FIRST after LAST; LAST <
+// FIRST plays backwards) through the mapper's TimeStep, as ParaView's time does; with --view K
+// the camera stands still (BenchRenderLoopScene.h).
 #include "BenchRenderLoopScene.h"
 #include "vtkAFAMReader.h"
 #include "vtkAFAMVolumeMapper.h"
@@ -63,6 +67,19 @@ struct Options : PathOptions
   bool Gpu = false, RequireGpu = false, RequireInterop = false, HostDraw = false, Offscreen = false;
   bool Plane = false, ScreenLod = false;
   double CacheMB = 512;
+  long long FirstStep = -1, LastStep = -1; // --steps FIRST:LAST: a run's playback
+
+  // The step frame i draws (-1: the file's only or first step, through the reader).
+  long long StepOf(size_t i) const
+  {
+    if (FirstStep < 0)
+    {
+      return -1;
+    }
+    const long long span = std::llabs(LastStep - FirstStep) + 1;
+    const long long k = static_cast<long long>(i % static_cast<size_t>(span));
+    return LastStep >= FirstStep ? FirstStep + k : FirstStep - k;
+  }
 };
 
 bool Parse(int argc, char* argv[], Options& o)
@@ -89,18 +106,22 @@ bool Parse(int argc, char* argv[], Options& o)
       o.Offscreen = true;
     else if (a == "--plane")
       o.Plane = true;
+    else if (a == "--steps" && hasValue &&
+      std::sscanf(argv[++i], "%lld:%lld", &o.FirstStep, &o.LastStep) == 2 && o.FirstStep >= 0 &&
+      o.LastStep >= 0)
+      continue;
     else
     {
       std::cerr << "BenchAFAMRenderLoop: unknown or incomplete argument '" << a << "'\n";
       return false;
     }
   }
-  if (!PathOptionsComplete(o))
+  if (!PathOptionsComplete(o) || !o.MoreFiles.empty())
   {
     std::cerr << "usage: BenchAFAMRenderLoop FILE.afam (--trajectory T.dat | --orbit N) [--size N "
                  "(16..8192)] [--frames K] [--device cpu|gpu] [--require-gpu] [--require-interop] "
                  "[--host-draw] [--offscreen] [--cold] [--plane] [--lod bands|screen] "
-                 "[--cache-mb MB] [--csv OUT.csv]\n";
+                 "[--cache-mb MB] [--steps FIRST:LAST] [--view K] [--csv OUT.csv]\n";
     return false;
   }
   return true;
@@ -141,10 +162,23 @@ int main(int argc, char* argv[])
     return 2;
   }
 
+  if (o.FirstStep >= 0 && (o.FirstStep >= file->stepCount() || o.LastStep >= file->stepCount()))
+  {
+    std::cerr << "BenchAFAMRenderLoop: --steps outside the " << file->stepCount() << " steps of "
+              << o.File << "\n";
+    return 2;
+  }
   vtkNew<vtkAFAMReader> reader;
   reader->SetFileName(o.File.c_str());
   vtkNew<vtkAFAMVolumeMapper> mapper;
-  mapper->SetInputConnection(reader->GetOutputPort());
+  if (o.FirstStep >= 0)
+  {
+    mapper->SetFileName(o.File.c_str()); // the step set per frame (TimeStep)
+  }
+  else
+  {
+    mapper->SetInputConnection(reader->GetOutputPort());
+  }
   if (o.ScreenLod)
   {
     mapper->SetLodPolicyToScreenSpace();
@@ -204,6 +238,10 @@ int main(int argc, char* argv[])
   {
     PlaceCamera(renderer->GetActiveCamera(), poses[i], c, h, o.Size);
     renderer->ResetCameraClippingRange();
+    if (o.FirstStep >= 0)
+    {
+      mapper->SetTimeStep(static_cast<vtkTypeInt64>(o.StepOf(i)));
+    }
     if (o.Cold)
     {
       (void)::posix_fadvise(file->nativeHandle(), 0, 0, POSIX_FADV_DONTNEED);
@@ -278,9 +316,12 @@ int main(int argc, char* argv[])
     series["draw"].push_back(f.Draw);
   }
   const double renderCall = Median(series["render_call"]);
-  std::printf("vtk_render_loop file=%s povs=%zu size=%dx%d device=%s cold=%d offscreen=%d plane=%d "
-              "gpu_frames=%zu interop_frames=%zu first_frame_ms=%.3f message='%s' interop='%s'\n",
+  std::printf("vtk_render_loop file=%s steps=%lld:%lld povs=%zu size=%dx%d device=%s cold=%d "
+              "offscreen=%d plane=%d gpu_frames=%zu interop_frames=%zu first_frame_ms=%.3f "
+              "message='%s' interop='%s'\n",
     o.File.c_str(),
+    o.FirstStep,
+    o.LastStep,
     frames.size(),
     o.Size,
     o.Size,

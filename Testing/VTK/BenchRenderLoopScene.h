@@ -6,6 +6,7 @@
 #ifndef BenchRenderLoopScene_h
 #define BenchRenderLoopScene_h
 
+#include "afam/base/errors.hpp"
 #include "afam/scene/camera.hpp"
 #include "afam/scene/trajectory_gen.hpp"
 #include "afam/scene/transfer_function.hpp"
@@ -26,10 +27,14 @@ namespace
 {
 // What both benchmarks take: the input, the camera path, the window's size, the frames to render,
 // a cold start and the CSV file.
+// --view K draws every frame from point of view K (a run's playback with a still camera); with
+// it, --frames may ask for more frames than the path has. Inputs after the first: a run's later
+// steps (BenchVTKRawVolume).
 struct PathOptions
 {
   std::string File, Trajectory, Csv;
-  int Orbit = 0, Size = 512, Frames = 0;
+  std::vector<std::string> MoreFiles;
+  int Orbit = 0, Size = 512, Frames = 0, View = -1;
   bool Cold = false;
 };
 
@@ -51,8 +56,12 @@ bool ParsePathOption(int argc, char* argv[], int& i, PathOptions& o)
     o.Csv = argv[++i];
   else if (a == "--cold")
     o.Cold = true;
+  else if (a == "--view" && hasValue)
+    o.View = std::atoi(argv[++i]);
   else if (a[0] != '-' && o.File.empty())
     o.File = a;
+  else if (a[0] != '-')
+    o.MoreFiles.push_back(a);
   else
     return false;
   return true;
@@ -71,6 +80,16 @@ std::vector<afam::Pose> LoadPoses(const PathOptions& o)
   std::vector<afam::Pose> poses = o.Trajectory.empty()
     ? afam::orbitTrajectory(o.Orbit, 1.5, 60.0, 0.0, 1.0)
     : afam::loadTrajectory(o.Trajectory);
+  if (o.View >= 0)
+  {
+    if (static_cast<size_t>(o.View) >= poses.size())
+    {
+      throw afam::InvalidArgument("--view " + std::to_string(o.View) + " outside the path's " +
+        std::to_string(poses.size()) + " points of view");
+    }
+    poses.assign(o.Frames > 0 ? static_cast<size_t>(o.Frames) : poses.size(),
+      poses[static_cast<size_t>(o.View)]);
+  }
   if (o.Frames > 0 && static_cast<size_t>(o.Frames) < poses.size())
   {
     poses.resize(static_cast<size_t>(o.Frames));

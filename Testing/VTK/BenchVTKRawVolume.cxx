@@ -3,14 +3,17 @@
 // What a user would run instead of the plugin: VTK's own GPU ray caster (vtkGPUVolumeRayCastMapper)
 // on the raw samples, on the views, image size and transfer function of BenchAFAMRenderLoop and
 // `afam replay`, so that the three can be set side by side.
-//   BenchVTKRawVolume IN_XxYxZ_type.raw (--trajectory T.dat | --orbit N) [--size N] [--frames K]
-//     [--cold] [--csv OUT.csv]
+//   BenchVTKRawVolume IN_XxYxZ_type.raw [STEP1.raw ...] (--trajectory T.dat | --orbit N)
+//     [--size N] [--frames K] [--view K] [--cold] [--csv OUT.csv]
 // The volume is read into a vtkImageData of its own sample type (no conversion), its value range
 // scanned (the .afam header's range, which the transfer function spans), and drawn with
 // trilinear interpolation, shading on, sample distance 0.005 and opacity unit 0.01 in the
 // normalised frame. --cold evicts the raw file from the OS page cache before it is read.
 // Prints the time to the first image (read + range + first Render(), which uploads the volume
 // to the GPU), then the medians and 95th percentile of the later frames' Render() (glFinish'ed).
+// Several inputs are a run's steps (one grid): frame i draws input i (back to the first after the
+// last), read from the page cache into a new image and given to the mapper, which uploads it: what
+// playing a file series in VTK costs; each frame's time includes that read.
 #include "BenchRenderLoopScene.h"
 
 #include "afam/base/errors.hpp"
@@ -54,8 +57,9 @@ bool Parse(int argc, char* argv[], Options& o)
   }
   if (!PathOptionsComplete(o))
   {
-    std::cerr << "usage: BenchVTKRawVolume IN_XxYxZ_type.raw (--trajectory T.dat | --orbit N) "
-                 "[--size N (16..8192)] [--frames K] [--cold] [--csv OUT.csv]\n";
+    std::cerr << "usage: BenchVTKRawVolume IN_XxYxZ_type.raw [STEP1.raw ...] (--trajectory T.dat "
+                 "| --orbit N) [--size N (16..8192)] [--frames K] [--view K] [--cold] "
+                 "[--csv OUT.csv]\n";
     return false;
   }
   return true;
@@ -194,6 +198,20 @@ int main(int argc, char* argv[])
     PlaceCamera(renderer->GetActiveCamera(), poses[i], c, h, o.Size);
     renderer->ResetCameraClippingRange();
     const auto t0 = std::chrono::steady_clock::now();
+    const size_t steps = 1 + o.MoreFiles.size();
+    if (steps > 1 && i > 0)
+    {
+      const size_t k = i % steps;
+      try
+      {
+        mapper->SetInputData(ReadRaw(k == 0 ? o.File : o.MoreFiles[k - 1], false));
+      }
+      catch (const std::exception& e)
+      {
+        std::cerr << "BenchVTKRawVolume: " << e.what() << "\n";
+        return 2;
+      }
+    }
     window->Render();
     window->WaitForCompletion();
     calls.push_back(
@@ -218,10 +236,11 @@ int main(int argc, char* argv[])
   }
   const std::vector<double> later(calls.begin() + (calls.size() > 1 ? 1 : 0), calls.end());
   const double median = Median(later);
-  std::printf("vtk_raw_volume file=%s povs=%zu size=%dx%d range=%g,%g load_ms=%.1f "
+  std::printf("vtk_raw_volume file=%s steps=%zu povs=%zu size=%dx%d range=%g,%g load_ms=%.1f "
               "first_render_ms=%.1f first_image_ms=%.1f median_render_call_ms=%.3f "
               "p95_render_call_ms=%.3f fps=%.1f\n",
     o.File.c_str(),
+    1 + o.MoreFiles.size(),
     calls.size(),
     o.Size,
     o.Size,

@@ -5,7 +5,8 @@
 // started from u = 1, v = 0 with `seeds` cubes of v = 0.5, u = 0.25 at places drawn from `seed`.
 // Patterns grow from the seeds and fill the grid over a few thousand iterations, each step
 // changing only where the fronts are: what a slowly evolving simulation's run looks like. The
-// same arguments give the same values bit for bit (one thread, fixed order of operations).
+// same arguments give the same values bit for bit, on any number of threads (each cell's update
+// reads only the iteration before, in a fixed order of operations).
 #pragma once
 
 #include <cstdint>
@@ -21,6 +22,7 @@ struct GrayScottOptions {
   double feed = 0.035, kill = 0.060;
   int seeds = 6;
   uint64_t seed = 1;
+  int threads = 0;  ///< 0: every core (grids under 2^20 cells: one); the values do not depend on it
 };
 
 class GrayScott {
@@ -35,6 +37,7 @@ class GrayScott {
   Index3 dims() const { return o_.dims; }
 
  private:
+  void stepPlanes(int64_t z0, int64_t z1);  ///< planes [z0, z1) of one iteration into nu_, nv_
   GrayScottOptions o_;
   std::vector<float> u_, v_, nu_, nv_;
 };

@@ -25,6 +25,11 @@
 #     cache of AFAM_VTK_SCALE_CACHE_MB (1000) by BenchAFAMRenderLoop and `afam replay`, beside VTK's
 #     own GPU ray caster on the raw samples (BenchVTKRawVolume): AFAM_VTK_SCALE_FRAMES (400) views
 #     at AFAM_VTK_SCALE_SIZE^2 (1024).
+#   - with "play" in AFAM_VTK_PARTS: a run played (Gray-Scott simulated at 128^3, each of
+#     AFAM_VTK_PLAY_STEPS (40) steps made large to AFAM_VTK_PLAY_DIMS (512,512,512) float32,
+#     encoded as one run at 1e-2 relative), every step in order twice with a still camera at
+#     AFAM_VTK_PLAY_SIZE^2 (1024), a host cache of a quarter of the decoded run: the mapper in the
+#     window, `afam replay --steps`, and VTK's own GPU ray caster given each step's raw samples.
 # The programs' OpenGL is NVIDIA's own on the GPU (AFAM_VTK_GLX=nvidia, default) or Mesa's llvmpipe
 # (AFAM_VTK_GLX=mesa). Logs and CSVs go to $OUT when set; a table is printed last.
 set -uo pipefail
@@ -107,7 +112,7 @@ run)
 work)
   ;;  # below
 *)
-  sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
   ;;
 esac
@@ -265,6 +270,69 @@ if part scale; then
     echo "| afam replay --device gpu | $(value median_latency_ms "$r") | $(value p95_latency_ms "$r") | - | - |"
     echo "| VTK's GPU ray caster on the raw samples | $theirs | $(value p95_render_call_ms "$w") | $theirfirst (read $(value load_ms "$w") + first render $(value first_render_ms "$w")) | - |"
     echo "Bars: per frame <= 1.5x VTK's: $(awk -v a="$ours" -v b="$theirs" 'BEGIN { if (b > 0) printf "%.2fx %s", a / b, (a <= 1.5 * b ? "met" : "NOT met"); else print "?" }'); first image >= 10x sooner: $(awk -v a="$first" -v b="$theirfirst" 'BEGIN { if (a > 0) printf "%.1fx %s", b / a, (b >= 10 * a ? "met" : "NOT met"); else print "?" }'); median <= 33 ms, p95 <= 100 ms, first image <= 500 ms."
+  } >>"$table"
+fi
+# --- A run played (issue 28's playback bars): a Gray-Scott run simulated at 128^3, each step made
+# large (`afam enlarge`, Catmull-Rom, the same noise field every step so that only the simulation
+# changes), encoded as one file at 1e-2 relative; every step in order twice with a still camera,
+# in the VTK window (the mapper's TimeStep, as ParaView's time) and by `afam replay --steps`,
+# with a host cache of a quarter of the run's decoded float32 size, beside VTK's own GPU ray
+# caster given each step's raw samples (read from the page cache, uploaded as a new image).
+if part play; then
+  pdims="${AFAM_VTK_PLAY_DIMS:-512,512,512}"
+  psteps="${AFAM_VTK_PLAY_STEPS:-40}"
+  psize="${AFAM_VTK_PLAY_SIZE:-1024}"
+  pdir="$work/play"
+  mkdir -p "$pdir"
+  IFS=, read -r px py pz <<<"$pdims"
+  decoded=$(( px * py * pz * 4 * psteps ))
+  pcache=$(( decoded / 4 / 1000000 ))
+  pfile="$pdir/run.afam"
+  t0=$(date +%s)
+  if [ ! -f "$pfile" ]; then
+    "$afam" simulate "$pdir/gs" --dims 128,128,128 --steps "$psteps" --every 20 --warmup 6000 \
+      --seeds 48 >"$pdir/simulate.log" 2>&1 || { tail -3 "$pdir/simulate.log"; exit 1; }
+    for f in "$pdir"/gs_*_128x128x128_float32.raw; do
+      k=$(basename "$f" | cut -d_ -f2)
+      "$afam" enlarge "$f" "$pdir/big_${k}_${px}x${py}x${pz}_float32.raw" --dims "$pdims" \
+        --noise 0.008 --seed 9 >>"$pdir/enlarge.log" 2>&1 || { tail -3 "$pdir/enlarge.log"; exit 1; }
+    done
+    "$afam" encode "$pdir"/big_*_float32.raw "$pfile" --error-bound 1e-2 --relative \
+      >"$pdir/encode.log" 2>&1 || { tail -3 "$pdir/encode.log"; exit 1; }
+  fi
+  status "run of ${psteps} x ${pdims} float32 made + encoded" "$(( $(date +%s) - t0 )) s, $(stat -c %s "$pfile") bytes ($(( decoded / 1000000 )) MB decoded)"
+  frames2=$(( 2 * psteps ))
+  last=$(( psteps - 1 ))
+  tag="play_${psize}"
+  "$bin/BenchAFAMRenderLoop" "$pfile" --trajectory "$traj" --view 0 --frames "$frames2" \
+    --steps "0:$last" --size "$psize" --device gpu --require-gpu "${interop[@]}" \
+    --cache-mb "$pcache" --csv "$work/vtk_$tag.csv" >"$work/vtk_$tag.log" 2>&1 ||
+    { failed=1; tail -3 "$work/vtk_$tag.log"; }
+  "$afam" replay "$pfile" --trajectory "$traj" --view 0 --frames "$frames2" --steps "0:$last" \
+    --size "$psize,$psize" --device gpu --cache-bytes "$((pcache * 1000000))" --cache-blocks 0 \
+    --csv "$work/replay_$tag.csv" >"$work/replay_$tag.log" 2>&1 ||
+    { failed=1; tail -3 "$work/replay_$tag.log"; }
+  "$bin/BenchVTKRawVolume" "$pdir"/big_*_float32.raw --trajectory "$traj" --view 0 \
+    --frames "$frames2" --size "$psize" --csv "$work/raw_$tag.csv" >"$work/raw_$tag.log" 2>&1 ||
+    { failed=1; tail -3 "$work/raw_$tag.log"; }
+  v=$(grep "median_render_call_ms=" "$work/vtk_$tag.log" | tail -1)
+  h=$(grep "^vtk_render_loop" "$work/vtk_$tag.log" | tail -1)
+  r=$(grep "median_latency_ms=" "$work/replay_$tag.log" | tail -1)
+  rp=$(grep "cache_peak_bytes=" "$work/replay_$tag.log" | tail -1)
+  w=$(grep "^vtk_raw_volume" "$work/raw_$tag.log" | tail -1)
+  ours=$(value median_render_call_ms "$v"); theirs=$(value median_render_call_ms "$w")
+  # The second pass alone (frames psteps .. 2 psteps - 1): median of the VTK window's frames.
+  second=$(awk -F, -v s="$psteps" 'NR > 1 && $1 >= s { print $2 }' "$work/vtk_$tag.csv" | sort -g |
+    awk '{ a[NR] = $1 } END { if (NR) print (NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2) }')
+  {
+    echo
+    echo "Run of ${psteps} steps of ${pdims} float32 ($(stat -c %s "$pfile") bytes; $(grep -o 'ratio=[0-9.]*' "$pdir/encode.log" | tail -1)), every step in order twice, still camera (user_1 view 0), ${psize}^2, host cache ${pcache} MB (a quarter of the decoded run):"
+    echo "| renderer | median ms | p95 ms | fps | second pass median ms | first frame ms | cache peak |"
+    echo "|---|---|---|---|---|---|---|"
+    echo "| vtkAFAMVolumeMapper in a VTK window ($(value gpu_frames "$h") GPU / $(value interop_frames "$h") interop of $(value povs "$h")) | $ours | $(value p95_render_call_ms "$v") | $(value fps "$v") | $second | $(value first_frame_ms "$h") | - |"
+    echo "| afam replay --device gpu --steps | $(value median_latency_ms "$r") | $(value p95_latency_ms "$r") | - | - | - | $(value cache_peak_bytes "$rp") B |"
+    echo "| VTK's GPU ray caster given each step's raw samples | $theirs | $(value p95_render_call_ms "$w") | $(value fps "$w") | - | $(value first_image_ms "$w") | - |"
+    echo "Bars: >= 20 fps in the VTK window: $(awk -v f="$(value fps "$v")" 'BEGIN { print (f >= 20) ? "met" : "NOT met" }'); >= 5x faster per step than VTK's: $(awk -v a="$ours" -v b="$theirs" 'BEGIN { if (a > 0) printf "%.1fx %s", b / a, (b >= 5 * a ? "met" : "NOT met"); else print "?" }'); cache peak <= ${pcache} MB: $(awk -v p="$(value cache_peak_bytes "$rp")" -v c="$pcache" 'BEGIN { print (p != "" && p <= c * 1e6) ? "met" : "NOT met" }')."
   } >>"$table"
 fi
 grep -hE "^gl: OpenGL (renderer|version)" "$work"/vtk_*.log | sort -u

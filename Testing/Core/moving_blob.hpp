@@ -28,6 +28,23 @@ inline std::vector<float> movingBlob(afam::Index3 dims, int step, double shift =
   return v;
 }
 
+/// Step k of a field that drifts everywhere, slowly: waves whose phase moves by `drift` a step
+/// (about a tenth of the bound's worth of change), plus fixed noise (so the models spend their
+/// budget and a reference to the step before rarely stays within it).
+inline std::vector<float> driftingWaves(afam::Index3 dims, int k, double drift = 0.02) {
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+  std::mt19937 rng(11);
+  std::normal_distribution<float> noise(0, 0.3f);
+  size_t i = 0;
+  for (int64_t z = 0; z < dims[2]; ++z)
+    for (int64_t y = 0; y < dims[1]; ++y)
+      for (int64_t x = 0; x < dims[0]; ++x, ++i)
+        v[i] = float(50 + 20 * std::sin(0.21 * x + drift * k) * std::cos(0.17 * y - 0.13 * z) +
+                     10 * std::sin(0.3 * z + 0.5 * drift * k)) +
+               noise(rng);
+  return v;
+}
+
 /// Steps held in memory with the sources and pointers encodeRun takes (not copyable: the sources
 /// point into data).
 struct InMemoryRun {

@@ -29,22 +29,7 @@ std::string scratch(const std::string& name) {
 
 const Index3 kDims{36, 32, 28};
 
-/// Step k of a field that drifts everywhere, slowly: waves whose phase moves by `drift` a step
-/// (about a tenth of the bound's worth of change), plus fixed noise (so the models spend their
-/// budget and a reference to the step before rarely stays within it).
-std::vector<float> drifting(int k, double drift = 0.02) {
-  std::vector<float> v(size_t(kDims[0] * kDims[1] * kDims[2]));
-  std::mt19937 rng(11);
-  std::normal_distribution<float> noise(0, 0.3f);
-  size_t i = 0;
-  for (int64_t z = 0; z < kDims[2]; ++z)
-    for (int64_t y = 0; y < kDims[1]; ++y)
-      for (int64_t x = 0; x < kDims[0]; ++x, ++i)
-        v[i] = float(50 + 20 * std::sin(0.21 * x + drift * k) * std::cos(0.17 * y - 0.13 * z) +
-                     10 * std::sin(0.3 * z + 0.5 * drift * k)) +
-               noise(rng);
-  return v;
-}
+std::vector<float> drifting(int k) { return afam_test::driftingWaves(kDims, k); }
 
 double decodedRmse(const AfamFile& f, const std::vector<float>& truth) {
   std::vector<float> out(truth.size());

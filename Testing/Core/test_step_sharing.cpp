@@ -103,6 +103,31 @@ TEST(StepSharing, TheNextStepIsLoadedWhileThisOneIsShown) {
   std::remove(path.c_str());
 }
 
+TEST(StepSharing, AResidualIsDecodedFromTheResidentModelBeforeItAsFromItsWholeChain) {
+  const std::string path = afam_test::scratchPath("step_sharing_residuals.afam");
+  {
+    std::vector<std::vector<float>> values;
+    for (int k = 0; k < 6; ++k) values.push_back(afam_test::driftingWaves(kDims, k));
+    afam_test::InMemoryRun run(kDims, std::move(values));
+    const RunStats st = encodeRun(run.steps, afam_test::runTestOptions(3), RunOptions{}, path);
+    ASSERT_GT(st.residuals[5], 0);
+  }
+  Renderer r(AfamFile::open(path, 0), resources(), finest());
+  FrameStats st;
+  r.renderFrame(kCamera, st);
+  for (int64_t s = 1; s < 6; ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    r.setStep(AfamFile::open(path, s));
+    const ImageRGBA played = r.renderFrame(kCamera, st);
+    Renderer fresh(AfamFile::open(path, s), resources(), finest());  // whole chains
+    FrameStats sf;
+    EXPECT_EQ(fresh.renderFrame(kCamera, sf).rgba, played.rgba);
+    EXPECT_EQ(fresh.cache().stats().residualsOnResident, 0u);
+  }
+  EXPECT_GT(r.cache().stats().residualsOnResident, 20u) << "one payload a residual while playing";
+  std::remove(path.c_str());
+}
+
 TEST(StepSharing, AFileOfAnotherRunIsRefused) {
   const std::string path = encodeRunOfThree();
   const std::string other = afam_test::scratchPath("step_sharing_other.afam");

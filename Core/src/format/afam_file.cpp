@@ -552,11 +552,13 @@ void AfamFile::checkUnchanged() const {
   throwIfChanged(identityOfPath(path_));
 }
 
-void AfamFile::readPayload(int64_t entry, void* out) const {
+void AfamFile::readPayload(int64_t entry, void* out) const { readPayloadOnto(entry, nullptr, out); }
+
+void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) const {
   // The descriptor is checked after the read, whatever its outcome: bytes read while (or after)
   // another process rewrote the file are neither returned nor recorded as damage.
   try {
-    readVerifiedPayload(entry, out);
+    readVerifiedPayload(entry, previous, out);
   } catch (const FormatError&) {
     throwIfChanged(identityOfDescriptor(fd_));
     throw;
@@ -564,13 +566,13 @@ void AfamFile::readPayload(int64_t entry, void* out) const {
   throwIfChanged(identityOfDescriptor(fd_));
 }
 
-void AfamFile::readVerifiedPayload(int64_t entry, void* out) const {
+void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* out) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
   const ModelEntry& e = entries_[static_cast<size_t>(entry)];
   const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
   if (e.residual) {  // its chain of payloads in time
-    decodeChain(fd_, path_, e, chain(entry), static_cast<float*>(out));
+    decodeChain(fd_, path_, e, chain(entry), previous, static_cast<float*>(out));
     return;
   }
   if (e.storedSize == e.size) {  // uncoded floats: read in place

@@ -174,10 +174,11 @@ size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
                          const ModelEntry& in);
 /// The model of a residual entry into out (entry.size bytes): each payload of its chain (the
 /// independent one first) read, checked against its CRC and decoded, the residuals added to the
-/// first in order (payload_chain.cpp). FormatError naming the path, block and step of a damaged
-/// payload.
+/// first in order (payload_chain.cpp); or, given `previous` (the model of the chain without its
+/// newest payload, as this function decoded it), the newest residual only, added to it: the same
+/// floats. FormatError naming the path, block and step of a damaged payload.
 void decodeChain(int fd, const std::string& path, const ModelEntry& e,
-                 const std::vector<PayloadPart>& chain, float* out);
+                 const std::vector<PayloadPart>& chain, const float* previous, float* out);
 /// The on-disk entry of a model, `extraFlags` or-ed into its flags.
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags);
 /// A header with the volume's description, the partition and `version` (checksum not set).

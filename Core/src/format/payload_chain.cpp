@@ -3,6 +3,7 @@
 // independent payload, then each step's coded residual added in order. The reader and the run
 // writer (which codes the next step against what a reader will decode) both come here, so that
 // both sum the same floats in the same order.
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -30,13 +31,20 @@ const uint8_t* readPart(int fd, const std::string& path, const ModelEntry& e, co
 }  // namespace
 
 void decodeChain(int fd, const std::string& path, const ModelEntry& e,
-                 const std::vector<PayloadPart>& chain, float* out) {
+                 const std::vector<PayloadPart>& chain, const float* previous, float* out) {
   if (chain.size() < 2) throw InvalidArgument(path + ": decodeChain of a model of one payload");
   thread_local std::vector<uint8_t> stored;
   thread_local std::vector<float> residual;
   const size_t count = e.size / sizeof(float);
   residual.resize(count);
-  for (size_t k = 0; k < chain.size(); ++k) {
+  // From the model before the newest residual when the caller has it (the same floats a whole
+  // chain sums to, as it was summed the same way), else from the chain's first payload.
+  size_t first = 0;
+  if (previous) {
+    std::copy(previous, previous + count, out);
+    first = chain.size() - 1;
+  }
+  for (size_t k = first; k < chain.size(); ++k) {
     const PayloadPart& p = chain[k];
     ModelEntry part = e;  // the model's kind and NCP, this payload's coding
     part.coded = p.coded;

@@ -421,7 +421,7 @@ bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
   entry = previous_.at(slotOf(probe));
   control.resize(entry.size / sizeof(float));
   if (entry.residual) {
-    decodeChain(fd_, tmpPath_, entry, previousChains_.at(slotOf(probe)), control.data());
+    decodeChain(fd_, tmpPath_, entry, previousChains_.at(slotOf(probe)), nullptr, control.data());
     return true;
   }
   std::vector<uint8_t> stored(entry.storedSize);

@@ -72,12 +72,24 @@ void LruCache::setFile(std::shared_ptr<const AfamFile> step) {
   pinned_.clear();
 }
 
+Payload LruCache::residentModelBefore(const AfamFile& f, int64_t entry) {
+  const ModelEntry& e = f.entries()[size_t(entry)];
+  if (!e.residual) return nullptr;
+  const std::vector<PayloadPart>& chain = f.chain(entry);
+  if (chain.size() < 2) return nullptr;
+  std::lock_guard<std::mutex> g(mutex_);
+  const auto it = map_.find(chain[chain.size() - 2].offset);  // the model key of the step before
+  return it == map_.end() ? nullptr : it->second.data;
+}
+
 Payload LruCache::load(const AfamFile& f, int64_t entry) {
   const ModelEntry& e = f.entries().at(size_t(entry));
   auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
   const auto t0 = Clock::now();
+  // A residual whose model at the step before is resident costs one payload, not its chain.
+  const Payload before = residentModelBefore(f, entry);
   try {
-    f.readPayload(entry, data->data());
+    f.readPayloadOnto(entry, before ? before->data() : nullptr, data->data());
   } catch (const FormatError& ex) {
     damage_->record(f, entry, ex.what());
     throw;
@@ -87,6 +99,7 @@ Payload LruCache::load(const AfamFile& f, int64_t entry) {
   std::lock_guard<std::mutex> g(mutex_);
   stats_.bytesRead += e.size;
   stats_.blocksRead++;
+  stats_.residualsOnResident += before ? 1 : 0;
   stats_.readSeconds += s;
   return data;
 }

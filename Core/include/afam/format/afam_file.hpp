@@ -174,6 +174,11 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   /// is no longer what it was at open (another process truncated or rewrote it): its bytes may
   /// then belong to another file, and are neither returned nor taken for damage.
   void readPayload(int64_t entry, void* out) const;
+  /// A residual entry's model from `previous`, the model of its chain without the newest payload
+  /// (the model of chain(entry)[size - 2].offset, as readPayload gave it): only the newest
+  /// residual is read and decoded, and the result is the floats readPayload gives. Other
+  /// entries, or previous null: readPayload.
+  void readPayloadOnto(int64_t entry, const float* previous, void* out) const;
   /// Reads and returns the payload as floats.
   std::vector<float> readPayload(int64_t entry) const;
   /// Throws FileChangedError (naming the path and what changed) when the file is no longer the
@@ -189,8 +194,8 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
 
  private:
   AfamFile() = default;
-  void readVerifiedPayload(int64_t entry,
-                           void* out) const;           ///< readPayload without the change check
+  void readVerifiedPayload(int64_t entry, const float* previous,
+                           void* out) const;           ///< readPayloadOnto without the change check
   void throwIfChanged(const FileIdentity& now) const;  ///< FileChangedError unless now == identity_
   std::string path_;
   int fd_ = -1;

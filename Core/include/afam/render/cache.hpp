@@ -29,7 +29,9 @@
 // not change (a reference). setFile() moves the cache to another step of the same run: what the
 // new step shares with what is resident stays resident and hits, nothing is dropped, and the
 // budgets hold across the run. The entries of the API are those of the current step's file;
-// prefetch(step, entry) loads from another step (the next one, while this one is shown).
+// prefetch(step, entry) loads from another step (the next one, while this one is shown). A
+// residual whose model at the step before is resident is decoded from it: one payload, not the
+// chain back to its key step (AfamFile::readPayloadOnto; the same floats).
 //
 // Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
 // the lock, and a block being loaded by one thread is waited for, not read twice.
@@ -60,6 +62,9 @@ struct CacheStats {
   uint64_t bytesRead = 0, blocksRead = 0;  ///< all reads, frame and prefetch
   uint64_t prefetchLoads = 0, prefetchBytes = 0, prefetchDropped = 0;
   uint64_t evictions = 0, bypasses = 0;
+  /// Residual models decoded from the resident model of the step before (one payload read and
+  /// decoded instead of the chain back to the independent payload).
+  uint64_t residualsOnResident = 0;
   double readSeconds = 0;      ///< wall time inside reads, including the bandwidth sleep
   double throttleSeconds = 0;  ///< of which sleeping for the bandwidth cap
 };
@@ -128,8 +133,9 @@ class LruCache {
   FilePtr current() const;  // the current step's file
   Payload getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool* wasHit);
   Payload getIntactFrom(const FilePtr& f, int64_t entry, Purpose purpose);
-  Payload load(const AfamFile& f, int64_t entry);      // read + throttle, outside the lock
-  bool makeRoom(uint64_t bytes, bool mayEvictPinned);  // under the lock
+  Payload load(const AfamFile& f, int64_t entry);  // read + throttle, outside the lock
+  Payload residentModelBefore(const AfamFile& f, int64_t entry);  // a residual's, if resident
+  bool makeRoom(uint64_t bytes, bool mayEvictPinned);             // under the lock
   void throttle(uint64_t bytes, std::chrono::steady_clock::time_point readStart);
 
   std::shared_ptr<const AfamFile> file_;

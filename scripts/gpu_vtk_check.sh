@@ -29,7 +29,8 @@
 #     AFAM_VTK_PLAY_STEPS (40) steps made large to AFAM_VTK_PLAY_DIMS (512,512,512) float32,
 #     encoded as one run at 1e-2 relative), every step in order twice with a still camera at
 #     AFAM_VTK_PLAY_SIZE^2 (1024), a host cache of a quarter of the decoded run: the mapper in the
-#     window, `afam replay --steps`, and VTK's own GPU ray caster given each step's raw samples.
+#     window, `afam replay --steps`, and VTK's own GPU ray caster given each step's raw samples
+#     (AFAM_VTK_PLAY_RAW=0 leaves VTK's caster out).
 # The programs' OpenGL is NVIDIA's own on the GPU (AFAM_VTK_GLX=nvidia, default) or Mesa's llvmpipe
 # (AFAM_VTK_GLX=mesa). Logs and CSVs go to $OUT when set; a table is printed last.
 set -uo pipefail
@@ -112,7 +113,7 @@ run)
 work)
   ;;  # below
 *)
-  sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,35p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
   ;;
 esac
@@ -312,9 +313,11 @@ if part play; then
     --size "$psize,$psize" --device gpu --cache-bytes "$((pcache * 1000000))" --cache-blocks 0 \
     --csv "$work/replay_$tag.csv" >"$work/replay_$tag.log" 2>&1 ||
     { failed=1; tail -3 "$work/replay_$tag.log"; }
-  "$bin/BenchVTKRawVolume" "$pdir"/big_*_float32.raw --trajectory "$traj" --view 0 \
-    --frames "$frames2" --size "$psize" --csv "$work/raw_$tag.csv" >"$work/raw_$tag.log" 2>&1 ||
-    { failed=1; tail -3 "$work/raw_$tag.log"; }
+  if [ "${AFAM_VTK_PLAY_RAW:-1}" = 1 ]; then
+    "$bin/BenchVTKRawVolume" "$pdir"/big_*_float32.raw --trajectory "$traj" --view 0 \
+      --frames "$frames2" --size "$psize" --csv "$work/raw_$tag.csv" >"$work/raw_$tag.log" 2>&1 ||
+      { failed=1; tail -3 "$work/raw_$tag.log"; }
+  fi
   v=$(grep "median_render_call_ms=" "$work/vtk_$tag.log" | tail -1)
   h=$(grep "^vtk_render_loop" "$work/vtk_$tag.log" | tail -1)
   r=$(grep "median_latency_ms=" "$work/replay_$tag.log" | tail -1)

@@ -199,6 +199,15 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
     {
       m.InstallGpu(request.CacheBudgetMB, resources.threads);
     }
+    // A run: the step after this one is loaded while this one is shown (playback goes forward
+    // first; Open() follows the direction of play from the first step change on).
+    const long long ahead = this->OpenStep + 1 < m.File->stepCount() ? this->OpenStep + 1
+                                                                       : this->OpenStep - 1;
+    if (!m.Next && ahead >= 0 && ahead != this->OpenStep)
+    {
+      m.Next = afam::AfamFile::open(this->OpenPath, ahead);
+    }
+    m.Renderer->setNextStep(m.Next);
   }
   m.LastGood = settings;
   afam::FrameStats frame;

@@ -34,7 +34,7 @@ generate() {  # series folder
     fast) "$AFAM" simulate "$dir/gs" --dims "$DIMS" --steps "$STEPS" --every 20 --warmup 1000 >/dev/null ;;
     unrelated)
       for ((k = 0; k < STEPS; ++k)); do
-        "$AFAM" simulate "$dir/seed$k" --dims "$DIMS" --steps 1 --warmup 1500 --seed $((k + 1)) >/dev/null
+        "$AFAM" simulate "$dir/seed$k" --dims "$DIMS" --steps 1 --warmup 500 --seed $((k + 1)) >/dev/null
         mv "$dir"/seed${k}_0000_*.raw "$dir/$(printf 'gs_%04d' "$k")_${DIMS//,/x}_float32.raw"
       done ;;
     *) echo "run_size.sh: unknown series $s" >&2; exit 1 ;;
@@ -68,7 +68,7 @@ for s in $SERIES; do
     done
     "$AFAM" compare-codecs "${steps[@]}" --bounds "$E" --csv "$work/cc.csv" --work "$work" >/dev/null
     zfp=$(awk -F, '$5 == "zfp" { s += $7 } END { print s }' "$work/cc.csv")
-    printf '| %s | %s | %d B | %d B | %.2fx smaller | %d B | %d | %d | %.3f | %.1f |\n' "$s" "$E" \
+    printf '| %s | %s | %d B | %d B | %.2fx smaller | %d B | %d | %d | %.4f | %.1f |\n' "$s" "$E" \
       "$run" "$per" "$(echo "$per / $run" | bc -l)" "$zfp" "$residuals" "$references" \
       "$(echo "$worst / $bound" | bc -l)" "$(echo "$t1 - $t0" | bc -l)"
   done

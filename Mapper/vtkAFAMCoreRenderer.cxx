@@ -201,8 +201,8 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
     }
     // A run: the step after this one is loaded while this one is shown (playback goes forward
     // first; Open() follows the direction of play from the first step change on).
-    const long long ahead = this->OpenStep + 1 < m.File->stepCount() ? this->OpenStep + 1
-                                                                       : this->OpenStep - 1;
+    const long long ahead =
+      this->OpenStep + 1 < m.File->stepCount() ? this->OpenStep + 1 : this->OpenStep - 1;
     if (!m.Next && ahead >= 0 && ahead != this->OpenStep)
     {
       m.Next = afam::AfamFile::open(this->OpenPath, ahead);

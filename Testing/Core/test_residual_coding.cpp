@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -151,4 +152,38 @@ TEST(ResidualCoding, AnAppendedStepContinuesTheChains) {
   EXPECT_EQ(longest, 4u) << "residuals at steps 1, 2 and 3 on step 0's payload";
   EXPECT_LE(decodedRmse(*f, series.data[3]), st.bound);
   std::remove(path.c_str());
+}
+
+TEST(ResidualCoding, AStepAtATimeEncodesTheRunEncodeRunWrites) {
+  afam_test::InMemoryRun series(kDims, drift(3));
+  const std::string whole = scratch("whole.afam"), stepped = scratch("stepped.afam");
+  const RunStats st = encodeRun(series.steps, options(), RunOptions{}, whole);
+  {
+    RunEncoder encoder(stepped, options(), 16, st.valueMin, st.valueMax);
+    for (size_t k = 0; k < 3; ++k) encoder.addStep(*series.steps[k], double(k));
+    EXPECT_FALSE(std::ifstream(stepped).good()) << "nothing before the commit";
+    EXPECT_EQ(encoder.commit().bytesOut, st.bytesOut);
+  }
+  std::ifstream a(whole, std::ios::binary), b(stepped, std::ios::binary);
+  const std::string bytesA((std::istreambuf_iterator<char>(a)), {}),
+      bytesB((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_EQ(bytesA, bytesB) << "the same file, byte for byte";
+  // A step of another grid is named and the encoder left without a commit leaves nothing.
+  const std::string refused = scratch("refused.afam");
+  {
+    RunEncoder encoder(refused, options(), 16, st.valueMin, st.valueMax);
+    encoder.addStep(*series.steps[0], 0.0);
+    const std::vector<float> other(size_t(kDims[0] * kDims[1] * (kDims[2] - 1)), 1.0f);
+    ArraySource smaller(other.data(), {kDims[0], kDims[1], kDims[2] - 1});
+    try {
+      encoder.addStep(smaller, 1.0);
+      FAIL() << "a step of another grid was encoded";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("step 1"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(encoder.addStep(*series.steps[1], 0.0), InvalidArgument) << "time goes back";
+  }
+  EXPECT_FALSE(std::ifstream(refused).good());
+  std::remove(whole.c_str());
+  std::remove(stepped.c_str());
 }

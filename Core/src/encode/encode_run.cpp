@@ -16,20 +16,32 @@ namespace afam {
 
 namespace {
 
-/// The first place where step k's grid differs from step 0's, or empty.
-std::string gridDifference(VolumeSource& first, VolumeSource& step) {
+/// What a run's steps share: the first step's grid and sample size.
+struct StepGrid {
+  Index3 dims{};
+  std::array<double, 3> origin{}, spacing{};
+  int bytesPerVoxel = 0;
+  explicit StepGrid(const VolumeSource& s)
+      : dims(s.dims()),
+        origin(s.origin()),
+        spacing(s.spacing()),
+        bytesPerVoxel(s.bytesPerVoxel()) {}
+};
+
+/// The first place where a step's grid differs from the run's, or empty.
+std::string gridDifference(const StepGrid& first, const VolumeSource& step) {
   std::ostringstream d;
-  const Index3 a = first.dims(), b = step.dims();
+  const Index3 a = first.dims, b = step.dims();
   if (a != b) {
     d << "dims " << b[0] << "x" << b[1] << "x" << b[2] << " differ from the first step's " << a[0]
       << "x" << a[1] << "x" << a[2];
-  } else if (first.origin() != step.origin()) {
+  } else if (first.origin != step.origin()) {
     d << "origin differs from the first step's";
-  } else if (first.spacing() != step.spacing()) {
+  } else if (first.spacing != step.spacing()) {
     d << "spacing differs from the first step's";
-  } else if (first.bytesPerVoxel() != step.bytesPerVoxel()) {
+  } else if (first.bytesPerVoxel != step.bytesPerVoxel()) {
     d << "sample type (" << step.bytesPerVoxel() << " bytes) differs from the first step's ("
-      << first.bytesPerVoxel() << " bytes)";
+      << first.bytesPerVoxel << " bytes)";
   }
   return d.str();
 }
@@ -124,63 +136,108 @@ class WrittenStep : public PreviousStep {
 
 }  // namespace
 
+struct RunEncoder::State {
+  std::string path;
+  EncoderOptions options;  ///< every step held to the run's bound, in data units
+  VolumeHeader header;     ///< the run's range and bound as given
+  int keyInterval = 16;
+  double bound = 0;
+  std::unique_ptr<StepGrid> grid;
+  std::unique_ptr<RunWriter> writer;
+  std::unique_ptr<WrittenStep> previous;
+  RunStats stats;
+  std::chrono::steady_clock::time_point start;
+};
+
+RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval,
+                       double valueMin, double valueMax)
+    : s_(std::make_unique<State>()) {
+  if (keyInterval < 1)
+    throw InvalidArgument("encode: key interval " + std::to_string(keyInterval) + " < 1");
+  if (!(valueMin <= valueMax) || !std::isfinite(valueMin) || !std::isfinite(valueMax))
+    throw InvalidArgument("encode: the run's value range must be finite");
+  State& s = *s_;
+  s.start = std::chrono::steady_clock::now();
+  s.path = path;
+  s.keyInterval = keyInterval;
+  s.bound = options.relativeBound ? options.errorBound * (valueMax - valueMin) : options.errorBound;
+  s.header.valueMin = valueMin;
+  s.header.valueMax = valueMax;
+  s.header.errorBound = options.errorBound;
+  s.header.relativeBound = options.relativeBound;
+  s.options = options;
+  s.options.errorBound = s.bound;
+  s.options.relativeBound = false;
+  s.stats.valueMin = valueMin;
+  s.stats.valueMax = valueMax;
+  s.stats.bound = s.bound;
+}
+
+RunEncoder::~RunEncoder() = default;
+
+EncodeStats RunEncoder::addStep(VolumeSource& step, double time) {
+  State& s = *s_;
+  const int64_t k = static_cast<int64_t>(s.stats.steps.size());
+  if (!std::isfinite(time) || (s.writer && !(time > s.writer->lastTime())))
+    throw InvalidArgument("encode: time values must increase: step " + std::to_string(k) + " has " +
+                          std::to_string(time));
+  if (!s.grid) s.grid = std::make_unique<StepGrid>(step);
+  const std::string d = gridDifference(*s.grid, step);
+  if (!d.empty())
+    throw InvalidArgument("encode: step " + std::to_string(k) + " (" + step.name() + "): " + d);
+  StepSink sink(s.writer, s.path, s.header, s.keyInterval, s.bound, time);
+  s.options.previous = s.previous.get();
+  s.stats.steps.push_back(encodeVolume(step, s.options, sink));
+  sink.end();
+  s.stats.references.push_back(sink.references);
+  s.stats.residuals.push_back(sink.residuals);
+  if (!s.previous) s.previous = std::make_unique<WrittenStep>(*s.writer);
+  return s.stats.steps.back();
+}
+
+RunStats RunEncoder::commit() {
+  State& s = *s_;
+  if (!s.writer) throw InvalidArgument("encode: a run needs at least one step");
+  s.stats.bytesOut = s.writer->commit();
+  s.stats.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
+  return s.stats;
+}
+
 RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
                    const RunOptions& run, const std::string& path) {
-  const auto t0 = std::chrono::steady_clock::now();
   if (steps.empty()) throw InvalidArgument("encode: a run needs at least one step");
-  if (run.keyInterval < 1)
-    throw InvalidArgument("encode: key interval " + std::to_string(run.keyInterval) + " < 1");
   std::vector<double> times = run.times;
   if (times.empty())
     for (size_t k = 0; k < steps.size(); ++k) times.push_back(double(k));
   if (times.size() != steps.size())
     throw InvalidArgument("encode: " + std::to_string(times.size()) + " time values for " +
                           std::to_string(steps.size()) + " steps");
-  for (size_t k = 0; k < steps.size(); ++k) {
+  const StepGrid grid(*steps[0]);
+  for (size_t k = 0; k < steps.size(); ++k) {  // refused before anything is read or written
     if (!std::isfinite(times[k]) || (k > 0 && !(times[k] > times[k - 1])))
       throw InvalidArgument("encode: time values must increase: step " + std::to_string(k) +
                             " has " + std::to_string(times[k]));
-    const std::string d = gridDifference(*steps[0], *steps[k]);
+    const std::string d = gridDifference(grid, *steps[k]);
     if (!d.empty())
       throw InvalidArgument("encode: step " + std::to_string(k) + " (" + steps[k]->name() +
                             "): " + d);
   }
-  RunStats stats;
-  stats.valueMin = std::numeric_limits<double>::infinity();
-  stats.valueMax = -stats.valueMin;
+  if (run.keyInterval < 1)
+    throw InvalidArgument("encode: key interval " + std::to_string(run.keyInterval) + " < 1");
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   std::vector<RangedStep> ranged;  // each step's range, read once
   ranged.reserve(steps.size());
   for (VolumeSource* s : steps) {
-    double lo, hi;
-    volumeValueRange(*s, lo, hi);
-    ranged.emplace_back(*s, lo, hi);
-    stats.valueMin = std::min(stats.valueMin, lo);
-    stats.valueMax = std::max(stats.valueMax, hi);
+    double a, b;
+    volumeValueRange(*s, a, b);
+    ranged.emplace_back(*s, a, b);
+    lo = std::min(lo, a);
+    hi = std::max(hi, b);
   }
-  stats.bound = options.relativeBound ? options.errorBound * (stats.valueMax - stats.valueMin)
-                                      : options.errorBound;
-  VolumeHeader runHeader;
-  runHeader.valueMin = stats.valueMin;
-  runHeader.valueMax = stats.valueMax;
-  runHeader.errorBound = options.errorBound;
-  runHeader.relativeBound = options.relativeBound;
-  EncoderOptions stepOptions = options;  // every step held to the run's bound, in data units
-  stepOptions.errorBound = stats.bound;
-  stepOptions.relativeBound = false;
-  std::unique_ptr<RunWriter> writer;
-  std::unique_ptr<WrittenStep> previous;
-  for (size_t k = 0; k < steps.size(); ++k) {
-    StepSink sink(writer, path, runHeader, run.keyInterval, stats.bound, times[k]);
-    stepOptions.previous = previous.get();
-    stats.steps.push_back(encodeVolume(ranged[k], stepOptions, sink));
-    sink.end();
-    stats.references.push_back(sink.references);
-    stats.residuals.push_back(sink.residuals);
-    if (!previous) previous = std::make_unique<WrittenStep>(*writer);
-  }
-  stats.bytesOut = writer->commit();
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return stats;
+  RunEncoder encoder(path, options, run.keyInterval, lo, hi);
+  for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(ranged[k], times[k]);
+  return encoder.commit();
 }
 
 RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& options,

@@ -10,6 +10,7 @@
 // to keyInterval - 1 steps after it).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,28 @@ struct RunStats {
 /// a single volume as version 2 through encodeVolume).
 RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
                    const RunOptions& run, const std::string& path);
+
+/// A run encoded one step at a time, as a pipeline delivers them (ParaView's encoding filter on
+/// a time-varying input): the coding of encodeRun, held to a bound fixed before the first step
+/// (relative: to [valueMin, valueMax], e.g. the first step's range, as later steps are not known
+/// yet). Nothing is at `path` until commit(); destroyed before it, nothing is left.
+class RunEncoder {
+ public:
+  RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval,
+             double valueMin, double valueMax);
+  ~RunEncoder();
+  RunEncoder(const RunEncoder&) = delete;
+  RunEncoder& operator=(const RunEncoder&) = delete;
+  /// Encodes the next step at `time` (after the last one's). InvalidArgument naming the step when
+  /// its grid or sample type is not the first step's, or the time does not follow.
+  EncodeStats addStep(VolumeSource& step, double time);
+  /// Writes the run (atomically, as encodeRun) and returns its statistics.
+  RunStats commit();
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
 
 /// Appends `step` to the run at `path` in place (RunWriter::append: a kill at any moment leaves
 /// the run with its old or its new steps), coded in time against the run's last step and held to

@@ -6,6 +6,7 @@
 #include "vtkAFAMModelTree.h"
 
 #include "afam/format/afam_file.hpp"
+#include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
 
 #include "vtkDataArray.h"
@@ -25,6 +26,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <string>
@@ -40,9 +43,59 @@ vtkAFAMEncoder::vtkAFAMEncoder()
     0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS);
 }
 
+// A run being encoded, one execution a step.
+struct vtkAFAMEncoder::RunUnderWay
+{
+  std::unique_ptr<afam::RunEncoder> Encoder;
+  std::string Path;
+};
+
 vtkAFAMEncoder::~vtkAFAMEncoder()
 {
+  this->DropRun();
   this->RemoveModelFile();
+}
+
+void vtkAFAMEncoder::DropRun()
+{
+  delete this->Run; // the run encoder removes its temporary file
+  this->Run = nullptr;
+  this->NextStep = 0;
+}
+
+int vtkAFAMEncoder::RequestInformation(vtkInformation*,
+  vtkInformationVector** inputVector,
+  vtkInformationVector*)
+{
+  // The output keeps the input's time steps (the executive copies them): a run's output
+  // describes the step the time asks for.
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  this->InputTimes.clear();
+  if (this->EncodeTimeSteps && inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) &&
+    inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 1)
+  {
+    const double* t = inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    this->InputTimes.assign(t, t + inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()));
+  }
+  return 1;
+}
+
+int vtkAFAMEncoder::RequestUpdateExtent(vtkInformation*,
+  vtkInformationVector** inputVector,
+  vtkInformationVector*)
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  if (this->InputTimes.size() < 2 || (controller && controller->GetNumberOfProcesses() > 1))
+  {
+    return 1; // the time asked of the output, as the executive passes it up
+  }
+  // The step a run under way encodes next; once it is done, the last step it read, so that a new
+  // time on the output does not execute the input again (and the run stays current).
+  const size_t k =
+    this->Run ? this->NextStep : (this->ModelFile.empty() ? 0 : this->InputTimes.size() - 1);
+  inputVector[0]->GetInformationObject(0)->Set(
+    vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(), this->InputTimes[k]);
+  return 1;
 }
 
 void vtkAFAMEncoder::RemoveModelFile()
@@ -217,21 +270,53 @@ void vtkAFAMEncoder::KeepStatistics(const afam::EncodeStats& stats)
     : 0;
 }
 
-void vtkAFAMEncoder::BuildOutput(const std::string& path, vtkMultiBlockDataSet* output)
+void vtkAFAMEncoder::KeepRunStatistics(const afam::RunStats& stats)
+{
+  afam::EncodeStats all; // the run as one: its worst block, its bound, all its bytes
+  all.seconds = stats.seconds;
+  all.bound = stats.bound;
+  all.bytesOut = stats.bytesOut;
+  for (const afam::EncodeStats& s : stats.steps)
+  {
+    all.maxRmse = std::max(all.maxRmse, s.maxRmse);
+    all.maxError = std::max(all.maxError, s.maxError);
+    all.bytesIn += s.bytesIn;
+  }
+  this->KeepStatistics(all);
+  std::ostringstream report;
+  for (size_t k = 0; k < stats.steps.size(); ++k)
+  {
+    report << (k ? "\n" : "") << "step " << k << ": max_rmse=" << stats.steps[k].maxRmse
+           << " references=" << stats.references[k] << " residuals=" << stats.residuals[k]
+           << " bound=" << stats.bound;
+  }
+  this->LastLevelReport = report.str();
+}
+
+void vtkAFAMEncoder::BuildOutput(const std::string& path,
+  vtkMultiBlockDataSet* output,
+  long long step)
 {
   this->ModelFile = path;
-  auto file = afam::AfamFile::open(path);
-  vtkAFAMModelTree::Build(file->header(),
+  auto file = afam::AfamFile::open(path, step);
+  vtkAFAMModelTree::Build(
+    file->header(),
     file->partition(),
     file->entries(),
     file->path(),
     0,
     1,
     output,
-    [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); });
+    [this](double f) { this->UpdateProgress(0.95 + 0.05 * f); },
+    step);
+  if (file->stepCount() > 1)
+  {
+    output->GetInformation()->Set(
+      vtkDataObject::DATA_TIME_STEP(), file->stepTimes()[static_cast<size_t>(step)]);
+  }
 }
 
-int vtkAFAMEncoder::RequestData(vtkInformation*,
+int vtkAFAMEncoder::RequestData(vtkInformation* request,
   vtkInformationVector** inputVector,
   vtkInformationVector* outputVector)
 {
@@ -242,29 +327,41 @@ int vtkAFAMEncoder::RequestData(vtkInformation*,
     vtkErrorMacro(<< "needs a vtkImageData input");
     return 0;
   }
-  this->RemoveModelFile();
   input->GetExtent(this->LastPieceExtent);
   this->LastRemoteBytesRead = 0;
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
+  const bool run = this->InputTimes.size() > 1 && !pieces;
+  if (!run)
+  {
+    this->DropRun();
+    this->RemoveModelFile();
+  }
   try
   {
-    if (pieces ? !this->EncodePieces(controller, input, inputVector, output)
-               : !this->EncodeWhole(input, inputVector, output))
+    if (run      ? !this->EncodeTimeStep(request, input, inputVector, outputVector)
+        : pieces ? !this->EncodePieces(controller, input, inputVector, output)
+                 : !this->EncodeWhole(input, inputVector, output))
     {
+      request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+      this->DropRun();
       return 0;
     }
   }
   catch (const afam::Cancelled&)
   {
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
     output->Initialize();
+    this->DropRun();
     this->RemoveModelFile();
     vtkWarningMacro(<< "encoding cancelled");
     return 0;
   }
   catch (const std::exception& e)
   {
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
     output->Initialize();
+    this->DropRun();
     this->RemoveModelFile();
     vtkErrorMacro(<< e.what());
     return 0;
@@ -272,16 +369,43 @@ int vtkAFAMEncoder::RequestData(vtkInformation*,
   return 1;
 }
 
-bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
+uint32_t vtkAFAMEncoder::InputFingerprint(vtkImageData* input, vtkInformationVector** inputVector)
+{
+  // A file-series reader executes again for the same time (its inner reader's file name is set
+  // anew), so neither the data's nor the pipeline's modification time tells a changed input:
+  // the chosen array's bytes do (CRC-32 with the grid and the name; a pass over memory).
+  std::string ignored;
+  vtkDataArray* array = this->ChooseArray(input, inputVector, ignored);
+  vtkAFAMArraySamples samples; // in VTK's standard layout, as encoded
+  if (!array || !vtkAFAMGetSamples(array, samples, ignored))
+  {
+    return 0;
+  }
+  int dims[3];
+  input->GetDimensions(dims);
+  double origin[3], spacing[3];
+  input->GetOrigin(origin);
+  input->GetSpacing(spacing);
+  uint32_t crc = afam::crc32(dims, sizeof dims);
+  crc = afam::crc32(origin, sizeof origin, crc);
+  crc = afam::crc32(spacing, sizeof spacing, crc);
+  const std::string name = array->GetName() ? array->GetName() : "";
+  crc = afam::crc32(name.data(), name.size(), crc);
+  const size_t bytes = static_cast<size_t>(array->GetNumberOfValues()) *
+    static_cast<size_t>(afam::sampleTypeSize(samples.Type));
+  return afam::crc32(samples.Data, bytes, crc);
+}
+
+std::unique_ptr<afam::ArraySource> vtkAFAMEncoder::SourceOf(vtkImageData* input,
   vtkInformationVector** inputVector,
-  vtkMultiBlockDataSet* output)
+  vtkAFAMArraySamples& samples)
 {
   std::string error;
   vtkDataArray* array = this->ChooseArray(input, inputVector, error);
   if (!array)
   {
     vtkErrorMacro(<< error);
-    return false;
+    return nullptr;
   }
   int dims[3];
   input->GetDimensions(dims);
@@ -290,13 +414,12 @@ bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
     vtkErrorMacro(<< "array '" << (array->GetName() ? array->GetName() : "") << "' has "
                   << array->GetNumberOfTuples() << " values for " << dims[0] << "x" << dims[1]
                   << "x" << dims[2] << " points");
-    return false;
+    return nullptr;
   }
-  vtkAFAMArraySamples samples;
   if (!vtkAFAMGetSamples(array, samples, error))
   {
     vtkErrorMacro(<< error);
-    return false;
+    return nullptr;
   }
   // The file's origin is the world position of the first sample that arrived: the image's origin
   // is that of index (0, 0, 0), and the extent (the whole extent's or a sub-extent's) may start
@@ -316,16 +439,104 @@ bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
   }
   // The array in its own type: the encoder converts the planes it reads, as VTK would
   // (static_cast).
-  afam::ArraySource source(samples.Data,
+  return std::make_unique<afam::ArraySource>(samples.Data,
     samples.Type,
     afam::Index3{ dims[0], dims[1], dims[2] },
     array->GetName() ? array->GetName() : "scalars",
-    { origin[0], origin[1], origin[2] },
-    { spacing[0], spacing[1], spacing[2] });
+    std::array<double, 3>{ origin[0], origin[1], origin[2] },
+    std::array<double, 3>{ spacing[0], spacing[1], spacing[2] });
+}
+
+bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiBlockDataSet* output)
+{
+  vtkAFAMArraySamples samples; // what the source reads, kept while it does
+  std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
+  if (!source)
+  {
+    return false;
+  }
   const std::string path = NewModelPath();
-  this->KeepStatistics(afam::encodeVolume(source, this->MakeOptions(), path));
+  this->KeepStatistics(afam::encodeVolume(*source, this->MakeOptions(), path));
   this->BuildOutput(path, output);
   return true;
+}
+
+bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
+  vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkInformationVector* outputVector)
+{
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
+  const size_t n = this->InputTimes.size();
+  if (!this->Run && !this->ModelFile.empty() && this->RunFilterTime == this->GetMTime() &&
+    this->RunInputPrint == this->InputFingerprint(input, inputVector))
+  {
+    // The run is current: the step the output's time asks for (the last not after it).
+    const double t = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+      ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+      : this->InputTimes.front();
+    const auto after =
+      std::upper_bound(this->InputTimes.begin(), this->InputTimes.end(), t + 1e-12 * std::abs(t));
+    const long long step = after == this->InputTimes.begin()
+      ? 0
+      : static_cast<long long>(after - this->InputTimes.begin()) - 1;
+    this->BuildOutput(this->ModelFile, output, step);
+    return true;
+  }
+  const double inputTime = input->GetInformation()->Has(vtkDataObject::DATA_TIME_STEP())
+    ? input->GetInformation()->Get(vtkDataObject::DATA_TIME_STEP())
+    : this->InputTimes[this->NextStep];
+  if (!this->Run)
+  {
+    // A new run (the input or a setting changed): from the first step, whose range a relative
+    // bound refers to.
+    this->RemoveModelFile();
+    this->NextStep = 0;
+    if (inputTime != this->InputTimes[0])
+    {
+      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+      return true; // this input is another step's: the next execution gets the first
+    }
+  }
+  vtkAFAMArraySamples samples; // what the source reads, kept while it does
+  std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
+  if (!source)
+  {
+    return false;
+  }
+  if (!this->Run)
+  {
+    double lo, hi;
+    afam::volumeValueRange(*source, lo, hi);
+    this->Run = new RunUnderWay;
+    this->Run->Path = NewModelPath();
+    this->Run->Encoder =
+      std::make_unique<afam::RunEncoder>(this->Run->Path, this->MakeOptions(), 16, lo, hi);
+  }
+  const size_t k = this->NextStep;
+  this->Run->Encoder->setProgress( // progress across the steps
+    [this, k, n](double f)
+    {
+      this->UpdateProgress(0.95 * (static_cast<double>(k) + f) / static_cast<double>(n));
+      return !this->CheckAbort();
+    });
+  this->Run->Encoder->addStep(*source, this->InputTimes[k]);
+  if (++this->NextStep < n)
+  {
+    request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+    return true;
+  }
+  request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+  const afam::RunStats stats = this->Run->Encoder->commit();
+  this->ModelFile = this->Run->Path;
+  this->DropRun();
+  this->KeepRunStatistics(stats);
+  this->RunFilterTime = this->GetMTime();
+  this->RunInputPrint = this->InputFingerprint(input, inputVector);
+  return this->EncodeTimeStep(request, input, inputVector, outputVector); // the step asked for
 }
 
 bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,

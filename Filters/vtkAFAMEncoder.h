@@ -33,15 +33,21 @@
 #include "vtkAFAMModule.h" // for export macro
 #include "vtkMultiBlockDataSetAlgorithm.h"
 
-#include <string> // for std::string
+#include <cstdint> // for uint32_t
+#include <memory>  // for std::unique_ptr
+#include <string>  // for std::string
+#include <vector>  // for std::vector
 
 class vtkDataArray;
+struct vtkAFAMArraySamples;
 class vtkImageData;
 class vtkMultiProcessController;
 namespace afam
 {
+class ArraySource;
 struct EncoderOptions;
 struct EncodeStats;
+struct RunStats;
 }
 
 class VTKAFAM_EXPORT vtkAFAMEncoder : public vtkMultiBlockDataSetAlgorithm
@@ -111,6 +117,19 @@ public:
   ///@}
 
   ///@{
+  /// A time-varying input (one that reports several time steps, e.g. a file series) is encoded
+  /// over all its steps, in order, into one run (format version 3, coded in time), whose output
+  /// reports the same time steps and describes the step the pipeline's time asks for; the run is
+  /// encoded once and not again when only the time changes. A relative bound is relative to the
+  /// first step's value range (later steps are not known when the first is coded). Default on;
+  /// off: only the step the time asks for is encoded, as a single volume. Under MPI (several
+  /// ranks) a time-varying input is encoded one step at a time, as off.
+  vtkSetMacro(EncodeTimeSteps, bool);
+  vtkGetMacro(EncodeTimeSteps, bool);
+  vtkBooleanMacro(EncodeTimeSteps, bool);
+  ///@}
+
+  ///@{
   /// Encoder threads, 0 = all cores (default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -149,6 +168,8 @@ protected:
   ~vtkAFAMEncoder() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   void RemoveModelFile();
   /// The array to encode (see the class documentation); nullptr with `error` naming the
@@ -166,9 +187,26 @@ protected:
     vtkImageData* input,
     vtkInformationVector** inputVector,
     vtkMultiBlockDataSet* output);
+  /// One execution of a run's encoding (InputTimes): encodes the input as step NextStep and asks
+  /// for the next (CONTINUE_EXECUTING), or, when the run is done and still current, describes
+  /// the step the output's time asks for.
+  bool EncodeTimeStep(vtkInformation* request,
+    vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkInformationVector* outputVector);
+  /// Forgets a run under way (its temporary file goes).
+  void DropRun();
+  /// The chosen array of the input as the encoder reads it (its values in `samples`, which must
+  /// outlive it); null after reporting what is wrong.
+  std::unique_ptr<afam::ArraySource> SourceOf(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkAFAMArraySamples& samples);
+  void KeepRunStatistics(const afam::RunStats& stats);
+  /// A CRC-32 of the input's chosen array with its grid and name (0 without one).
+  uint32_t InputFingerprint(vtkImageData* input, vtkInformationVector** inputVector);
   afam::EncoderOptions MakeOptions();
   void KeepStatistics(const afam::EncodeStats& stats);
-  void BuildOutput(const std::string& path, vtkMultiBlockDataSet* output);
+  void BuildOutput(const std::string& path, vtkMultiBlockDataSet* output, long long step = 0);
   static std::string NewModelPath();
 
   double ErrorBound = 1e-3;
@@ -179,6 +217,15 @@ protected:
   int Mode = MODE_ADAPTIVE;
   int FixedNcp = 0;
   int NumberOfThreads = 0;
+  bool EncodeTimeSteps = true;
+  // A run of the input's time steps: the times, the step the next execution encodes, the encoder
+  // while the run is under way, and what the finished run was encoded from.
+  std::vector<double> InputTimes;
+  size_t NextStep = 0;
+  struct RunUnderWay;
+  RunUnderWay* Run = nullptr;
+  vtkMTimeType RunFilterTime = 0;
+  uint32_t RunInputPrint = 0; ///< InputFingerprint of the run's last step
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0,
          LastCompressionRatio = 0;
   std::string LastLevelReport;

@@ -195,6 +195,10 @@ EncodeStats RunEncoder::addStep(VolumeSource& step, double time) {
   return s.stats.steps.back();
 }
 
+void RunEncoder::setProgress(std::function<bool(double)> progress) {
+  s_->options.progress = std::move(progress);
+}
+
 RunStats RunEncoder::commit() {
   State& s = *s_;
   if (!s.writer) throw InvalidArgument("encode: a run needs at least one step");

@@ -10,6 +10,7 @@
 // to keyInterval - 1 steps after it).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -55,6 +56,9 @@ class RunEncoder {
   /// Encodes the next step at `time` (after the last one's). InvalidArgument naming the step when
   /// its grid or sample type is not the first step's, or the time does not follow.
   EncodeStats addStep(VolumeSource& step, double time);
+  /// The progress callback of the steps from now on (EncoderOptions::progress: fractions of the
+  /// step; returning false cancels it, Cancelled).
+  void setProgress(std::function<bool(double)> progress);
   /// Writes the run (atomically, as encodeRun) and returns its statistics.
   RunStats commit();
 

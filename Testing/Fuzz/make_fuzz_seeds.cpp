@@ -58,6 +58,12 @@ Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, i
   return b;
 }
 
+Bytes readThenRemove(const std::string& scratch) {
+  Bytes bytes = readFile(scratch);
+  std::remove(scratch.c_str());
+  return bytes;
+}
+
 // A run of three steps of Marschner-Lobb (the second the first again: references), as one file.
 Bytes encodedRun(const std::string& scratch) {
   const afam::Index3 dims{7, 6, 5};
@@ -74,9 +80,34 @@ Bytes encodedRun(const std::string& scratch) {
   afam::RunOptions r;
   r.keyInterval = 2;
   afam::encodeRun({&sa, &sa, &sb}, o, r, scratch);
-  Bytes bytes = readFile(scratch);
-  std::remove(scratch.c_str());
-  return bytes;
+  return readThenRemove(scratch);
+}
+
+// A run whose steps drift a little (residuals on the step before, chains of three payloads).
+Bytes encodedResidualRun(const std::string& scratch) {
+  const afam::Index3 dims{9, 8, 7};
+  std::vector<std::vector<float>> steps(4);
+  for (int k = 0; k < 4; ++k) {
+    steps[size_t(k)].resize(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+    size_t i = 0;
+    for (int64_t z = 0; z < dims[2]; ++z)
+      for (int64_t y = 0; y < dims[1]; ++y)
+        for (int64_t x = 0; x < dims[0]; ++x, ++i)
+          steps[size_t(k)][i] = float(std::sin(0.7 * double(x) + 0.05 * k) *
+                                      std::cos(0.5 * double(y) - 0.3 * double(z))) +
+                                0.05f * float((x * 7 + y * 13 + z * 29) % 11);
+  }
+  std::vector<afam::ArraySource> sources;
+  for (const auto& v : steps) sources.emplace_back(v.data(), dims);
+  afam::EncoderOptions o;
+  o.levels = 2;
+  o.blocksPerAxis = 2;
+  o.errorBound = 1e-2;
+  o.threads = 1;
+  afam::RunOptions r;
+  r.keyInterval = 3;
+  afam::encodeRun({&sources[0], &sources[1], &sources[2], &sources[3]}, o, r, scratch);
+  return readThenRemove(scratch);
 }
 
 void afamSeeds(const std::string& out) {
@@ -101,6 +132,9 @@ void afamSeeds(const std::string& out) {
   const Bytes run = encodedRun(scratch);  // format version 3, references included
   writeSeed(dir, "run-fixall", 7, run);
   writeSeed(dir, "run-asis", 0, run);
+  const Bytes residuals = encodedResidualRun(scratch);  // residual chains
+  writeSeed(dir, "residuals-fixall", 7, residuals);
+  writeSeed(dir, "residuals-asis", 0, residuals);
 }
 
 Bytes floatBytes(const std::vector<float>& f) {

@@ -64,6 +64,20 @@ Bytes readThenRemove(const std::string& scratch) {
   return bytes;
 }
 
+// The steps as a run file (2 levels, 2 blocks a side, RMSE bound 1e-2, one thread); its bytes.
+Bytes encodedRunOf(const std::vector<afam::VolumeSource*>& steps, int keyInterval,
+                   const std::string& scratch) {
+  afam::EncoderOptions o;
+  o.levels = 2;
+  o.blocksPerAxis = 2;
+  o.errorBound = 1e-2;
+  o.threads = 1;
+  afam::RunOptions r;
+  r.keyInterval = keyInterval;
+  afam::encodeRun(steps, o, r, scratch);
+  return readThenRemove(scratch);
+}
+
 // A run of three steps of Marschner-Lobb (the second the first again: references), as one file.
 Bytes encodedRun(const std::string& scratch) {
   const afam::Index3 dims{7, 6, 5};
@@ -72,15 +86,7 @@ Bytes encodedRun(const std::string& scratch) {
   b = a;
   for (float& v : b) v = 1.5f - v;
   afam::ArraySource sa(a.data(), dims), sb(b.data(), dims);
-  afam::EncoderOptions o;
-  o.levels = 2;
-  o.blocksPerAxis = 2;
-  o.errorBound = 1e-2;
-  o.threads = 1;
-  afam::RunOptions r;
-  r.keyInterval = 2;
-  afam::encodeRun({&sa, &sa, &sb}, o, r, scratch);
-  return readThenRemove(scratch);
+  return encodedRunOf({&sa, &sa, &sb}, 2, scratch);
 }
 
 // A run whose steps drift a little (residuals on the step before, chains of three payloads).
@@ -99,15 +105,7 @@ Bytes encodedResidualRun(const std::string& scratch) {
   }
   std::vector<afam::ArraySource> sources;
   for (const auto& v : steps) sources.emplace_back(v.data(), dims);
-  afam::EncoderOptions o;
-  o.levels = 2;
-  o.blocksPerAxis = 2;
-  o.errorBound = 1e-2;
-  o.threads = 1;
-  afam::RunOptions r;
-  r.keyInterval = 3;
-  afam::encodeRun({&sources[0], &sources[1], &sources[2], &sources[3]}, o, r, scratch);
-  return readThenRemove(scratch);
+  return encodedRunOf({&sources[0], &sources[1], &sources[2], &sources[3]}, 3, scratch);
 }
 
 void afamSeeds(const std::string& out) {

@@ -13,21 +13,25 @@ namespace afam::cli {
 namespace {
 
 /// A run's steps: their count, key interval, and per step its time, its blocks coded in time
-/// (references, residuals) and the payloads its deepest block decodes from.
+/// (references, residuals), the payloads its deepest block decodes from and its payload bytes.
 void printSteps(const AfamFile& f) {
   std::printf("steps=%lld key_interval=%d\n", (long long)f.stepCount(), f.keyInterval());
   for (int64_t s = 0; s < f.stepCount(); ++s) {
     const auto step = AfamFile::open(f.path(), s);
     int64_t references = 0, residuals = 0;
+    uint64_t bytes = 0;    // the step's own payloads
     uint32_t longest = 1;  // payloads the deepest block of the step decodes from
     for (const ModelEntry& e : step->entries()) {
       references += e.reference;
       residuals += e.residual && !e.reference;
+      bytes += e.reference ? 0 : e.storedSize;
       longest = std::max(longest, e.chainLength);
     }
-    std::printf("step=%lld time=%.9g references=%lld residuals=%lld of %zu longest_chain=%u\n",
-                (long long)s, f.stepTimes()[size_t(s)], (long long)references, (long long)residuals,
-                step->entries().size(), longest);
+    std::printf(
+        "step=%lld time=%.9g references=%lld residuals=%lld of %zu longest_chain=%u "
+        "payload_bytes=%llu\n",
+        (long long)s, f.stepTimes()[size_t(s)], (long long)references, (long long)residuals,
+        step->entries().size(), longest, (unsigned long long)bytes);
   }
 }
 

@@ -23,7 +23,8 @@ if (NOT out MATCHES "steps=3 key_interval=4 bound=2.55 \\(relative to the run\\)
 endif ()
 run_ok(out ${AFAM} info run.afam)
 if (NOT out MATCHES "version=3" OR NOT out MATCHES "steps=3 key_interval=4"
-    OR NOT out MATCHES "step=1 time=0.5 references=" OR NOT out MATCHES "step=2 time=1.5 references=0 ")
+    OR NOT out MATCHES "step=1 time=0.5 references=[0-9]+ residuals=0 of [0-9]+ longest_chain=[0-9]+ payload_bytes=0\n"
+    OR NOT out MATCHES "step=2 time=1.5 references=0 [^\n]* payload_bytes=[1-9]")
   message(FATAL_ERROR "afam info of a run: ${out}")
 endif ()
 run_ok(out ${AFAM} decode run.afam --step 0 s0.raw)

@@ -332,6 +332,14 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
   const bool run = this->InputTimes.size() > 1 && !pieces;
+  if (pieces && this->InputTimes.size() > 1 && controller->GetLocalProcessId() == 0 &&
+    !this->WarnedMpiTime)
+  {
+    this->WarnedMpiTime = true;
+    vtkWarningMacro(<< "a time-varying input under MPI is encoded one step at a time (the step "
+                    << "the time asks for), not as one run of its " << this->InputTimes.size()
+                    << " steps");
+  }
   if (!run)
   {
     this->DropRun();

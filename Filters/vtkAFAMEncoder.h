@@ -225,6 +225,7 @@ protected:
   struct RunUnderWay;
   RunUnderWay* Run = nullptr;
   vtkMTimeType RunFilterTime = 0;
+  bool WarnedMpiTime = false; ///< said once that MPI encodes a time series a step at a time
   uint32_t RunInputPrint = 0; ///< InputFingerprint of the run's last step
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0,
          LastCompressionRatio = 0;

@@ -482,16 +482,9 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   if (!this->Run && !this->ModelFile.empty() && this->RunFilterTime == this->GetMTime() &&
     this->RunInputPrint == this->InputFingerprint(input, inputVector))
   {
-    // The run is current: the step the output's time asks for (the last not after it).
-    const double t = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-      ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-      : this->InputTimes.front();
-    const auto after =
-      std::upper_bound(this->InputTimes.begin(), this->InputTimes.end(), t + 1e-12 * std::abs(t));
-    const long long step = after == this->InputTimes.begin()
-      ? 0
-      : static_cast<long long>(after - this->InputTimes.begin()) - 1;
-    this->BuildOutput(this->ModelFile, output, step);
+    // The run is current: the step the output's time asks for.
+    this->BuildOutput(
+      this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
     return true;
   }
   const double inputTime = input->GetInformation()->Has(vtkDataObject::DATA_TIME_STEP())
@@ -544,7 +537,9 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   this->KeepRunStatistics(stats);
   this->RunFilterTime = this->GetMTime();
   this->RunInputPrint = this->InputFingerprint(input, inputVector);
-  return this->EncodeTimeStep(request, input, inputVector, outputVector); // the step asked for
+  this->BuildOutput(
+    this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+  return true;
 }
 
 bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,

@@ -14,11 +14,13 @@
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 #include "vtkTypeInt64Array.h"
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -242,4 +244,15 @@ long long vtkAFAMModelTree::Step(vtkMultiBlockDataSet* tree)
   }
   auto* a = vtkTypeInt64Array::SafeDownCast(tree->GetFieldData()->GetAbstractArray(StepArray));
   return (a && a->GetNumberOfTuples() > 0) ? static_cast<long long>(a->GetValue(0)) : 0;
+}
+
+long long vtkAFAMModelTree::StepAtTime(const std::vector<double>& times, vtkInformation* info)
+{
+  if (times.size() < 2 || !info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+  {
+    return 0;
+  }
+  const double t = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+  const auto after = std::upper_bound(times.begin(), times.end(), t + 1e-12 * std::abs(t));
+  return after == times.begin() ? 0 : static_cast<long long>(after - times.begin()) - 1;
 }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+class vtkInformation;
 class vtkMultiBlockDataSet;
 namespace afam
 {
@@ -56,6 +57,10 @@ void Build(const afam::VolumeHeader& header,
 std::string FileName(vtkMultiBlockDataSet* tree);
 /// The time step of the run the tree describes (0 for a file of one step, or no tree).
 long long Step(vtkMultiBlockDataSet* tree);
+/// The step a pipeline's UPDATE_TIME_STEP in `info` asks for among `times`: the last whose time
+/// is not after it (the first before every step), as ParaView's file series do; 0 for fewer
+/// than two steps or no time asked.
+long long StepAtTime(const std::vector<double>& times, vtkInformation* info);
 }
 
 #endif

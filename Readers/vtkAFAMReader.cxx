@@ -92,19 +92,6 @@ int vtkAFAMReader::CanReadFile(const char* filename)
 
 namespace
 {
-// The step a pipeline's UPDATE_TIME_STEP asks for: the last whose time is not after it (the
-// first before every step), as ParaView's file series do.
-long long StepAtTime(const std::vector<double>& times, vtkInformation* info)
-{
-  if (times.size() < 2 || !info->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
-  {
-    return 0;
-  }
-  const double t = info->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
-  const auto after = std::upper_bound(times.begin(), times.end(), t + 1e-12 * std::abs(t));
-  return after == times.begin() ? 0 : static_cast<long long>(after - times.begin()) - 1;
-}
-
 // A run's time steps and range on an output's information (nothing for one step).
 void SetTimeSteps(vtkInformation* info, const std::vector<double>& times)
 {
@@ -191,7 +178,7 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
     // Opening reads and validates the header and the index only, never a payload. A run opens at
     // the step the pipeline's time asks for.
     auto file = afam::AfamFile::open(this->FileName);
-    const long long step = StepAtTime(file->stepTimes(), outInfo);
+    const long long step = vtkAFAMModelTree::StepAtTime(file->stepTimes(), outInfo);
     if (step != 0)
     {
       file = afam::AfamFile::open(this->FileName, step);

@@ -213,27 +213,24 @@ bool LruCache::prefetch(const FilePtr& step, int64_t entry) {
 }
 
 Payload LruCache::takeLoaded(int64_t entry) {
-  const uint64_t key = modelKey(current()->entries().at(size_t(entry)));
   std::lock_guard<std::mutex> g(mutex_);
-  auto it = map_.find(key);
+  auto it = map_.find(modelKey(file_->entries().at(size_t(entry))));
   if (it == map_.end()) return nullptr;
   lru_.splice(lru_.begin(), lru_, it->second.pos);
   return it->second.data;
 }
 
 bool LruCache::contains(int64_t entry) const {
-  const uint64_t key = modelKey(current()->entries().at(size_t(entry)));
-  std::lock_guard<std::mutex> g(mutex_);
-  return map_.count(key) != 0;
+  std::lock_guard<std::mutex> g(mutex_);  // the step's key and the lookup under one lock
+  return map_.count(modelKey(file_->entries().at(size_t(entry)))) != 0;
 }
 
 bool LruCache::isDamaged(int64_t entry) const { return damage_->isDamaged(*current(), entry); }
 
 void LruCache::setPinned(const std::vector<int64_t>& entries) {
-  const FilePtr f = current();
   std::lock_guard<std::mutex> g(mutex_);
   pinned_.clear();
-  for (const int64_t e : entries) pinned_.insert(modelKey(f->entries().at(size_t(e))));
+  for (const int64_t e : entries) pinned_.insert(modelKey(file_->entries().at(size_t(e))));
 }
 
 void LruCache::clearPinned() {

@@ -13,7 +13,7 @@ namespace afam::cli {
 int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
-             "search", "spacing", "window", "times", "key-interval", "append"},
+             "search", "spacing", "window", "times", "key-interval", "append", "coded-share"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
@@ -21,7 +21,7 @@ int runEncode(int argc, char** argv) {
       "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
-      "       [--times T0,T1,...] [--key-interval K]\n"
+      "       [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
       "       afam encode --append STEP RUN.afam [--times T] [--threads T]";
   if (args.help()) {
     std::printf(
@@ -42,6 +42,9 @@ int runEncode(int argc, char** argv) {
         "  --times T0,T1,...  the steps' time values, increasing (default 0, 1, 2, ...)\n"
         "  --key-interval K   a block is stored on its own at least every K steps, so that any\n"
         "                     step decodes from one payload (default 16)\n"
+        "  --coded-share S    a block that is coded (on its own or as a residual) is held to S\n"
+        "                     times the bound, the rest left to the steps after, which refer to\n"
+        "                     it while the data drifts by less (default %g; 1: to the bound)\n"
         "  --append STEP      add STEP to the run RUN.afam in place, as a running simulation\n"
         "                     would; a kill at any moment leaves the run with its old or new\n"
         "                     steps. --times T: its time (default the last step's + 1); the\n"
@@ -69,7 +72,7 @@ int runEncode(int argc, char** argv) {
         "header's)\n"
         "  --progress        draw the progress bar even when stderr is not a terminal\n"
         "  --quiet           print nothing on success\n",
-        usage);
+        usage, EncoderOptions{}.runCodedShare);
     return 0;
   }
   if (args.has("append")) args.expectPositional(1, usage);
@@ -88,6 +91,7 @@ int runEncode(int argc, char** argv) {
     throw InvalidArgument("--ncp needs --mode fixed");
   opt.threads = int(args.integer("threads", 0));
   opt.fastWindow = int(args.integer("window", 3));
+  opt.runCodedShare = args.real("coded-share", EncoderOptions{}.runCodedShare);
   const std::string search = args.str("search", "fast");
   if (search == "fast")
     opt.search = SearchMethod::Fast;
@@ -97,8 +101,9 @@ int runEncode(int argc, char** argv) {
     throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
   if (args.has("append")) return appendStepCommand(args, opt);
   if (args.positional().size() > 2) return encodeRunCommand(args, opt);
-  if (args.has("times") || args.has("key-interval"))
-    throw InvalidArgument("--times and --key-interval need several inputs (a run of steps)");
+  if (args.has("times") || args.has("key-interval") || args.has("coded-share"))
+    throw InvalidArgument(
+        "--times, --key-interval and --coded-share need several inputs (a run of steps)");
   const InputVolume input = openInput(args.positional()[0], args);
   VolumeSource* source = input.source.get();
   ProgressBar bar("encode", args.has("progress"));

@@ -23,7 +23,8 @@ int runExtract(int argc, char** argv) {
     return 0;
   }
   args.expectPositional(2, usage);
-  if (!args.has("step")) throw InvalidArgument("extract: --step K is required (" + std::string(usage) + ")");
+  if (!args.has("step"))
+    throw InvalidArgument("extract: --step K is required (" + std::string(usage) + ")");
   const int64_t step = args.integer("step", 0);
   const std::string out = args.positional()[1];
   const ExtractStats st = extractStep(args.positional()[0], step, out);

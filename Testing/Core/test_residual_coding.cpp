@@ -48,7 +48,13 @@ std::vector<std::vector<float>> drift(int count) {
   return out;
 }
 
-EncoderOptions options() { return afam_test::runTestOptions(3); }
+/// Every coded block to the whole bound (no headroom), so that the chains these tests look at run
+/// unbroken from step 0 (ARunLeavesHeadroom looks at the headroom).
+EncoderOptions options() {
+  EncoderOptions opt = afam_test::runTestOptions(3);
+  opt.runCodedShare = 1.0;
+  return opt;
+}
 
 }  // namespace
 
@@ -152,6 +158,35 @@ TEST(ResidualCoding, AnAppendedStepContinuesTheChains) {
   EXPECT_EQ(longest, 4u) << "residuals at steps 1, 2 and 3 on step 0's payload";
   EXPECT_LE(decodedRmse(*f, series.data[3]), st.bound);
   std::remove(path.c_str());
+}
+
+TEST(ResidualCoding, ARunLeavesHeadroomForReferencesWhereItDriftsSlowly) {
+  // A field drifting by about a tenth of the bound a step: coded to 0.7 of the bound where a block
+  // moved little, the steps after refer to it; coded to the bound, every step needs a residual.
+  std::vector<std::vector<float>> values;
+  for (int k = 0; k < 8; ++k) values.push_back(afam_test::driftingWaves(kDims, k, 0.01));
+  afam_test::InMemoryRun series(kDims, std::move(values));
+  EncoderOptions tight = options(), headroom = options();
+  headroom.runCodedShare = 0.7;
+  const std::string a = scratch("to_the_bound.afam"), b = scratch("headroom.afam");
+  const RunStats full = encodeRun(series.steps, tight, RunOptions{}, a);
+  const RunStats room = encodeRun(series.steps, headroom, RunOptions{}, b);
+  int64_t refsFull = 0, refsRoom = 0;
+  for (size_t k = 0; k < 8; ++k) {
+    refsFull += full.references[k];
+    refsRoom += room.references[k];
+  }
+  EXPECT_GT(refsRoom, refsFull + 20) << "blocks kept as references";
+  EXPECT_LT(room.bytesOut, full.bytesOut) << "a smaller run";
+  EXPECT_EQ(room.steps[0].payloadBytes, full.steps[0].payloadBytes)
+      << "the first step, with nothing to tell how fast it moves, is coded to the bound";
+  for (int64_t s = 0; s < 8; ++s) {
+    auto f = AfamFile::open(b, s);
+    EXPECT_LE(decodedRmse(*f, series.data[size_t(s)]), room.bound) << "step " << s;
+    for (const ModelEntry& e : f->entries()) EXPECT_LE(e.rmse, room.bound * (1 + 1e-6));
+  }
+  std::remove(a.c_str());
+  std::remove(b.c_str());
 }
 
 TEST(ResidualCoding, AStepAtATimeEncodesTheRunEncodeRunWrites) {

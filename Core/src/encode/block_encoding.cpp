@@ -338,12 +338,9 @@ void storeDownsampled(const BlockExtent& e, BlockTask& t) {
 
 namespace {
 
-/// A run's block whose model at the step before still meets the bound on its samples: stored as a
-/// reference to it (no payload), its error measured on these samples.
-bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
-                   const ModelEntry& previous, const FitResult& model, BlockTask& t) {
-  const ErrorStats es = fitter.error(t.samples.data(), e.samples, model);
-  if (!(es.rmse <= c.bound)) return false;
+/// A run's block whose model at the step before still meets the bound on its samples (`moved`,
+/// the model's error on them): stored as a reference to it (no payload).
+void referPrevious(const ModelEntry& previous, const ErrorStats& moved, BlockTask& t) {
   ModelEntry& m = t.entry;
   m.kind = previous.kind;
   m.coded = previous.coded;
@@ -351,26 +348,37 @@ bool referPrevious(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   m.ncp = previous.ncp;
   m.degree = previous.degree;
   m.reference = true;
-  setError(t, es);
+  setError(t, moved);
   t.stored.clear();
   m.storedSize = 0;
-  return true;
 }
 
 }  // namespace
 
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
-    // A run's step: the block's model at the step before, when the key interval allows.
+    // A run's step: the block's model at the step before, and how far the block moved from it.
     ModelEntry previous;
     FitResult model;
-    const bool inTime = c.opt.previous && bounded(c.opt.mode) &&
-                        c.opt.previous->model(c.level, t.ijk, previous, model);
-    if (inTime && referPrevious(c, e, fitter, previous, model, t)) {
-      // the step before's model, unchanged
+    bool mayRefer = false;
+    const bool before = c.opt.previous && bounded(c.opt.mode) &&
+                        c.opt.previous->model(c.level, t.ijk, previous, model, mayRefer);
+    const ErrorStats moved =
+        before ? fitter.error(t.samples.data(), e.samples, model) : ErrorStats{};
+    const bool inTime = before && mayRefer;
+    // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
+    // block moved little since the step before, and at a key step (the model the next steps
+    // refer to); a first step, with nothing to tell how fast its blocks move, is coded to the
+    // bound.
+    const bool headroom =
+        c.opt.runStep && before && (moved.rmse <= kDriftForHeadroom * c.bound || !mayRefer);
+    const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
+                           c.sourceName};
+    if (inTime && moved.rmse <= c.bound) {
+      referPrevious(previous, moved, t);  // the step before's model, unchanged
     } else if (c.opt.compact && bounded(c.opt.mode)) {
-      encodeCompact(c, e, fitter, t);
-      if (inTime) codeResidualIfSmaller(c, e, fitter, previous, model, t);
+      encodeCompact(coded, e, fitter, t);
+      if (inTime) codeResidualIfSmaller(coded, e, fitter, previous, model, t);
     } else {
       FitResult fr;
       fitBlock(c, e, fitter, c.bound, t, fr);

@@ -130,9 +130,10 @@ class StepSink : public ModelSink {
 class WrittenStep : public PreviousStep {
  public:
   explicit WrittenStep(const RunWriter& writer) : writer_(writer) {}
-  bool model(int level, Int3 block, ModelEntry& entry, FitResult& model) const override {
-    if (!writer_.canReference(level, block)) return false;
+  bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
+             bool& mayRefer) const override {
     if (!writer_.previousModel(level, block, entry, model.control)) return false;
+    mayRefer = writer_.canReference(level, block);
     model.ncp = entry.ncp;
     model.degree = entry.degree;
     return true;
@@ -168,6 +169,7 @@ RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, i
   s.path = path;
   s.keyInterval = keyInterval;
   s.options = options;
+  s.options.runStep = true;
   s.header.errorBound = options.errorBound;
   s.header.relativeBound = options.relativeBound;
 }
@@ -339,6 +341,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   stepOptions.mode = h.mode;
   stepOptions.errorBound = stats.bound;
   stepOptions.relativeBound = false;
+  stepOptions.runStep = true;
   WrittenStep previous(*writer);
   stepOptions.previous = &previous;
   StepSink sink(writer, path, &h, 0, stats.bound, time);

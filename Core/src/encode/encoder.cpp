@@ -58,6 +58,9 @@ void validateOptions(const EncoderOptions& opt) {
         "encode: error bound 0 asks for an exact copy: give a positive bound (e.g. --error-bound "
         "1e-6 --relative) or use --mode fixed --ncp 0 (interpolation at every sample)");
   if (opt.fixedNcp < 0) throw InvalidArgument("encode: --ncp must be >= 0");
+  if (!(opt.runCodedShare > 0 && opt.runCodedShare <= 1))
+    throw InvalidArgument("encode: the share of the bound a run's coded blocks keep (" +
+                          std::to_string(opt.runCodedShare) + ") must be in (0, 1]");
 }
 
 /// The finest-level block holding sample xyz (for messages).

@@ -52,10 +52,17 @@ namespace afam {
 class PreviousStep {
  public:
   virtual ~PreviousStep() = default;
-  /// The step before's model of a block (its entry and decoded control points); false when the
-  /// block may not refer to it (the key interval). Called from the encoder's worker threads.
-  virtual bool model(int level, Int3 block, ModelEntry& entry, FitResult& model) const = 0;
+  /// The step before's model of a block (its entry and decoded control points); false when there
+  /// is none. `mayRefer`: whether the block may refer to it (false at a key step: the key
+  /// interval), else the model only tells how far the block moved. Called from the encoder's
+  /// worker threads.
+  virtual bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
+                     bool& mayRefer) const = 0;
 };
+
+/// A run's block whose model at the step before misses its new samples by more than this many
+/// bounds (RMSE) is coded to the whole bound (EncoderOptions::runCodedShare).
+constexpr double kDriftForHeadroom = 1.2;
 
 struct EncoderOptions {
   int levels = 0;         ///< 0: from the volume's dimensions (defaultPartition)
@@ -79,6 +86,15 @@ struct EncoderOptions {
   std::function<bool(double fraction)> progress;
   /// Bounded modes: the step before of a run (encode_run.hpp); nullptr for one volume.
   const PreviousStep* previous = nullptr;
+  /// Bounded modes, a run's steps (runStep, set by the run encoder): a block that is coded (on its
+  /// own or as a residual) where it moved by at most kDriftForHeadroom bounds since the step
+  /// before, or at a key step, is held to this share of the bound, the rest left to the steps
+  /// after, which keep its model as a reference while the data drifts by less. The first step,
+  /// and blocks that move faster, are coded to the bound. 1 codes every block to the bound. In
+  /// (0, 1].
+  /// Measured on real and generated runs: docs/BENCHMARKS.md, "Headroom for references".
+  double runCodedShare = 0.7;
+  bool runStep = false;
 };
 
 /// The value range of a volume (one pass unless the source knows it); NumericError naming the

@@ -13,12 +13,14 @@ namespace afam::cli {
 int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
-             "search", "spacing", "window", "times", "key-interval", "append", "coded-share"},
+             "search", "spacing", "window", "times", "key-interval", "append", "coded-share",
+             "max-error"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
       "       [--type int8|uint8|int16|uint16|int32|uint32|int64|uint64|float32|float64]\n"
-      "       [--error-bound E] [--relative] [--levels L] [--blocks B] [--degree P]\n"
+      "       [--error-bound E | --max-error E] [--relative] [--levels L] [--blocks B] [--degree "
+      "P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
       "       [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
@@ -50,6 +52,9 @@ int runEncode(int argc, char** argv) {
         "                     steps. --times T: its time (default the last step's + 1); the\n"
         "                     run's partition and bound apply\n\n"
         "  --error-bound E   RMSE bound per micro-block (default 1e-4)\n"
+        "  --max-error E     a pointwise bound instead: every sample within E, as a reader\n"
+        "                    decodes it (as SZ's absolute mode and ZFP's fixed accuracy promise);\n"
+        "                    written as format version 3\n"
         "  --relative        the bound is E * (max - min) of the volume\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
         "of a\n"
@@ -81,7 +86,12 @@ int runEncode(int argc, char** argv) {
   opt.levels = int(args.integer("levels", 0));
   opt.blocksPerAxis = int(args.integer("blocks", 0));
   opt.degree = int(args.integer("degree", 2));
-  opt.errorBound = args.real("error-bound", 1e-4);
+  if (args.has("error-bound") && args.has("max-error"))
+    throw InvalidArgument(
+        "give --error-bound (an RMSE) or --max-error (a pointwise bound), not both");
+  opt.boundKind = args.has("max-error") ? BoundKind::MaxError : BoundKind::Rmse;
+  opt.errorBound =
+      args.has("max-error") ? args.real("max-error", 0) : args.real("error-bound", 1e-4);
   opt.relativeBound = args.has("relative");
   opt.compact = !args.has("float-payloads");
   opt.perAxisNcp = !args.has("isotropic-ncp");
@@ -125,7 +135,9 @@ int runEncode(int argc, char** argv) {
       "dims=%lldx%lldx%lld type=%s mode=%s search=%s levels=%d blocks=%d degree=%d bound=%.6g%s\n",
       (long long)d[0], (long long)d[1], (long long)d[2], input.typeName.c_str(), modeName(opt.mode),
       search.c_str(), s.levelsUsed, s.blocksPerAxisUsed, opt.degree, s.bound,
-      opt.relativeBound ? " (relative)" : "");
+      opt.boundKind == BoundKind::MaxError
+          ? (opt.relativeBound ? " (relative, pointwise)" : " (pointwise)")
+          : (opt.relativeBound ? " (relative)" : ""));
   std::printf(
       "seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
       "fits=%lld blocks=%lld\n",

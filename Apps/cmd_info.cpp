@@ -67,8 +67,9 @@ int runInfo(int argc, char** argv) {
               h.valueMax);
   std::printf("origin=%g,%g,%g spacing=%g,%g,%g\n", h.origin[0], h.origin[1], h.origin[2],
               h.spacing[0], h.spacing[1], h.spacing[2]);
-  std::printf("mode=%s levels=%d blocks=%d degree=%d error_bound=%g%s", modeName(h.mode), h.levels,
-              h.blocksPerAxis, h.degree, h.errorBound, h.relativeBound ? " (relative)" : "");
+  std::printf("mode=%s levels=%d blocks=%d degree=%d error_bound=%g%s bound_kind=%s",
+              modeName(h.mode), h.levels, h.blocksPerAxis, h.degree, h.errorBound,
+              h.relativeBound ? " (relative)" : "", boundKindName(h.boundKind));
   if (h.mode == EncodingMode::Fixed) std::printf(" ncp=%d", h.fixedNcp);
   std::printf("\n");
   uint64_t payload = 0, paper = 0;

@@ -36,11 +36,24 @@ size_t damagedModels(const AfamFile& f, const std::function<void(double)>& progr
   return damaged;
 }
 
+/// The file's bound in data units.
+double absoluteBound(const VolumeHeader& h) {
+  return h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+}
+
+/// Whether a level's error against its input keeps a pointwise bound (every sample within it);
+/// an RMSE bound holds per block and is checked on the whole level only by runs (below) and
+/// --max-rmse.
+bool keepsPointwise(const VolumeHeader& h, const ErrorAccumulator& e) {
+  return h.boundKind != BoundKind::MaxError || e.maxError <= absoluteBound(h) * (1 + 1e-6);
+}
+
 /// A run: every step's checksums and, with inputs, each step against its own, one line a step;
-/// throws when a step is damaged or its RMSE is above the file's bound.
+/// throws when a step is damaged or above the file's bound (its RMSE, or a sample's error for a
+/// pointwise bound).
 int verifyRun(const Args& args, const AfamFile& f, const std::vector<std::string>& inputs) {
   const VolumeHeader& h = f.header();
-  const double bound = h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+  const double bound = absoluteBound(h);
   const int level = int(args.integer("level", h.levels - 1));
   if (level < 0 || level >= h.levels) throw InvalidArgument("--level out of range");
   size_t broken = 0;
@@ -55,7 +68,7 @@ int verifyRun(const Args& args, const AfamFile& f, const std::vector<std::string
         throw InvalidArgument(inputs[size_t(s)] + ": dims differ from the .afam file's");
       const ErrorAccumulator e = measureLevelError(*step, *input.source, level, [](double) {});
       std::printf(" level=%d rmse=%.9g max_error=%.9g", level, e.rmse(), e.maxError);
-      broken += !(e.rmse() <= bound * (1 + 1e-6));
+      broken += !(e.rmse() <= bound * (1 + 1e-6)) || !keepsPointwise(h, e);
     }
     std::printf("\n");
   }
@@ -80,7 +93,8 @@ int runVerify(int argc, char** argv) {
         "(or --level K) on its sample grid and compares it with the raw volume at the same sample\n"
         "positions, each sample once, streaming; prints rmse=<number> and max_error=<number>.\n"
         "IN may be raw (name_XxYxZ_type.raw or --dims/--type), NRRD or MetaImage, as for encode.\n"
-        "With --max-rmse E the exit status is 1 when the RMSE is above E.\n"
+        "With --max-rmse E the exit status is 1 when the RMSE is above E; a file that keeps a\n"
+        "pointwise bound (afam encode --max-error) exits 1 when a sample is off by more.\n"
         "Exit status 1 on any checksum mismatch or error.\n"
         "A run of steps (version 3): every step is checked and, with --against S0 S1 ... (one\n"
         "input a step, in order), compared with its own input; one line a step, step=K rmse=R\n"
@@ -124,6 +138,9 @@ int runVerify(int argc, char** argv) {
               e.maxError);
   if (args.has("max-rmse") && !(rmse <= args.real("max-rmse", 0)))
     throw Error("rmse " + std::to_string(rmse) + " is above --max-rmse " + args.str("max-rmse"));
+  if (!keepsPointwise(h, e))
+    throw Error("max_error " + std::to_string(e.maxError) +
+                " is above the file's pointwise bound " + std::to_string(absoluteBound(h)));
   return 0;
 }
 

@@ -70,12 +70,13 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
     nmax = std::max(nmax, e.samples[a]);
   }
   const int lo = std::min(c.opt.degree + 1, nmax);
+  const BoundKind kind = c.opt.boundKind;
   auto search = [&]() {
     t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search,
-                          c.opt.fastWindow, fr, t.fits);
+                          c.opt.fastWindow, fr, t.fits, kind);
     t.complex = t.ncpStar > lo;
-    if (c.opt.perAxisNcp && t.complex && fr.error.rmse <= bound)
-      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits);
+    if (c.opt.perAxisNcp && t.complex && keeps(kind, fr.error, bound))
+      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits, kind);
   };
   if (t.search) {
     search();
@@ -88,12 +89,14 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
     ++t.fits;
     t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
   }
-  if (!bounded(c.opt.mode) || fr.error.rmse <= bound) return;
+  if (!bounded(c.opt.mode)) return;
+  if (!fr.errorMeasured) fitter.measure(t.samples.data(), e.samples, fr);
+  if (keeps(kind, fr.error, bound)) return;
   if (!t.search) {
     t.search = true;
     t.refit = true;
     search();
-    if (fr.error.rmse <= bound) return;
+    if (keeps(kind, fr.error, bound)) return;
   }
   exactModel(e, t.samples, fr);
   t.exact = true;
@@ -122,12 +125,18 @@ struct Candidate {
 };
 
 bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound,
-                  Candidate& out) {
-  double mean = 0;
-  for (float v : s) mean += double(v);
-  const float c = float(mean / double(s.size()));
+                  BoundKind kind, Candidate& out) {
+  float c;
+  if (kind == BoundKind::MaxError) {  // the middle of the range: the smallest worst error
+    const auto mm = std::minmax_element(s.begin(), s.end());
+    c = float(0.5 * (double(*mm.first) + double(*mm.second)));
+  } else {  // the mean: the smallest RMSE
+    double mean = 0;
+    for (float v : s) mean += double(v);
+    c = float(mean / double(s.size()));
+  }
   const ErrorStats es = compare([c](size_t) { return c; }, s);
-  if (!(es.rmse <= bound)) return false;
+  if (!keeps(kind, es, bound)) return false;
   out.kind = BlockKind::Constant;
   for (int a = 0; a < 3; ++a) {
     out.degree[a] = effectiveDegree(degree, e.samples[a]);
@@ -142,25 +151,36 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree,
 /// The fitted spline's control points, Lorenzo-predicted in the given form and coded; the step is
 /// the largest of the ladder that keeps the model within the bound.
 bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
-                      Predictor form, BlockFitter& fitter, Candidate& out) {
-  const double budget = std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
+                      BoundKind kind, Predictor form, BlockFitter& fitter, Candidate& out) {
+  // What quantization may spend: the rest of an RMSE in quadrature; of a pointwise bound, what
+  // the fit's worst sample leaves (the model moves by at most step / 2 anywhere).
+  const double budget =
+      kind == BoundKind::MaxError
+          ? bound - fr.error.maxError
+          : std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
   FitResult q = fr;
   bool lattice = true;
   FitResult passed;  // the last passing step's model (its error measured only near the bound)
   auto passes = [&](double k) {
-    const double step = 2 * std::sqrt(3.0) * budget * k;
+    const double step = ladderStep(kind, budget, k);
     if (!quantizeValues(fr.control.data(), fr.ncp, step, form, q.control)) {
       lattice = false;
       return false;
     }
-    if (!fitter.changeWithin(s.data(), n, fr, q, bound)) return false;
+    if (kind == BoundKind::MaxError) {
+      q.errorMeasured = false;
+      fitter.measure(s.data(), n, q);
+      if (!keeps(kind, q.error, bound)) return false;
+    } else if (!fitter.changeWithin(s.data(), n, fr, q, bound)) {
+      return false;
+    }
     passed = q;
     return true;
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
-  const double step = 2 * std::sqrt(3.0) * budget * kStepFactors[best];
+  const double step = ladderStep(kind, budget, kStepFactors[best]);
   std::vector<uint8_t> bytes;
   if (!encodeValues(fr.control.data(), fr.ncp, step, form, kZstdLevel, bytes, q.control))
     return false;
@@ -171,7 +191,7 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
     q.errorMeasured = false;
   fitter.measure(s.data(), n, q);
   out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
-  return out.error.rmse <= bound;
+  return keeps(kind, out.error, bound);
 }
 
 /// Keeps the smaller of two coded candidates, the integer form unless the double form saves more
@@ -191,31 +211,32 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 }
 
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
-                BlockFitter& fitter, Candidate& out) {
+                BoundKind kind, BlockFitter& fitter, Candidate& out) {
   Candidate integer, dbl;
   const bool hasInteger =
-      codeSplineInForm(fr, s, n, bound, Predictor::IntegerLorenzo, fitter, integer);
-  const bool hasDouble = codeSplineInForm(fr, s, n, bound, Predictor::Lorenzo, fitter, dbl);
+      codeSplineInForm(fr, s, n, bound, kind, Predictor::IntegerLorenzo, fitter, integer);
+  const bool hasDouble = codeSplineInForm(fr, s, n, bound, kind, Predictor::Lorenzo, fitter, dbl);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
 /// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
 /// measured on the samples.
-bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double bound, double beat,
-                       Predictor form, BlockFitter& fitter, Candidate& out) {
+bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double bound,
+                       BoundKind kind, double beat, Predictor form, BlockFitter& fitter,
+                       Candidate& out) {
   std::vector<float> recon;
   bool lattice = true;
   auto passes = [&](double k) {
-    if (!quantizeValues(s.data(), n, 2 * std::sqrt(3.0) * bound * k, form, recon)) {
+    if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, recon)) {
       lattice = false;
       return false;
     }
-    return compare([&recon](size_t i) { return recon[i]; }, s).rmse <= bound;
+    return keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s), bound);
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
-  const double step = 2 * std::sqrt(3.0) * bound * kStepFactors[best];
+  const double step = ladderStep(kind, bound, kStepFactors[best]);
   if (estimateCodedBytes(s.data(), n, step, form) > beat)
     return false;  // cannot win: spare the coding
   Candidate c;
@@ -237,21 +258,21 @@ bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double b
   model.control.resize(s.size());
   decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
   c.error = fitter.error(s.data(), n, model);
-  if (!(c.error.rmse <= bound))
+  if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
   out = std::move(c);
   return true;
 }
 
 /// The samples as an Interpolant in whichever form stores them smaller (keepSmallerForm).
-bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, double beat,
-                 BlockFitter& fitter, Candidate& out) {
+bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, BoundKind kind,
+                 double beat, BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
   Candidate integer, dbl;
-  const bool hasInteger = codeSamplesInForm(s, n, degree, bound, beat,
+  const bool hasInteger = codeSamplesInForm(s, n, degree, bound, kind, beat,
                                             Predictor::IntegerInterpolation, fitter, integer);
   const bool hasDouble =
-      codeSamplesInForm(s, n, degree, bound, beat, Predictor::Interpolation, fitter, dbl);
+      codeSamplesInForm(s, n, degree, bound, kind, beat, Predictor::Interpolation, fitter, dbl);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
@@ -271,7 +292,8 @@ void storeCandidate(Candidate& c, BlockTask& t) {
 /// (fitted to kFitShare of the bound) and the coded samples; the float samples where neither does.
 void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   Candidate best, other;
-  if (constantFits(e, t.samples, c.opt.degree, c.bound, best)) {
+  const BoundKind kind = c.opt.boundKind;
+  if (constantFits(e, t.samples, c.opt.degree, c.bound, kind, best)) {
     t.complex = false;
     storeCandidate(best, t);
     return;
@@ -280,14 +302,14 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   fitBlock(c, e, fitter, kFitShare * c.bound, t, fr);
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
-                          codeSpline(fr, t.samples, e.samples, c.bound, fitter, best);
+                          codeSpline(fr, t.samples, e.samples, c.bound, kind, fitter, best);
   // Samples pay when the spline is missing or spends more than a bit per sample; they are coded
   // only when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could
   // beat it.
   const double beat =
       haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
   if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) &&
-      codeSamples(t.samples, e.samples, c.opt.degree, c.bound, beat, fitter, other) &&
+      codeSamples(t.samples, e.samples, c.opt.degree, c.bound, kind, beat, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;
@@ -374,7 +396,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
         c.opt.runStep && before && (moved.rmse <= kDriftForHeadroom * c.bound || !mayRefer);
     const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
                            c.sourceName};
-    if (inTime && moved.rmse <= c.bound) {
+    if (inTime && keeps(c.opt.boundKind, moved, c.bound)) {
       referPrevious(previous, moved, t);  // the step before's model, unchanged
     } else if (c.opt.compact && bounded(c.opt.mode)) {
       encodeCompact(coded, e, fitter, t);
@@ -388,10 +410,13 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName +
                        ": " + ex.what());
   }
-  if (bounded(c.opt.mode) && !(t.rmse <= c.bound)) {
+  if (bounded(c.opt.mode) &&
+      !keeps(c.opt.boundKind, ErrorStats{t.rmse, t.maxError, 0, 0}, c.bound)) {
+    const bool pointwise = c.opt.boundKind == BoundKind::MaxError;
     std::ostringstream msg;
-    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName
-        << " has RMSE " << t.entry.rmse << " over the bound " << c.bound << " even stored exactly";
+    msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName << " has "
+        << (pointwise ? "a sample off by " : "RMSE ") << (pointwise ? t.maxError : t.rmse)
+        << ", over the bound " << c.bound << ", even stored exactly";
     throw NumericError(msg.str());
   }
   for (int a = 0; a < 3; ++a)

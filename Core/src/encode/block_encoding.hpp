@@ -3,6 +3,7 @@
 // bound check, and the compact representations (constant, coded spline, coded samples).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -41,12 +42,25 @@ struct FitContext {
   std::string sourceName;
 };
 
+/// Whether a model whose error on the block's samples is `es` keeps the bound: their RMSE, or
+/// every sample's error (a pointwise bound).
+inline bool keeps(BoundKind kind, const ErrorStats& es, double bound) {
+  return kind == BoundKind::MaxError ? es.maxError <= bound : es.rmse <= bound;
+}
+
 // Quantization steps of coded payloads, as factors of 2 sqrt(3) x the error budget (the step whose
 // uniform rounding error alone would spend it), tried from the largest: a larger step is fewer
 // bits, and a block whose error budget is not spent gains nothing from it.
 constexpr double kStepFactors[] = {4.0, 3.2,  2.6, 2.1,  1.7, 1.4, 1.15,
                                    1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
 constexpr int kZstdLevel = 15;
+
+/// The quantization step of ladder factor k for an error budget: factors of the step whose
+/// rounding alone would spend the budget, 2 sqrt(3) x budget for an RMSE (uniform rounding's RMSE
+/// is step / sqrt(12)), 2 x budget for a pointwise bound (its worst case is step / 2).
+inline double ladderStep(BoundKind kind, double budget, double k) {
+  return (kind == BoundKind::MaxError ? 2.0 : 2.0 * std::sqrt(3.0)) * budget * k;
+}
 
 /// The largest factor of kStepFactors (sorted descending) for which passes(factor) holds, by
 /// bisection over the ladder (the error grows with the step); -1 when even the smallest fails. The

@@ -170,6 +170,7 @@ RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, i
   s.keyInterval = keyInterval;
   s.options = options;
   s.options.runStep = true;
+  if (keyInterval == 1) s.options.runCodedShare = 1.0;  // no step may refer to another
   s.header.errorBound = options.errorBound;
   s.header.relativeBound = options.relativeBound;
 }
@@ -339,9 +340,11 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   stepOptions.blocksPerAxis = h.blocksPerAxis;
   stepOptions.degree = h.degree;
   stepOptions.mode = h.mode;
+  stepOptions.boundKind = h.boundKind;
   stepOptions.errorBound = stats.bound;
   stepOptions.relativeBound = false;
   stepOptions.runStep = true;
+  if (writer->keyInterval() == 1) stepOptions.runCodedShare = 1.0;
   WrittenStep previous(*writer);
   stepOptions.previous = &previous;
   StepSink sink(writer, path, &h, 0, stats.bound, time);

@@ -58,6 +58,11 @@ void validateOptions(const EncoderOptions& opt) {
         "encode: error bound 0 asks for an exact copy: give a positive bound (e.g. --error-bound "
         "1e-6 --relative) or use --mode fixed --ncp 0 (interpolation at every sample)");
   if (opt.fixedNcp < 0) throw InvalidArgument("encode: --ncp must be >= 0");
+  if (opt.boundKind == BoundKind::MaxError && !bounded(opt.mode))
+    throw InvalidArgument(
+        std::string("encode: a pointwise bound (--max-error) needs a bounded mode "
+                    "(adaptive or inlevel), not ") +
+        modeName(opt.mode));
   if (!(opt.runCodedShare > 0 && opt.runCodedShare <= 1))
     throw InvalidArgument("encode: the share of the bound a run's coded blocks keep (" +
                           std::to_string(opt.runCodedShare) + ") must be in (0, 1]");
@@ -201,6 +206,7 @@ VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, i
   header.degree = opt.degree;
   header.errorBound = opt.errorBound;
   header.relativeBound = opt.relativeBound;
+  header.boundKind = opt.boundKind;
   header.mode = opt.mode;
   header.fixedNcp = opt.fixedNcp;
   header.sampling = levelSampling(opt.mode);

@@ -2,6 +2,7 @@
 #include "afam/encode/model_sink.hpp"
 
 #include "afam/base/errors.hpp"
+#include "afam/format/run_writer.hpp"
 
 namespace afam {
 
@@ -44,13 +45,34 @@ void InMemoryModels::write(const std::string& path) const {
   w.commit();
 }
 
+FileModelSink::FileModelSink(std::string path) : path_(std::move(path)) {}
+
+FileModelSink::~FileModelSink() = default;
+
 void FileModelSink::begin(const VolumeHeader& h) {
-  writer_ = std::make_unique<AfamWriter>(path_, h);
+  if (h.boundKind == BoundKind::Rmse) {
+    writer_ = std::make_unique<AfamWriter>(path_, h);
+    return;
+  }
+  const double bound = h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+  run_ = std::make_unique<RunWriter>(path_, h, 1, bound);
+  run_->beginStep(0.0);
+  stepMin_ = float(h.valueMin);
+  stepMax_ = float(h.valueMax);
 }
 
-void FileModelSink::add(const ModelEntry& e, const void* stored) { writer_->addStored(e, stored); }
+void FileModelSink::add(const ModelEntry& e, const void* stored) {
+  if (run_)
+    run_->addStored(e, stored);
+  else
+    writer_->addStored(e, stored);
+}
 
 uint64_t FileModelSink::commit() {
+  if (run_) {
+    run_->endStep(stepMin_, stepMax_);
+    return run_->commit();
+  }
   const uint64_t size = writer_->bytesWritten();
   writer_->commit();
   return size;

@@ -9,8 +9,23 @@
 
 namespace afam {
 
+namespace {
+
+/// Whether the fit at `ncp` keeps the bound: fitWithin's answer for an RMSE; for a pointwise
+/// bound, an RMSE above it already fails (no sample can be within it then), else every sample's
+/// error is measured.
+bool fitKeeps(BlockFitter& fitter, const float* samples, Int3 n, Int3 ncp, int degree, double bound,
+              BoundKind kind, double squares, FitResult& out) {
+  if (!fitter.fitWithin(samples, n, ncp, degree, bound, squares, out)) return false;
+  if (kind == BoundKind::Rmse) return true;
+  fitter.measure(samples, n, out);
+  return out.error.maxError <= bound;
+}
+
+}  // namespace
+
 int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
-              SearchMethod method, int window, FitResult& result, int64_t& fits) {
+              SearchMethod method, int window, FitResult& result, int64_t& fits, BoundKind kind) {
   Int3 degs{};
   int nmax = 1;
   for (int a = 0; a < 3; ++a) {
@@ -25,7 +40,8 @@ int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, dou
   const double squares = sumOfSquares(samples, n);
   auto pass = [&](int k) -> bool {
     if (state[size_t(k)] >= 0) return state[size_t(k)] == 1;
-    const bool ok = fitter.fitWithin(samples, n, clampNcp(k, n, degs), degree, bound, squares, tmp);
+    const bool ok =
+        fitKeeps(fitter, samples, n, clampNcp(k, n, degs), degree, bound, kind, squares, tmp);
     ++fits;
     state[size_t(k)] = ok ? 1 : 0;
     if (ok && k < bestK) {
@@ -103,7 +119,7 @@ std::array<double, 3> axisRoughness(const float* samples, Int3 n) {
 }
 
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
-                      FitResult& result, int64_t& fits) {
+                      FitResult& result, int64_t& fits, BoundKind kind) {
   const std::array<double, 3> rough = axisRoughness(samples, n);
   const double roughest = *std::max_element(rough.begin(), rough.end());
   if (!(roughest > 0)) {
@@ -126,7 +142,7 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
           fail == lo - 1 ? lo : fail + (pass - fail) / 2;  // try p+1 first: layers need no more
       Int3 ncp = result.ncp;
       ncp[size_t(a)] = mid;
-      const bool ok = fitter.fitWithin(samples, n, ncp, degree, bound, squares, trial);
+      const bool ok = fitKeeps(fitter, samples, n, ncp, degree, bound, kind, squares, trial);
       ++fits;
       if (ok) {
         pass = mid;

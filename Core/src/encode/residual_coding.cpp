@@ -34,15 +34,18 @@ FitResult applyResidual(const ModelEntry& before, const FitResult& model,
   return out;
 }
 
-/// RMSE of (base + q) against the samples.
-double rmseOfSum(const std::vector<float>& base, const std::vector<float>& q,
-                 const std::vector<float>& s) {
+/// RMSE and largest error of (base + q) against the samples.
+ErrorStats errorOfSum(const std::vector<float>& base, const std::vector<float>& q,
+                      const std::vector<float>& s) {
+  ErrorStats es;
   double sum = 0;
   for (size_t i = 0; i < s.size(); ++i) {
     const double d = double(base[i]) + double(q[i]) - double(s[i]);
     sum += d * d;
+    es.maxError = std::max(es.maxError, std::fabs(d));
   }
-  return std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
+  es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
+  return es;
 }
 
 }  // namespace
@@ -55,6 +58,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   const std::vector<float>& s = t.samples;
   std::vector<float> delta(model.control.size()), values;
   FitResult fitted;  // a spline's fit of this step at the model's NCP
+  const BoundKind kind = c.opt.boundKind;
   double budget = c.bound;
   if (onSamples) {
     fitter.evaluateOnGrid(model, n, values);
@@ -62,32 +66,40 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
     for (size_t i = 0; i < s.size(); ++i) delta[i] = s[i] - values[i];
   } else {
     fitter.fitInto(s.data(), n, model.ncp, c.opt.degree, true, fitted);
-    if (fitted.degree != model.degree || !(fitted.error.rmse < c.bound)) return false;
-    budget = std::sqrt(c.bound * c.bound - fitted.error.rmse * fitted.error.rmse);
+    if (fitted.degree != model.degree) return false;
+    if (kind == BoundKind::MaxError) {  // what the fit's worst sample leaves
+      if (!(fitted.error.maxError < c.bound)) return false;
+      budget = c.bound - fitted.error.maxError;
+    } else {  // the rest of the RMSE, in quadrature
+      if (!(fitted.error.rmse < c.bound)) return false;
+      budget = std::sqrt(c.bound * c.bound - fitted.error.rmse * fitted.error.rmse);
+    }
     for (size_t i = 0; i < delta.size(); ++i) delta[i] = fitted.control[i] - model.control[i];
   }
   const Predictor form = onSamples ? Predictor::IntegerInterpolation : Predictor::IntegerLorenzo;
   std::vector<float> q;
   FitResult trial = model;
   auto passes = [&](double k) {
-    if (!quantizeValues(delta.data(), model.ncp, 2 * std::sqrt(3.0) * budget * k, form, q))
+    if (!quantizeValues(delta.data(), model.ncp, ladderStep(kind, budget, k), form, q))
       return false;
-    if (onSamples) return rmseOfSum(values, q, s) <= c.bound;
+    if (onSamples) return keeps(kind, errorOfSum(values, q, s), c.bound);
     for (size_t i = 0; i < q.size(); ++i) trial.control[i] = model.control[i] + q[i];
     trial.errorMeasured = false;
-    return fitter.changeWithin(s.data(), n, fitted, trial, c.bound);
+    if (kind == BoundKind::Rmse) return fitter.changeWithin(s.data(), n, fitted, trial, c.bound);
+    fitter.measure(s.data(), n, trial);
+    return keeps(kind, trial.error, c.bound);
   };
   const int best = largestPassingStep(passes);
   if (best < 0) return false;
   std::vector<uint8_t> bytes;
-  if (!encodeValues(delta.data(), model.ncp, 2 * std::sqrt(3.0) * budget * kStepFactors[best], form,
+  if (!encodeValues(delta.data(), model.ncp, ladderStep(kind, budget, kStepFactors[best]), form,
                     kZstdLevel, bytes, q) ||
       bytes.size() >= t.stored.size())
     return false;
   const FitResult decoded = applyResidual(
       before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));
   const ErrorStats es = fitter.error(s.data(), n, decoded);
-  if (!(es.rmse <= c.bound)) return false;
+  if (!keeps(kind, es, c.bound)) return false;
   ModelEntry& m = t.entry;
   m.kind = before.kind;
   m.coded = true;

@@ -174,6 +174,7 @@ void parseVolumeHeader(const FileHeader& h, const std::string& path, VolumeHeade
   vh.degree = h.degree;
   vh.errorBound = h.errorBound;
   vh.relativeBound = h.relativeBound != 0;
+  vh.boundKind = h.version >= 3 ? static_cast<BoundKind>(h.boundKind) : BoundKind::Rmse;
   vh.mode = static_cast<EncodingMode>(h.mode);
   if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
     throw bad("unknown level sampling " + std::to_string(h.levelSampling));
@@ -260,6 +261,7 @@ FileHeader makeFileHeader(const VolumeHeader& vh, const Partition& partition, ui
   h.fixedNcp = vh.fixedNcp;
   h.mode = static_cast<uint8_t>(vh.mode);
   h.relativeBound = vh.relativeBound ? 1 : 0;
+  if (version >= 3) h.boundKind = static_cast<uint8_t>(vh.boundKind);
   h.levelSampling = static_cast<uint8_t>(vh.sampling);
   h.sourceBytesPerSample = static_cast<uint8_t>(std::min(vh.sourceBytesPerSample, 255));
   std::strncpy(h.scalarName, vh.scalarName.c_str(), sizeof h.scalarName - 1);
@@ -383,6 +385,10 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
   } else {
     std::memcpy(out, stored, e.size);
   }
+}
+
+const char* boundKindName(BoundKind kind) {
+  return kind == BoundKind::MaxError ? "max_error" : "rmse";
 }
 
 const char* modeName(EncodingMode mode) {
@@ -612,6 +618,9 @@ std::vector<float> AfamFile::readPayload(int64_t entry) const {
 
 AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
     : path_(path), header_(header) {
+  if (header.boundKind != BoundKind::Rmse)
+    throw InvalidArgument("writer: a pointwise bound is kept by version-3 files (RunWriter), not " +
+                          std::string("version 2"));
   if (header.degree < 1 || header.degree > 5)
     throw InvalidArgument("writer: degree " + std::to_string(header.degree) + " outside [1, 5]");
   if (header.levels > kMaxLevels) throw InvalidArgument("writer: more than 16 levels");

@@ -43,7 +43,7 @@ CommitRecord readCommit(const AfamFile& f, const FileHeader& h, int fd) {
     throw bad("index count " + std::to_string(h.entryCount) + " does not match the " +
               std::to_string(f.partition().totalBlockCount()) + " blocks of the partition");
   if (h.keyInterval < 1) throw bad("key interval 0");
-  if (h.boundKind != 0)
+  if (h.boundKind > static_cast<uint8_t>(BoundKind::MaxError))
     throw bad("bound kind " + std::to_string(h.boundKind) + " is not read by this version");
   if (h.missingKind != 0)
     throw bad("missing-value kind " + std::to_string(h.missingKind) +

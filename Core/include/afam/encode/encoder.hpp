@@ -70,6 +70,9 @@ struct EncoderOptions {
   int degree = 2;
   double errorBound = 1e-4;
   bool relativeBound = false;  ///< bound = errorBound * (valueMax - valueMin)
+  /// Bounded modes: what the bound holds, each block's RMSE on its samples or every sample's
+  /// error (a pointwise bound; written as format version 3, docs/FORMAT.md).
+  BoundKind boundKind = BoundKind::Rmse;
   EncodingMode mode = EncodingMode::Adaptive;
   int fixedNcp = 0;  ///< Fixed mode: NCP per axis, 0 = n
   int threads = 0;   ///< 0 = hardware concurrency
@@ -90,8 +93,8 @@ struct EncoderOptions {
   /// own or as a residual) where it moved by at most kDriftForHeadroom bounds since the step
   /// before, or at a key step, is held to this share of the bound, the rest left to the steps
   /// after, which keep its model as a reference while the data drifts by less. The first step,
-  /// and blocks that move faster, are coded to the bound. 1 codes every block to the bound. In
-  /// (0, 1].
+  /// blocks that move faster and a run of key interval 1 (no step refers to another) are coded
+  /// to the bound. 1 codes every block to the bound. In (0, 1].
   /// Measured on real and generated runs: docs/BENCHMARKS.md, "Headroom for references".
   double runCodedShare = 0.7;
   bool runStep = false;

@@ -36,10 +36,15 @@ class InMemoryModels : public ModelSink {
   void write(const std::string& path) const;
 };
 
-/// Writes to an .afam file through AfamWriter; nothing is left at the path unless commit() ran.
+class RunWriter;
+
+/// Writes to an .afam file through AfamWriter (version 2), or, for a header whose bound is
+/// pointwise (BoundKind::MaxError, a field of version 3 only), as a run of one step through
+/// RunWriter; nothing is left at the path unless commit() ran.
 class FileModelSink : public ModelSink {
  public:
-  explicit FileModelSink(std::string path) : path_(std::move(path)) {}
+  explicit FileModelSink(std::string path);
+  ~FileModelSink() override;
   void begin(const VolumeHeader& h) override;
   void add(const ModelEntry& e, const void* stored) override;
   /// Commits the file; returns its size in bytes.
@@ -48,6 +53,8 @@ class FileModelSink : public ModelSink {
  private:
   std::string path_;
   std::unique_ptr<AfamWriter> writer_;
+  std::unique_ptr<RunWriter> run_;
+  float stepMin_ = 0, stepMax_ = 0;
 };
 
 }  // namespace afam

@@ -7,6 +7,8 @@
 #include <array>
 #include <cstdint>
 
+#include "afam/format/afam_file.hpp"
+
 namespace afam {
 
 class BlockFitter;
@@ -19,9 +21,11 @@ enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 /// is. Returns NCP* and the fit at NCP* in `result` (its error measured on the samples); `fits`
 /// counts the fits performed. Each candidate is judged by BlockFitter::fitWithin, which gives the
 /// answer measuring its error would. Fast and Exhaustive give the same NCP* (see encoder.hpp for
-/// how Fast searches).
+/// how Fast searches). With a pointwise bound (BoundKind::MaxError) a candidate must keep every
+/// sample within `bound` (measured; fitWithin's RMSE above the bound rejects it without).
 int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
-              double bound, SearchMethod method, int window, FitResult& result, int64_t& fits);
+              double bound, SearchMethod method, int window, FitResult& result, int64_t& fits,
+              BoundKind kind = BoundKind::Rmse);
 
 /// Per-axis refinement of a passing fit: for each axis whose samples are much smoother than the
 /// roughest axis (mean squared second difference at most kAnisotropy times smaller), the smallest
@@ -30,7 +34,8 @@ int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, i
 /// return (its error measured), with a control-point count never larger. Returns true when an axis
 /// was reduced.
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
-                      double bound, FitResult& result, int64_t& fits);
+                      double bound, FitResult& result, int64_t& fits,
+                      BoundKind kind = BoundKind::Rmse);
 
 /// Roughness ratio between the roughest and an axis at which refineNcpPerAxis tries that axis.
 constexpr double kAnisotropy = 8.0;

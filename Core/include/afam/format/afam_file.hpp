@@ -32,6 +32,13 @@ namespace afam {
 
 enum class EncodingMode : uint8_t { Adaptive = 0, InLevel = 1, Fixed = 2, Downsampled = 3 };
 
+/// What a file's bound promises (version 3's boundKind): the RMSE of each block's samples, or the
+/// absolute error of every sample (a pointwise bound, as SZ's absolute mode and ZFP's fixed
+/// accuracy promise). A file that keeps a pointwise bound is written as version 3.
+enum class BoundKind : uint8_t { Rmse = 0, MaxError = 1 };
+/// "rmse" or "max_error" (`afam info`, the reader's field data).
+const char* boundKindName(BoundKind kind);
+
 /// Name used on the command line and in `afam info`: adaptive, inlevel, fixed, ds.
 const char* modeName(EncodingMode mode);
 /// Parses adaptive|inlevel|fixed|ds; throws InvalidArgument otherwise.
@@ -47,6 +54,7 @@ struct VolumeHeader {
   int degree = 2;
   double errorBound = 0;  ///< as given by the user (absolute, or relative when relativeBound)
   bool relativeBound = false;
+  BoundKind boundKind = BoundKind::Rmse;  ///< what errorBound bounds
   EncodingMode mode = EncodingMode::Adaptive;
   int fixedNcp = 0;  ///< Fixed mode: requested NCP (0 = n)
   /// How coarse levels were sampled (and what their error is measured against).

@@ -60,6 +60,7 @@ class RunWriter {
   int64_t stepsDone() const { return static_cast<int64_t>(rows_.size()) - (inStep_ ? 1 : 0); }
   const VolumeHeader& header() const { return header_; }
   double absoluteBound() const { return absoluteBound_; }
+  int keyInterval() const { return keyInterval_; }
   /// The time of the last step begun (NaN before the first).
   double lastTime() const;
   const Partition& partition() const { return partition_; }

@@ -7,9 +7,11 @@
 # more thing:
 #   gpu-pv/src/scripts/gpu_pv_check.sh part           carrying one gpu-pv/pv.tar.zst.partNN
 #        (as many calls as there are parts; after the last, bundle 1 is checked and unpacked)
-#   gpu-pv/src/scripts/gpu_pv_check.sh part run [WAIT] carrying gpu-pv/afam.tar.zst (the plugin)
+#   gpu-pv/src/scripts/gpu_pv_check.sh part run [WAIT] carrying the last part and
+#        gpu-pv/afam.tar.zst (the plugin and programs)
 # (`run` again, with nothing more carried, goes on waiting when WAIT seconds, default 540, were too
-# few.) gpu-pv/src is this checkout's scripts, tests and baselines as packed. Unpacks under
+# few.) gpu-pv/src is this checkout's scripts, tests and baselines as packed. Parts already there
+# (or unpacked) are kept, so a call that failed is simply made again. Unpacks under
 # $AFAM_PV_PREFIX (default /opt/afam-pv): pv/ (ParaView, Python 3.11, numpy, OpenMPI, Xvfb, Mesa,
 # their libraries) and afam/ (AdaptiveFAM.so, afam, BenchAFAMRenderLoop). `run` starts Xvfb on :98
 # (AFAM_PV_DISPLAY) and, in its own process session, the check:
@@ -31,9 +33,10 @@
 #     pvpython client on the loopback address (AFAM_PV_SERVER_BENCH=0 leaves it out).
 # AFAM_PV_PARTS picks among "tests faults bench" (default all); AFAM_PV_TESTS names the tests to
 # run (default all: Pipeline ShowColoured Placement State Scenes DefaultLod EditKeepsCache Damage
-# DecodeDamaged FileChanged DecodeLevel TimeSteps ClientServer1 ClientServer2). OpenGL is NVIDIA's own on the GPU
-# (AFAM_PV_GLX=nvidia, default) or Mesa's llvmpipe (AFAM_PV_GLX=mesa: no interop; the GPU frames
-# then go through the host). Logs, CSVs and images go to $OUT when set; a table is printed last.
+# DecodeDamaged FileChanged DecodeLevel TimeSteps ClientServer1 ClientServer2). OpenGL is NVIDIA's
+# own on the GPU (AFAM_PV_GLX=nvidia, default) or Mesa's llvmpipe (AFAM_PV_GLX=mesa: no interop;
+# the GPU frames then go through the host; give it its own AFAM_PV_WORK). Logs, CSVs and images go
+# to $OUT/<work folder's name>.tar.gz when OUT is set; a table is printed last.
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 mode="${1:-}"
@@ -171,7 +174,7 @@ run)
 work)
   ;;  # below
 *)
-  sed -n '2,35p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,39p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
   ;;
 esac

@@ -10,6 +10,7 @@ int runEncode(int argc, char** argv);      // afam encode IN.raw OUT.afam [...]
 int runInfo(int argc, char** argv);        // afam info FILE.afam
 int runVerify(int argc, char** argv);      // afam verify FILE.afam [--against IN.raw]
 int runDecode(int argc, char** argv);      // afam decode FILE.afam --level K OUT.raw
+int runExtract(int argc, char** argv);     // afam extract RUN.afam --step K OUT.afam
 int runEnlarge(int argc, char** argv);     // afam enlarge IN OUT.raw --dims X,Y,Z
 int runSimulate(int argc, char** argv);    // afam simulate PREFIX --dims X,Y,Z --steps N
 int runTrajectory(int argc, char** argv);  // afam trajectory OUT.dat [--kind orbit|dolly|walk]

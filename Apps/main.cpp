@@ -24,6 +24,7 @@ const Command kCommands[] = {
     {"verify", afam::cli::runVerify,
      "check checksums; with --against IN.raw print rmse= and max_error="},
     {"decode", afam::cli::runDecode, "decode one level to a float32 raw volume"},
+    {"extract", afam::cli::runExtract, "one step of a run as a file of its own"},
     {"enlarge", afam::cli::runEnlarge,
      "a real scan made large: resampled with noise at the new resolution"},
     {"simulate", afam::cli::runSimulate,

@@ -42,6 +42,21 @@ if (NOT out MATCHES "step=0 time=0 damaged=0 level=[0-9]+ rmse=[0-9.e-]+ max_err
     OR NOT out MATCHES "step=2 time=1.5 damaged=0 level=")
   message(FATAL_ERROR "afam verify of a run: ${out}")
 endif ()
+# A step extracted as a file of its own: version 2, and it decodes to the step's bytes.
+run_ok(out ${AFAM} extract run.afam --step 2 step2.afam)
+if (NOT out MATCHES "models=[0-9]+ copied=[0-9]+ resolved=[0-9]+")
+  message(FATAL_ERROR "afam extract: ${out}")
+endif ()
+run_ok(out ${AFAM} info step2.afam)
+if (NOT out MATCHES "version=2" OR out MATCHES "steps=")
+  message(FATAL_ERROR "an extracted step is not a one-step file: ${out}")
+endif ()
+run_ok(out ${AFAM} decode step2.afam e2.raw)
+file(SHA256 "${WORK}/e2.raw" e2)
+if (NOT e2 STREQUAL h2)
+  message(FATAL_ERROR "the extracted step decodes otherwise than step 2 of the run")
+endif ()
+run_fails("--step K is required" ${AFAM} extract run.afam x.afam)
 run_fails("1 of 3 steps damaged or above the bound" ${AFAM} verify run.afam --against
           a_64x80x56_uint8.raw b_64x80x56_uint8.raw b_64x80x56_uint8.raw)
 run_fails("2 inputs for a run of 3 steps" ${AFAM} verify run.afam --against a_64x80x56_uint8.raw
@@ -117,6 +132,10 @@ endif ()
 
 run_fails("step 5 of a run of 5 steps" ${AFAM} decode run.afam --step 5 x.raw)
 run_fails("step 1 of a file of one step" ${AFAM} decode one.afam --step 1 x.raw)
+run_fails("step 7 of a run of 5 steps" ${AFAM} extract run.afam --step 7 x.afam)
+if (EXISTS "${WORK}/x.afam")
+  message(FATAL_ERROR "a refused extract left a file")
+endif ()
 run_fails("appending needs a run" ${AFAM} encode --append b_64x80x56_uint8.raw one.afam)
 run_fails("time values must increase: step 1" ${AFAM} encode a_64x80x56_uint8.raw
           b_64x80x56_uint8.raw bad.afam --times 1,1)

@@ -90,6 +90,18 @@ std::string vtkAFAMControllerTeam::broadcast(const std::string& text, int root)
   return result;
 }
 
+void vtkAFAMControllerTeam::broadcastFromFirst(std::vector<uint8_t>& bytes)
+{
+  std::lock_guard<std::mutex> lock(this->Mutex);
+  vtkIdType length = static_cast<vtkIdType>(bytes.size());
+  this->Controller->Broadcast(&length, 1, 0);
+  bytes.resize(static_cast<size_t>(length));
+  if (length > 0)
+  {
+    this->Controller->Broadcast(reinterpret_cast<char*>(bytes.data()), length, 0);
+  }
+}
+
 std::vector<int> vtkAFAMControllerTeam::allGather(const int* values, int count)
 {
   std::lock_guard<std::mutex> lock(this->Mutex);

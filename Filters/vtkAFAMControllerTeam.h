@@ -32,6 +32,7 @@ public:
   void mergeFlags(std::vector<uint8_t>& flags) override;
   std::vector<std::vector<uint8_t>> gatherToFirst(const std::vector<uint8_t>& bytes) override;
   std::string agreeOnError(const std::string& localError) override;
+  void broadcastFromFirst(std::vector<uint8_t>& bytes) override;
 
   /// Collective: `text` of rank `root` on every rank.
   std::string broadcast(const std::string& text, int root);

@@ -122,8 +122,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   vtkDataArray* array,
   const std::string& arrayError,
   const int wholeExtent[6],
-  const afam::EncoderOptions& options,
-  const std::string& path)
+  const vtkAFAMTeamEncode& encode)
 {
   vtkAFAMControllerTeam team(controller);
   auto* communicator = vtkMPICommunicator::SafeDownCast(controller->GetCommunicator());
@@ -197,7 +196,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
     spacing,
     bytes);
   vtkAFAMPiecesEncoded result;
-  result.stats = afam::encodeVolume(source, options, path, team);
+  result.stats = encode(source, team);
   std::copy(mine.begin(), mine.end(), result.pieceExtent);
   result.remoteBytesRead = source.remoteBytesRead();
   return result;
@@ -215,8 +214,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController*,
   vtkDataArray*,
   const std::string&,
   const int*,
-  const afam::EncoderOptions&,
-  const std::string&)
+  const vtkAFAMTeamEncode&)
 {
   throw afam::Error("encode: this build of the plugin has no MPI (VTK::ParallelMPI): encoding "
                     "runs on one process");

@@ -6,7 +6,8 @@
  * Every rank of the controller calls vtkAFAMEncodePieces with its piece of the image. The ranks
  * agree on the array and the geometry, share the pieces' extents, expose their pieces to one
  * another (vtkAFAMPieceSource) and run Core's encoder as one team (vtkAFAMControllerTeam): each
- * fits a share of every level's rows of blocks, and rank 0 alone writes `path`. The models are
+ * fits a share of every level's rows of blocks, and rank 0 alone writes the file (one volume, or
+ * a run's next step). The models are
  * those of a one-process encode of the whole image. Any error, on any rank, is thrown on every
  * rank.
  */
@@ -20,6 +21,7 @@
 #include "vtkSmartPointer.h"
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 class vtkAbstractArray;
@@ -57,6 +59,12 @@ struct vtkAFAMPiecesEncoded
   uint64_t remoteBytesRead = 0;                 ///< samples read from other ranks' pieces, in bytes
 };
 
+/// What the ranks do with the volume their pieces make up, together (collective): e.g. encode it
+/// into one file (afam::encodeVolume with the team) or as the next step of a run
+/// (afam::RunEncoder::addStep with the team).
+using vtkAFAMTeamEncode =
+  std::function<afam::EncodeStats(afam::VolumeSource& volume, afam::EncodeTeam& team)>;
+
 /// `array` is the chosen point array of `piece` (nullptr when `arrayError` says why none could be
 /// chosen; both unused where the piece is empty); `wholeExtent` is the pipeline's whole extent.
 /// Throws std::exception (afam::Error or afam::Cancelled) with the same message on every rank.
@@ -65,8 +73,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   vtkDataArray* array,
   const std::string& arrayError,
   const int wholeExtent[6],
-  const afam::EncoderOptions& options,
-  const std::string& path);
+  const vtkAFAMTeamEncode& encode);
 
 /// Whether this build can encode across ranks (the module was built with VTK::ParallelMPI).
 bool vtkAFAMCanEncodePieces();

@@ -2,6 +2,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMEncoder.h"
 
+#include "vtkAFAMControllerTeam.h"
 #include "vtkAFAMDistributedEncode.h"
 #include "vtkAFAMModelTree.h"
 
@@ -16,6 +17,7 @@
 #include "vtkInformationVector.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMultiBlockDataSet.h"
+#include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
@@ -84,15 +86,14 @@ int vtkAFAMEncoder::RequestUpdateExtent(vtkInformation*,
   vtkInformationVector** inputVector,
   vtkInformationVector*)
 {
-  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
-  if (this->InputTimes.size() < 2 || (controller && controller->GetNumberOfProcesses() > 1))
+  if (this->InputTimes.size() < 2)
   {
     return 1; // the time asked of the output, as the executive passes it up
   }
   // The step a run under way encodes next; once it is done, the last step it read, so that a new
   // time on the output does not execute the input again (and the run stays current).
   const size_t k =
-    this->Run ? this->NextStep : (this->ModelFile.empty() ? 0 : this->InputTimes.size() - 1);
+    this->Run ? this->NextStep : (this->RunEncoded ? this->InputTimes.size() - 1 : 0);
   inputVector[0]->GetInformationObject(0)->Set(
     vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(), this->InputTimes[k]);
   return 1;
@@ -100,6 +101,7 @@ int vtkAFAMEncoder::RequestUpdateExtent(vtkInformation*,
 
 void vtkAFAMEncoder::RemoveModelFile()
 {
+  this->RunEncoded = false;
   if (!this->ModelFile.empty())
   {
     std::error_code ignored;
@@ -331,15 +333,7 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   this->LastRemoteBytesRead = 0;
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
-  const bool run = this->InputTimes.size() > 1 && !pieces;
-  if (pieces && this->InputTimes.size() > 1 && controller->GetLocalProcessId() == 0 &&
-    !this->WarnedMpiTime)
-  {
-    this->WarnedMpiTime = true;
-    vtkWarningMacro(<< "a time-varying input under MPI is encoded one step at a time (the step "
-                    << "the time asks for), not as one run of its " << this->InputTimes.size()
-                    << " steps");
-  }
+  const bool run = this->InputTimes.size() > 1;
   if (!run)
   {
     this->DropRun();
@@ -347,8 +341,8 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   }
   try
   {
-    if (run      ? !this->EncodeTimeStep(request, input, inputVector, outputVector)
-        : pieces ? !this->EncodePieces(controller, input, inputVector, output)
+    if (run      ? !this->EncodeTimeStep(request, input, inputVector, outputVector, controller)
+        : pieces ? !this->EncodeOnRanks(controller, input, inputVector, output)
                  : !this->EncodeWhole(input, inputVector, output))
     {
       request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
@@ -474,17 +468,29 @@ bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
 bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   vtkImageData* input,
   vtkInformationVector** inputVector,
-  vtkInformationVector* outputVector)
+  vtkInformationVector* outputVector,
+  vtkMultiProcessController* controller)
 {
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
+  const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
   const size_t n = this->InputTimes.size();
-  if (!this->Run && !this->ModelFile.empty() && this->RunFilterTime == this->GetMTime() &&
-    this->RunInputPrint == this->InputFingerprint(input, inputVector))
+  int current = !this->Run && this->RunEncoded && this->RunFilterTime == this->GetMTime() &&
+    this->RunInputPrint == this->InputFingerprint(input, inputVector);
+  if (pieces) // every rank encodes again when one's piece changed
   {
-    // The run is current: the step the output's time asks for.
-    this->BuildOutput(
-      this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+    int all = current;
+    controller->AllReduce(&current, &all, 1, vtkCommunicator::MIN_OP);
+    current = all;
+  }
+  if (current)
+  {
+    // The run is current: the step the output's time asks for (rank 0 holds the file).
+    if (!this->ModelFile.empty())
+    {
+      this->BuildOutput(
+        this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+    }
     return true;
   }
   const double inputTime = input->GetInformation()->Has(vtkDataObject::DATA_TIME_STEP())
@@ -501,21 +507,10 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
       request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
       return true; // this input is another step's: the next execution gets the first
     }
-  }
-  vtkAFAMArraySamples samples; // what the source reads, kept while it does
-  std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
-  if (!source)
-  {
-    return false;
-  }
-  if (!this->Run)
-  {
-    double lo, hi;
-    afam::volumeValueRange(*source, lo, hi);
     this->Run = new RunUnderWay;
     this->Run->Path = NewModelPath();
     this->Run->Encoder =
-      std::make_unique<afam::RunEncoder>(this->Run->Path, this->MakeOptions(), 16, lo, hi);
+      std::make_unique<afam::RunEncoder>(this->Run->Path, this->MakeOptions(), 16);
   }
   const size_t k = this->NextStep;
   this->Run->Encoder->setProgress( // progress across the steps
@@ -524,28 +519,56 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
       this->UpdateProgress(0.95 * (static_cast<double>(k) + f) / static_cast<double>(n));
       return !this->CheckAbort();
     });
-  this->Run->Encoder->addStep(*source, this->InputTimes[k]);
+  afam::RunEncoder& encoder = *this->Run->Encoder;
+  const double time = this->InputTimes[k];
+  if (pieces)
+  {
+    this->EncodePieces(controller,
+      input,
+      inputVector,
+      [&encoder, time](afam::VolumeSource& step, afam::EncodeTeam& team)
+      { return encoder.addStep(step, time, team); });
+  }
+  else
+  {
+    vtkAFAMArraySamples samples; // what the source reads, kept while it does
+    std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
+    if (!source)
+    {
+      return false;
+    }
+    encoder.addStep(*source, time);
+  }
   if (++this->NextStep < n)
   {
     request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
     return true;
   }
   request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-  const afam::RunStats stats = this->Run->Encoder->commit();
-  this->ModelFile = this->Run->Path;
+  vtkAFAMControllerTeam team(controller);
+  afam::SoloTeam solo;
+  const afam::RunStats stats = encoder.commit(pieces ? static_cast<afam::EncodeTeam&>(team) : solo);
+  if (!pieces || controller->GetLocalProcessId() == 0) // the one file
+  {
+    this->ModelFile = this->Run->Path;
+  }
   this->DropRun();
+  this->RunEncoded = true;
   this->KeepRunStatistics(stats);
   this->RunFilterTime = this->GetMTime();
   this->RunInputPrint = this->InputFingerprint(input, inputVector);
-  this->BuildOutput(
-    this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+  if (!this->ModelFile.empty())
+  {
+    this->BuildOutput(
+      this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+  }
   return true;
 }
 
-bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,
+vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,
   vtkImageData* input,
   vtkInformationVector** inputVector,
-  vtkMultiBlockDataSet* output)
+  const vtkAFAMTeamEncode& encode)
 {
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
   int whole[6];
@@ -562,12 +585,26 @@ bool vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,
   {
     vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
   }
-  const std::string path = NewModelPath();
   const vtkAFAMPiecesEncoded done =
-    vtkAFAMEncodePieces(controller, input, array, error, whole, this->MakeOptions(), path);
-  this->KeepStatistics(done.stats);
+    vtkAFAMEncodePieces(controller, input, array, error, whole, encode);
   std::copy(done.pieceExtent, done.pieceExtent + 6, this->LastPieceExtent);
   this->LastRemoteBytesRead = static_cast<double>(done.remoteBytesRead);
+  return done;
+}
+
+bool vtkAFAMEncoder::EncodeOnRanks(vtkMultiProcessController* controller,
+  vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiBlockDataSet* output)
+{
+  const std::string path = NewModelPath();
+  const afam::EncoderOptions options = this->MakeOptions();
+  const vtkAFAMPiecesEncoded done = this->EncodePieces(controller,
+    input,
+    inputVector,
+    [&options, &path](afam::VolumeSource& volume, afam::EncodeTeam& team)
+    { return afam::encodeVolume(volume, options, path, team); });
+  this->KeepStatistics(done.stats);
   if (controller->GetLocalProcessId() == 0) // the one file; the other ranks' outputs stay empty
   {
     this->BuildOutput(path, output);

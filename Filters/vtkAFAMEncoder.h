@@ -33,21 +33,25 @@
 #include "vtkAFAMModule.h" // for export macro
 #include "vtkMultiBlockDataSetAlgorithm.h"
 
-#include <cstdint> // for uint32_t
-#include <memory>  // for std::unique_ptr
-#include <string>  // for std::string
-#include <vector>  // for std::vector
+#include <cstdint>    // for uint32_t
+#include <functional> // for std::function
+#include <memory>     // for std::unique_ptr
+#include <string>     // for std::string
+#include <vector>     // for std::vector
 
 class vtkDataArray;
 struct vtkAFAMArraySamples;
+struct vtkAFAMPiecesEncoded;
 class vtkImageData;
 class vtkMultiProcessController;
 namespace afam
 {
 class ArraySource;
+class EncodeTeam;
 struct EncoderOptions;
 struct EncodeStats;
 struct RunStats;
+class VolumeSource;
 }
 
 class VTKAFAM_EXPORT vtkAFAMEncoder : public vtkMultiBlockDataSetAlgorithm
@@ -183,17 +187,26 @@ protected:
     vtkMultiBlockDataSet* output);
   /// Several ranks, each with its piece of the image: one file, written by rank 0, whose output
   /// holds the models (the other ranks' outputs are empty).
-  bool EncodePieces(vtkMultiProcessController* controller,
+  bool EncodeOnRanks(vtkMultiProcessController* controller,
     vtkImageData* input,
     vtkInformationVector** inputVector,
     vtkMultiBlockDataSet* output);
+  /// Several ranks: the volume their pieces of the input make up, handed to `encode` on every
+  /// rank (vtkAFAMEncodePieces); keeps this rank's piece extent and remote reads.
+  vtkAFAMPiecesEncoded EncodePieces(vtkMultiProcessController* controller,
+    vtkImageData* input,
+    vtkInformationVector** inputVector,
+    const std::function<afam::EncodeStats(afam::VolumeSource&, afam::EncodeTeam&)>& encode);
   /// One execution of a run's encoding (InputTimes): encodes the input as step NextStep and asks
   /// for the next (CONTINUE_EXECUTING), or, when the run is done and still current, describes
-  /// the step the output's time asks for.
+  /// the step the output's time asks for. Under MPI (`controller` of several ranks) every rank
+  /// runs it with its piece of each step, the steps encoded by the ranks together and written
+  /// by rank 0, whose output alone holds the run.
   bool EncodeTimeStep(vtkInformation* request,
     vtkImageData* input,
     vtkInformationVector** inputVector,
-    vtkInformationVector* outputVector);
+    vtkInformationVector* outputVector,
+    vtkMultiProcessController* controller);
   /// Forgets a run under way (its temporary file goes).
   void DropRun();
   /// The chosen array of the input as the encoder reads it (its values in `samples`, which must
@@ -225,7 +238,7 @@ protected:
   struct RunUnderWay;
   RunUnderWay* Run = nullptr;
   vtkMTimeType RunFilterTime = 0;
-  bool WarnedMpiTime = false; ///< said once that MPI encodes a time series a step at a time
+  bool RunEncoded = false;    ///< the run of InputTimes is encoded (on rank 0, in ModelFile)
   uint32_t RunInputPrint = 0; ///< InputFingerprint of the run's last step
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0,
          LastCompressionRatio = 0;

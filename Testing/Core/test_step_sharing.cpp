@@ -2,7 +2,8 @@
 // Playing a run: a Renderer moved to another step (setStep) keeps what the steps share (the
 // models a step refers to) and loads only what changed, draws the step exactly as a renderer
 // opened on it, and with setNextStep loads the next step's models of the view while this step is
-// shown, so that the next frame misses nothing. The cache refuses a file of another run.
+// shown, so that the next frame misses nothing. A jump to a step draws exactly as the step's
+// own file (afam extract). The cache refuses a file of another run.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/encode/encode_run.hpp"
+#include "afam/format/step_extract.hpp"
 #include "afam/render/renderer.hpp"
 #include "moving_blob.hpp"
 #include "scratch_dir.hpp"
@@ -126,6 +128,54 @@ TEST(StepSharing, AResidualIsDecodedFromTheResidentModelBeforeItAsFromItsWholeCh
   }
   EXPECT_GT(r.cache().stats().residualsOnResident, 20u) << "one payload a residual while playing";
   std::remove(path.c_str());
+}
+
+TEST(StepSharing, AJumpToAStepDrawsAsAFileOfThatStepAlone) {
+  const std::string path = afam_test::scratchPath("step_sharing_jump.afam");
+  const std::string alone = afam_test::scratchPath("step_sharing_jump_step4.afam");
+  {
+    std::vector<std::vector<float>> values;
+    for (int k = 0; k < 6; ++k) {
+      std::vector<float> v = afam_test::driftingWaves(kDims, k);
+      const std::vector<float> blob = step(k);
+      for (size_t i = 0; i < v.size(); ++i) v[i] += blob[i];
+      values.push_back(std::move(v));
+    }
+    afam_test::InMemoryRun run(kDims, std::move(values));
+    RunOptions options;
+    options.keyInterval = 8;
+    const RunStats st = encodeRun(run.steps, afam_test::runTestOptions(3), options, path);
+    ASSERT_GT(st.residuals[4], 0);
+    ASSERT_GT(st.references[4], 0);
+  }
+  const ExtractStats ex = extractStep(path, 4, alone);
+  EXPECT_GT(ex.resolved, 0) << "residual chains stored as what they decode to";
+  EXPECT_GT(ex.copied, 0) << "the others keep their stored bytes";
+  auto one = AfamFile::open(alone);
+  EXPECT_EQ(one->version(), 2u);
+  EXPECT_EQ(one->stepCount(), 1);
+  auto four = AfamFile::open(path, 4);
+  ASSERT_EQ(one->entries().size(), four->entries().size());
+  for (size_t i = 0; i < one->entries().size(); ++i)
+    ASSERT_EQ(one->readPayload(int64_t(i)), four->readPayload(int64_t(i))) << "model " << i;
+  // The run played from step 0, then a jump to step 4 (past the residuals in between): every
+  // level drawn exactly as the file of step 4 alone draws it.
+  for (int level : {0, 1}) {
+    SCOPED_TRACE("level " + std::to_string(level));
+    FrameSettings settings = finest();
+    settings.lod.forceLevel = level;
+    Renderer played(AfamFile::open(path, 0), resources(), settings);
+    FrameStats st;
+    played.renderFrame(kCamera, st);
+    played.setStep(AfamFile::open(path, 1));
+    played.renderFrame(kCamera, st);
+    played.setStep(AfamFile::open(path, 4));
+    const ImageRGBA jumped = played.renderFrame(kCamera, st);
+    Renderer fresh(AfamFile::open(alone), resources(), settings);
+    EXPECT_EQ(fresh.renderFrame(kCamera, st).rgba, jumped.rgba) << "0/255";
+  }
+  std::remove(path.c_str());
+  std::remove(alone.c_str());
 }
 
 TEST(StepSharing, AFileOfAnotherRunIsRefused) {

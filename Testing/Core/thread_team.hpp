@@ -85,6 +85,12 @@ class ThreadTeam : public afam::EncodeTeam {
     hub_.barrier();
     return agreed;
   }
+  void broadcastFromFirst(std::vector<uint8_t>& bytes) override {
+    if (rank_ == 0) hub_.bytes_[0] = bytes;
+    hub_.barrier();
+    if (rank_ != 0) bytes = hub_.bytes_[0];
+    hub_.barrier();
+  }
 
  private:
   ThreadTeamHub& hub_;

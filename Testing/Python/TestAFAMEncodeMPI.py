@@ -9,8 +9,11 @@ axis, kind, errors, checksum, stored bytes), those of a one-process encode of th
     script on one process and against `afam encode`;
   - an int16 volume on 3 ranks for 2 rows of blocks (one rank fits nothing), and a source whose
     only piece is rank 0's;
+  - a time series (a .vti file series of a Gray-Scott run) encoded as one run coded in time on 2
+    ranks: the file a one-process encode writes, byte for byte, every step within its bound;
   - bad input: a missing array, an empty whole extent and pieces that leave a hole give one clear
     error on every rank, no file and no hang (each run inside a time limit)."""
+import glob
 import json
 import os
 import subprocess
@@ -105,6 +108,33 @@ expect_same(three, head_cli, "int16 on 3 ranks for 2 rows of blocks against afam
 alone, _, _ = encode_case(1, "rank0", "rank0_1")
 spread, _, _ = encode_case(2, "rank0", "rank0_2")
 expect_same(spread, alone, "one rank's piece, 2 ranks against 1 process")
+
+# A time series: one run coded in time, the same file on 2 ranks as on one process.
+series_dir = os.path.join(out, "series")
+os.makedirs(series_dir, exist_ok=True)
+gs_dims = (24, 28, 20)
+subprocess.check_call([afam, "simulate", os.path.join(series_dir, "gs"), "--dims", "%d,%d,%d" % gs_dims,
+                       "--steps", "4", "--every", "20", "--warmup", "300", "--seeds", "3"],
+                      stdout=subprocess.DEVNULL)
+gs_raws = sorted(glob.glob(os.path.join(series_dir, "gs_*_float32.raw")))
+u.raws_to_vti(gs_raws, gs_dims, "v")
+run_1, _, _ = encode_case(1, "series", "series_1", series_dir)
+run_2, _, _ = encode_case(2, "series", "series_2", series_dir)
+info = subprocess.run([afam, "info", run_2], capture_output=True, text=True).stdout
+if "steps=4" not in info:
+    u.fail("the 2-rank encode of a 4-step series is not a run of 4 steps:\n%s" % info)
+with open(run_1, "rb") as a, open(run_2, "rb") as b:
+    if a.read() != b.read():
+        u.fail("the run encoded on 2 ranks differs from the one-process run")
+verify = subprocess.run([afam, "verify", run_2, "--against"] + gs_raws, capture_output=True, text=True)
+if verify.returncode != 0 or verify.stdout.count("step=") != 4:
+    u.fail("a step of the 2-rank run breaks the bound:\n%s%s" % (verify.stdout, verify.stderr))
+coded = [line for line in info.splitlines() if "references=" in line or "residuals=" in line]
+print("series, 2 ranks: the one-process run byte for byte (%d bytes), every step verified; %s"
+      % (os.path.getsize(run_2), "; ".join(coded[:4])), flush=True)
+leftovers = glob.glob(os.path.join(out, "*.rank*")) + glob.glob("/tmp/afam-encoder-*.rank*")
+if leftovers:
+    u.fail("scratch runs were left behind: %s" % leftovers)
 
 # Bad input: the same clear error on both ranks, no file.
 for case, array, message in (

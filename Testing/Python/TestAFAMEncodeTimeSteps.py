@@ -16,8 +16,6 @@ import afam_test_util as u  # noqa: E402
 
 from paraview.simple import (GetActiveViewOrCreate, Render, SaveData, SaveScreenshot, Show,  # noqa: E402
                              XMLImageDataReader)
-from vtkmodules.vtkIOImage import vtkImageReader2  # noqa: E402
-from vtkmodules.vtkIOXML import vtkXMLImageDataWriter  # noqa: E402
 
 u.load_plugin(globals())
 out = u.out_dir()
@@ -34,22 +32,7 @@ subprocess.check_call([exe, "simulate", os.path.join(out, "gs"), "--dims", "%d,%
                        "--steps", "3", "--every", "40", "--warmup", "300", "--seeds", "3"],
                       stdout=subprocess.DEVNULL)
 raws = sorted(glob.glob(os.path.join(out, "gs_*_float32.raw")))
-series = []
-for k, raw in enumerate(raws):
-    reader = vtkImageReader2()
-    reader.SetFileName(raw)
-    reader.SetFileDimensionality(3)
-    reader.SetFileLowerLeft(True)  # rows as stored, not flipped
-    reader.SetDataScalarTypeToFloat()
-    reader.SetDataByteOrderToLittleEndian()
-    reader.SetDataExtent(0, dims[0] - 1, 0, dims[1] - 1, 0, dims[2] - 1)
-    reader.Update()
-    reader.GetOutput().GetPointData().GetScalars().SetName("v")
-    series.append(os.path.join(out, "gs_%d.vti" % k))
-    writer = vtkXMLImageDataWriter()
-    writer.SetInputData(reader.GetOutput())
-    writer.SetFileName(series[-1])
-    writer.Write()
+series = u.raws_to_vti(raws, dims, "v")
 
 source = XMLImageDataReader(FileName=series)
 if list(source.TimestepValues) != [0.0, 1.0, 2.0]:

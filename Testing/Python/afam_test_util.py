@@ -322,6 +322,30 @@ def non_blank(png, background=(0.1, 0.1, 0.15), min_pixels=500):
     return int(foreground_mask(png, background, 8).sum())
 
 
+def raws_to_vti(raws, dims, name):
+    """Each float32 raw file of `raws` (x fastest) written as a .vti file beside it, its scalars
+    named `name`: a file series ParaView reads. Returns the .vti paths, in the same order."""
+    from vtkmodules.vtkIOImage import vtkImageReader2
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+    written = []
+    for raw in raws:
+        reader = vtkImageReader2()
+        reader.SetFileName(raw)
+        reader.SetFileDimensionality(3)
+        reader.SetFileLowerLeft(True)  # rows as stored, not flipped
+        reader.SetDataScalarTypeToFloat()
+        reader.SetDataByteOrderToLittleEndian()
+        reader.SetDataExtent(0, dims[0] - 1, 0, dims[1] - 1, 0, dims[2] - 1)
+        reader.Update()
+        reader.GetOutput().GetPointData().GetScalars().SetName(name)
+        written.append(os.path.splitext(raw)[0] + ".vti")
+        writer = vtkXMLImageDataWriter()
+        writer.SetInputData(reader.GetOutput())
+        writer.SetFileName(written[-1])
+        writer.Write()
+    return written
+
+
 def afam_models(path):
     """The partition and micro-models of an .afam file (docs/FORMAT.md), for comparing encodes:
     (header bytes 24..176 and 240..444: dims, origin, spacing, value range, bound, partition, mode;

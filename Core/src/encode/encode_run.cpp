@@ -11,6 +11,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/format/run_writer.hpp"
+#include "step_records.hpp"
 
 namespace afam {
 
@@ -72,10 +73,12 @@ class RangedStep : public VolumeSource {
   double lo_, hi_;
 };
 
-/// Where one step's models go: the run writer, references included.
+/// Where one step's models go: the run writer, references included. The writer is made at the
+/// first step's begin(), with the run's range and bound, or, when the run has none yet
+/// (`run` null), the first step's own range and the bound the encoder derived from it.
 class StepSink : public ModelSink {
  public:
-  StepSink(std::unique_ptr<RunWriter>& writer, const std::string& path, const VolumeHeader& run,
+  StepSink(std::unique_ptr<RunWriter>& writer, const std::string& path, const VolumeHeader* run,
            int keyInterval, double bound, double time)
       : writer_(writer),
         path_(path),
@@ -86,11 +89,16 @@ class StepSink : public ModelSink {
   void begin(const VolumeHeader& h) override {
     if (!writer_) {
       VolumeHeader header = h;  // the step's partition, with the run's range and bound
-      header.valueMin = run_.valueMin;
-      header.valueMax = run_.valueMax;
-      header.errorBound = run_.errorBound;
-      header.relativeBound = run_.relativeBound;
-      writer_ = std::make_unique<RunWriter>(path_, header, keyInterval_, bound_);
+      double bound = bound_;
+      if (run_) {
+        header.valueMin = run_->valueMin;
+        header.valueMax = run_->valueMax;
+        header.errorBound = run_->errorBound;
+        header.relativeBound = run_->relativeBound;
+      } else {  // as encodeVolume derived it from the step's range
+        bound = h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+      }
+      writer_ = std::make_unique<RunWriter>(path_, header, keyInterval_, bound);
     }
     stepMin_ = h.valueMin;
     stepMax_ = h.valueMax;
@@ -113,7 +121,7 @@ class StepSink : public ModelSink {
  private:
   std::unique_ptr<RunWriter>& writer_;
   std::string path_;
-  VolumeHeader run_;
+  const VolumeHeader* run_;
   int keyInterval_;
   double bound_, time_, stepMin_ = 0, stepMax_ = 0;
 };
@@ -138,34 +146,42 @@ class WrittenStep : public PreviousStep {
 
 struct RunEncoder::State {
   std::string path;
-  EncoderOptions options;  ///< every step held to the run's bound, in data units
-  VolumeHeader header;     ///< the run's range and bound as given
+  EncoderOptions options;   ///< every step held to the run's bound, in data units
+  VolumeHeader header;      ///< the run's range and bound as given
+  bool rangeKnown = false;  ///< false: the first step's range is the run's
   int keyInterval = 16;
   double bound = 0;
+  double lastTime = std::numeric_limits<double>::quiet_NaN();
   std::unique_ptr<StepGrid> grid;
-  std::unique_ptr<RunWriter> writer;
+  std::unique_ptr<RunWriter> writer;  ///< the run; on a team's other processes, their scratch run
   std::unique_ptr<WrittenStep> previous;
   RunStats stats;
   std::chrono::steady_clock::time_point start;
 };
 
-RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval,
-                       double valueMin, double valueMax)
+RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval)
     : s_(std::make_unique<State>()) {
   if (keyInterval < 1)
     throw InvalidArgument("encode: key interval " + std::to_string(keyInterval) + " < 1");
-  if (!(valueMin <= valueMax) || !std::isfinite(valueMin) || !std::isfinite(valueMax))
-    throw InvalidArgument("encode: the run's value range must be finite");
   State& s = *s_;
   s.start = std::chrono::steady_clock::now();
   s.path = path;
   s.keyInterval = keyInterval;
+  s.options = options;
+  s.header.errorBound = options.errorBound;
+  s.header.relativeBound = options.relativeBound;
+}
+
+RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval,
+                       double valueMin, double valueMax)
+    : RunEncoder(path, options, keyInterval) {
+  if (!(valueMin <= valueMax) || !std::isfinite(valueMin) || !std::isfinite(valueMax))
+    throw InvalidArgument("encode: the run's value range must be finite");
+  State& s = *s_;
+  s.rangeKnown = true;
   s.bound = options.relativeBound ? options.errorBound * (valueMax - valueMin) : options.errorBound;
   s.header.valueMin = valueMin;
   s.header.valueMax = valueMax;
-  s.header.errorBound = options.errorBound;
-  s.header.relativeBound = options.relativeBound;
-  s.options = options;
   s.options.errorBound = s.bound;
   s.options.relativeBound = false;
   s.stats.valueMin = valueMin;
@@ -176,19 +192,57 @@ RunEncoder::RunEncoder(const std::string& path, const EncoderOptions& options, i
 RunEncoder::~RunEncoder() = default;
 
 EncodeStats RunEncoder::addStep(VolumeSource& step, double time) {
+  SoloTeam solo;
+  return addStep(step, time, solo);
+}
+
+EncodeStats RunEncoder::addStep(VolumeSource& step, double time, EncodeTeam& team) {
   State& s = *s_;
   const int64_t k = static_cast<int64_t>(s.stats.steps.size());
-  if (!std::isfinite(time) || (s.writer && !(time > s.writer->lastTime())))
-    throw InvalidArgument("encode: time values must increase: step " + std::to_string(k) + " has " +
-                          std::to_string(time));
-  if (!s.grid) s.grid = std::make_unique<StepGrid>(step);
-  const std::string d = gridDifference(*s.grid, step);
-  if (!d.empty())
-    throw InvalidArgument("encode: step " + std::to_string(k) + " (" + step.name() + "): " + d);
-  StepSink sink(s.writer, s.path, s.header, s.keyInterval, s.bound, time);
+  teamStep(team, [&] {  // a team refuses the step together
+    if (!std::isfinite(time) || (k > 0 && !(time > s.lastTime)))
+      throw InvalidArgument("encode: time values must increase: step " + std::to_string(k) +
+                            " has " + std::to_string(time));
+    if (!s.grid) s.grid = std::make_unique<StepGrid>(step);
+    const std::string d = gridDifference(*s.grid, step);
+    if (!d.empty())
+      throw InvalidArgument("encode: step " + std::to_string(k) + " (" + step.name() + "): " + d);
+  });
+  // The first process writes the run; the others, a scratch run of their own (never committed).
+  const bool writes = team.rank() == 0;
+  const std::string path = writes ? s.path : s.path + ".rank" + std::to_string(team.rank());
+  StepSink sink(s.writer, path, s.rangeKnown ? &s.header : nullptr, s.keyInterval, s.bound, time);
+  StepRecorder recorder(sink);
   s.options.previous = s.previous.get();
-  s.stats.steps.push_back(encodeVolume(step, s.options, sink));
-  sink.end();
+  const EncodeStats stats = encodeVolume(
+      step, s.options, team.size() > 1 ? static_cast<ModelSink&>(recorder) : sink, team);
+  std::vector<uint8_t> models;  // the step as the first process wrote it, for the others
+  teamStep(team, [&] {
+    if (!writes) return;
+    sink.end();
+    models = recorder.bytes();
+  });
+  if (team.size() > 1) {
+    team.broadcastFromFirst(models);
+    teamStep(team, [&] {
+      if (writes) return;
+      replayStep(models, sink);
+      sink.end();
+    });
+  }
+  if (!s.rangeKnown) {  // the first step's range and bound are the run's from now on
+    s.rangeKnown = true;
+    s.bound = stats.bound;
+    s.header.valueMin = stats.valueMin;
+    s.header.valueMax = stats.valueMax;
+    s.options.errorBound = s.bound;
+    s.options.relativeBound = false;
+    s.stats.valueMin = stats.valueMin;
+    s.stats.valueMax = stats.valueMax;
+    s.stats.bound = s.bound;
+  }
+  s.lastTime = time;
+  s.stats.steps.push_back(stats);
   s.stats.references.push_back(sink.references);
   s.stats.residuals.push_back(sink.residuals);
   if (!s.previous) s.previous = std::make_unique<WrittenStep>(*s.writer);
@@ -200,9 +254,20 @@ void RunEncoder::setProgress(std::function<bool(double)> progress) {
 }
 
 RunStats RunEncoder::commit() {
+  SoloTeam solo;
+  return commit(solo);
+}
+
+RunStats RunEncoder::commit(EncodeTeam& team) {
   State& s = *s_;
   if (!s.writer) throw InvalidArgument("encode: a run needs at least one step");
-  s.stats.bytesOut = s.writer->commit();
+  teamStep(team, [&] {
+    if (team.rank() == 0) s.stats.bytesOut = s.writer->commit();
+  });
+  if (team.rank() != 0) {  // the scratch run and its temporary file go
+    s.previous.reset();
+    s.writer.reset();
+  }
   s.stats.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
   return s.stats;
@@ -276,7 +341,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   stepOptions.relativeBound = false;
   WrittenStep previous(*writer);
   stepOptions.previous = &previous;
-  StepSink sink(writer, path, h, 0, stats.bound, time);
+  StepSink sink(writer, path, &h, 0, stats.bound, time);
   stats.steps.push_back(encodeVolume(step, stepOptions, sink));
   sink.end();
   stats.references.push_back(sink.references);

@@ -184,31 +184,6 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   vmax = hi;
 }
 
-/// Runs one step of the encode; in a team, an exception of any process is thrown on every process
-/// once all have run the step (a process's own exception as it is, another's as afam::Error naming
-/// its rank), so no process waits in a later collective for one that has stopped.
-template <class Step>
-void teamStep(EncodeTeam& team, Step&& step) {
-  if (team.size() == 1) {
-    step();
-    return;
-  }
-  std::exception_ptr failure;
-  std::string message;
-  try {
-    step();
-  } catch (const std::exception& e) {
-    failure = std::current_exception();
-    message = *e.what() ? e.what() : "an error with no message";
-  } catch (...) {
-    failure = std::current_exception();
-    message = "an error that is not a std::exception";
-  }
-  const std::string agreed = team.agreeOnError(message);
-  if (failure) std::rethrow_exception(failure);
-  if (!agreed.empty()) throw Error("encode: " + agreed);
-}
-
 VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels,
                         double vmin, double vmax) {
   VolumeHeader header;

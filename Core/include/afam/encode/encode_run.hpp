@@ -43,24 +43,38 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
                    const RunOptions& run, const std::string& path);
 
 /// A run encoded one step at a time, as a pipeline delivers them (ParaView's encoding filter on
-/// a time-varying input): the coding of encodeRun, held to a bound fixed before the first step
-/// (relative: to [valueMin, valueMax], e.g. the first step's range, as later steps are not known
-/// yet). Nothing is at `path` until commit(); destroyed before it, nothing is left.
+/// a time-varying input): the coding of encodeRun, held to a bound fixed at the first step
+/// (relative: to [valueMin, valueMax] when given, else to the first step's range, as later steps
+/// are not known yet). Nothing is at `path` until commit(); destroyed before it, nothing is left.
+///
+/// The steps may be encoded by the processes of a team (encode_team.hpp; MPI ranks under
+/// pvbatch), each passing its source of the same step: every process fits its share of the
+/// step's blocks, the first writes the run, and then sends the step's models to the others, which
+/// keep them in a scratch run of their own (a temporary file beside `path`, never committed, gone
+/// when the encoder is) to code their blocks of the next step in time against the same models.
+/// The file is byte for byte the one a single process writes.
 class RunEncoder {
  public:
   RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval,
              double valueMin, double valueMax);
+  /// The run's range is its first step's.
+  RunEncoder(const std::string& path, const EncoderOptions& options, int keyInterval);
   ~RunEncoder();
   RunEncoder(const RunEncoder&) = delete;
   RunEncoder& operator=(const RunEncoder&) = delete;
   /// Encodes the next step at `time` (after the last one's). InvalidArgument naming the step when
   /// its grid or sample type is not the first step's, or the time does not follow.
   EncodeStats addStep(VolumeSource& step, double time);
+  /// The same, by every process of `team` (collective; each with its source of the step). Only
+  /// the first process's statistics count every block (encodeVolume with a team).
+  EncodeStats addStep(VolumeSource& step, double time, EncodeTeam& team);
   /// The progress callback of the steps from now on (EncoderOptions::progress: fractions of the
   /// step; returning false cancels it, Cancelled).
   void setProgress(std::function<bool(double)> progress);
   /// Writes the run (atomically, as encodeRun) and returns its statistics.
   RunStats commit();
+  /// The same, collective: the first process writes the run, the others drop their scratch run.
+  RunStats commit(EncodeTeam& team);
 
  private:
   struct State;

@@ -6,9 +6,10 @@
 // rank order, are in the file's order; a process reads only the rows of the planes its lines need.
 // Per level the processes merge the per-block flags the next level's cross-level reuse needs
 // (mergeFlags) and hand their fitted models to the first process (gatherToFirst), which alone
-// writes the file. The global value range comes from a reduction (reduceRange). Any exception on
-// any process reaches every process at the next collective step (agreeOnError), so none waits for a
-// process that has stopped.
+// writes the file; a run of steps (encode_run.hpp) then shares each step's models with every
+// process (broadcastFromFirst), which codes its blocks of the next step against them. The global
+// value range comes from a reduction (reduceRange). Any exception on any process reaches every
+// process at the next collective step (agreeOnError), so none waits for a process that has stopped.
 //
 // Every call but rank() / size() is collective: all processes call it, in the same order. Core
 // knows no MPI: the ParaView filter implements this over its vtkMultiProcessController; SoloTeam
@@ -16,8 +17,11 @@
 #pragma once
 
 #include <cstdint>
+#include <exception>
 #include <string>
 #include <vector>
+
+#include "afam/base/errors.hpp"
 
 namespace afam {
 
@@ -35,6 +39,9 @@ class EncodeTeam {
   /// "" when no process failed, else "rank R: <its message>" for the lowest failing rank R, on
   /// every process. `localError` is this process's message ("" when it did not fail).
   virtual std::string agreeOnError(const std::string& localError) = 0;
+  /// The first process's bytes on every process (a run's step, encode_run.hpp): `bytes` is read
+  /// on the first process and replaced on the others.
+  virtual void broadcastFromFirst(std::vector<uint8_t>& bytes) = 0;
 };
 
 /// One process: every collective is the identity.
@@ -50,7 +57,33 @@ class SoloTeam : public EncodeTeam {
   std::string agreeOnError(const std::string& localError) override {
     return localError.empty() ? localError : "rank 0: " + localError;
   }
+  void broadcastFromFirst(std::vector<uint8_t>&) override {}
 };
+
+/// Runs one step of an encode; in a team, an exception of any process is thrown on every process
+/// once all have run the step (a process's own exception as it is, another's as afam::Error naming
+/// its rank), so no process waits in a later collective for one that has stopped.
+template <class Step>
+void teamStep(EncodeTeam& team, Step&& step) {
+  if (team.size() == 1) {
+    step();
+    return;
+  }
+  std::exception_ptr failure;
+  std::string message;
+  try {
+    step();
+  } catch (const std::exception& e) {
+    failure = std::current_exception();
+    message = *e.what() ? e.what() : "an error with no message";
+  } catch (...) {
+    failure = std::current_exception();
+    message = "an error that is not a std::exception";
+  }
+  const std::string agreed = team.agreeOnError(message);
+  if (failure) std::rethrow_exception(failure);
+  if (!agreed.empty()) throw Error("encode: " + agreed);
+}
 
 /// Items [first, end) of `count` (lines of blocks, z-planes) that process `rank` of `size` takes:
 /// contiguous, in rank order, sizes differing by at most one (empty when rank >= count).

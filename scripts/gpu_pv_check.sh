@@ -21,8 +21,9 @@
 #     and, with NVIDIA's OpenGL, drawn through CUDA-OpenGL interop: afam_test_util's hook); then
 #     every image the gpu run wrote against the cpu run's image of the same name: at most 2/255
 #     in every channel of every pixel ("[pv gpu-vs-cpu]" lines);
-#   - "faults": the GPU asked for where CUDA is hidden (CUDA_VISIBLE_DEVICES=""): one message, a
-#     CPU frame equal to the CPU's;
+#   - "faults": the GPU asked for where CUDA is hidden (CUDA_VISIBLE_DEVICES=""), and (when
+#     gpu-pv/afam_nocuda.tar.zst was carried) by the plugin built without CUDA: one message each,
+#     CPU frames equal to the CPU's;
 #   - "bench": Marschner-Lobb N^3 (AFAM_PV_N, default 1024) encoded at the paper's settings, the
 #     camera path user_1 (carried in gpu-data/trajectories, else generated) replayed through
 #     paraview.simple in pvbatch (Apps/pvbatch/afam_pv_loop.py) at AFAM_PV_SIZES ("512 1024"),
@@ -86,6 +87,11 @@ store_parts() {  # keep each carried part of bundle 1; unpack once all are there
       rm -rf "$prefix/parts"
       echo "unpacked bundle 1 into $prefix/pv: $(find "$prefix/pv" -type f | wc -l) files, $(du -sm "$prefix/pv" | cut -f1) MB in $(( $(date +%s) - t0 )) s"
     fi
+  fi
+  if [ -f "$pack/afam_nocuda.tar.zst" ]; then
+    rm -rf "$prefix/afam_nocuda"
+    unzstd "$pack/afam_nocuda.tar.zst" | tar -x -C "$prefix" || die "unpacking the plugin without CUDA failed"
+    echo "unpacked the plugin built without CUDA into $prefix/afam_nocuda"
   fi
   if [ -f "$pack/afam.tar.zst" ]; then
     rm -rf "$prefix/afam"
@@ -174,7 +180,7 @@ run)
 work)
   ;;  # below
 *)
-  sed -n '2,39p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,40p' "$0" | sed 's/^# \{0,1\}//'
   exit 2
   ;;
 esac
@@ -283,6 +289,16 @@ if part faults; then
   [ $rc -eq 0 ] && grep -qE "Traceback|AFAM-TEST-FAIL" "$out/no_gpu.log" && rc=99
   status "GPU asked for, CUDA hidden" "$([ $rc -eq 0 ] && echo passed || echo "FAILED rc=$rc"): $(grep -m1 "no-gpu:" "$out/no_gpu.log")"
   [ $rc -eq 0 ] || failed=1
+  # The plugin built without CUDA, loaded here with the GPU there and asked for.
+  if [ -f "$prefix/afam_nocuda/AdaptiveFAM.so" ]; then
+    AFAM_TEST_NO_GPU=1 AFAM_PLUGIN="$prefix/afam_nocuda/AdaptiveFAM.so" AFAM_TEST_OUT="$out/nocuda" \
+      AFAM_TEST_SCRIPTS="$tests" AFAM_BASELINE="$root/Testing/Data/Baseline" timeout 300 \
+      "$pv/pvbatch3.11" --no-mpi "$tests/TestAFAMScenes.py" >"$out/no_cuda.log" 2>&1
+    rc=$?
+    [ $rc -eq 0 ] && grep -qE "Traceback|AFAM-TEST-FAIL" "$out/no_cuda.log" && rc=99
+    status "plugin built without CUDA, GPU asked for" "$([ $rc -eq 0 ] && echo passed || echo "FAILED rc=$rc"): $(grep -m1 "no-gpu:" "$out/no_cuda.log")"
+    [ $rc -eq 0 ] || failed=1
+  fi
 fi
 
 # --- Timing in ParaView's own loop, beside the VTK window and afam replay, and ParaView's Volume.

@@ -21,6 +21,8 @@
 #   gpu-pv/src/   this checkout's scripts, Python tests, pvbatch scripts and baselines, which the
 #       device calls run (the device tool sends the session's main checkout, not a worktree).
 #   scripts/gpu_pv_pack.sh [BUILD_DIR]
+#   gpu-pv/afam_nocuda.tar.zst  with AFAM_PV_NOCUDA_BUILD (a ParaView build with AFAM_ENABLE_CUDA=OFF):
+#       its plugin, which the check loads on the GPU machine too.
 # AFAM_PV_PACK: the output folder (default gpu-pv/ of this checkout); AFAM_PV_BUNDLES ("pv afam",
 # the default, or one of them); AFAM_JOBS (2); AFAM_PACK_ZSTD_LEVEL (bundle 1, default 15); nvcc
 # from /usr/local/cuda/bin unless CUDACXX names another.
@@ -154,6 +156,23 @@ tar -C "$stage" -cf - afam | zstd -q -T0 -19 --long=27 -o "$pack/afam.tar.zst" -
 printf 'afam: %d files, %d MB unpacked, %.1f MB packed (programs at %s)\n' "$(find "$a" -type f | wc -l)" \
   "$(( $(du -sb "$a" | cut -f1) / 1000000 ))" "$(stat -c %s "$pack/afam.tar.zst" | awk '{ print $1 / 1e6 }')" \
   "$(cat "$a/COMMIT")" | tee -a "$pack/SIZES"
+
+# ------------------------------------------------ Bundle 3 (optional): the plugin built without CUDA.
+# AFAM_PV_NOCUDA_BUILD names a ParaView build of this checkout with AFAM_ENABLE_CUDA=OFF: its plugin
+# goes to gpu-pv/afam_nocuda.tar.zst, which the check loads on the GPU machine (CPU frames, one
+# message).
+rm -f "$pack/afam_nocuda.tar.zst"
+if [ -n "${AFAM_PV_NOCUDA_BUILD:-}" ]; then
+  nb="$AFAM_PV_NOCUDA_BUILD"
+  [ -f "$nb/CMakeCache.txt" ] || die "AFAM_PV_NOCUDA_BUILD=$nb is not a build folder"
+  grep -q "^AFAM_ENABLE_CUDA:BOOL=OFF" "$nb/CMakeCache.txt" || die "$nb is built with CUDA"
+  cmake --build "$nb" -j "${AFAM_JOBS:-2}" --target AdaptiveFAM
+  n="$stage/afam_nocuda"
+  mkdir -p "$n"
+  cp -L "$(find "$nb" -name AdaptiveFAM.so -path '*plugins*' | head -1)" "$n/"
+  tar -C "$stage" -cf - afam_nocuda | zstd -q -T0 -19 --long=27 -o "$pack/afam_nocuda.tar.zst" -f
+  echo "afam_nocuda: the plugin without CUDA, $(stat -c %s "$pack/afam_nocuda.tar.zst" | awk '{ print $1 / 1e6 }') MB packed" | tee -a "$pack/SIZES"
+fi
 
 # ------------------------------------------------ zstd, and what the device calls run.
 rm -rf "$pack/zstd" "$pack/src"

@@ -26,6 +26,7 @@ struct vtkAFAMCoreRenderer::Internals
   // The open file's damaged blocks, kept across renderer rebuilds: each is reported once per file.
   std::shared_ptr<afam::DamageLog> Damage;
   std::vector<std::string> Messages; // the GPU's set-up notes, handed to the frame that made it
+  bool BuiltUnreported = false;      // built by Prepare: the next Render reports it
 
   void InstallGpu(double budgetMB, int threads)
   {
@@ -175,40 +176,67 @@ bool vtkAFAMCoreRenderer::WillCastOnGpu(const vtkAFAMFrameRequest& request) cons
   return this->Impl->Gpu && !this->NeedsBuild(request);
 }
 
+void vtkAFAMCoreRenderer::Build(const vtkAFAMFrameRequest& request,
+  const afam::FrameSettings& settings)
+{
+  const afam::RendererResources resources = ResourcesFor(request);
+  const bool wantGpu = request.Device != 1;
+  Internals& m = *this->Impl;
+  m.Gpu = nullptr;
+  m.Renderer.reset(); // the old cache, prefetch thread and GPU pool go before the new ones come
+  m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);
+  m.Resources = resources;
+  m.GpuWanted = wantGpu;
+  m.BuiltUnreported = true;
+  if (wantGpu)
+  {
+    m.InstallGpu(request.CacheBudgetMB, resources.threads);
+  }
+  // A run: the step after this one is loaded while this one is shown (playback goes forward
+  // first; Open() follows the direction of play from the first step change on).
+  const long long ahead =
+    this->OpenStep + 1 < m.File->stepCount() ? this->OpenStep + 1 : this->OpenStep - 1;
+  if (!m.Next && ahead >= 0 && ahead != this->OpenStep)
+  {
+    m.Next = afam::AfamFile::open(this->OpenPath, ahead);
+  }
+  m.Renderer->setNextStep(m.Next);
+}
+
+void vtkAFAMCoreRenderer::Prepare(const vtkAFAMFrameRequest& request)
+{
+  Internals& m = *this->Impl;
+  if (!m.File || !this->NeedsBuild(request))
+  {
+    return;
+  }
+  if (!m.BuiltUnreported)
+  {
+    m.Messages.clear();
+  }
+  std::vector<std::string> unused; // Render reports the settings' warnings
+  this->Build(request, afam::acceptFrameSettings(request.Settings, m.LastGood, unused));
+}
+
 void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
   afam::ImageRGBA& image,
   vtkAFAMFrameStats& stats)
 {
-  const afam::RendererResources resources = ResourcesFor(request);
   const bool wantGpu = request.Device != 1;
 
   Internals& m = *this->Impl;
-  m.Messages.clear();
+  if (!m.BuiltUnreported)
+  {
+    m.Messages.clear(); // else they are the set-up notes of the build Prepare made
+  }
   const afam::FrameSettings settings =
     afam::acceptFrameSettings(request.Settings, m.LastGood, stats.SettingWarnings);
-  stats.RendererBuilt = false;
   if (this->NeedsBuild(request))
   {
-    m.Gpu = nullptr;
-    m.Renderer.reset(); // the old cache, prefetch thread and GPU pool go before the new ones come
-    m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);
-    m.Resources = resources;
-    m.GpuWanted = wantGpu;
-    stats.RendererBuilt = true;
-    if (wantGpu)
-    {
-      m.InstallGpu(request.CacheBudgetMB, resources.threads);
-    }
-    // A run: the step after this one is loaded while this one is shown (playback goes forward
-    // first; Open() follows the direction of play from the first step change on).
-    const long long ahead =
-      this->OpenStep + 1 < m.File->stepCount() ? this->OpenStep + 1 : this->OpenStep - 1;
-    if (!m.Next && ahead >= 0 && ahead != this->OpenStep)
-    {
-      m.Next = afam::AfamFile::open(this->OpenPath, ahead);
-    }
-    m.Renderer->setNextStep(m.Next);
+    this->Build(request, settings);
   }
+  stats.RendererBuilt = m.BuiltUnreported;
+  m.BuiltUnreported = false;
   m.LastGood = settings;
   afam::FrameStats frame;
   try

@@ -97,9 +97,15 @@ public:
   /// it as it is now: no block of the old file is drawn again.
   void Render(const vtkAFAMFrameRequest& request, afam::ImageRGBA& image, vtkAFAMFrameStats& stats);
 
+  /// Builds the renderer `request` needs now, when it needs a new one (the first frame, or after
+  /// a change of device, cache, prefetcher or threads; else nothing), so that the frame knows
+  /// before it is cast whether it will be cast on the GPU, and its image can go to OpenGL without
+  /// the host from the first frame on. The next Render reports the build (RendererBuilt) and the
+  /// GPU's set-up notes. Throws what Render's build throws.
+  void Prepare(const vtkAFAMFrameRequest& request);
   /// True when Render(request) will cast on the GPU: the current renderer has it (a CUDA build, a
   /// usable GPU, the GPU asked for) and the request keeps that renderer. A frame that builds a
-  /// new renderer (the first, or after a change of device, cache, prefetcher or threads) says no.
+  /// new renderer in Render (without Prepare first) says no.
   bool WillCastOnGpu(const vtkAFAMFrameRequest& request) const;
   /// The cudaStream_t the GPU caster casts on (nullptr without one): where buffers shared with
   /// OpenGL are mapped, so that CUDA's and OpenGL's uses of them are ordered without host waits.
@@ -108,6 +114,8 @@ public:
 private:
   /// True when Render(request) builds a new renderer (new cache, prefetch thread, GPU pool).
   bool NeedsBuild(const vtkAFAMFrameRequest& request) const;
+  /// Builds the renderer for `request` with `settings` (Prepare, Render).
+  void Build(const vtkAFAMFrameRequest& request, const afam::FrameSettings& settings);
   struct Internals;
   std::unique_ptr<Internals> Impl;
   std::string OpenPath;

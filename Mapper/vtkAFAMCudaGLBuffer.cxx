@@ -134,6 +134,17 @@ void vtkAFAMCudaGLBuffer::Unmap()
 #endif
 }
 
+void vtkAFAMCudaGLBuffer::StreamEnded()
+{
+#if defined(AFAM_HAVE_CUDA)
+  if (this->Mapped && this->Stream)
+  {
+    (void)cudaDeviceSynchronize();
+    this->Stream = nullptr;
+  }
+#endif
+}
+
 void vtkAFAMCudaGLBuffer::Free()
 {
   this->Unmap();

@@ -35,6 +35,11 @@ public:
   /// Gives it back to OpenGL (no-op when not mapped): CUDA's earlier work on the stream comes
   /// first.
   void Unmap();
+  /// The stream it was mapped on was destroyed while it was mapped (its renderer was rebuilt
+  /// within the frame, as when the file changed on disk and was opened again): waits for the
+  /// device, and Unmap then uses the default stream (unmapping on a destroyed stream crashes the
+  /// driver).
+  void StreamEnded();
   /// Unregisters and deletes the buffer, and forgets a Problem (a new context may do better).
   void Free();
   unsigned int Name() const

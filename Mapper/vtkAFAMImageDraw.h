@@ -35,6 +35,11 @@ public:
   float* MapDeviceImage(int width, int height, void* stream, size_t& floats);
   /// Gives the mapped buffer back to OpenGL without drawing it (nothing was cast into it).
   void UnmapDeviceImage();
+  /// The stream the image was mapped on is gone (vtkAFAMCudaGLBuffer::StreamEnded).
+  void DeviceImageStreamEnded()
+  {
+    this->ImageBuffer.StreamEnded();
+  }
   /// Draws the image CUDA left in the mapped buffer (unmapping it first).
   void DrawDeviceImage(vtkOpenGLRenderWindow* window, int width, int height);
   /// Draws `rgba` (width * height * 4 floats in host memory).

@@ -229,7 +229,21 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   this->ReadFrameSettings(vol->GetProperty(), frame);
   auto* renWin = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
   // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one, and
-  // then take the depth buffer the same way (ReadDepthLimits).
+  // then take the depth buffer the same way (ReadDepthLimits). A frame that needs a new renderer
+  // (the first, or after a change of device or cache) builds it first, so that it goes that way
+  // too (in ParaView, the image of OpenDataFile + Show + SaveScreenshot is such a frame).
+  if (this->GpuImageInterop)
+  {
+    try
+    {
+      this->Core->Prepare(frame.Request);
+    }
+    catch (const std::exception&)
+    {
+      // RenderCore builds it again and reports why it cannot
+    }
+  }
+  void* const mappedStream = this->Core->GpuStream();
   size_t deviceFloats = 0;
   float* deviceImage = this->GpuImageInterop && this->Core->WillCastOnGpu(frame.Request)
     ? this->Draw->MapDeviceImage(
@@ -244,6 +258,13 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   afam::ImageRGBA image;
   vtkAFAMFrameStats stats;
   const bool cast = this->RenderCore(frame, image, stats);
+  if (this->Core->GpuStream() != mappedStream)
+  {
+    // The renderer was rebuilt within this frame (the file changed on disk and was opened again):
+    // the stream the buffers were mapped on went with the old one.
+    this->DepthBuffer->StreamEnded();
+    this->Draw->DeviceImageStreamEnded();
+  }
   this->DepthBuffer->Unmap();
   if (frame.DepthOnGpu && stats.DeviceDepthLimited >= 0)
   {
@@ -277,6 +298,17 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
   const auto end = std::chrono::steady_clock::now();
   this->LastInteropProblem = this->Draw->Problem();
+  // Frames cast on the GPU but drawn through the host (an OpenGL that shares no buffers with
+  // CUDA, as Mesa's): said once per problem, as information (the image is right, only slower).
+  if (stats.UsedGpu && !this->LastInteropProblem.empty() &&
+    this->LastInteropProblem != this->ReportedInteropProblem)
+  {
+    this->ReportedInteropProblem = this->LastInteropProblem;
+    vtkLog(INFO,
+      "Adaptive-FAM: frames cast on the GPU reach the window through the host (no CUDA-OpenGL "
+      "interop here): "
+        << this->LastInteropProblem);
+  }
   this->RecordStatistics(frame, stats);
   this->LastDepthReadTime = std::chrono::duration<double>(depthEnd - depthStart).count();
   this->LastDrawTime = std::chrono::duration<double>(end - drawStart).count();

@@ -334,6 +334,7 @@ protected:
   int RenderDevice = DEVICE_AUTO;
   bool DepthCompositing = true;
   bool WarnedDevice = false;
+  std::string ReportedInteropProblem; // the interop problem last said (once per problem)
   bool WarnedBlendMode = false;
   double SampleDistance = 0;
   int NumberOfThreads = 0;

@@ -57,7 +57,7 @@ def connect(host, port, plugin=None, server_plugin=None, ns=None, timeout=30):
 
 
 STATISTICS = ("NumberOfRanks", "RanksDrawingBlocks", "TotalBytesRead", "MaxBytesRead",
-              "TotalVisibleBlocks", "MaxTotalTime", "MinImageScale")
+              "TotalVisibleBlocks", "MaxTotalTime", "MinImageScale", "RanksOnGpu", "RanksThroughInterop")
 
 
 def frame_statistics(display):

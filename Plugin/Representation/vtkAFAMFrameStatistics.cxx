@@ -46,12 +46,18 @@ void vtkAFAMFrameStatistics::Gather()
     scale = sums[1] > 0 ? volume->GetLastImageScale() : 1.0;
   }
   vtkTypeInt64 drawing = sums[1] > 0 ? 1 : 0;
+  vtkTypeInt64 onGpu = 0, interop = 0; // this rank's last frame: cast on the GPU, through interop
+  if (auto* volume = findVolumeRepresentation(this->Representation))
+  {
+    onGpu = volume->GetLastUsedGpu() ? 1 : 0;
+    interop = volume->GetLastImageOnDevice() ? 1 : 0;
+  }
   auto* controller = vtkMultiProcessController::GetGlobalController();
   if (controller && controller->GetNumberOfProcesses() > 1)
   {
-    const vtkTypeInt64 local[4] = { sums[0], sums[1], sums[2], drawing };
-    vtkTypeInt64 total[4];
-    controller->AllReduce(local, total, 4, vtkCommunicator::SUM_OP);
+    const vtkTypeInt64 local[6] = { sums[0], sums[1], sums[2], drawing, onGpu, interop };
+    vtkTypeInt64 total[6];
+    controller->AllReduce(local, total, 6, vtkCommunicator::SUM_OP);
     const double localMax[2] = { maxima[0], maxima[1] };
     controller->AllReduce(localMax, maxima, 2, vtkCommunicator::MAX_OP);
     const double localScale = scale;
@@ -60,6 +66,8 @@ void vtkAFAMFrameStatistics::Gather()
     sums[1] = total[1];
     sums[2] = total[2];
     drawing = total[3];
+    onGpu = total[4];
+    interop = total[5];
   }
   this->TotalBytesRead = sums[0];
   this->TotalVisibleBlocks = sums[1];
@@ -68,6 +76,8 @@ void vtkAFAMFrameStatistics::Gather()
   this->MaxBytesRead = static_cast<vtkTypeInt64>(maxima[0]);
   this->MaxTotalTime = maxima[1];
   this->MinImageScale = scale;
+  this->RanksOnGpu = static_cast<int>(onGpu);
+  this->RanksThroughInterop = static_cast<int>(interop);
 }
 
 void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
@@ -81,4 +91,6 @@ void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TotalVisibleBlocks: " << this->TotalVisibleBlocks << "\n";
   os << indent << "MaxTotalTime: " << this->MaxTotalTime << "\n";
   os << indent << "MinImageScale: " << this->MinImageScale << "\n";
+  os << indent << "RanksOnGpu: " << this->RanksOnGpu << "\n";
+  os << indent << "RanksThroughInterop: " << this->RanksThroughInterop << "\n";
 }

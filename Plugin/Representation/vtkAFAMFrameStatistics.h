@@ -45,6 +45,10 @@ public:
   /// Smallest image scale among the ranks that drew blocks (below 1 in interactive frames that
   /// the mapper shrank to meet the frame budget).
   vtkGetMacro(MinImageScale, double);
+  /// Ranks whose last frame was cast on the GPU, and those whose last frame's image went from the
+  /// GPU to the window without the host (CUDA-OpenGL interop).
+  vtkGetMacro(RanksOnGpu, int);
+  vtkGetMacro(RanksThroughInterop, int);
   ///@}
 
 protected:
@@ -59,6 +63,8 @@ protected:
   vtkTypeInt64 TotalVisibleBlocks = 0;
   double MaxTotalTime = 0;
   double MinImageScale = 1;
+  int RanksOnGpu = 0;
+  int RanksThroughInterop = 0;
 
 private:
   vtkAFAMFrameStatistics(const vtkAFAMFrameStatistics&) = delete;

@@ -287,6 +287,14 @@ int vtkAFAMVolumeRepresentation::GetLastUsedGpu()
 {
   return this->Mapper->GetLastUsedGpu() ? 1 : 0;
 }
+int vtkAFAMVolumeRepresentation::GetLastImageOnDevice()
+{
+  return this->Mapper->GetLastImageOnDevice() ? 1 : 0;
+}
+const char* vtkAFAMVolumeRepresentation::GetLastInteropProblem()
+{
+  return this->Mapper->GetLastInteropProblem();
+}
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastDepthLimitedPixels()
 {
   return this->Mapper->GetLastDepthLimitedPixels();

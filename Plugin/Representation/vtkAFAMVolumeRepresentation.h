@@ -81,6 +81,10 @@ public:
   vtkTypeInt64 GetLastVisibleBlocks();
   vtkTypeInt64 GetNumberOfFrames();
   int GetLastUsedGpu();
+  /// 1 when the last frame's image went from the GPU to the window without the host (CUDA-OpenGL
+  /// interop), 0 otherwise; GetLastInteropProblem says why not where OpenGL cannot share buffers.
+  int GetLastImageOnDevice();
+  const char* GetLastInteropProblem();
   vtkTypeInt64 GetLastDepthLimitedPixels();
   double GetLastImageScale();
   const char* GetLastDeviceMessage();

@@ -73,6 +73,13 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
         u.fail("the server ranks read %d bytes, builtin %d" % (got["TotalBytesRead"], want["TotalBytesRead"]))
     if got["TotalVisibleBlocks"] != want["TotalVisibleBlocks"]:
         u.fail("the server ranks drew %d blocks, builtin %d" % (got["TotalVisibleBlocks"], want["TotalVisibleBlocks"]))
+    # The ranks that drew blocks cast them where builtin mode cast its frame on this machine (the
+    # CPU without a GPU; the GPU, through interop with NVIDIA's OpenGL, on the GPU machine).
+    if got["RanksOnGpu"] != got["RanksDrawingBlocks"] * want["RanksOnGpu"] \
+            or got["RanksThroughInterop"] != got["RanksDrawingBlocks"] * want["RanksThroughInterop"]:
+        u.fail("server ranks on the GPU / through interop %d / %d of %d drawing, builtin %d / %d" % (
+            got["RanksOnGpu"], got["RanksThroughInterop"], got["RanksDrawingBlocks"], want["RanksOnGpu"],
+            want["RanksThroughInterop"]))
 
     # Interaction: on the server an interactive frame shrinks the image to meet the frame budget
     # and a still frame draws it whole (CPU ray caster; at 1000 x 1000 a full frame is over budget).

@@ -37,7 +37,7 @@ def show(file_path):
     display = Show(OpenDataFile(file_path), view)
     display.Representation = "Adaptive-FAM Volume"
     u.apply_transfer_function(display)
-    display.AFAMRenderDevice = "CPU"
+    display.AFAMRenderDevice = u.render_device("CPU")
     return view
 
 

@@ -27,7 +27,8 @@ if display.Representation != "Adaptive-FAM Volume":
     u.fail("Show gave %s, not the reader's default 'Adaptive-FAM Volume'" % display.Representation)
 u.apply_transfer_function(display)
 display.AFAMSampleDistance = 0.75
-display.AFAMRenderDevice = "CPU"
+device = u.render_device("CPU")  # a value other than the default, which the state must keep
+display.AFAMRenderDevice = device
 Render(view)
 before = os.path.join(out, "before.png")
 SaveScreenshot(before, view, ImageResolution=[301, 300])
@@ -48,7 +49,7 @@ print("loaded: representation %s, LOD %s, sample distance %s, device %s" % (
 if display.Representation != "Adaptive-FAM Volume":
     u.fail("representation after LoadState: %s" % display.Representation)
 if display.AFAMSampleDistance != 0.75 or display.AFAMLodPolicy != "Screen-space error" \
-        or display.AFAMRenderDevice != "CPU":
+        or display.AFAMRenderDevice != device:
     u.fail("Adaptive-FAM settings were not restored")
 Render(view)
 after = os.path.join(out, "after.png")

@@ -5,6 +5,130 @@ import shutil
 import sys
 
 
+def device_under_test():
+    """"gpu" or "cpu" when AFAM_TEST_DEVICE names one (scripts/gpu_pv_check.sh), else None (CI)."""
+    device = os.environ.get("AFAM_TEST_DEVICE", "").lower()
+    return device if device in ("gpu", "cpu") else None
+
+
+def render_device(default):
+    """The AFAMRenderDevice a test that picks one should pick: the device under test when
+    AFAM_TEST_DEVICE names one (scripts/gpu_pv_check.sh), else `default`."""
+    device = device_under_test()
+    return device.upper() if device else default
+
+
+def _afam_displays(view):
+    """The visible "Adaptive-FAM Volume" displays of `view` (none for a layout or no view)."""
+    try:
+        representations = list(view.Representations)
+    except AttributeError:
+        return []
+    return [r for r in representations if r.GetProperty("AFAMLastUsedGpu") is not None
+            and r.GetProperty("Representation") is not None and r.Representation == "Adaptive-FAM Volume"
+            and r.Visibility]
+
+
+_frames_seen = {}  # display proxy id -> (frames, renderer builds) at the last check
+
+
+def check_frames(view, what):
+    """With AFAM_TEST_DEVICE: each visible Adaptive-FAM display of `view` set to that device drew its
+    last frame there; with gpu and AFAM_TEST_INTEROP=1 (OpenGL on the NVIDIA driver) also through
+    CUDA-OpenGL interop, the frame that built the renderer included. One "[pv frame]" line per
+    display; fails otherwise."""
+    device = device_under_test()
+    if device is None:
+        return
+    need_interop = device == "gpu" and os.environ.get("AFAM_TEST_INTEROP") == "1"
+    from paraview import servermanager
+    if servermanager.ActiveConnection is not None and servermanager.ActiveConnection.IsRemote():
+        _check_server_frames(view, what, device, need_interop)
+        return
+    for display in _afam_displays(view):
+        display.UpdatePropertyInformation()
+        value = display.GetPropertyValue
+        frames, builds = value("AFAMNumberOfFrames"), value("AFAMNumberOfRendererBuilds")
+        key = display.GetGlobalIDAsString()
+        last_frames, last_builds = _frames_seen.get(key, (0, 0))
+        _frames_seen[key] = (frames, builds)
+        if frames == last_frames:
+            continue  # nothing drawn by this display since the last check
+        chosen = str(display.AFAMRenderDevice).strip("'\"")
+        used_gpu, on_device = value("AFAMLastUsedGpu"), value("AFAMLastImageOnDevice")
+        built = builds > last_builds and frames == last_frames + 1
+        print("[pv frame] %s: device %s, frame %d, cast on the GPU %d, through interop %d%s%s" % (
+            what, chosen, frames, used_gpu, on_device, " (renderer built in this frame)" if built else "",
+            "" if on_device or not used_gpu else "; interop: %s" % value("AFAMLastInteropProblem")), flush=True)
+        if chosen != device.upper():
+            continue  # the test itself picked the other device for this display
+        if device == "cpu" and used_gpu:
+            fail("%s: the display asked for the CPU cast on the GPU" % what)
+        if device == "gpu" and not used_gpu:
+            fail("%s: cast on the CPU though the GPU was asked for: %s" % (what, value("AFAMLastDeviceMessage")))
+        if need_interop and not on_device:
+            fail("%s: cast on the GPU but not drawn through interop: %s" % (what, value("AFAMLastInteropProblem")))
+
+
+def _check_server_frames(view, what, device, need_interop):
+    """check_frames for a view rendered by a pvserver: the client's copy of a display never renders,
+    so the last frame is read from the server's ranks (afam_client.frame_statistics): every rank
+    that drew blocks cast them on the device under test (and, with need_interop, drew them through
+    interop)."""
+    import afam_client  # Apps/pvbatch, on the client tests' path
+    for display in _afam_displays(view):
+        chosen = str(display.AFAMRenderDevice).strip("'\"")
+        stats = afam_client.frame_statistics(display)
+        ranks, drawing = stats["NumberOfRanks"], stats["RanksDrawingBlocks"]
+        on_gpu, interop = stats["RanksOnGpu"], stats["RanksThroughInterop"]
+        print("[pv frame] %s (pvserver, %d rank(s), %d drawing blocks): device %s, ranks cast on the "
+              "GPU %d, through interop %d" % (what, ranks, drawing, chosen, on_gpu, interop), flush=True)
+        if chosen != device.upper():
+            continue
+        if device == "cpu" and on_gpu:
+            fail("%s: %d server rank(s) cast on the GPU though the CPU was asked for" % (what, on_gpu))
+        if device == "gpu" and (drawing < 1 or on_gpu < drawing):
+            fail("%s: %d of the %d server ranks drawing blocks cast on the GPU" % (what, on_gpu, drawing))
+        if need_interop and interop < drawing:
+            fail("%s: %d of the %d server ranks drawing blocks drew through interop" % (what, interop, drawing))
+
+
+def _install_device_hook():
+    """AFAM_TEST_DEVICE=gpu|cpu: paraview.simple's Show sets AFAMRenderDevice on every display that
+    has it, and its Render and SaveScreenshot check the frames drawn (check_frames). Installed when
+    this module is imported, so that the tests' own `from paraview.simple import ...` (after it)
+    get the wrapped functions."""
+    device = device_under_test()
+    if device is None:
+        return
+    import paraview.simple as simple
+    if getattr(simple, "_afam_device_hook", False):
+        return
+    show, render, screenshot = simple.Show, simple.Render, simple.SaveScreenshot
+
+    def Show(*args, **kwargs):
+        display = show(*args, **kwargs)
+        if display is not None and display.GetProperty("AFAMRenderDevice") is not None:
+            display.AFAMRenderDevice = device.upper()
+        return display
+
+    def Render(view=None, **kwargs):
+        result = render(view, **kwargs)
+        check_frames(view or simple.GetActiveView(), "Render")
+        return result
+
+    def SaveScreenshot(filename, viewOrLayout=None, *args, **kwargs):
+        result = screenshot(filename, viewOrLayout, *args, **kwargs)
+        check_frames(viewOrLayout or simple.GetActiveView(), "SaveScreenshot %s" % os.path.basename(filename))
+        return result
+
+    simple.Show, simple.Render, simple.SaveScreenshot = Show, Render, SaveScreenshot
+    simple._afam_device_hook = True
+    print("[pv frame] AFAM_TEST_DEVICE=%s: displays cast on the %s%s" % (
+        device, device.upper(), ", drawn through interop" if os.environ.get("AFAM_TEST_INTEROP") == "1" else ""),
+        flush=True)
+
+
 def fail(message):
     """Print the marker ctest fails on and exit non-zero."""
     print("AFAM-TEST-FAIL: %s" % message, flush=True)
@@ -254,3 +378,6 @@ def compare_models(path, reference):
         if a[1] != b[1]:
             return "model %d: stored bytes differ" % i
     return None
+
+
+_install_device_hook()

@@ -116,7 +116,7 @@ CodecRow baseRow(const RawFileSource& src, double bound, const char* codec) {
 CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound,
                         const fs::path& folder) {
   options.errorBound = bound;
-  options.relativeBound = true;
+  options.relativeBound = true;  // the bound kind (RMSE or pointwise) is the caller's
   const fs::path out = folder / (fs::path(src.path()).stem().string() + ".afam");
   const EncodeStats s = encodeVolume(src, options, out.string());
   auto file = AfamFile::open(out.string());
@@ -154,19 +154,23 @@ ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent,
   return t;
 }
 
-/// Bisection on the tolerance for the largest one whose RMSE is <= target. ZFP's fixed-accuracy
-/// mode applies the power of two at or below the tolerance asked for, so the search runs over that
-/// exponent: from a passing exponent (2^e <= target bounds every error by target) and a failing one
-/// found by doubling steps upwards, down to two neighbours; the passing one is returned.
+/// Bisection on the tolerance for the largest one whose RMSE (or, `pointwise`, largest error) is
+/// <= target. ZFP's fixed-accuracy mode applies the power of two at or below the tolerance asked
+/// for, so the search runs over that exponent: from a passing exponent (2^e <= target bounds every
+/// error by target) and a failing one found by doubling steps upwards, down to two neighbours; the
+/// passing one is returned.
 ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, double valueRange,
-                 int& trials) {
+                 bool pointwise, int& trials) {
   if (!(target > 0))
-    throw Error("Adaptive-FAM reached RMSE 0: there is no ZFP tolerance to tune to it");
+    throw Error("Adaptive-FAM reached an error of 0: there is no ZFP tolerance to tune to it");
+  const auto within = [&](const ZfpTrial& t) {
+    return (pointwise ? t.error.maxError : t.error.rmse()) <= target;
+  };
   std::vector<float> decoded;
   int lo = int(std::floor(std::log2(target)));
   ZfpTrial best = zfpTrial(volume, dims, lo, decoded);
   trials = 1;
-  for (int k = 0; !(best.error.rmse() <= target);
+  for (int k = 0; !within(best);
        ++k, ++trials) {  // ZFP's bound is on the max error
     if (k == 64)
       throw Error("ZFP does not reach RMSE " + std::to_string(target) + " at tolerance 2^" +
@@ -180,7 +184,7 @@ ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, d
     hi = std::min(lo + step, top);
     ZfpTrial t = zfpTrial(volume, dims, hi, decoded);
     ++trials;
-    if (!(t.error.rmse() <= target)) break;
+    if (!within(t)) break;
     best = t;
     lo = hi;
     step *= 2;
@@ -190,7 +194,7 @@ ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, d
     const int mid = lo + (hi - lo) / 2;
     ZfpTrial t = zfpTrial(volume, dims, mid, decoded);
     ++trials;
-    if (t.error.rmse() <= target) {
+    if (within(t)) {
       best = t;
       lo = mid;
     } else {
@@ -200,14 +204,15 @@ ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, d
   return best;
 }
 
-/// ZFP tuned to `target` (Adaptive-FAM's reached RMSE, or its bound), on the same float32 volume.
-CodecRow runZfp(RawFileSource& src, const CodecRow& afam, double target) {
+/// ZFP tuned to `target` (Adaptive-FAM's reached RMSE, or its bound; `pointwise`: the largest
+/// error), on the same float32 volume.
+CodecRow runZfp(RawFileSource& src, const CodecRow& afam, double target, bool pointwise) {
   const Index3 d = src.dims();
   std::vector<float> volume(size_t(d[0] * d[1] * d[2]));
   src.readSlab(0, d[2], volume.data());
   int trials = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  const ZfpTrial t = tuneZfp(volume, d, target, afam.valueRange, trials);
+  const ZfpTrial t = tuneZfp(volume, d, target, afam.valueRange, pointwise, trials);
   const double tuning = secondsSince(t0);
   CodecRow r = baseRow(src, afam.bound, "zfp");
   r.compressedBytes = t.trip.bytes;
@@ -272,11 +277,12 @@ EncoderOptions encoderOptions(const Args& args) {
 
 int runCompareCodecs(int argc, char** argv) {
   Args args(argc, argv,
-            {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target"}, {});
+            {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target"},
+            {"max-error"});
   const char* usage =
       "afam compare-codecs IN.raw... [--bounds E1,E2,...] [--csv OUT.csv] [--levels L] [--blocks "
       "B]\n"
-      "       [--degree P] [--threads T] [--work DIR] [--zfp-target reached|bound]";
+      "       [--degree P] [--threads T] [--work DIR] [--zfp-target reached|bound] [--max-error]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -303,15 +309,24 @@ int runCompareCodecs(int argc, char** argv) {
         "  --zfp-target T  reached (default): ZFP's RMSE <= the RMSE adaptive-fam reached; bound: "
         "<= the\n"
         "                  bound E * (max - min) itself (looser for ZFP when adaptive-fam lands "
-        "below it)\n",
+        "below it)\n"
+        "  --max-error     the bounds are pointwise: adaptive-fam encodes with --max-error E "
+        "--relative,\n"
+        "                  ZFP's tolerance is the largest whose largest error is <= E * (max - "
+        "min)\n"
+        "                  (--zfp-target bound is then the default; target_rmse is that largest "
+        "error)\n",
         usage);
     return 0;
   }
   if (args.positional().empty())
     throw InvalidArgument("no raw volume given (afam compare-codecs --help)");
   const std::vector<double> bounds = parseBounds(args.str("bounds", "1e-2"));
-  const EncoderOptions options = encoderOptions(args);
-  const std::string zfpTarget = args.str("zfp-target", "reached");
+  EncoderOptions options = encoderOptions(args);
+  const bool pointwise = args.has("max-error");
+  if (pointwise) options.boundKind = BoundKind::MaxError;
+  // Pointwise: both codecs held to the same largest error E * (max - min), as a user asks for it.
+  const std::string zfpTarget = args.str("zfp-target", pointwise ? "bound" : "reached");
   if (zfpTarget != "reached" && zfpTarget != "bound")
     throw InvalidArgument("--zfp-target must be reached or bound, not '" + zfpTarget + "'");
   if (!zfpAvailable())
@@ -328,7 +343,9 @@ int runCompareCodecs(int argc, char** argv) {
     for (double bound : bounds) {
       const CodecRow afam = runAdaptiveFam(*src, options, bound, folder.path());
       rows.push_back(afam);
-      rows.push_back(runZfp(*src, afam, zfpTarget == "reached" ? afam.rmse : afam.targetRmse));
+      const double reached = pointwise ? afam.maxError : afam.rmse;
+      rows.push_back(
+          runZfp(*src, afam, zfpTarget == "reached" ? reached : afam.targetRmse, pointwise));
     }
   printTable(rows);
   if (args.has("csv")) {

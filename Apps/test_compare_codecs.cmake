@@ -93,6 +93,27 @@ foreach (bound 0.01 0.001)
   math(EXPR k "${k} + 1")
 endforeach ()
 
+# --max-error: both codecs held to the same largest error (bound x range), every sample within it.
+run_ok(out ${AFAM} compare-codecs ${vol} --bounds 1e-2 ${opts} --max-error --csv point.csv --work tmp)
+file(STRINGS "${WORK}/point.csv" lines)
+foreach (k 1 2)
+  read_row(${k})
+  if (NOT c_target_rmse STREQUAL "${point_target}" AND k EQUAL 2)
+    message(FATAL_ERROR "zfp's target ${c_target_rmse} is not adaptive-fam's bound ${point_target}")
+  endif ()
+  set(point_target ${c_target_rmse})
+  execute_process(COMMAND awk "BEGIN { exit !(${c_max_error} <= ${c_target_rmse} * (1 + 1e-6) && ${c_target_rmse} > 0) }"
+                  RESULT_VARIABLE within)
+  if (NOT within EQUAL 0)
+    message(FATAL_ERROR "--max-error: ${c_codec} is off by ${c_max_error}, above ${c_target_rmse}")
+  endif ()
+endforeach ()
+run_ok(info ${AFAM} encode ${vol} point.afam --max-error 1e-2 --relative ${opts})
+run_ok(info ${AFAM} info point.afam)
+if (NOT info MATCHES "bound_kind=max_error")
+  message(FATAL_ERROR "the pointwise file of compare-codecs' settings: ${info}")
+endif ()
+
 # Bad input: one line on stderr, exit status 1, no CSV.
 file(WRITE "${WORK}/short_4x4x4_uint8.raw" "too short")
 file(WRITE "${WORK}/notes.txt" "not a volume")

@@ -170,8 +170,7 @@ ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, d
   int lo = int(std::floor(std::log2(target)));
   ZfpTrial best = zfpTrial(volume, dims, lo, decoded);
   trials = 1;
-  for (int k = 0; !within(best);
-       ++k, ++trials) {  // ZFP's bound is on the max error
+  for (int k = 0; !within(best); ++k, ++trials) {  // ZFP's bound is on the max error
     if (k == 64)
       throw Error("ZFP does not reach RMSE " + std::to_string(target) + " at tolerance 2^" +
                   std::to_string(lo));

@@ -199,6 +199,8 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
   options.degree = this->Degree;
   options.errorBound = this->ErrorBound;
   options.relativeBound = this->RelativeBound;
+  options.boundKind =
+    this->BoundKind == BOUND_MAX_ERROR ? afam::BoundKind::MaxError : afam::BoundKind::Rmse;
   static_assert(MODE_ADAPTIVE == static_cast<int>(afam::EncodingMode::Adaptive) &&
       MODE_IN_LEVEL == static_cast<int>(afam::EncodingMode::InLevel) &&
       MODE_FIXED_NCP == static_cast<int>(afam::EncodingMode::Fixed) &&
@@ -617,6 +619,7 @@ void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "ErrorBound: " << this->ErrorBound << "\n";
   os << indent << "RelativeBound: " << this->RelativeBound << "\n";
+  os << indent << "BoundKind: " << this->BoundKind << "\n";
   os << indent << "Levels: " << this->Levels << "\n";
   os << indent << "BlocksPerAxis: " << this->BlocksPerAxis << "\n";
   os << indent << "Degree: " << this->Degree << "\n";

@@ -72,6 +72,19 @@ public:
   ///@}
 
   ///@{
+  /// What ErrorBound bounds: BOUND_RMSE (default), each micro-model's RMSE on its samples, or
+  /// BOUND_MAX_ERROR, every sample's error (a pointwise bound, as SZ's absolute mode and ZFP's
+  /// fixed accuracy promise; the file is then format version 3).
+  enum BoundKinds
+  {
+    BOUND_RMSE = 0,
+    BOUND_MAX_ERROR = 1
+  };
+  vtkSetClampMacro(BoundKind, int, BOUND_RMSE, BOUND_MAX_ERROR);
+  vtkGetMacro(BoundKind, int);
+  ///@}
+
+  ///@{
   /// Levels of detail, [1, 16]; finest blocks per axis, [1, 4096]. 0 (the default) for each: from
   /// the image's dimensions (blocks of about 64 samples, levels down to 2 blocks along the longest
   /// axis).
@@ -224,6 +237,7 @@ protected:
 
   double ErrorBound = 1e-3;
   bool RelativeBound = true;
+  int BoundKind = BOUND_RMSE;
   int Levels = 0;
   int BlocksPerAxis = 0;
   int Degree = 2;

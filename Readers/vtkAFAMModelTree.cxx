@@ -220,6 +220,11 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
     fd, DimensionsArray, { header.dims[0], header.dims[1], header.dims[2] });
   AddTuple<vtkDoubleArray, double>(fd, ValueRangeArray, { header.valueMin, header.valueMax });
   AddTuple<vtkTypeInt64Array, vtkTypeInt64>(fd, StepArray, { static_cast<vtkTypeInt64>(step) });
+  AddString(fd, BoundKindArray, afam::boundKindName(header.boundKind));
+  AddTuple<vtkDoubleArray, double>(fd,
+    BoundArray,
+    { header.relativeBound ? header.errorBound * (header.valueMax - header.valueMin)
+                           : header.errorBound });
   if (progress)
   {
     progress(1.0);

@@ -36,6 +36,8 @@ constexpr const char* PayloadBytesArray = "AFAM_PayloadBytes"; // leaves: decode
 constexpr const char* StoredBytesArray = "AFAM_StoredBytes";   // leaves: bytes in the file
 constexpr const char* DimensionsArray = "AFAM_Dimensions";     // root: volume samples per axis
 constexpr const char* StepArray = "AFAM_Step";                 // root: time step of a run
+constexpr const char* BoundKindArray = "AFAM_BoundKind";       // root: "rmse" or "max_error"
+constexpr const char* BoundArray = "AFAM_Bound";               // root: the bound, data units
 
 /// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A
 /// level's leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays

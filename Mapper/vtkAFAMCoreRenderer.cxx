@@ -255,6 +255,7 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
   stats.CulledBlocks = frame.culled.frustumBlocks + frame.culled.tfBlocks;
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
+  stats.CacheBytes = frame.cacheBytes;
   stats.DamagedBlocks = frame.damagedBlocks;
   stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
   stats.StandInBlocks = frame.standInBlocks;

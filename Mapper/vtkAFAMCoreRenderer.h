@@ -45,6 +45,9 @@ struct vtkAFAMFrameStats
   double CachingSeconds = 0, RenderSeconds = 0;
   int64_t CacheHits = 0, CacheMisses = 0, CulledBlocks = 0, VisibleBlocks = 0;
   uint64_t BytesRead = 0;
+  /// Bytes of decoded models resident in the RAM cache at the end of the frame (its budget's
+  /// measure).
+  uint64_t CacheBytes = 0;
   bool UsedGpu = false;
   /// True when this frame built the renderer anew (first frame, a new file, or a change of cache
   /// budget, prefetcher, device or threads): a new RAM cache and a new GPU pool.

@@ -581,6 +581,7 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   this->LastCulledBlocks = stats.CulledBlocks;
   this->LastVisibleBlocks = stats.VisibleBlocks;
   this->LastBytesRead = static_cast<vtkTypeInt64>(stats.BytesRead);
+  this->LastCacheBytes = static_cast<vtkTypeInt64>(stats.CacheBytes);
   this->LastDamagedBlocks = stats.DamagedBlocks;
   this->KnownDamagedBlocks = stats.KnownDamagedBlocks;
   this->LastStandInBlocks = stats.StandInBlocks;
@@ -670,6 +671,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastCulledBlocks: " << this->LastCulledBlocks << "\n";
   os << indent << "LastVisibleBlocks: " << this->LastVisibleBlocks << "\n";
   os << indent << "LastBytesRead: " << this->LastBytesRead << "\n";
+  os << indent << "LastCacheBytes: " << this->LastCacheBytes << "\n";
   os << indent << "LastDamagedBlocks: " << this->LastDamagedBlocks << "\n";
   os << indent << "KnownDamagedBlocks: " << this->KnownDamagedBlocks << "\n";
   os << indent << "LastStandInBlocks: " << this->LastStandInBlocks << "\n";

@@ -253,6 +253,8 @@ public:
   vtkGetMacro(LastCulledBlocks, vtkTypeInt64);
   vtkGetMacro(LastVisibleBlocks, vtkTypeInt64);
   vtkGetMacro(LastBytesRead, vtkTypeInt64);
+  /// Bytes of decoded models in the RAM cache after the last frame (what CacheBudgetMB bounds).
+  vtkGetMacro(LastCacheBytes, vtkTypeInt64);
   vtkGetMacro(LastUsedGpu, bool);
   /// Models the last frame copied into the GPU's model pool (0: all were resident); -1 when the
   /// frame was cast on the CPU.
@@ -348,7 +350,7 @@ protected:
   double LastDepthReadTime = 0, LastDrawTime = 0;
   double LastGpuUploadTime = -1, LastGpuKernelTime = -1, LastGpuDownloadTime = -1;
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
-  vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0;
+  vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0, LastCacheBytes = 0;
   vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0, LastStandInBlocks = 0;
   bool LastUsedGpu = false;
   int LastUsedBlendMode = COMPOSITE_BLEND;

@@ -271,6 +271,10 @@ vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBytesRead()
 {
   return this->Mapper->GetLastBytesRead();
 }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCacheBytes()
+{
+  return this->Mapper->GetLastCacheBytes();
+}
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastCulledBlocks()
 {
   return this->Mapper->GetLastCulledBlocks();

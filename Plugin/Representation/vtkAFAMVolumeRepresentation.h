@@ -77,6 +77,7 @@ public:
   vtkTypeInt64 GetLastCacheHits();
   vtkTypeInt64 GetLastCacheMisses();
   vtkTypeInt64 GetLastBytesRead();
+  vtkTypeInt64 GetLastCacheBytes();
   vtkTypeInt64 GetLastCulledBlocks();
   vtkTypeInt64 GetLastVisibleBlocks();
   vtkTypeInt64 GetNumberOfFrames();

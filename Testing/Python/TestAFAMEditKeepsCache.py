@@ -70,7 +70,7 @@ def stats():
     display.UpdatePropertyInformation()
     names = ("AFAMLastVisibleBlocks", "AFAMLastCacheHits", "AFAMLastCacheMisses",
              "AFAMNumberOfRendererBuilds", "AFAMLastUsedGpu", "AFAMLastGpuModelsUploaded",
-             "AFAMNumberOfFrames")
+             "AFAMNumberOfFrames", "AFAMLastCacheBytes")
     return dict((n[4:], display.GetPropertyValue(n)) for n in names)
 
 
@@ -126,5 +126,9 @@ s = stats()
 print("cache budget 256 MB: %s" % s)
 if s["NumberOfRendererBuilds"] != 2 or s["LastCacheMisses"] != s["LastVisibleBlocks"]:
     u.fail("a new cache budget should build a new renderer that reads every visible model")
+# What the cache holds is reported, and keeps the budget (MB: 10^6 bytes).
+if not (0 < s["LastCacheBytes"] <= 256e6 and first["LastCacheBytes"] > 0):
+    u.fail("AFAMLastCacheBytes %d (first frame %d) for a 256 MB budget" % (
+        s["LastCacheBytes"], first["LastCacheBytes"]))
 print("%d edits rendered from the cache (%d models each), %s" % (
     len(edits), first["LastVisibleBlocks"], "GPU pool kept" if first["LastUsedGpu"] else "CPU"))

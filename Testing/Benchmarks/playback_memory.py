@@ -87,7 +87,7 @@ for budget in [float(b) for b in args.budgets.split(",")]:
         cache_peak = max(cache_peak, display.GetProperty("AFAMLastCacheBytes").GetData() / 2**20)
     final = rss_mb() - first
     beyond = max(peak - baseline, 0.0)
-    print("| %g MB | %.1f MB | %.1f MB | %.1f MB | %.1f MB | %.1f MB | %.1f MiB | %s |"
+    print("| %g MB | %.1f MiB | %.1f MiB | %.1f MiB | %.1f MiB | %.1f MiB | %.1f MiB | %s |"
           % (budget, first, peak, final, baseline, beyond, cache_peak,
              "yes" if beyond <= 1.1 * budget * 1e6 / 2**20 else "no"), flush=True)
     Hide(reader, view)

@@ -36,11 +36,6 @@ size_t damagedModels(const AfamFile& f, const std::function<void(double)>& progr
   return damaged;
 }
 
-/// The file's bound in data units.
-double absoluteBound(const VolumeHeader& h) {
-  return h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
-}
-
 /// Whether a level's error against its input keeps a pointwise bound (every sample within it);
 /// an RMSE bound holds per block and is checked on the whole level only by runs (below) and
 /// --max-rmse.

@@ -221,10 +221,7 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
   AddTuple<vtkDoubleArray, double>(fd, ValueRangeArray, { header.valueMin, header.valueMax });
   AddTuple<vtkTypeInt64Array, vtkTypeInt64>(fd, StepArray, { static_cast<vtkTypeInt64>(step) });
   AddString(fd, BoundKindArray, afam::boundKindName(header.boundKind));
-  AddTuple<vtkDoubleArray, double>(fd,
-    BoundArray,
-    { header.relativeBound ? header.errorBound * (header.valueMax - header.valueMin)
-                           : header.errorBound });
+  AddTuple<vtkDoubleArray, double>(fd, BoundArray, { afam::absoluteBound(header) });
   if (progress)
   {
     progress(1.0);

@@ -385,15 +385,15 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     bool mayRefer = false;
     const bool before = c.opt.previous && bounded(c.opt.mode) &&
                         c.opt.previous->model(c.level, t.ijk, previous, model, mayRefer);
-    const ErrorStats moved =
-        before ? fitter.error(t.samples.data(), e.samples, model) : ErrorStats{};
     const bool inTime = before && mayRefer;
+    const ErrorStats moved =
+        inTime ? fitter.error(t.samples.data(), e.samples, model) : ErrorStats{};
     // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
     // block moved little since the step before, and at a key step (the model the next steps
     // refer to); a first step, with nothing to tell how fast its blocks move, is coded to the
     // bound.
     const bool headroom =
-        c.opt.runStep && before && (moved.rmse <= kDriftForHeadroom * c.bound || !mayRefer);
+        c.opt.runStep && before && (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound);
     const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
                            c.sourceName};
     if (inTime && keeps(c.opt.boundKind, moved, c.bound)) {

@@ -96,7 +96,7 @@ class StepSink : public ModelSink {
         header.errorBound = run_->errorBound;
         header.relativeBound = run_->relativeBound;
       } else {  // as encodeVolume derived it from the step's range
-        bound = h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+        bound = absoluteBound(h);
       }
       writer_ = std::make_unique<RunWriter>(path_, header, keyInterval_, bound);
     }
@@ -132,8 +132,10 @@ class WrittenStep : public PreviousStep {
   explicit WrittenStep(const RunWriter& writer) : writer_(writer) {}
   bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
              bool& mayRefer) const override {
-    if (!writer_.previousModel(level, block, entry, model.control)) return false;
+    if (writer_.stepsDone() == 0) return false;
     mayRefer = writer_.canReference(level, block);
+    if (!mayRefer) return true;  // a key step for this block: nothing to decode
+    if (!writer_.previousModel(level, block, entry, model.control)) return false;
     model.ncp = entry.ncp;
     model.degree = entry.degree;
     return true;

@@ -54,8 +54,7 @@ void FileModelSink::begin(const VolumeHeader& h) {
     writer_ = std::make_unique<AfamWriter>(path_, h);
     return;
   }
-  const double bound = h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
-  run_ = std::make_unique<RunWriter>(path_, h, 1, bound);
+  run_ = std::make_unique<RunWriter>(path_, h, 1, absoluteBound(h));
   run_->beginStep(0.0);
   stepMin_ = float(h.valueMin);
   stepMax_ = float(h.valueMax);

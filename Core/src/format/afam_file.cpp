@@ -387,6 +387,10 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
   }
 }
 
+double absoluteBound(const VolumeHeader& h) {
+  return h.relativeBound ? h.errorBound * (h.valueMax - h.valueMin) : h.errorBound;
+}
+
 const char* boundKindName(BoundKind kind) {
   return kind == BoundKind::MaxError ? "max_error" : "rmse";
 }

@@ -52,10 +52,10 @@ namespace afam {
 class PreviousStep {
  public:
   virtual ~PreviousStep() = default;
-  /// The step before's model of a block (its entry and decoded control points); false when there
-  /// is none. `mayRefer`: whether the block may refer to it (false at a key step: the key
-  /// interval), else the model only tells how far the block moved. Called from the encoder's
-  /// worker threads.
+  /// Whether there is a step before; then `mayRefer` says whether the block may refer to its model
+  /// (false at the block's key step: the key interval), and only when it may are `entry` and
+  /// `model` filled with that model (its entry and decoded control points). Called from the
+  /// encoder's worker threads.
   virtual bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
                      bool& mayRefer) const = 0;
 };

@@ -62,6 +62,10 @@ struct VolumeHeader {
   int sourceBytesPerSample = 0;  ///< of the encoded input (1 for uint8, ...); 0 when unknown
 };
 
+/// The bound a header's file keeps, in the data's units: errorBound, times the value range when
+/// relativeBound.
+double absoluteBound(const VolumeHeader& h);
+
 /// How a micro-model is stored (format version 2; version-1 files hold float32 splines only).
 ///   Spline:   B-spline of the header's degree (lowered per axis by short axes), NCP per axis.
 ///   Samples:  the block's samples as a degree-1 spline with NCP = samples (the implied knots put

@@ -354,6 +354,8 @@ const char* blockKindName(BlockKind kind) {
       return "constant";
     case BlockKind::Interpolant:
       return "interpolant";
+    case BlockKind::Empty:
+      return "empty";
   }
   return "unknown";
 }

@@ -36,6 +36,10 @@ enum class EncodingMode : uint8_t { Adaptive = 0, InLevel = 1, Fixed = 2, Downsa
 /// absolute error of every sample (a pointwise bound, as SZ's absolute mode and ZFP's fixed
 /// accuracy promise). A file that keeps a pointwise bound is written as version 3.
 enum class BoundKind : uint8_t { Rmse = 0, MaxError = 1 };
+/// What marks a missing sample in a file's source (version 3's missingKind): none are missing, NaN,
+/// or the fill value VolumeHeader::missingValue. A file with missing samples is version 3; its
+/// readers return NaN at every missing sample whatever marked it.
+enum class MissingKind : uint8_t { None = 0, NaN = 1, Value = 2 };
 /// "rmse" or "max_error" (`afam info`, the reader's field data).
 const char* boundKindName(BoundKind kind);
 
@@ -60,6 +64,8 @@ struct VolumeHeader {
   /// How coarse levels were sampled (and what their error is measured against).
   LevelSampling sampling = LevelSampling::Point;
   int sourceBytesPerSample = 0;  ///< of the encoded input (1 for uint8, ...); 0 when unknown
+  MissingKind missing = MissingKind::None;
+  double missingValue = 0;  ///< with MissingKind::Value: the source's fill value
 };
 
 /// The bound a header's file keeps, in the data's units: errorBound, times the value range when
@@ -75,7 +81,15 @@ double absoluteBound(const VolumeHeader& h);
 ///             with NCP = samples that interpolates them: smooth value and gradient like a fitted
 ///             spline, exact at the (quantized) samples.
 /// Spline and Samples payloads are float32 control points, or `coded` (block_codec.hpp).
-enum class BlockKind : uint8_t { Spline = 0, Samples = 1, Constant = 2, Interpolant = 3 };
+///   Empty:    (version 3, a file with missing samples) no valid sample in the block: no payload
+///             (size and storedSize 0), drawn as nothing, decoded to NaN.
+enum class BlockKind : uint8_t {
+  Spline = 0,
+  Samples = 1,
+  Constant = 2,
+  Interpolant = 3,
+  Empty = 4
+};
 const char* blockKindName(BlockKind kind);
 
 /// One stored payload of a model decoded from several (a residual chain in time, version 3).
@@ -113,7 +127,16 @@ struct ModelEntry {
   /// from (chainLength of them), the independent one first.
   bool residual = false;
   uint32_t chainLength = 1;
+  /// Version 3 (missing samples): some of the block's samples are missing. The stored payload
+  /// starts with the coded mask; `size` counts the control points and the mask words after them
+  /// (block_mask.hpp says how they lie in memory). Masked models are always independent.
+  bool masked = false;
 };
+
+/// Control points of an entry's decoded model (the floats before a masked model's mask words).
+inline int64_t controlCount(const ModelEntry& e) {
+  return e.kind == BlockKind::Empty ? 0 : int64_t(e.ncp[0]) * e.ncp[1] * e.ncp[2];
+}
 
 /// The identity of a decoded model in its file, across every step of a run: the offset of its
 /// (newest) payload. Steps that share a model (a reference) give it the same key, and no two

@@ -4,6 +4,7 @@
 #include <thread>
 
 #include "afam/encode/encoder.hpp"
+#include "afam/volume/missing_value_source.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "source_args.hpp"
@@ -14,7 +15,7 @@ int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
              "search", "spacing", "window", "times", "key-interval", "append", "coded-share",
-             "max-error"},
+             "max-error", "missing-value"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
@@ -23,7 +24,7 @@ int runEncode(int argc, char** argv) {
       "P]\n"
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
-      "       [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
+      "       [--missing-value V] [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
       "       afam encode --append STEP RUN.afam [--times T] [--threads T]";
   if (args.help()) {
     std::printf(
@@ -55,7 +56,12 @@ int runEncode(int argc, char** argv) {
         "  --max-error E     a pointwise bound instead: every sample within E, as a reader\n"
         "                    decodes it (as SZ's absolute mode and ZFP's fixed accuracy promise);\n"
         "                    written as format version 3\n"
-        "  --relative        the bound is E * (max - min) of the volume\n"
+        "  --relative        the bound is E * (max - min) of the volume (of its valid samples)\n"
+        "  --missing-value V samples equal to V are missing (a land mask, outside a scan's field\n"
+        "                    of view), as NaN samples always are: the bound holds on the valid\n"
+        "                    samples, missing ones are stored as a compact mask per block (and\n"
+        "                    blocks with none valid as empty), decoded and drawn as NaN (nothing,\n"
+        "                    or the NaN colour); a file with missing samples is format version 3\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
         "of a\n"
         "                    constant, a coded spline and coded samples per block\n"
@@ -109,6 +115,9 @@ int runEncode(int argc, char** argv) {
     opt.search = SearchMethod::Exhaustive;
   else
     throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
+  if (args.has("missing-value") && (args.has("append") || args.positional().size() > 2))
+    throw InvalidArgument(
+        "--missing-value applies to one volume; a run's steps mark missing samples with NaN");
   if (args.has("append")) return appendStepCommand(args, opt);
   if (args.positional().size() > 2) return encodeRunCommand(args, opt);
   if (args.has("times") || args.has("key-interval") || args.has("coded-share"))
@@ -116,10 +125,23 @@ int runEncode(int argc, char** argv) {
         "--times, --key-interval and --coded-share need several inputs (a run of steps)");
   const InputVolume input = openInput(args.positional()[0], args);
   VolumeSource* source = input.source.get();
+  std::unique_ptr<MissingValueSource> filled;
+  if (args.has("missing-value")) {
+    opt.hasMissingValue = true;
+    opt.missingValue = args.real("missing-value", 0);
+    filled = std::make_unique<MissingValueSource>(*source, opt.missingValue,
+                                                  parseSampleType(input.typeName));
+    source = filled.get();
+  }
   ProgressBar bar("encode", args.has("progress"));
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
   bar.finish();
+  if (filled && filled->matches() == 0)
+    std::fprintf(stderr,
+                 "afam encode: warning: no sample equals the missing value %s; every sample was "
+                 "encoded as valid\n",
+                 args.str("missing-value").c_str());
   int64_t reduced = 0;
   for (const LevelStats& ls : s.levels) reduced += ls.reducedDegree;
   if (reduced > 0)

@@ -71,6 +71,8 @@ int runInfo(int argc, char** argv) {
               modeName(h.mode), h.levels, h.blocksPerAxis, h.degree, h.errorBound,
               h.relativeBound ? " (relative)" : "", boundKindName(h.boundKind));
   if (h.mode == EncodingMode::Fixed) std::printf(" ncp=%d", h.fixedNcp);
+  if (h.missing == MissingKind::NaN) std::printf(" missing=nan");
+  if (h.missing == MissingKind::Value) std::printf(" missing=value(%.9g)", h.missingValue);
   std::printf("\n");
   uint64_t payload = 0, paper = 0;
   for (int l = 0; l < h.levels; ++l) {
@@ -78,7 +80,7 @@ int runInfo(int argc, char** argv) {
     std::map<int, int64_t> hist;
     uint64_t bytes = 0, paperL = 0;
     double maxRmse = 0, maxErr = 0;
-    int64_t complexCount = 0, kinds[4] = {0, 0, 0, 0}, coded = 0, integer = 0;
+    int64_t complexCount = 0, kinds[5] = {0, 0, 0, 0, 0}, coded = 0, integer = 0, masked = 0;
     double codedBits = 0, codedValues = 0;
     const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
     for (int64_t i = s; i < e; ++i) {
@@ -87,11 +89,12 @@ int runInfo(int argc, char** argv) {
       ++hist[k];
       bytes += m.storedSize;
       ++kinds[int(m.kind)];
+      masked += m.masked;
       if (m.coded) {
         ++coded;
         integer += m.integerCoded;
         codedBits += 8.0 * double(m.storedSize);
-        codedValues += double(m.size) / 4;
+        codedValues += double(controlCount(m));
       }
       paperL += h.mode == EncodingMode::Downsampled ? m.size : paperModelBytes(m.ncp, m.degree);
       maxRmse = std::max(maxRmse, double(m.rmse));
@@ -108,9 +111,12 @@ int runInfo(int argc, char** argv) {
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
     std::printf(
         "\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld "
-        "integer_form=%lld bits_per_coded_value=%.3f\n",
+        "integer_form=%lld bits_per_coded_value=%.3f",
         (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3],
         (long long)coded, (long long)integer, codedValues > 0 ? codedBits / codedValues : 0.0);
+    if (h.missing != MissingKind::None)
+      std::printf(" empty=%lld masked=%lld", (long long)kinds[4], (long long)masked);
+    std::printf("\n");
     payload += bytes;
     paper += paperL;
   }

@@ -63,7 +63,10 @@ int verifyRun(const Args& args, const AfamFile& f, const std::vector<std::string
         throw InvalidArgument(inputs[size_t(s)] + ": dims differ from the .afam file's");
       const ErrorAccumulator e = measureLevelError(*step, *input.source, level, [](double) {});
       std::printf(" level=%d rmse=%.9g max_error=%.9g", level, e.rmse(), e.maxError);
-      broken += !(e.rmse() <= bound * (1 + 1e-6)) || !keepsPointwise(h, e);
+      if (h.missing != MissingKind::None)
+        std::printf(" missing=%lld mask_mismatches=%lld", (long long)e.missing,
+                    (long long)e.maskMismatches);
+      broken += !(e.rmse() <= bound * (1 + 1e-6)) || !keepsPointwise(h, e) || e.maskMismatches > 0;
     }
     std::printf("\n");
   }
@@ -87,6 +90,8 @@ int runVerify(int argc, char** argv) {
         "level\n"
         "(or --level K) on its sample grid and compares it with the raw volume at the same sample\n"
         "positions, each sample once, streaming; prints rmse=<number> and max_error=<number>.\n"
+        "Missing samples (NaN, or the file's missing value in IN) are left out of both; a sample\n"
+        "missing on one side only is a mask mismatch (exit status 1).\n"
         "IN may be raw (name_XxYxZ_type.raw or --dims/--type), NRRD or MetaImage, as for encode.\n"
         "With --max-rmse E the exit status is 1 when the RMSE is above E; a file that keeps a\n"
         "pointwise bound (afam encode --max-error) exits 1 when a sample is off by more.\n"
@@ -129,8 +134,15 @@ int runVerify(int argc, char** argv) {
       measureLevelError(*f, *src, level, [&](double x) { bar(0.5 + 0.5 * x); });
   bar.finish();
   const double rmse = e.rmse();
-  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g\n", level, (long long)e.count, rmse,
+  std::printf("level=%d samples=%lld rmse=%.9g max_error=%.9g", level, (long long)e.count, rmse,
               e.maxError);
+  if (h.missing != MissingKind::None || e.missing > 0 || e.maskMismatches > 0)
+    std::printf(" missing=%lld mask_mismatches=%lld", (long long)e.missing,
+                (long long)e.maskMismatches);
+  std::printf("\n");
+  if (e.maskMismatches > 0)
+    throw Error(std::to_string(e.maskMismatches) +
+                " samples are missing on one side only: the decoded mask is not the input's");
   if (args.has("max-rmse") && !(rmse <= args.real("max-rmse", 0)))
     throw Error("rmse " + std::to_string(rmse) + " is above --max-rmse " + args.str("max-rmse"));
   if (!keepsPointwise(h, e))

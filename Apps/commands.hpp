@@ -6,6 +6,7 @@
 namespace afam::cli {
 
 int runMl(int argc, char** argv);          // afam ml --size N OUT.raw
+int runMask(int argc, char** argv);        // afam mask IN OUT.raw --shape ball|fov|land
 int runEncode(int argc, char** argv);      // afam encode IN.raw OUT.afam [...]
 int runInfo(int argc, char** argv);        // afam info FILE.afam
 int runVerify(int argc, char** argv);      // afam verify FILE.afam [--against IN.raw]

@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "level_error.hpp"
 
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "afam/volume/missing_value_source.hpp"
 
 namespace afam::cli {
 
@@ -43,7 +46,11 @@ ErrorAccumulator measureLevelError(const AfamFile& file, VolumeSource& original,
                           std::to_string(part.levels() - 1) + "]");
   const LevelGrid grid = levelGrid(part, level);
   const Int3 nb = part.blocksPerAxis(level);
-  BlockRowReader reader(original, part);
+  // The file's fill value marks missing samples of the original as it did for the encoder.
+  std::unique_ptr<MissingValueSource> filled;
+  if (file.header().missing == MissingKind::Value)
+    filled = std::make_unique<MissingValueSource>(original, file.header().missingValue);
+  BlockRowReader reader(filled ? *filled : original, part);
   std::vector<std::vector<float>> row;
   std::vector<float> decoded, reference;
   ErrorAccumulator acc;

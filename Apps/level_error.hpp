@@ -14,17 +14,24 @@
 
 namespace afam::cli {
 
-/// RMSE and max absolute error over pairs of values, accumulated in double.
+/// RMSE and max absolute error over pairs of values, accumulated in double. A missing sample
+/// (NaN) is counted as such when both sides miss it, and as a mask mismatch when one side does.
 struct ErrorAccumulator {
   double sumSquares = 0, maxError = 0;
-  int64_t count = 0;
+  int64_t count = 0;  ///< valid samples compared
+  int64_t missing = 0, maskMismatches = 0;
   void add(const float* decoded, const float* reference, int64_t n) {
     for (int64_t k = 0; k < n; ++k) {
+      const bool lost = std::isnan(decoded[k]), absent = std::isnan(reference[k]);
+      if (lost || absent) {
+        ++(lost == absent ? missing : maskMismatches);
+        continue;
+      }
       const double d = double(decoded[k]) - double(reference[k]);
       sumSquares += d * d;
       maxError = std::max(maxError, std::fabs(d));
+      ++count;
     }
-    count += n;
   }
   double rmse() const { return count > 0 ? std::sqrt(sumSquares / double(count)) : 0.0; }
 };

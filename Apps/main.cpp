@@ -19,6 +19,8 @@ struct Command {
 
 const Command kCommands[] = {
     {"ml", afam::cli::runMl, "write a float32 Marschner-Lobb volume: afam ml --size N OUT.raw"},
+    {"mask", afam::cli::runMask,
+     "a volume with holes (ball, CT field of view, land): afam mask IN OUT.raw --shape S"},
     {"encode", afam::cli::runEncode, "encode a raw volume into an .afam file"},
     {"info", afam::cli::runInfo, "levels, NCP histograms, sizes and compression of an .afam file"},
     {"verify", afam::cli::runVerify,

@@ -412,7 +412,7 @@ TEST(Encoder, CancellationThrowsAndLeavesNoFile) {
 
 TEST(Encoder, NonFiniteInputNamesTheBlock) {
   std::vector<float> v(size_t(33 * 33 * 33), 1.f);
-  v[size_t((20 * 33 + 5) * 33 + 30)] = std::nanf("");
+  v[size_t((20 * 33 + 5) * 33 + 30)] = -std::numeric_limits<float>::infinity();
   ArraySource src(v.data(), {33, 33, 33}, "bad");
   InMemoryModels m;
   EncoderOptions opt;
@@ -425,7 +425,7 @@ TEST(Encoder, NonFiniteInputNamesTheBlock) {
     const std::string w = e.what();
     EXPECT_NE(w.find("(30, 5, 20)"), std::string::npos) << w;
     EXPECT_NE(w.find("level 3 block (14, 2, 9)"), std::string::npos) << w;
-    EXPECT_NE(w.find("NaN"), std::string::npos) << w;
+    EXPECT_NE(w.find("-Inf"), std::string::npos) << w;
   }
 }
 

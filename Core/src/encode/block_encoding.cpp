@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "afam/format/block_codec.hpp"
+#include "afam/format/block_mask.hpp"
+#include "hole_fill.hpp"
 
 namespace afam {
 
@@ -28,33 +30,23 @@ std::vector<uint8_t> bytesOf(const std::vector<T>& v) {
   return out;
 }
 
-/// Error of model values (on the block's sample grid; model(i) gives value i) against the samples;
-/// min/max of the model.
+/// The valid samples' mask words of a task, nullptr when every sample is valid.
+const uint32_t* validOf(const BlockTask& t) { return t.mask.empty() ? nullptr : t.mask.data(); }
+
+/// Error of model values (on the block's sample grid; model(i) gives value i) against the valid
+/// samples; min/max of the model there.
 template <typename Model>
-ErrorStats compare(const Model& model, const std::vector<float>& s) {
-  ErrorStats es;
-  es.minValue = std::numeric_limits<double>::infinity();
-  es.maxValue = -es.minValue;
-  double sum = 0;
-  for (size_t i = 0; i < s.size(); ++i) {
-    const double d = double(model(i)) - double(s[i]);
-    sum += d * d;
-    es.maxError = std::max(es.maxError, std::fabs(d));
-    es.minValue = std::min(es.minValue, double(model(i)));
-    es.maxValue = std::max(es.maxValue, double(model(i)));
-  }
-  es.rmse = std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
-  return es;
+ErrorStats compare(const Model& model, const std::vector<float>& s, const uint32_t* valid) {
+  return errorOnValidOf(model, s.data(), s.size(), valid);
 }
 
 /// The block's samples themselves as a degree-1 spline with NCP = n per axis: its implied knots
 /// put the control points on the sample parameters, so it reproduces every (float) sample exactly.
-void exactModel(const BlockExtent& e, const std::vector<float>& samples, FitResult& fr) {
+void exactModel(const BlockExtent& e, const BlockTask& t, FitResult& fr) {
   fr.ncp = e.samples;
   for (int a = 0; a < 3; ++a) fr.degree[a] = effectiveDegree(1, e.samples[a]);
-  fr.control = samples;
-  const auto mm = std::minmax_element(samples.begin(), samples.end());
-  fr.error = ErrorStats{0, 0, double(*mm.first), double(*mm.second)};
+  fr.control = t.samples;
+  fr.error = compare([&t](size_t i) { return t.samples[i]; }, t.samples, validOf(t));
 }
 
 /// Fits one block to `bound`: the searched NCP*, or the mode's NCP without a search. In bounded
@@ -98,7 +90,7 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
     search();
     if (keeps(kind, fr.error, bound)) return;
   }
-  exactModel(e, t.samples, fr);
+  exactModel(e, t, fr);
   t.exact = true;
   t.complex = true;
 }
@@ -124,18 +116,23 @@ struct Candidate {
   std::vector<uint8_t> bytes;
 };
 
-bool constantFits(const BlockExtent& e, const std::vector<float>& s, int degree, double bound,
-                  BoundKind kind, Candidate& out) {
+bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint32_t* valid,
+                  int degree, double bound, BoundKind kind, Candidate& out) {
   float c;
+  const ErrorStats range = compare([&s](size_t i) { return s[i]; }, s, valid);
   if (kind == BoundKind::MaxError) {  // the middle of the range: the smallest worst error
-    const auto mm = std::minmax_element(s.begin(), s.end());
-    c = float(0.5 * (double(*mm.first) + double(*mm.second)));
+    c = float(0.5 * (range.minValue + range.maxValue));
   } else {  // the mean: the smallest RMSE
     double mean = 0;
-    for (float v : s) mean += double(v);
-    c = float(mean / double(s.size()));
+    size_t used = 0;
+    for (size_t i = 0; i < s.size(); ++i)
+      if (!valid || ((valid[i >> 5] >> (i & 31)) & 1u) != 0) {
+        mean += double(s[i]);
+        ++used;
+      }
+    c = float(mean / double(used));
   }
-  const ErrorStats es = compare([c](size_t) { return c; }, s);
+  const ErrorStats es = compare([c](size_t) { return c; }, s, valid);
   if (!keeps(kind, es, bound)) return false;
   out.kind = BlockKind::Constant;
   for (int a = 0; a < 3; ++a) {
@@ -222,9 +219,9 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
 /// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
 /// measured on the samples.
-bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double bound,
-                       BoundKind kind, double beat, Predictor form, BlockFitter& fitter,
-                       Candidate& out) {
+bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
+                       double bound, BoundKind kind, double beat, Predictor form,
+                       BlockFitter& fitter, Candidate& out) {
   std::vector<float> recon;
   bool lattice = true;
   auto passes = [&](double k) {
@@ -232,7 +229,7 @@ bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double b
       lattice = false;
       return false;
     }
-    return keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s), bound);
+    return keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound);
   };
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
@@ -265,14 +262,14 @@ bool codeSamplesInForm(const std::vector<float>& s, Int3 n, int degree, double b
 }
 
 /// The samples as an Interpolant in whichever form stores them smaller (keepSmallerForm).
-bool codeSamples(const std::vector<float>& s, Int3 n, int degree, double bound, BoundKind kind,
-                 double beat, BlockFitter& fitter, Candidate& out) {
+bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
+                 double bound, BoundKind kind, double beat, BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
   Candidate integer, dbl;
-  const bool hasInteger = codeSamplesInForm(s, n, degree, bound, kind, beat,
+  const bool hasInteger = codeSamplesInForm(s, valid, n, degree, bound, kind, beat,
                                             Predictor::IntegerInterpolation, fitter, integer);
-  const bool hasDouble =
-      codeSamplesInForm(s, n, degree, bound, kind, beat, Predictor::Interpolation, fitter, dbl);
+  const bool hasDouble = codeSamplesInForm(s, valid, n, degree, bound, kind, beat,
+                                           Predictor::Interpolation, fitter, dbl);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
@@ -293,7 +290,7 @@ void storeCandidate(Candidate& c, BlockTask& t) {
 void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   Candidate best, other;
   const BoundKind kind = c.opt.boundKind;
-  if (constantFits(e, t.samples, c.opt.degree, c.bound, kind, best)) {
+  if (constantFits(e, t.samples, validOf(t), c.opt.degree, c.bound, kind, best)) {
     t.complex = false;
     storeCandidate(best, t);
     return;
@@ -303,18 +300,19 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
                           codeSpline(fr, t.samples, e.samples, c.bound, kind, fitter, best);
-  // Samples pay when the spline is missing or spends more than a bit per sample; they are coded
-  // only when their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could
-  // beat it.
+  // Samples pay when the spline is missing or spends more than a bit per sample (masked blocks,
+  // whose fitted splines also follow the filled holes, always try them); they are coded only when
+  // their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
   const double beat =
       haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
-  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count) &&
-      codeSamples(t.samples, e.samples, c.opt.degree, c.bound, kind, beat, fitter, other) &&
+  if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count || !t.mask.empty()) &&
+      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, beat, fitter,
+                  other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;
   } else if (!haveSpline) {
-    exactModel(e, t.samples, fr);
+    exactModel(e, t, fr);
     t.exact = true;
     t.complex = true;
     storeFloat(fr, true, t);
@@ -377,13 +375,80 @@ void referPrevious(const ModelEntry& previous, const ErrorStats& moved, BlockTas
 
 }  // namespace
 
+namespace {
+
+/// A block without a valid sample: no payload.
+void storeEmpty(const FitContext& c, const BlockExtent& e, BlockTask& t) {
+  ModelEntry& m = t.entry;
+  m.kind = BlockKind::Empty;
+  m.coded = m.integerCoded = m.masked = false;
+  for (int a = 0; a < 3; ++a) {
+    m.degree[a] = effectiveDegree(c.opt.degree, e.samples[a]);
+    m.ncp[a] = m.degree[a] + 1;
+  }
+  setError(t, ErrorStats{});
+  t.stored.clear();
+  m.storedSize = 0;
+}
+
+/// A block with missing samples: their mask in t.mask and its holes filled. false when no sample
+/// is valid (the block is then stored empty).
+bool prepareMissing(const FitContext& c, const BlockExtent& e, BlockTask& t) {
+  t.mask = maskOfValid(t.samples.data(), int64_t(t.samples.size()));
+  const int64_t valid = validCount(t.mask);
+  if (valid == 0) {
+    storeEmpty(c, e, t);
+    return false;
+  }
+  if (valid == int64_t(t.samples.size())) {
+    t.mask.clear();
+  } else {
+    fillMissing(t.samples.data(), e.samples, t.mask);
+  }
+  return true;
+}
+
+/// A masked block's payload: the coded mask section before the model's own (block_mask.hpp).
+void prependMask(const BlockExtent& e, BlockTask& t) {
+  const std::vector<uint8_t> coded = encodeMask(t.mask, e.samples);
+  std::vector<uint8_t> stored(maskSectionBytes(coded.size()), 0);
+  const uint32_t length = uint32_t(coded.size());
+  std::memcpy(stored.data(), &length, 4);
+  std::memcpy(stored.data() + 4, coded.data(), coded.size());
+  stored.insert(stored.end(), t.stored.begin(), t.stored.end());
+  t.stored = std::move(stored);
+  t.entry.masked = true;
+  t.entry.storedSize = t.stored.size();
+}
+
+/// The fitter judges models on t's valid samples while it lives (BlockFitter::setMask).
+struct MaskScope {
+  BlockFitter& fitter;
+  MaskScope(BlockFitter& f, const BlockTask& t) : fitter(f) {
+    fitter.setMask(t.mask.empty() ? nullptr : &t.mask);
+  }
+  ~MaskScope() { fitter.setMask(nullptr); }
+  MaskScope(const MaskScope&) = delete;
+  MaskScope& operator=(const MaskScope&) = delete;
+};
+
+}  // namespace
+
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
+    const bool hasMissing =
+        std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); });
+    if (hasMissing && !prepareMissing(c, e, t)) {
+      std::vector<float>().swap(t.samples);
+      return;
+    }
+    const MaskScope scope(fitter, t);
     // A run's step: the block's model at the step before, and how far the block moved from it.
+    // Masked blocks are coded on their own (their models are never shared in time).
     ModelEntry previous;
     FitResult model;
     bool mayRefer = false;
-    const bool before = c.opt.previous && bounded(c.opt.mode) &&
+    const bool before = c.opt.previous && bounded(c.opt.mode) && t.mask.empty() &&
                         c.opt.previous->model(c.level, t.ijk, previous, model, mayRefer);
     const bool inTime = before && mayRefer;
     const ErrorStats moved =
@@ -419,6 +484,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
         << ", over the bound " << c.bound << ", even stored exactly";
     throw NumericError(msg.str());
   }
+  if (!t.mask.empty()) prependMask(e, t);
   for (int a = 0; a < 3; ++a)
     if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
   std::vector<float>().swap(t.samples);

@@ -23,6 +23,9 @@ struct BlockTask {
   Int3 ijk{};
   bool search = false;
   std::vector<float> samples;
+  /// A block with missing samples: the valid ones' mask words (block_mask.hpp), the holes of
+  /// `samples` filled (hole_fill.hpp); empty when every sample is valid.
+  std::vector<uint32_t> mask;
   ModelEntry entry;
   std::vector<uint8_t> stored;  ///< the payload as the file stores it (entry.storedSize bytes)
   int ncpStar = 0;

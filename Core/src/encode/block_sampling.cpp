@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 
 namespace afam {
 
@@ -108,31 +110,65 @@ struct BlockTaps {
 
 /// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)); rows is scratch. y
 /// first: it runs along whole rows of the columns the block reads (vectorised), and x then filters
-/// only the block's rows. The plane holds rows from yBase on.
+/// only the block's rows. The plane holds rows from yBase on. Masked: NaN samples (missing) are
+/// left out, and `weight` gathers the filter's weight of the valid ones the same way.
+template <bool Masked>
 void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
-                      std::vector<double>& rows, std::vector<double>& acc) {
+                      std::vector<double>& rows, std::vector<double>& acc,
+                      std::vector<double>* rowWeights = nullptr,
+                      std::vector<double>* weight = nullptr) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const size_t width = size_t(bt.x1 - bt.x0 + 1);
   rows.resize(size_t(bt.ny) * width);
+  if (Masked) rowWeights->assign(size_t(bt.ny) * width, 0.0);
   for (int j = 0; j < bt.ny; ++j) {
     double* __restrict h = rows.data() + size_t(j) * width;
     std::fill_n(h, width, 0.0);
     for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
       const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
       const double wy = ty.weight[k];
-      for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
+      if (!Masked) {
+        for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
+        continue;
+      }
+      double* hw = rowWeights->data() + size_t(j) * width;
+      for (size_t c = 0; c < width; ++c)
+        if (!std::isnan(src[c])) {
+          h[c] += wy * double(src[c]);
+          hw[c] += wy;
+        }
     }
   }
   for (int j = 0; j < bt.ny; ++j) {
-    const double* h = rows.data() + size_t(j) * width - bt.x0;
+    const size_t row = size_t(j) * width;
+    const double* h = rows.data() + row - bt.x0;
     double* dst = acc.data() + size_t(j) * size_t(bt.nx);
     for (int i = 0; i < bt.nx; ++i) {
-      double v = 0;
-      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k)
+      double v = 0, vw = 0;
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) {
         v += tx.weight[k] * h[tx.index[k]];
+        if (Masked) vw += tx.weight[k] * (*rowWeights)[row + size_t(tx.index[k] - bt.x0)];
+      }
       dst[i] += w * v;
+      if (Masked) (*weight)[size_t(j) * size_t(bt.nx) + size_t(i)] += w * vw;
     }
   }
+}
+
+/// The samples of a filtered z-sample that came out NaN (a missing sample among their taps) again,
+/// from the valid samples alone: their weighted mean where they hold more than half of the
+/// filter's weight, else missing (NaN). Samples with no missing tap keep their values.
+void refilterMissing(const std::function<const float*(size_t)>& planeOf, int64_t X, int64_t yBase,
+                     const AxisTaps& tz, size_t t0, size_t t1, const BlockTaps& bt, float* dst) {
+  const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
+  if (std::none_of(dst, dst + nxy, [](float v) { return std::isnan(v); })) return;
+  std::vector<double> rows, rowWeights, acc(nxy, 0.0), weight(nxy, 0.0);
+  for (size_t t = t0; t < t1; ++t)
+    addFilteredPlane<true>(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc, &rowWeights, &weight);
+  for (size_t q = 0; q < nxy; ++q)
+    if (std::isnan(dst[q]))
+      dst[q] = weight[q] > 0.5 ? static_cast<float>(acc[q] / weight[q])
+                               : std::numeric_limits<float>::quiet_NaN();
 }
 
 /// The planes z-samples [k0, k1) need (ascending, distinct).
@@ -167,7 +203,7 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
-  auto planeOf = [&](size_t t) {
+  const std::function<const float*(size_t)> planeOf = [&](size_t t) {
     const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
     return buf + i * plane;
   };
@@ -185,8 +221,9 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
     }
     acc.assign(nxy, 0.0);
     for (size_t t = t0; t < t1; ++t)
-      addFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
+      addFilteredPlane<false>(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
+    refilterMissing(planeOf, X, yBase, tz, t0, t1, bt, dst);
   }
 }
 

@@ -154,10 +154,29 @@ bool extendRange(const float* v, size_t n, float& lo, float& hi) {
   return finite;
 }
 
-/// Value range and NaN/Inf check in one streaming pass (unless the source knows its range) over
-/// this process's share of the z-planes; the team reduces the shares to the volume's range.
+/// NumericError naming the first infinite sample of a slab starting at plane z; none: returns
+/// whether the slab has a NaN (a missing sample).
+bool checkSlab(const std::vector<float>& buf, int64_t z, const VolumeSource& source,
+               const Partition& part) {
+  const auto inf = std::find_if(buf.begin(), buf.end(), [](float v) { return std::isinf(v); });
+  if (inf == buf.end()) return true;  // extendRange saw a NaN
+  const Index3 dims = source.dims();
+  const int64_t plane = dims[0] * dims[1], i = int64_t(inf - buf.begin());
+  const int64_t xyz[3] = {i % dims[0], (i / dims[0]) % dims[1], z + i / plane};
+  std::ostringstream msg;
+  msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of "
+      << source.name() << " is " << (*inf > 0 ? "+Inf" : "-Inf") << ", in "
+      << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz))
+      << "; the encoder needs finite values (NaN marks a missing sample)";
+  throw NumericError(msg.str());
+}
+
+/// Value range of the valid samples and Inf check in one streaming pass (unless the source knows
+/// its range) over this process's share of the z-planes; the team reduces the shares to the
+/// volume's range. `missing`: whether a sample of the share is NaN (missing).
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
-                    EncodeTeam& team, double& vmin, double& vmax) {
+                    EncodeTeam& team, double& vmin, double& vmax, bool& missing) {
+  missing = false;
   if (source.knownRange(vmin, vmax)) return;
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
@@ -170,26 +189,33 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
     const int64_t nz = std::min(chunk, planes.end - z);
     buf.resize(size_t(nz * plane));
     source.readSlab(z, nz, buf.data());
-    if (!extendRange(buf.data(), buf.size(), lo, hi)) {
-      const size_t i =
-          size_t(std::find_if(buf.begin(), buf.end(), [](float v) { return !std::isfinite(v); }) -
-                 buf.begin());
-      const float v = buf[i];
-      const int64_t xyz[3] = {int64_t(i) % dims[0], (int64_t(i) / dims[0]) % dims[1],
-                              z + int64_t(i) / plane};
-      std::ostringstream msg;
-      msg << "encode: sample (" << xyz[0] << ", " << xyz[1] << ", " << xyz[2] << ") of "
-          << source.name() << " is " << (std::isnan(v) ? "NaN" : "Inf") << ", in "
-          << Partition::blockName(part.levels() - 1, finestBlockOf(part, xyz))
-          << "; the encoder needs finite values";
-      throw NumericError(msg.str());
-    }
+    if (!extendRange(buf.data(), buf.size(), lo, hi) && checkSlab(buf, z, source, part))
+      missing = true;
     if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) /
                          double(planes.end - planes.first)))
       throw cancelled();
   }
   vmin = lo;
   vmax = hi;
+}
+
+/// A volume with missing samples: at least one valid sample, and a spline mode (DS draws its
+/// samples trilinearly, with nothing to stand in for a missing one).
+void checkMissing(bool missing, const EncoderOptions& opt, const VolumeSource& source, double vmin,
+                  double vmax) {
+  if (!(vmin <= vmax))
+    throw InvalidArgument("encode: " + source.name() + " has no valid sample (every sample is " +
+                          (opt.hasMissingValue ? "NaN or the missing value" : "NaN") + ")");
+  if (missing && opt.mode == EncodingMode::Downsampled)
+    throw InvalidArgument("encode: " + source.name() +
+                          " has missing samples (NaN), which mode ds cannot store: use a spline "
+                          "mode (adaptive, inlevel or fixed)");
+}
+
+/// The header of a volume with missing samples: what marked them in the source.
+void setMissing(const EncoderOptions& opt, VolumeHeader& h) {
+  h.missing = opt.hasMissingValue ? MissingKind::Value : MissingKind::NaN;
+  h.missingValue = opt.hasMissingValue ? opt.missingValue : 0.0;
 }
 
 VolumeHeader makeHeader(const VolumeSource& source, const EncoderOptions& opt, int levels,
@@ -476,7 +502,8 @@ void volumeValueRange(VolumeSource& source, double& vmin, double& vmax) {
   EncoderOptions opt;
   const EncodeProgress progress(part, opt);
   SoloTeam solo;
-  scanValueRange(source, part, progress, solo, vmin, vmax);
+  bool missing = false;
+  scanValueRange(source, part, progress, solo, vmin, vmax, missing);
 }
 
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
@@ -507,15 +534,24 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   stats.bytesIn = uint64_t(stats.inputVoxels) * uint64_t(source.bytesPerVoxel());
 
   EncodeProgress progress(part, opt);
-  teamStep(team,
-           [&] { scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax); });
+  bool missing = false;
+  teamStep(team, [&] {
+    scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing);
+  });
   team.reduceRange(stats.valueMin, stats.valueMax);
+  std::vector<uint8_t> anyMissing{uint8_t(missing ? 1 : 0)};
+  team.mergeFlags(anyMissing);
+  checkMissing(anyMissing[0] != 0, opt, source, stats.valueMin, stats.valueMax);
   progress.finishRange();
   stats.bound =
       opt.relativeBound ? opt.errorBound * (stats.valueMax - stats.valueMin) : opt.errorBound;
   teamStep(team, [&] {  // the first process alone hands models to the sink
-    if (team.rank() == 0)
-      sink.begin(makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax));
+    if (team.rank() == 0) {
+      VolumeHeader header =
+          makeHeader(source, resolved, part.levels(), stats.valueMin, stats.valueMax);
+      if (anyMissing[0] != 0) setMissing(opt, header);
+      sink.begin(header);
+    }
   });
   stats.levelsUsed = resolved.levels;
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;

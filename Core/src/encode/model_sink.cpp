@@ -30,7 +30,7 @@ void InMemoryModels::add(const ModelEntry& entry, const void* bytes) {
   const int64_t i = entryIndex(entry.level, entry.block);
   if (i < 0) throw InvalidArgument("InMemoryModels: block out of range");
   ModelEntry e = entry;
-  e.size = payloadBytes(e.ncp);
+  e.size = decodedBytes(e);
   const auto* b = static_cast<const uint8_t*>(bytes);
   stored[size_t(i)].assign(b, b + e.storedSize);
   payloads[size_t(i)].resize(e.size / 4);
@@ -50,7 +50,7 @@ FileModelSink::FileModelSink(std::string path) : path_(std::move(path)) {}
 FileModelSink::~FileModelSink() = default;
 
 void FileModelSink::begin(const VolumeHeader& h) {
-  if (h.boundKind == BoundKind::Rmse) {
+  if (h.boundKind == BoundKind::Rmse && h.missing == MissingKind::None) {
     writer_ = std::make_unique<AfamWriter>(path_, h);
     return;
   }

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <limits>
@@ -14,6 +15,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/format/block_codec.hpp"
+#include "afam/format/block_mask.hpp"
 #include "afam/format/temporary_file.hpp"
 #include "afam/spline/fit.hpp"
 #include "file_layout.hpp"
@@ -92,7 +94,7 @@ AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
   if (mode == EncodingMode::Downsampled) return {1, n + 2, n + 2};
   if (kind == BlockKind::Samples) return {effectiveDegree(1, n), n, n};
   const int p = effectiveDegree(headerDegree, n);
-  if (kind == BlockKind::Constant) return {p, p + 1, p + 1};
+  if (kind == BlockKind::Constant || kind == BlockKind::Empty) return {p, p + 1, p + 1};
   if (kind == BlockKind::Interpolant) return {p, n, n};
   return {p, p + 1, n};
 }
@@ -100,10 +102,12 @@ AxisRule axisRule(BlockKind kind, EncodingMode mode, int headerDegree, int n) {
 /// Empty when the model is valid for its block, else what is wrong.
 std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegree,
                          const BlockExtent& e) {
-  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Interpolant))
+  if (static_cast<uint8_t>(m.kind) > static_cast<uint8_t>(BlockKind::Empty))
     return "unknown block kind " + std::to_string(static_cast<int>(m.kind));
-  if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded))
+  if (mode == EncodingMode::Downsampled && (m.kind != BlockKind::Spline || m.coded || m.masked))
     return "a downsampled file holds raw samples only";
+  if (m.kind == BlockKind::Empty && (m.coded || m.masked))
+    return "an empty block has no payload and no mask";
   if (m.kind == BlockKind::Constant && m.coded) return "a constant block is never coded";
   if (m.kind == BlockKind::Interpolant && !m.coded) return "an interpolant block is always coded";
   for (int a = 0; a < 3; ++a) {
@@ -119,7 +123,33 @@ std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegre
 
 /// Stored bytes of an uncoded model.
 uint64_t uncodedBytes(const ModelEntry& m) {
+  if (m.kind == BlockKind::Empty) return 0;
   return m.kind == BlockKind::Constant ? 4 : payloadBytes(m.ncp);
+}
+
+/// Empty when the entry's stored size fits its kind and flags, else what is wrong: an uncoded
+/// model's exact bytes, a coded payload's header and more, a masked one's mask section before
+/// either (at least 8 bytes: its length and a zstd frame).
+std::string storedSizeProblem(const ModelEntry& m) {
+  const uint64_t mask = m.masked ? 8 : 0;
+  const uint64_t codedMin = (m.integerCoded ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + 1;
+  const bool ok = m.coded ? m.storedSize >= codedMin + mask
+                          : (m.masked ? m.storedSize >= uncodedBytes(m) + mask
+                                      : m.storedSize == uncodedBytes(m));
+  if (ok && m.storedSize <= std::numeric_limits<uint32_t>::max()) return {};
+  return "stored size " + std::to_string(m.storedSize) + " does not fit " +
+         (m.masked  ? "a masked "
+          : m.coded ? "a coded "
+                    : "an uncoded ") +
+         blockKindName(m.kind);
+}
+
+/// Empty when the header allows the entry's missing-sample forms (an empty block, a mask), else
+/// what is wrong.
+std::string missingProblem(const ModelEntry& m, const VolumeHeader& vh) {
+  if (vh.missing != MissingKind::None || (m.kind != BlockKind::Empty && !m.masked)) return {};
+  return std::string(m.masked ? "a masked block" : "an empty block") +
+         " in a file without missing samples";
 }
 
 void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
@@ -132,21 +162,23 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
   m.integerCoded = (r.flags & 0x200) != 0;
+  m.masked = (r.flags & kMaskedFlag) != 0;
   if (m.integerCoded && !m.coded) throw bad("integer form flagged on an uncoded payload");
   m.samples = e.samples;
   for (int a = 0; a < 3; ++a) {
     m.ncp[a] = r.ncp[a];
     m.degree[a] = axisRule(m.kind, vh.mode, vh.degree, e.samples[a]).degree;
   }
-  const std::string problem = modelProblem(m, vh.mode, vh.degree, e);
+  std::string problem = modelProblem(m, vh.mode, vh.degree, e);
+  if (problem.empty()) problem = missingProblem(m, vh);
   if (!problem.empty()) throw bad(problem);
   if (!checkedPayloadBytes(r.ncp, m.size)) throw bad("payload size overflows");
+  m.size = decodedBytes(m);
   m.storedSize = version == 1 ? m.size : r.storedBytes;
-  if (!m.coded && m.storedSize != uncodedBytes(m))
-    throw bad("stored size " + std::to_string(m.storedSize) + " is not the " +
-              std::to_string(uncodedBytes(m)) + " bytes of an uncoded " + blockKindName(m.kind));
-  if (m.coded && m.storedSize <= (m.integerCoded ? kIntegerCodedHeaderBytes : kCodedHeaderBytes))
-    throw bad("coded payload of " + std::to_string(m.storedSize) + " bytes");
+  if (m.kind == BlockKind::Empty && (r.offset != 0 || r.checksum != 0))
+    throw bad("an empty block with a payload");
+  problem = storedSizeProblem(m);
+  if (!problem.empty()) throw bad(problem);
 }
 
 void parseVolumeHeader(const FileHeader& h, const std::string& path, VolumeHeader& vh,
@@ -175,6 +207,15 @@ void parseVolumeHeader(const FileHeader& h, const std::string& path, VolumeHeade
   vh.errorBound = h.errorBound;
   vh.relativeBound = h.relativeBound != 0;
   vh.boundKind = h.version >= 3 ? static_cast<BoundKind>(h.boundKind) : BoundKind::Rmse;
+  if (h.version >= 3) {
+    if (h.missingKind > static_cast<uint8_t>(MissingKind::Value))
+      throw bad("missing-value kind " + std::to_string(h.missingKind) +
+                " is not read by this version");
+    vh.missing = static_cast<MissingKind>(h.missingKind);
+    vh.missingValue = h.missingValue;
+    if (vh.missing == MissingKind::Value && !std::isfinite(vh.missingValue))
+      throw bad("missing value is not a finite number");
+  }
   vh.mode = static_cast<EncodingMode>(h.mode);
   if (h.levelSampling > static_cast<uint8_t>(LevelSampling::Box))
     throw bad("unknown level sampling " + std::to_string(h.levelSampling));
@@ -213,14 +254,23 @@ size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
     if (in.block[a] < 0 || in.block[a] >= b[a]) throw bad(" out of range");
   const BlockExtent e = partition.extent(in.level, in.block);
   if (in.samples != e.samples) throw bad(": samples disagree with the partition");
-  const std::string problem = modelProblem(in, vh.mode, vh.degree, e);
+  std::string problem = modelProblem(in, vh.mode, vh.degree, e);
+  if (problem.empty()) problem = missingProblem(in, vh);
+  if (problem.empty()) problem = storedSizeProblem(in);
   if (!problem.empty()) throw bad(": " + problem);
-  const uint64_t bytes = in.storedSize;
-  if (in.coded ? (bytes <= kCodedHeaderBytes || bytes > std::numeric_limits<uint32_t>::max())
-               : bytes != uncodedBytes(in))
-    throw bad(": stored size " + std::to_string(bytes) + " invalid");
   return static_cast<size_t>(levelStart[static_cast<size_t>(in.level)] +
                              partition.linearIndex(in.level, in.block));
+}
+
+bool storedIsIntegerCoded(const ModelEntry& m, const void* stored) {
+  const auto* bytes = static_cast<const uint8_t*>(stored);
+  size_t skip = 0;
+  if (m.masked && m.storedSize >= 4) {
+    uint32_t coded = 0;
+    std::memcpy(&coded, bytes, 4);
+    skip = std::min<size_t>(maskSectionBytes(coded), m.storedSize);
+  }
+  return m.coded && payloadIsIntegerCoded(bytes + skip, m.storedSize - skip);
 }
 
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
@@ -234,8 +284,10 @@ IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
   r.maxError = m.maxError;
   r.checksum = m.checksum;
   r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
-                                  (m.integerCoded ? 0x200 : 0) | extraFlags);
+                                  (m.integerCoded ? 0x200 : 0) | (m.masked ? kMaskedFlag : 0) |
+                                  extraFlags);
   r.storedBytes = static_cast<uint32_t>(m.storedSize);
+  if (m.kind == BlockKind::Empty) r.offset = r.checksum = r.storedBytes = 0;
   return r;
 }
 
@@ -261,7 +313,11 @@ FileHeader makeFileHeader(const VolumeHeader& vh, const Partition& partition, ui
   h.fixedNcp = vh.fixedNcp;
   h.mode = static_cast<uint8_t>(vh.mode);
   h.relativeBound = vh.relativeBound ? 1 : 0;
-  if (version >= 3) h.boundKind = static_cast<uint8_t>(vh.boundKind);
+  if (version >= 3) {
+    h.boundKind = static_cast<uint8_t>(vh.boundKind);
+    h.missingKind = static_cast<uint8_t>(vh.missing);
+    h.missingValue = vh.missing == MissingKind::Value ? vh.missingValue : 0.0;
+  }
   h.levelSampling = static_cast<uint8_t>(vh.sampling);
   h.sourceBytesPerSample = static_cast<uint8_t>(std::min(vh.sourceBytesPerSample, 255));
   std::strncpy(h.scalarName, vh.scalarName.c_str(), sizeof h.scalarName - 1);
@@ -338,6 +394,14 @@ uint64_t payloadBytes(const Int3& ncp) {
   return out;
 }
 
+uint64_t decodedBytes(const ModelEntry& e) {
+  if (e.kind == BlockKind::Empty) return 0;
+  const uint64_t control = payloadBytes(e.ncp);
+  if (!e.masked) return control;
+  return control +
+         4 * uint64_t(maskWordCount(int64_t(e.samples[0]) * e.samples[1] * int64_t(e.samples[2])));
+}
+
 uint64_t paperModelBytes(const Int3& ncp, const Int3& degree) {
   uint64_t knots = 0;
   for (int a = 0; a < 3; ++a) knots += static_cast<uint64_t>(ncp[a] + degree[a]);
@@ -362,6 +426,20 @@ const char* blockKindName(BlockKind kind) {
 
 void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
                          const std::string& where) {
+  if (e.kind == BlockKind::Empty) return;
+  if (e.masked) {  // the mask section, then the model as an unmasked entry stores it
+    const size_t section =
+        readMaskSection(stored, e.storedSize, e.samples, out + controlCount(e), where.c_str());
+    ModelEntry model = e;
+    model.masked = false;
+    model.storedSize = e.storedSize - section;
+    model.size = decodedBytes(model);
+    if (!model.coded && model.storedSize != uncodedBytes(model))
+      throw FormatError(where + ": masked payload's model is " + std::to_string(model.storedSize) +
+                        " bytes, not " + std::to_string(uncodedBytes(model)));
+    decodeStoredPayload(model, stored + section, out, where);
+    return;
+  }
   const size_t count = e.size / sizeof(float);
   if (e.kind == BlockKind::Constant) {
     float c;
@@ -587,7 +665,8 @@ void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* o
     decodeChain(fd_, path_, e, chain(entry), previous, static_cast<float*>(out));
     return;
   }
-  if (e.storedSize == e.size) {  // uncoded floats: read in place
+  if (e.kind == BlockKind::Empty) return;     // no payload
+  if (e.storedSize == e.size && !e.masked) {  // uncoded floats: read in place
     preadAll(fd_, out, e.size, e.offset, path_,
              "payload of " + Partition::blockName(e.level, e.block));
     if (crc32(out, e.size) != e.checksum)
@@ -624,9 +703,11 @@ std::vector<float> AfamFile::readPayload(int64_t entry) const {
 
 AfamWriter::AfamWriter(const std::string& path, const VolumeHeader& header)
     : path_(path), header_(header) {
-  if (header.boundKind != BoundKind::Rmse)
-    throw InvalidArgument("writer: a pointwise bound is kept by version-3 files (RunWriter), not " +
-                          std::string("version 2"));
+  if (header.boundKind != BoundKind::Rmse || header.missing != MissingKind::None)
+    throw InvalidArgument(
+        std::string("writer: ") +
+        (header.missing != MissingKind::None ? "missing samples are" : "a pointwise bound is") +
+        " kept by version-3 files (RunWriter), not version 2");
   if (header.degree < 1 || header.degree > 5)
     throw InvalidArgument("writer: degree " + std::to_string(header.degree) + " outside [1, 5]");
   if (header.levels > kMaxLevels) throw InvalidArgument("writer: more than 16 levels");
@@ -682,9 +763,9 @@ void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   end_ = alignUp(offset + bytes, kPayloadAlign);
   ModelEntry& m = entries_[slot];
   m = in;
-  m.integerCoded = in.coded && payloadIsIntegerCoded(static_cast<const uint8_t*>(stored), bytes);
+  m.integerCoded = storedIsIntegerCoded(in, stored);
   m.offset = offset;
-  m.size = payloadBytes(in.ncp);
+  m.size = decodedBytes(in);
   m.checksum = crc;
   present_[slot] = 1;
 }

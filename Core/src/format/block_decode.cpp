@@ -2,9 +2,11 @@
 #include "afam/format/block_decode.hpp"
 
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "afam/base/errors.hpp"
+#include "afam/format/block_mask.hpp"
 #include "afam/spline/fit.hpp"
 
 namespace afam {
@@ -22,11 +24,20 @@ void decodeBlockSamples(const ModelEntry& e, const float* payload, EncodingMode 
                     size_t(n[0]) * sizeof(float));
     return;
   }
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  if (e.kind == BlockKind::Empty) {
+    out.assign(count, std::numeric_limits<float>::quiet_NaN());
+    return;
+  }
   FitResult model;
   model.ncp = e.ncp;
   model.degree = e.degree;
-  model.control.assign(payload, payload + size_t(e.ncp[0]) * size_t(e.ncp[1]) * size_t(e.ncp[2]));
+  model.control.assign(payload, payload + controlCount(e));
   evaluateOnGrid(model, n, out);
+  if (!e.masked) return;
+  const float* words = payload + controlCount(e);
+  for (size_t i = 0; i < count; ++i)
+    if (!maskBit(words, int64_t(i))) out[i] = std::numeric_limits<float>::quiet_NaN();
 }
 
 LevelGrid levelGrid(const Partition& part, int level) {

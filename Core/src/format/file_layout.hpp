@@ -24,6 +24,7 @@ constexpr uint32_t kEndianTag = 0x01020304u;
 constexpr uint64_t kAlign = 64;        // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;  // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
+constexpr uint16_t kMaskedFlag = 1u << 12;  // v3 entry flags bit 12: the payload starts with a mask
 
 // On-disk header of versions 1, 2 and 3 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
 // each member's byte offset and size beside it (@offset, size), checked by the static_asserts
@@ -179,6 +180,9 @@ size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
 /// floats. FormatError naming the path, block and step of a damaged payload.
 void decodeChain(int fd, const std::string& path, const ModelEntry& e,
                  const std::vector<PayloadPart>& chain, const float* previous, float* out);
+/// Whether a stored payload is coded in an integer form (index flag bit 9), looking past a masked
+/// payload's mask section.
+bool storedIsIntegerCoded(const ModelEntry& m, const void* stored);
 /// The on-disk entry of a model, `extraFlags` or-ed into its flags.
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags);
 /// A header with the volume's description, the partition and `version` (checksum not set).

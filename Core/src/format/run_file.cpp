@@ -45,9 +45,6 @@ CommitRecord readCommit(const AfamFile& f, const FileHeader& h, int fd) {
   if (h.keyInterval < 1) throw bad("key interval 0");
   if (h.boundKind > static_cast<uint8_t>(BoundKind::MaxError))
     throw bad("bound kind " + std::to_string(h.boundKind) + " is not read by this version");
-  if (h.missingKind != 0)
-    throw bad("missing-value kind " + std::to_string(h.missingKind) +
-              " is not read by this version");
   if (f.fileSize() < kRunStepsOffset) throw bad("truncated: no commit slots");
   uint8_t slots[2 * kCommitSlotBytes];
   preadAll(fd, slots, sizeof slots, kCommitSlotsOffset, path, "commit slots");
@@ -119,13 +116,23 @@ void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileH
     if (inTime != 0 && step - s + 1 >= static_cast<int64_t>(h.keyInterval))
       throw FormatError(where + ": coding in time runs past the key interval " +
                         std::to_string(h.keyInterval));
+    if (inTime != 0 && (r.flags & kMaskedFlag) != 0)
+      throw FormatError(where + ": a masked block coded in time at step " + std::to_string(s));
     if (inTime == kReferenceFlag) {
       if (r.offset != 0 || r.storedBytes != 0 || r.checksum != 0)
         throw FormatError(where + ": a reference with a payload");
       continue;
     }
     ModelEntry e;
-    parseEntry(r, 3, vh, extent, where, e, kTemporalMask);
+    parseEntry(r, 3, vh, extent, where, e, kTemporalMask | kMaskedFlag);
+    if (s < step && (e.masked || e.kind == BlockKind::Empty))
+      throw FormatError(where + ": step " + std::to_string(step) + " is coded in time on step " +
+                        std::to_string(s) + "'s " + (e.masked ? "masked" : "empty") + " block");
+    if (e.kind == BlockKind::Empty) {  // no payload: the walk ends here
+      parsed = e;
+      owner = s;
+      break;
+    }
     if (inTime == kResidualFlag && e.kind == BlockKind::Constant)
       throw FormatError(where + ": a residual on a constant at step " + std::to_string(s));
     if (kindKnown && (e.kind != parsed.kind || e.ncp != parsed.ncp))
@@ -136,6 +143,17 @@ void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileH
     kindKnown = true;
     parts.push_back(payloadPart(r, e, rows[size_t(s)], s, h.payloadAlignment, where));
     if (inTime == 0) break;
+  }
+  m.masked = parsed.masked;
+  if (parts.empty()) {  // an empty block: no payload
+    const int level = m.level;
+    const Int3 block = m.block;
+    m = parsed;
+    m.level = level;
+    m.block = block;
+    m.ownerStep = owner;
+    chain.clear();
+    return;
   }
   const PayloadPart newest = parts.front();
   m.kind = parsed.kind;
@@ -338,9 +356,9 @@ ModelEntry& RunWriter::writePayload(size_t slot, const ModelEntry& in, const voi
   payloadSum_ += bytes;
   ModelEntry& m = current_[slot];
   m = in;
-  m.integerCoded = in.coded && payloadIsIntegerCoded(static_cast<const uint8_t*>(stored), bytes);
+  m.integerCoded = storedIsIntegerCoded(in, stored);
   m.offset = offset;
-  m.size = payloadBytes(in.ncp);
+  m.size = decodedBytes(in);
   m.checksum = crc;
   m.reference = false;
   m.residual = false;
@@ -362,7 +380,8 @@ bool RunWriter::canReference(int level, Int3 block) const {
   probe.level = level;
   probe.block = block;
   const size_t slot = slotOf(probe);
-  return !previous_.empty() && previousDepth_[slot] + 1 < keyInterval_;
+  return !previous_.empty() && previousDepth_[slot] + 1 < keyInterval_ && !previous_[slot].masked &&
+         previous_[slot].kind != BlockKind::Empty;
 }
 
 void RunWriter::addReference(const ModelEntry& in) {
@@ -371,10 +390,13 @@ void RunWriter::addReference(const ModelEntry& in) {
   if (!inStep_) throw InvalidArgument(path_ + ": addReference outside a step");
   const std::string name = Partition::blockName(in.level, in.block);
   if (present_[slot]) throw InvalidArgument(path_ + ": " + name + " added twice");
-  if (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_)
+  if (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_ || previous_[slot].masked ||
+      previous_[slot].kind == BlockKind::Empty)
     throw InvalidArgument(path_ + ": " + name + " cannot refer to the step before (" +
                           (previous_.empty() ? std::string("first step")
-                                             : "key interval " + std::to_string(keyInterval_)) +
+                           : previousDepth_[slot] + 1 >= keyInterval_
+                               ? "key interval " + std::to_string(keyInterval_)
+                               : "a masked or empty block") +
                           ")");
   ModelEntry& m = current_[slot];
   m = previous_[slot];  // the owner's payload, kind and NCP
@@ -396,6 +418,8 @@ void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
   if (inStep_ && (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_))
     throw InvalidArgument(path_ + ": " + name + " cannot be coded on the step before");
   const ModelEntry& before = inStep_ ? previous_[slot] : in;
+  if (in.masked || before.masked || before.kind == BlockKind::Empty)
+    throw InvalidArgument(path_ + ": " + name + ": masked and empty blocks are not coded in time");
   if (before.kind == BlockKind::Constant || before.kind != in.kind || before.ncp != in.ncp)
     throw InvalidArgument(path_ + ": " + name + ": a residual's kind and NCP must be the step " +
                           "before's (" + blockKindName(before.kind) + ")");

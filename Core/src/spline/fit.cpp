@@ -318,9 +318,14 @@ double sumOfSquares(const float* samples, std::array<int, 3> n) {
   return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
 }
 
+/// A range that decides nothing: the error is measured.
+constexpr RmseRange kUndecided{0.0, std::numeric_limits<double>::infinity()};
+
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
   std::vector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
+  const std::vector<uint32_t>* valid = nullptr;  ///< setMask
+  std::vector<float> grid;                       ///< the model on the grid, for masked errors
 
   /// Bounds the cache. Called before the three axis() look-ups of a fit or an evaluation, never
   /// between them: clearing inside axis() destroyed the system the caller's earlier reference
@@ -510,8 +515,9 @@ bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::arr
   Impl& im = *impl_;
   const Impl::Axes axes = im.prepareFit(samples, n, ncp, degree, !std::isfinite(sumOfSquares));
   const double largest = im.solve(axes, samples, n, out);
-  const RmseRange range =
-      rmseRange(sumOfSquares, im.energy(ncp), largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  const RmseRange range = im.valid ? kUndecided
+                                   : rmseRange(sumOfSquares, im.energy(ncp), largest,
+                                               size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
   return decide(range, bound, samples, n, out);
 }
 
@@ -526,8 +532,9 @@ bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const
   for (size_t i = 0; i < fitted.control.size(); ++i)
     largest = std::max({largest, std::fabs(fitted.control[i]), std::fabs(changed.control[i])});
   const RmseRange range =
-      changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed), largest,
-                       size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+      impl_->valid ? kUndecided
+                   : changedRmseRange(fitted.error.rmse, impl_->changeEnergy(n, fitted, changed),
+                                      largest, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
   changed.errorMeasured = false;
   changed.error = ErrorStats{};
   return decide(range, bound, samples, n, changed);
@@ -645,9 +652,21 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
 
 ErrorStats BlockFitter::error(const float* samples, std::array<int, 3> n, const FitResult& model) {
   if (!samples) throw InvalidArgument("afam error: null sample pointer");
+  Impl& im = *impl_;
+  if (im.valid) {
+    evaluateOnGrid(model, n, im.grid);
+    return errorOnValid(im.grid.data(), samples, im.grid.size(), im.valid->data());
+  }
   ErrorStats stats;
-  impl_->evaluate(model, n, samples, &stats, nullptr);
+  im.evaluate(model, n, samples, &stats, nullptr);
   return stats;
+}
+
+void BlockFitter::setMask(const std::vector<uint32_t>* valid) { impl_->valid = valid; }
+
+ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
+                        const uint32_t* valid) {
+  return errorOnValidOf([model](size_t i) { return model[i]; }, samples, count, valid);
 }
 
 void BlockFitter::evaluateOnGrid(const FitResult& model, std::array<int, 3> n,

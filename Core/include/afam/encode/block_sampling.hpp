@@ -47,9 +47,11 @@ enum class ChunkBudget { Large, QuarterOfSamples };
 /// whole planes for a whole row of blocks) as large as `budget` allows, at least the planes of one
 /// z-sample (the samples do not depend on the chunks), and each block is filtered from a chunk
 /// separably (y, then x, then z; sums in double), blocks in parallel through `loop` when given.
-/// out[b] is resized to the block's (ghosted) sample count. `ghost` adds one sample on each side at
-/// the same spacing (DS payload layout); `sampling` says how coarse levels are filtered (see
-/// LevelSampling).
+/// out[b] is resized to the block's (ghosted) sample count. Missing samples (NaN) stay NaN at
+/// grid samples; a filtered sample with a missing one among its taps is the weighted mean of the
+/// valid ones where they hold more than half of the filter's weight, else missing (NaN). `ghost`
+/// adds one sample on each side at the same spacing (DS payload layout); `sampling` says how coarse
+/// levels are filtered (see LevelSampling).
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
                     const std::vector<Int3>& blocks, bool ghost, LevelSampling sampling,
                     std::vector<std::vector<float>*>& out, const BlockLoop& loop = {},

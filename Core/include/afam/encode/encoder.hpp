@@ -98,6 +98,11 @@ struct EncoderOptions {
   /// Measured on real and generated runs: docs/BENCHMARKS.md, "Headroom for references".
   double runCodedShare = 0.7;
   bool runStep = false;
+  /// The source's samples equal to missingValue were turned into NaN before they reached the
+  /// encoder (MissingValueSource): the file records the value as what marked them. NaN samples
+  /// are always missing: the bound holds on the others, and a reader gives NaN back.
+  bool hasMissingValue = false;
+  double missingValue = 0;
 };
 
 /// The value range of a volume (one pass unless the source knows it); NumericError naming the
@@ -114,8 +119,8 @@ struct LevelStats {
   int64_t fits = 0;           ///< fits performed at this level
   int64_t samples = 0;        ///< micro-block samples fitted (sum of n0 n1 n2)
   uint64_t payloadBytes = 0;  ///< sum of stored payload sizes
-  std::array<int64_t, 4>
-      kinds{};              ///< blocks per BlockKind (spline, samples, constant, interpolant)
+  std::array<int64_t, 5>
+      kinds{};  ///< blocks per BlockKind (spline, samples, constant, interpolant, empty)
   uint64_t paperBytes = 0;  ///< the paper's layout for the same models
   double maxRmse = 0, maxError = 0;
   double seconds = 0;

@@ -158,6 +158,10 @@ uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0);
 /// Payload bytes of a model: ncp product * 4.
 uint64_t payloadBytes(const Int3& ncp);
 
+/// Bytes of an entry's decoded model (ModelEntry::size): its control points, and a masked
+/// model's mask words after them; 0 for an empty block.
+uint64_t decodedBytes(const ModelEntry& e);
+
 /// Bytes of a file holding `entries` models whose payloads total `payloadBytes` (header + index +
 /// payloads, before the payload area's alignment padding).
 uint64_t fileBytes(uint64_t entries, uint64_t payloadBytes);

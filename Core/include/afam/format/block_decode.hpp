@@ -11,7 +11,8 @@
 namespace afam {
 
 /// Samples of a decoded micro-block on its own n0 x n1 x n2 grid: the spline evaluated at the
-/// sample parameters (B-spline modes) or the stored samples without the ghost layer (DS).
+/// sample parameters (B-spline modes) or the stored samples without the ghost layer (DS); NaN at
+/// the missing samples of a masked model and everywhere in an empty block.
 void decodeBlockSamples(const ModelEntry& entry, const float* payload, EncodingMode mode,
                         std::vector<float>& out);
 

@@ -37,18 +37,28 @@ AFAM_HD bool maskBit(const float* words, int64_t i) {
 }
 
 /// Mask words of samples (count of them): bit set where the sample is not NaN.
-std::vector<uint32_t> maskOfFinite(const float* samples, int64_t count);
+std::vector<uint32_t> maskOfValid(const float* samples, int64_t count);
 
-/// Number of set bits among the first `count` of the words.
-int64_t validCount(const uint32_t* words, int64_t count);
+/// Number of valid samples of a mask.
+int64_t validCount(const std::vector<uint32_t>& words);
 
-/// The words coded for a file: zstd of the words' little-endian bytes.
-std::vector<uint8_t> encodeMask(const uint32_t* words, int64_t sampleCount);
+/// The mask of a block of n samples per axis coded for a file: its bits in raster order through an
+/// adaptive binary range coder whose probabilities are chosen by the eight neighbours already
+/// coded (docs/FORMAT.md "Masks" gives the exact rules).
+std::vector<uint8_t> encodeMask(const std::vector<uint32_t>& words, Int3 n);
 
-/// Decodes coded mask bytes of a block of sampleCount samples into maskWordCount words (written as
-/// bit patterns into `out`, a float array as in memory above). Throws FormatError naming `where`
-/// when the bytes are not a mask of that size or set bits past the last sample.
-void decodeMask(const uint8_t* data, size_t bytes, int64_t sampleCount, float* out,
-                const char* where);
+/// Decodes a coded mask of a block of n samples per axis into maskWordCount words, written as bit
+/// patterns into `out` (a float array, as in memory above). Throws FormatError naming `where` when
+/// the bytes are not a mask of that size, or set a bit past the last sample.
+void decodeMask(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);
+
+/// Bytes of the mask section a masked payload starts with: a u32 of the coded mask's length, the
+/// coded mask, zeros to a multiple of 4 (the model's payload after it stays float-aligned).
+size_t maskSectionBytes(size_t codedMaskBytes);
+
+/// The mask section of a masked payload: where the model's own payload starts (the section's
+/// length). Throws FormatError naming `where` when the section does not fit in `bytes`.
+size_t readMaskSection(const uint8_t* stored, size_t bytes, Int3 n, float* words,
+                       const char* where);
 
 }  // namespace afam

@@ -27,8 +27,12 @@
 // (x, y, z) and flat index); callers add the block's name. There is no masking policy.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -124,6 +128,13 @@ class BlockFitter {
   /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
   void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
+  /// A block with missing samples (block_mask.hpp's words, bit set = valid; nullptr: none): until
+  /// it is reset, error(), measure(), fitWithin() and changeWithin() judge models on the valid
+  /// samples alone, always measuring (the least-squares ranges hold for all samples only), and
+  /// min/max are the model's on them. Fits still use every sample: the caller fills the holes
+  /// (hole_fill.hpp). The words must outlive their use.
+  void setMask(const std::vector<uint32_t>* valid);
+
  private:
   /// The answer of fitWithin and changeWithin: the decisive end of the range (model unmeasured),
   /// else the measured error.
@@ -133,6 +144,34 @@ class BlockFitter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Error of model values (model(i) gives value i) against samples (count of them) on the samples
+/// whose bit is set in `valid` (block_mask.hpp's words; nullptr: every sample); min/max are the
+/// model's there.
+template <typename Model>
+ErrorStats errorOnValidOf(const Model& model, const float* samples, size_t count,
+                          const uint32_t* valid) {
+  ErrorStats es;
+  es.minValue = std::numeric_limits<double>::infinity();
+  es.maxValue = -es.minValue;
+  double sum = 0;
+  size_t used = 0;
+  for (size_t i = 0; i < count; ++i) {
+    if (valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0) continue;
+    const double m = double(model(i)), d = m - double(samples[i]);
+    sum += d * d;
+    es.maxError = std::max(es.maxError, std::fabs(d));
+    es.minValue = std::min(es.minValue, m);
+    es.maxValue = std::max(es.maxValue, m);
+    ++used;
+  }
+  es.rmse = std::sqrt(sum / double(std::max<size_t>(used, 1)));
+  return es;
+}
+
+/// errorOnValidOf for model values in an array.
+ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
+                        const uint32_t* valid);
 
 /// Sum of the squared samples of an n0 x n1 x n2 block, in double.
 double sumOfSquares(const float* samples, std::array<int, 3> n);

@@ -37,8 +37,8 @@ inline float maskedSceneField(double y, double z) {
 inline afam::TransferFunction maskedSceneTransferFunction() {
   afam::TransferFunction tf;
   tf.colors = {{0.0, 1, 1, 1}, {0.5, 1, 1, 1}, {0.56, 0.3, 0.35, 0.5}, {1.0, 0.3, 0.35, 0.5}};
-  tf.opacities = {{0.0, 0.0},  {0.15, 0.0}, {0.3, 0.9},  {0.45, 0.9},
-                  {0.5, 0.0},  {0.56, 0.0}, {0.6, 0.05}, {1.0, 0.05}};
+  tf.opacities = {{0.0, 0.0}, {0.15, 0.0}, {0.3, 0.9},  {0.45, 0.9},
+                  {0.5, 0.0}, {0.56, 0.0}, {0.6, 0.05}, {1.0, 0.05}};
   tf.referenceDistance = 0.02;
   return tf;
 }
@@ -82,10 +82,9 @@ inline int maskedBlockSamples(const afam::Partition& p, const afam::BlockExtent&
       for (int i = 0; i < n[0]; ++i) {
         const int64_t at = (int64_t(k) * n[1] + j) * n[0] + i;
         const bool ok = p.samplePosition(e, 0, i) < kFirstMissingX;
-        samples[size_t(at)] =
-            ok || o.smoothFill
-                ? maskedSceneField(p.samplePosition(e, 1, j), p.samplePosition(e, 2, k))
-                : 0.f;
+        samples[size_t(at)] = ok || o.smoothFill ? maskedSceneField(p.samplePosition(e, 1, j),
+                                                                    p.samplePosition(e, 2, k))
+                                                 : 0.f;
         if (ok) words[size_t(at >> 5)] |= 1u << (at & 31);
         valid += ok ? 1 : 0;
       }
@@ -187,6 +186,21 @@ inline bool rayVoxelXRange(const afam::FrameView& f, int px, int py, float& xMin
   xMin = std::min(x0, x1);
   xMax = std::max(x0, x1);
   return true;
+}
+
+/// Pixels whose rays take samples, all of them missing: the whole ray inside the box lies at voxel
+/// x >= kFirstMissingX - 0.5 (positions whose nearest sample is missing), with a margin.
+inline std::vector<size_t> missingOnlyPixels(const afam::FrameView& f) {
+  std::vector<size_t> out;
+  for (int y = 0; y < f.camera.height; ++y)
+    for (int x = 0; x < f.camera.width; ++x) {
+      float lo, hi;
+      afam::RaySamples r;
+      if (rayVoxelXRange(f, x, y, lo, hi) && lo > kFirstMissingX - 0.45f &&
+          afam::raySamples(f, x, y, r) && r.kEnd >= r.kBegin)
+        out.push_back(size_t(y) * f.camera.width + x);
+    }
+  return out;
 }
 
 /// Luminance of a premultiplied pixel over black.

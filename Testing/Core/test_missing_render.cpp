@@ -24,18 +24,7 @@ ImageRGBA renderMasked(const MaskedSceneOptions& o, MaskedScene& s) {
   return image;
 }
 
-/// Pixels whose rays cross only missing samples: the whole ray inside the box lies at voxel
-/// x >= kFirstMissingX - 0.5 (positions whose nearest sample is missing), with a margin.
-std::vector<size_t> missingOnlyPixels(const FrameView& f) {
-  std::vector<size_t> out;
-  for (int y = 0; y < f.camera.height; ++y)
-    for (int x = 0; x < f.camera.width; ++x) {
-      float lo, hi;
-      if (afam_test::rayVoxelXRange(f, x, y, lo, hi) && lo > afam_test::kFirstMissingX - 0.45f)
-        out.push_back(size_t(y) * f.camera.width + x);
-    }
-  return out;
-}
+using afam_test::missingOnlyPixels;
 
 /// Largest luminance of the pixels whose rays' voxel x range overlaps [lo, hi] (band) or lies
 /// below `interiorEnd` (interior: every sample valid, far from the hole).
@@ -91,7 +80,9 @@ TEST(MissingRender, PositionIsMissingWhereItsNearestSampleIs) {
     float g[3] = {1, 1, 1};
     const float v = sampleSlot<true>(masked, s.pool.data(), at, g);
     EXPECT_EQ(isMissing(v), !expected) << "x " << x;
-    if (!expected) EXPECT_EQ(g[0] * g[0] + g[1] * g[1] + g[2] * g[2], 0.f);
+    if (!expected) {
+      EXPECT_EQ(g[0] * g[0] + g[1] * g[1] + g[2] * g[2], 0.f);
+    }
     const float e[3] = {x + 12.f, 3.3f, 7.7f};
     EXPECT_TRUE(isMissing(sampleSlot<false>(empty, s.pool.data(), e, nullptr)));
   }
@@ -138,7 +129,12 @@ TEST(MissingRender, NoHaloBrighterThanTheValidInteriorAtTheMaskBoundary) {
     ASSERT_GT(good.interiorPixels, 2000);
     EXPECT_GT(good.interior, 0.05f);  // the valid region is drawn
     EXPECT_LE(good.band, good.interior * 1.01f);
-    EXPECT_GT(bad.band, bad.interior * 1.5f);  // the measure sees a fill value's halo
+    // The measure sees a fill value's halo. Shaded, the halo is a layer across the view whose
+    // gradient is normal to the rays: the headlight leaves it at the ambient term, darker than
+    // the interior (0.33 against 0.52 measured), so only the unshaded render shows it.
+    if (!shaded) {
+      EXPECT_GT(bad.band, bad.interior * 1.5f);
+    }
   }
 }
 
@@ -175,20 +171,22 @@ TEST(MissingRender, PartialNanOpacityIsCorrectedForTheSampleDistance) {
   }
 }
 
+/// The resident models' sampler, counting the samples it takes in the empty blocks' region
+/// (voxel x > 36).
+struct InEmptyRegion {
+  ModelSampler inner;
+  unsigned* count;
+  template <bool G>
+  bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
+    const bool ok = inner.template sample<G>(f, p, value, gradient);
+    float x[3];
+    toVoxel(f, p, x);
+    if (ok && x[0] > 36.f) ++*count;
+    return ok;
+  }
+};
+
 TEST(MissingRender, EmptyBlocksAreCulledAndCostNoSamples) {
-  // Samples counted by the caster's sampler wrapper in the empty blocks' region (x >= 36).
-  struct InEmptyRegion {
-    ModelSampler inner;
-    unsigned* count;
-    template <bool G>
-    bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
-      const bool ok = inner.template sample<G>(f, p, value, gradient);
-      float x[3];
-      toVoxel(f, p, x);
-      if (ok && x[0] > 36.f) ++*count;
-      return ok;
-    }
-  };
   for (bool draw : {false, true}) {
     MaskedSceneOptions o;
     o.drawMissing = draw;
@@ -206,13 +204,16 @@ TEST(MissingRender, EmptyBlocksAreCulledAndCostNoSamples) {
 }
 
 TEST(MissingRender, ProjectionsTakeValidSamplesOnly) {
-  MaskedScene s;
-  buildMaskedScene(afam_test::maskedSceneCamera(), {}, s);
-  const std::vector<size_t> pixels = missingOnlyPixels(s.view);
-  for (int mode : {kBlendMaximum, kBlendMinimum, kBlendAverage}) {
-    s.view.blendMode = mode;
-    for (float nan : {0.f, 0.6f}) {
-      s.view.nanOpacity = nan;
+  for (float nan : {0.f, 0.6f}) {
+    MaskedSceneOptions o;
+    o.drawMissing = nan > 0;  // as the Renderer: empty blocks are slots only when drawn
+    o.nanOpacity = nan;
+    MaskedScene s;
+    buildMaskedScene(afam_test::maskedSceneCamera(), o, s);
+    const std::vector<size_t> pixels = missingOnlyPixels(s.view);
+    ASSERT_GT(pixels.size(), 2000u);
+    for (int mode : {kBlendMaximum, kBlendMinimum, kBlendAverage}) {
+      s.view.blendMode = mode;
       ImageRGBA image;
       renderCpu(s.view, image, 2);
       for (size_t p : pixels) ASSERT_EQ(image.rgba[p * 4 + 3], nan) << "mode " << mode;
@@ -221,8 +222,7 @@ TEST(MissingRender, ProjectionsTakeValidSamplesOnly) {
       const size_t inside = size_t(s.view.camera.height / 2) * s.view.camera.width + 10;
       const float a = image.rgba[inside * 4 + 3];
       EXPECT_TRUE(std::isfinite(a));
-      if (mode != kBlendAverage) EXPECT_NEAR(a, 0.05f, 1e-5f) << "mode " << mode;
-      if (mode == kBlendAverage) EXPECT_EQ(a, 1.f);
+      EXPECT_NEAR(a, mode == kBlendAverage ? 1.f : 0.05f, 1e-5f) << "mode " << mode;
     }
   }
 }

@@ -48,18 +48,6 @@ std::vector<MissingCase> missingCases() {
   return out;
 }
 
-/// Pixels whose rays cross only missing samples (voxel x past the mask's edge, with a margin).
-std::vector<size_t> missingOnly(const FrameView& f) {
-  std::vector<size_t> out;
-  for (int y = 0; y < f.camera.height; ++y)
-    for (int x = 0; x < f.camera.width; ++x) {
-      float lo, hi;
-      if (afam_test::rayVoxelXRange(f, x, y, lo, hi) && lo > afam_test::kFirstMissingX - 0.45f)
-        out.push_back(size_t(y) * f.camera.width + x);
-    }
-  return out;
-}
-
 TEST(GpuMissing, MaskedSceneMatchesCpuAndMissingRaysAreBackgroundOrNanColour) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
@@ -71,7 +59,7 @@ TEST(GpuMissing, MaskedSceneMatchesCpuAndMissingRaysAreBackgroundOrNanColour) {
     s.view.blendMode = c.blendMode;
     ImageRGBA cpu;
     renderCpu(s.view, cpu, 0);
-    const std::vector<size_t> missing = missingOnly(s.view);
+    const std::vector<size_t> missing = afam_test::missingOnlyPixels(s.view);
     ASSERT_GT(missing.size(), 3000u);
     for (GpuFloatMode mode : {GpuFloatMode::Exact, GpuFloatMode::Fast}) {
       for (bool specialise : {true, false}) {
@@ -91,7 +79,7 @@ TEST(GpuMissing, MaskedSceneMatchesCpuAndMissingRaysAreBackgroundOrNanColour) {
         // a partial opacity composited over many samples: the CPU's.
         const afam_test::MaskedSceneOptions& o = c.options;
         for (size_t p : missing) {
-          const float alpha = !o.drawMissing                  ? 0.f
+          const float alpha = !o.drawMissing                   ? 0.f
                               : c.blendMode != kBlendComposite ? o.nanOpacity
                               : o.nanOpacity >= 1.f            ? 1.f
                                                                : cpu.rgba[p * 4 + 3];

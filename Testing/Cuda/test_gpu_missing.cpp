@@ -51,9 +51,10 @@ std::vector<MissingCase> missingCases() {
 TEST(GpuMissing, MaskedSceneMatchesCpuAndMissingRaysAreBackgroundOrNanColour) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
-  GpuRenderer gpu(size_t(64) << 20);
-  gpu.setPoisonOutput(true);
   for (const MissingCase& c : missingCases()) {
+    // A renderer per scene: the scenes key their blocks alike, and a pool keeps models by key.
+    GpuRenderer gpu(size_t(64) << 20);
+    gpu.setPoisonOutput(true);
     afam_test::MaskedScene s;
     buildMaskedScene(afam_test::maskedSceneCamera(200, 160), c.options, s);
     s.view.blendMode = c.blendMode;
@@ -88,8 +89,6 @@ TEST(GpuMissing, MaskedSceneMatchesCpuAndMissingRaysAreBackgroundOrNanColour) {
       }
     }
   }
-  gpu.setFloatMode(GpuFloatMode::Exact);
-  gpu.setDegreeSpecialisation(true);
 }
 
 }  // namespace

@@ -252,7 +252,8 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
   stats.RenderSeconds = frame.renderMs * 1e-3;
   stats.CacheHits = static_cast<int64_t>(frame.hits);
   stats.CacheMisses = static_cast<int64_t>(frame.misses);
-  stats.CulledBlocks = frame.culled.frustumBlocks + frame.culled.tfBlocks;
+  stats.CulledBlocks =
+    frame.culled.frustumBlocks + frame.culled.tfBlocks + frame.culled.emptyBlocks;
   stats.VisibleBlocks = frame.culled.visibleBlocks;
   stats.BytesRead = frame.bytesRead;
   stats.CacheBytes = frame.cacheBytes;

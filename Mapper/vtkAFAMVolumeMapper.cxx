@@ -416,6 +416,11 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
       ctf->GetNodeValue(i, node);
       tf.colors.push_back({ node[0], node[1], node[2], node[3] });
     }
+    if (this->DrawMissingValues)
+    {
+      ctf->GetNanColor(tf.nanColor.data());
+      tf.nanOpacity = ctf->GetNanOpacity();
+    }
   }
   if (vtkPiecewiseFunction* pwf = property->GetScalarOpacity(0))
   {
@@ -645,6 +650,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TimeStep: " << this->TimeStep << "\n";
   os << indent << "LodPolicy: " << this->LodPolicy << "\n";
   os << indent << "LodPixelBudget: " << this->LodPixelBudget << "\n";
+  os << indent << "DrawMissingValues: " << (this->DrawMissingValues ? "On" : "Off") << "\n";
   os << indent << "CacheBudgetMB: " << this->CacheBudgetMB << "\n";
   os << indent << "Prefetcher: " << this->Prefetcher << "\n";
   os << indent << "RenderDevice: " << this->RenderDevice << "\n";

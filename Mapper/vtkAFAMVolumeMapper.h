@@ -107,6 +107,17 @@ public:
   ///@}
 
   ///@{
+  /// Missing samples (NaN, the file's fill value): with DrawMissingValues on they are drawn with
+  /// the colour transfer function's NanColor and NanOpacity (ParaView's "NaN Color" and "NaN
+  /// Opacity"; the opacity per ScalarOpacityUnitDistance, like the scalar opacity); off (default)
+  /// they are empty space. Off by default because VTK's NanOpacity defaults to 1, which would
+  /// fill every hole of a volume opaque.
+  vtkSetMacro(DrawMissingValues, bool);
+  vtkGetMacro(DrawMissingValues, bool);
+  vtkBooleanMacro(DrawMissingValues, bool);
+  ///@}
+
+  ///@{
   /// RAM cache budget for micro-models in MB. Default 512, range [16, 1e6]. A change starts a new
   /// cache (and GPU pool); transfer functions, shading and sample distance do not.
   vtkSetClampMacro(CacheBudgetMB, double, 16.0, 1e6);
@@ -331,6 +342,7 @@ protected:
   vtkTypeInt64 TimeStep = 0;
   int LodPolicy = LOD_SCREEN_SPACE;
   double LodPixelBudget = 1.0;
+  bool DrawMissingValues = false;
   double CacheBudgetMB = 512;
   int Prefetcher = PREFETCH_NONE;
   int RenderDevice = DEVICE_AUTO;

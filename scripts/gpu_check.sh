@@ -40,10 +40,12 @@ fi
 # --- GPU tests.
 "$tests" --gtest_color=no >"$logs/tests.log" 2>&1
 test_rc=$?
-grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
+grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage|gpu-missing)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
 status "GPU tests" "$(grep -E '^\[  PASSED  \]' "$logs/tests.log" | head -1) $(grep -E '^\[  FAILED  \] [0-9]' "$logs/tests.log" | head -1) $(grep -E '^\[  SKIPPED \] [0-9]' "$logs/tests.log" | head -1)"
 worst=$(grep -E '^\[gpu-vs-cpu\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
 status "GPU vs CPU worst diff" "${worst:-?}/255 over $(grep -c '^\[gpu-vs-cpu\]' "$logs/tests.log") images (bar <= 2/255, exact kernels)"
+worst=$(grep -E '^\[gpu-missing\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
+status "missing samples vs CPU" "${worst:-?}/255 over $(grep -c '^\[gpu-missing\]' "$logs/tests.log") images (bar <= 2/255, exact and fast kernels)"
 for m in fma fast; do
   w=$(grep -E "^\[gpu-vs-cpu:$m\]" "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
   status "  same, $m kernels" "${w:-?}/255 (reported, not a bar)"

@@ -24,7 +24,7 @@ int uniformDegree(const FrameView& v) {
   int degree = 0;
   for (int32_t s = 0; s < v.slotCount; ++s) {
     const FrameSlot& slot = v.slots[s];
-    if (slot.kind == kSlotRaw) continue;
+    if (slot.kind != kSlotSpline) continue;
     for (int a = 0; a < 3; ++a) {
       const int d = slot.knots[a].degree;
       if (degree == 0) degree = d;
@@ -46,9 +46,7 @@ double GpuKernelTiming::median() const {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-uint64_t GpuRenderer::slotFloats(const FrameSlot& slot) {
-  return uint64_t(slot.knots[0].ncp) * uint64_t(slot.knots[1].ncp) * uint64_t(slot.knots[2].ncp);
-}
+uint64_t GpuRenderer::slotFloats(const FrameSlot& slot) { return slotFloatCount(slot); }
 
 uint64_t GpuRenderer::defaultSlotKey(const FrameSlot& slot) {
   // The fields that tell two models apart, through the project's one hash (hash.hpp).
@@ -272,6 +270,10 @@ struct GpuRenderer::Impl {
     for (int32_t s = 0; s < v.slotCount; ++s) {
       FrameSlot slot = v.slots[s];
       const uint64_t floats = slotFloats(slot);
+      if (floats == 0) {  // an empty block: nothing to hold
+        slots[s] = slot;
+        continue;
+      }
       const uint64_t key = keys ? keys[s] : defaultSlotKey(slot);
       const float* host = slotHost ? slotHost[s] : v.pool + slot.offset;
       const size_t byteOffset = pool.acquire(key, host, size_t(floats) * sizeof(float));

@@ -203,6 +203,10 @@ void vtkAFAMVolumeRepresentation::SetLodPixelBudget(double v)
 {
   this->Mapper->SetLodPixelBudget(v);
 }
+void vtkAFAMVolumeRepresentation::SetDrawMissingValues(bool v)
+{
+  this->Mapper->SetDrawMissingValues(v);
+}
 void vtkAFAMVolumeRepresentation::SetCacheBudgetMB(double v)
 {
   this->Mapper->SetCacheBudgetMB(v);

@@ -57,6 +57,7 @@ public:
   /// Forwarded to vtkAFAMVolumeMapper (see there for defaults and ranges).
   void SetLodPolicy(int);
   void SetLodPixelBudget(double);
+  void SetDrawMissingValues(bool);
   void SetCacheBudgetMB(double);
   void SetPrefetcher(int);
   void SetRenderDevice(int);

@@ -85,6 +85,7 @@ Payload LruCache::residentModelBefore(const AfamFile& f, int64_t entry) {
 Payload LruCache::load(const AfamFile& f, int64_t entry) {
   const ModelEntry& e = f.entries().at(size_t(entry));
   auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
+  if (e.kind == BlockKind::Empty) return data;  // no valid sample: no payload, nothing to read
   const auto t0 = Clock::now();
   // A residual whose model at the step before is resident costs one payload, not its chain.
   const Payload before = residentModelBefore(f, entry);

@@ -54,6 +54,12 @@ std::string transferFunctionProblem(const TransferFunction& tf) {
       return "opacity point " + std::to_string(i) + " (value " + number(p.value) + ", opacity " +
              number(p.alpha) + ") is not a finite value with an opacity in [0, 1]";
   }
+  const auto& nan = tf.nanColor;
+  if (!std::isfinite(nan[0]) || !std::isfinite(nan[1]) || !std::isfinite(nan[2]) ||
+      !(tf.nanOpacity >= 0 && tf.nanOpacity <= 1))
+    return "the NaN colour (rgb " + number(nan[0]) + " " + number(nan[1]) + " " + number(nan[2]) +
+           ", opacity " + number(tf.nanOpacity) +
+           ") is not a finite colour with an opacity in [0, 1]";
   if (!(tf.referenceDistance > 0) || !std::isfinite(tf.referenceDistance))
     return "the opacity unit distance " + number(tf.referenceDistance) +
            " is not a finite number > 0";

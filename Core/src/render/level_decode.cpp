@@ -39,9 +39,7 @@ class StandIns {
   float valueAt(const float* x) const {
     for (size_t k = 0; k < slots_.size(); ++k) {
       if (!covers(regions_[k], x)) continue;
-      const float* pool = placed_[k].data->data();
-      return slots_[k].kind == kSlotRaw ? sampleRawSlot<false>(slots_[k], pool, x, nullptr)
-                                        : sampleSplineSlot<false>(slots_[k], pool, x, nullptr);
+      return sampleSlot<false>(slots_[k], placed_[k].data->data(), x, nullptr);
     }
     return std::numeric_limits<float>::quiet_NaN();
   }

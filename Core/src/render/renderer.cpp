@@ -96,7 +96,7 @@ void Renderer::setFrameSettings(const FrameSettings& settings) {
 Selection Renderer::select(const Camera& camera) const {
   static const std::vector<float> none;
   return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_,
-                     tfHi_);
+                     tfHi_, settings_.transferFunction.nanOpacity > 0);
 }
 
 void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
@@ -127,8 +127,13 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   const float ratio =
       float(double(settings_.sampleDistance) / settings_.transferFunction.referenceDistance);
   // Compositing uses opacities per sample step; the projections use the table's own opacity.
-  if (settings_.blendMode == kBlendComposite)
+  const TransferFunction& tf = settings_.transferFunction;
+  v.nanOpacity = float(tf.nanOpacity);
+  if (settings_.blendMode == kBlendComposite) {
     for (size_t i = 3; i < fr.tf.size(); i += 4) fr.tf[i] = correctOpacity(fr.tf[i], ratio);
+    v.nanOpacity = correctOpacity(v.nanOpacity, ratio);
+  }
+  for (int a = 0; a < 3; ++a) v.nanColor[a] = float(tf.nanColor[size_t(a)]);
   v.blendMode = settings_.blendMode;
   v.tfMin = float(tfLo_);
   v.tfMax = float(tfHi_);
@@ -150,6 +155,7 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   std::vector<int64_t> pins, missing;
   pins.reserve(sel.visible.size());
   for (const BlockRef& b : sel.visible) {
+    if (isEmptyBlock(b)) continue;  // nothing to read (drawn as missing)
     pins.push_back(b.entry);
     if (!cache_->contains(b.entry) && !cache_->isDamaged(b.entry)) missing.push_back(b.entry);
   }
@@ -164,7 +170,12 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   std::vector<Placement> placed;
   placed.reserve(sel.visible.size());
   const std::unordered_set<int64_t> missed(missing.begin(), missing.end());
+  static const Payload noFloats = std::make_shared<const std::vector<float>>();
   for (const BlockRef& b : sel.visible) {
+    if (isEmptyBlock(b)) {
+      placed.push_back(Placement{b, b, noFloats});
+      continue;
+    }
     if (loader_->pending(b.entry)) {
       if (placeStandIn(b, placed)) {
         st.standInBlocks++;
@@ -183,6 +194,10 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
     if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
   }
   return placed;
+}
+
+bool Renderer::isEmptyBlock(const BlockRef& block) const {
+  return file_->entries()[size_t(block.entry)].kind == BlockKind::Empty;
 }
 
 bool Renderer::placeStandIn(const BlockRef& block, std::vector<Placement>& placed) {
@@ -221,6 +236,11 @@ FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset
     s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
   }
   s.offset = offset;
+  if (e.kind == BlockKind::Empty) s.kind = kSlotEmpty;
+  if (e.masked) {
+    for (int a = 0; a < 3; ++a) s.maskSamples[a] = e.samples[a];
+    s.maskOffset = uint32_t(controlCount(e));
+  }
   return s;
 }
 

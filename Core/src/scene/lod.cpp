@@ -136,7 +136,8 @@ bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const doub
 }
 
 Selection LodSelector::select(const AfamFile& file, const Camera& camera,
-                              const std::vector<float>& tfTable, double tfLo, double tfHi) const {
+                              const std::vector<float>& tfTable, double tfLo, double tfHi,
+                              bool drawMissing) const {
   Selection sel;
   const Partition& p = file.partition();
   const auto& entries = file.entries();
@@ -157,7 +158,12 @@ Selection LodSelector::select(const AfamFile& file, const Camera& camera,
         continue;
       }
     }
-    if (options_.tfCulling && !tfTable.empty()) {
+    if (e.kind == BlockKind::Empty && !drawMissing) {
+      sel.counts.emptyBlocks++;
+      continue;
+    }
+    if (options_.tfCulling && !tfTable.empty() && e.kind != BlockKind::Empty &&
+        !(e.masked && drawMissing)) {
       const double margin = std::max(double(e.maxError), margin0);
       if (TransferFunction::maxOpacity(tfTable, tfLo, tfHi, double(e.minValue) - margin,
                                        double(e.maxValue) + margin) <= 0.f) {

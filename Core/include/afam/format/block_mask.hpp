@@ -28,7 +28,7 @@ AFAM_HD int64_t maskWordCount(int64_t sampleCount) { return (sampleCount + 31) /
 AFAM_HD bool maskBit(const float* words, int64_t i) {
   const float w = words[i >> 5];
   uint32_t bits;
-#if defined(__CUDACC__)
+#if defined(__CUDA_ARCH__)  // device code (nvcc's host pass takes memcpy)
   bits = __float_as_uint(w);
 #else
   std::memcpy(&bits, &w, sizeof bits);

@@ -44,6 +44,26 @@
 //    clamped at the volume edge), knots[a].degree unused; samples k = 0..n-1 sit at
 //    lo + k (hi-lo)/(n-1), ghost k = -1 and k = n one sample spacing outside. Trilinear
 //    interpolation, gradient by central differences of one sample spacing.
+//  * kSlotEmpty: a block with no valid sample (BlockKind::Empty; no floats). Every sample in it is
+//    missing. The Renderer makes such slots only when missing samples are drawn (nanOpacity > 0);
+//    otherwise an empty block's cells are -1 like a culled block's, so it costs no sampling.
+//  * A masked slot (maskSamples[0] > 0: a model some of whose samples are missing) keeps the
+//    mask words of block_mask.hpp at pool + offset + maskOffset (right after the control points,
+//    as the cache holds them). A sample position is missing when the NEAREST sample of the
+//    block's maskSamples grid (its Partition samples: k at lo + k (hi-lo)/(n-1)) is missing, so a
+//    decode on the sample grid gives NaN exactly at the missing samples.
+//
+// ---------------------------------------------------------------------------------------------
+// Missing samples
+// ---------------------------------------------------------------------------------------------
+//  A sampler reports a missing sample as value NaN (missingValue(); a culled cell is `false`, as
+//  before). castRayWith: by default (nanOpacity 0) a missing sample contributes nothing: no
+//  colour, no opacity, and no gradient is taken there (the valid samples' gradients are the
+//  spline's, which the encoder extrapolates smoothly into the holes, so no halo appears at the
+//  mask's boundary). With nanOpacity > 0 a missing sample is drawn, unshaded, in nanColor with
+//  nanOpacity (per tfReferenceDistance, corrected for the sample distance like the table's alpha).
+//  Projections (castProjectionRayWith) take the valid samples only; a ray whose every sample is
+//  missing gets nanColor at nanOpacity (0 by default: nothing).
 //
 // ---------------------------------------------------------------------------------------------
 // Ray extent and sample positions (pixels and rays: scene/ray_camera.hpp)
@@ -77,12 +97,14 @@
 #include <stdint.h>
 
 #include "afam/base/host_device.hpp"
+#include "afam/format/block_mask.hpp"
 #include "afam/scene/ray_camera.hpp"
 #include "afam/spline/basis.hpp"
 #include "afam/spline/evaluate.hpp"
 
 #if !defined(__CUDACC__)
 #include <cmath>
+#include <cstring>
 #endif
 
 namespace afam {
@@ -92,7 +114,7 @@ struct RGBA {
   float r = 0.f, g = 0.f, b = 0.f, a = 0.f;
 };
 
-enum SlotKind : int32_t { kSlotSpline = 0, kSlotRaw = 1 };
+enum SlotKind : int32_t { kSlotSpline = 0, kSlotRaw = 1, kSlotEmpty = 2 };
 
 /// One resident model of this frame. Trivially copyable.
 struct FrameSlot {
@@ -102,7 +124,21 @@ struct FrameSlot {
   float lo[3] = {0.f, 0.f, 0.f};         ///< block extent, voxel coordinates
   float invExtent[3] = {0.f, 0.f, 0.f};  ///< 1 / (hi - lo), 0 on a one-sample axis
   uint64_t offset = 0;                   ///< first float of this model in FrameView::pool
+  /// Masked slots: samples per axis of the block's grid the mask covers; {0, 0, 0}: no mask.
+  int32_t maskSamples[3] = {0, 0, 0};
+  /// Masked slots: floats from `offset` to the first mask word (the control points before them),
+  /// so the mask moves with the model when a GPU pool places it elsewhere.
+  uint32_t maskOffset = 0;
 };
+
+/// Floats of a slot's model in the pool: control points (or raw samples) and mask words.
+AFAM_HD uint64_t slotFloatCount(const FrameSlot& s) {
+  if (s.kind == kSlotEmpty) return 0;
+  const uint64_t control = uint64_t(s.knots[0].ncp) * s.knots[1].ncp * s.knots[2].ncp;
+  if (s.maskSamples[0] <= 0) return control;
+  return control +
+         uint64_t(maskWordCount(int64_t(s.maskSamples[0]) * s.maskSamples[1] * s.maskSamples[2]));
+}
 
 /// Everything a ray needs for one frame. Trivially copyable; all pointers are non-owning and
 /// point into host memory (CPU caster) or device memory (CUDA kernel).
@@ -132,6 +168,10 @@ struct FrameView {
   int32_t tfSize = 0;
   float tfMin = 0.f, tfMax = 1.f;
   float tfReferenceDistance = 0.01f;  ///< segment length the table's alpha refers to
+  /// Missing samples: drawn (unshaded) in nanColor with opacity nanOpacity (per
+  /// tfReferenceDistance, like the table's alpha) when nanOpacity > 0; nothing by default.
+  float nanColor[3] = {0.5f, 0.f, 0.f};
+  float nanOpacity = 0.f;
 
   // Sampling and shading.
   float sampleDistance = 0.01f;  ///< normalised units
@@ -306,6 +346,57 @@ AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* pool, const float* 
   return value;
 }
 
+/// The value a sampler reports for a missing sample: a quiet NaN.
+AFAM_HD float missingValue() {
+  const uint32_t bits = 0x7fc00000u;
+#if defined(__CUDA_ARCH__)
+  return __uint_as_float(bits);
+#else
+  float v;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+#endif
+}
+
+/// Whether a sampled value stands for a missing sample (NaN).
+AFAM_HD bool isMissing(float value) { return value != value; }
+
+/// Whether voxel coordinate x of slot s is valid: its nearest sample of the mask's grid is (an
+/// unmasked slot: always; an empty slot: never).
+AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* pool, const float* x) {
+  if (s.kind == kSlotEmpty) return false;
+  if (s.maskSamples[0] <= 0) return true;
+  int64_t index = 0;
+  for (int a = 2; a >= 0; --a) {
+    const int n = s.maskSamples[a];
+    const float u = rc::clampf((x[a] - s.lo[a]) * s.invExtent[a], 0.f, 1.f);
+    int k = int(u * float(n - 1) + 0.5f);
+    k = k > n - 1 ? n - 1 : k;
+    index = index * n + k;
+  }
+  return maskBit(pool + s.offset + s.maskOffset, index);
+}
+
+/// Value (and gradient in voxel units) of slot s at voxel coordinate x, missingValue() (gradient
+/// 0) where the slot's sample there is missing: every model sampler's evaluation.
+template <bool WithGradient, int FixedDegree = -1>
+AFAM_HD float sampleSlot(const FrameSlot& stored, const float* pool, const float* x,
+                         float* gVoxel) {
+  if (!slotSampleValid(stored, pool, x)) {
+    if (WithGradient) gVoxel[0] = gVoxel[1] = gVoxel[2] = 0.f;
+    return missingValue();
+  }
+  if (stored.kind == kSlotRaw) return sampleRawSlot<WithGradient>(stored, pool, x, gVoxel);
+  if (FixedDegree > 0) {
+    FrameSlot s = stored;
+    s.knots[0].degree = FixedDegree;
+    s.knots[1].degree = FixedDegree;
+    s.knots[2].degree = FixedDegree;
+    return sampleSplineSlot<WithGradient>(s, pool, x, gVoxel);
+  }
+  return sampleSplineSlot<WithGradient>(stored, pool, x, gVoxel);
+}
+
 /// Voxel coordinate x of a normalised-frame point p and the slot covering it (-1: culled / empty):
 /// the first step of every model sampler.
 AFAM_HD int32_t locateSample(const FrameView& f, const float* p, float* x) {
@@ -323,7 +414,8 @@ AFAM_HD void voxelToNormalisedGradient(const FrameView& f, const float* gVoxel, 
 /// The default sampler: the frame's resident micro-models (spline or raw), found in O(1).
 /// A sampler provides `template <bool G> bool sample(const FrameView&, const float* p, float&
 /// value, float* gradient) const` with p and gradient in the NORMALISED frame; it returns false
-/// where nothing is to be sampled (culled cell). castRayWith<> accepts any such sampler
+/// where nothing is to be sampled (culled cell), and value NaN (missingValue()) at a missing
+/// sample. castRayWith<> accepts any such sampler
 /// (ground_truth.hpp plugs the analytic Marschner-Lobb function in here). FixedDegree > 0 promises
 /// that every spline slot of the frame has that degree on all axes: the slot's knots are copied
 /// with the degree as a compile-time constant, so the compiler unrolls the basis and tensor loops
@@ -336,19 +428,8 @@ struct ModelSamplerT {
     float x[3];
     const int32_t slot = locateSample(f, p, x);
     if (slot < 0) return false;
-    const FrameSlot& stored = f.slots[slot];
     float gv[3] = {0.f, 0.f, 0.f};
-    if (stored.kind == kSlotRaw) {
-      value = sampleRawSlot<WithGradient>(stored, f.pool, x, gv);
-    } else if (FixedDegree > 0) {
-      FrameSlot s = stored;
-      s.knots[0].degree = FixedDegree;
-      s.knots[1].degree = FixedDegree;
-      s.knots[2].degree = FixedDegree;
-      value = sampleSplineSlot<WithGradient>(s, f.pool, x, gv);
-    } else {
-      value = sampleSplineSlot<WithGradient>(stored, f.pool, x, gv);
-    }
+    value = sampleSlot<WithGradient, FixedDegree>(f.slots[slot], f.pool, x, gv);
     if (WithGradient) voxelToNormalisedGradient(f, gv, gradient);
     return true;
   }
@@ -432,6 +513,16 @@ AFAM_HD void shadePhong(const FrameView& f, const float* d, const float* g, RGBA
   c.b = c.b * k + spec * f.specularColor[2];
 }
 
+/// A missing sample drawn with the frame's NaN colour and opacity (per tfReferenceDistance).
+AFAM_HD RGBA missingColour(const FrameView& f) {
+  RGBA c;
+  c.r = f.nanColor[0];
+  c.g = f.nanColor[1];
+  c.b = f.nanColor[2];
+  c.a = f.nanOpacity;
+  return c;
+}
+
 /// Front-to-back compositing of one classified (non-premultiplied) sample into `acc`.
 AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
   const float w = (1.f - acc.a) * s.a;
@@ -489,17 +580,31 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
     } else if (!sampler.template sample<false>(f, p, value, g)) {
       continue;
     }
-    RGBA c = classify(f, value);
-    if (c.a <= 0.f) continue;
-    if (ratio != 1.f) c.a = correctOpacity(c.a, ratio);
-    if (Shaded) {
-      if (!together) sampler.template sample<true>(f, p, value, g);
-      shadePhong(f, d, g, c);
+    RGBA c;
+    if (isMissing(value)) {  // drawn in the NaN colour or not at all; never shaded
+      if (!(f.nanOpacity > 0.f)) continue;
+      c = missingColour(f);
+    } else {
+      c = classify(f, value);
+      if (c.a <= 0.f) continue;
+      if (Shaded) {
+        if (!together) sampler.template sample<true>(f, p, value, g);
+        shadePhong(f, d, g, c);
+      }
     }
+    if (ratio != 1.f) c.a = correctOpacity(c.a, ratio);
     compositeFrontToBack(acc, c);
     if (acc.a >= f.terminationOpacity) break;
   }
   return acc;
+}
+
+/// out = c with its colour premultiplied by its opacity.
+AFAM_HD void premultiply(const RGBA& c, RGBA& out) {
+  out.r = c.r * c.a;
+  out.g = c.g * c.a;
+  out.b = c.b * c.a;
+  out.a = c.a;
 }
 
 /// Blend modes, numbered as VTK's vtkVolumeMapper::BlendModes.
@@ -524,11 +629,16 @@ AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, i
   if (!raySamples(f, px, py, r)) return acc;
   float best = 0.f, sum = 0.f;
   int64_t n = 0;
+  bool missed = false;  // the ray met a missing sample
   for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
     const float t = float(k) * r.dt;
     const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
     float value = 0.f, g[3] = {0.f, 0.f, 0.f};
     if (!sampler.template sample<false>(f, p, value, g)) continue;
+    if (isMissing(value)) {
+      missed = true;
+      continue;
+    }
     if (n == 0)
       best = value;
     else
@@ -536,7 +646,10 @@ AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, i
     if (f.blendMode == kBlendAverage) sum += classify(f, value).a * (value - f.tfMin);
     ++n;
   }
-  if (n == 0) return acc;
+  if (n == 0) {
+    if (missed && f.nanOpacity > 0.f) premultiply(missingColour(f), acc);
+    return acc;
+  }
   if (f.blendMode == kBlendAverage) {
     const float span = f.tfMax - f.tfMin;
     const float grey = span > 0.f ? rc::clampf(sum / (float(n) * span), 0.f, 1.f) : 0.f;
@@ -544,11 +657,7 @@ AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, i
     acc.a = 1.f;
     return acc;
   }
-  const RGBA c = classify(f, best);
-  acc.r = c.r * c.a;
-  acc.g = c.g * c.a;
-  acc.b = c.b * c.a;
-  acc.a = c.a;
+  premultiply(classify(f, best), acc);
   return acc;
 }
 

@@ -193,6 +193,7 @@ class Renderer {
   std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats,
                                     std::chrono::steady_clock::time_point deadline);
   bool placeStandIn(const BlockRef& block, std::vector<Placement>& placed);
+  bool isEmptyBlock(const BlockRef& block) const;  ///< no valid sample: no payload to load
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
   void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
 

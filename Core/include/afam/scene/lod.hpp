@@ -16,7 +16,13 @@
 //    entirely behind the near plane;
 //  * transfer function: the maximum table opacity over the entry's [min, max] widened by a margin
 //    (max(entry maxError, 1% of the value range), because the stored min/max are the model's
-//    values at the samples and a spline may overshoot slightly between them) is zero.
+//    values at the samples and a spline may overshoot slightly between them) is zero. The
+//    min/max of a masked entry (some samples missing) are over its valid samples, so a masked
+//    block is culled as its valid range says, unless missing samples are drawn (the transfer
+//    function's NaN opacity > 0: drawMissing);
+//  * empty: a block with no valid sample (BlockKind::Empty) has nothing to draw unless missing
+//    samples are drawn, whatever the blend mode and the tfCulling option (its cells stay -1, so
+//    empty-space skipping sees it and it costs no sampling).
 #pragma once
 
 #include <cstdint>
@@ -50,6 +56,7 @@ struct CullCounts {
   int64_t cutBlocks = 0, cutBytes = 0;          ///< the whole LOD cut
   int64_t frustumBlocks = 0, frustumBytes = 0;  ///< removed by frustum culling
   int64_t tfBlocks = 0, tfBytes = 0;            ///< removed by transfer-function culling
+  int64_t emptyBlocks = 0;  ///< empty blocks (no valid sample, no bytes) removed: nothing to draw
   int64_t visibleBlocks = 0, visibleBytes = 0;  ///< left to load and render
 };
 
@@ -72,10 +79,11 @@ class LodSelector {
   /// True when the block's box is entirely outside the camera's frustum.
   static bool outsideFrustum(const Camera& camera, const double lo[3], const double hi[3]);
 
-  /// Cut + frustum culling + TF culling against a file's index (no payload is read).
-  /// tfTable spans [tfLo, tfHi]; an empty table disables TF culling.
+  /// Cut + frustum culling + TF culling + empty blocks against a file's index (no payload is
+  /// read). tfTable spans [tfLo, tfHi]; an empty table disables TF culling. drawMissing: missing
+  /// samples are drawn (NaN opacity > 0), so empty and masked blocks stay.
   Selection select(const AfamFile& file, const Camera& camera, const std::vector<float>& tfTable,
-                   double tfLo, double tfHi) const;
+                   double tfLo, double tfHi, bool drawMissing = false) const;
 
  private:
   int desiredLevel(const Partition& p, int level, Int3 ijk, const Camera& camera) const;

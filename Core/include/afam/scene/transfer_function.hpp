@@ -4,6 +4,7 @@
 // from the index's min/max without reading their payloads).
 #pragma once
 
+#include <array>
 #include <vector>
 
 namespace afam {
@@ -21,6 +22,11 @@ class TransferFunction {
   std::vector<ColorPoint> colors;
   std::vector<OpacityPoint> opacities;
   double referenceDistance = 0.01;  ///< normalised-frame length the opacities refer to
+  /// Missing samples (NaN, a file's fill value): drawn in nanColor with nanOpacity (per
+  /// referenceDistance, like the opacities) when nanOpacity > 0; by default not drawn at all.
+  /// (VTK's vtkColorTransferFunction NanColor / NanOpacity; its default colour.)
+  std::array<double, 3> nanColor{{0.5, 0.0, 0.0}};
+  double nanOpacity = 0.0;
 
   double opacity(double value) const;
   void color(double value, double rgb[3]) const;

@@ -108,7 +108,8 @@ class GpuRenderer {
 
   /// Key used for slot s when the caller gives none.
   static uint64_t defaultSlotKey(const FrameSlot& slot);
-  /// Floats of a slot's model: ncp.x * ncp.y * ncp.z (raw blocks: padded sample counts).
+  /// Floats of a slot's model (slotFloatCount: control points or padded raw samples, and a masked
+  /// model's mask words; 0 for an empty block, which takes no room in the pool).
   static uint64_t slotFloats(const FrameSlot& slot);
 
  private:

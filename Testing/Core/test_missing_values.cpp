@@ -97,7 +97,7 @@ std::vector<float> maskedVolume(MaskShape shape, float fill = kNaN) {
 }
 
 std::vector<uint32_t> ballMask(Int3 n, double cx, double r) {
-  std::vector<float> s(size_t(n[0]) * size_t(n[1]) * size_t(n[2]), 1.f);
+  std::vector<float> s(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]), 1.f);
   size_t i = 0;
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)
@@ -195,9 +195,9 @@ TEST(MissingValues, SmallerThanTheVolumeFilledWithTheNearestValidValue) {
     SampleType type;
     Index3 dims;
     MaskShape shape;
-  } cases[] = {{"neghip_66x66x66_uint8.raw", SampleType::UInt8, {66, 66, 66}, MaskShape::Ball},
-               {"chi_field_50x50x50_float32.raw", SampleType::Float32, {50, 50, 50},
-                MaskShape::Land}};
+  } cases[] = {
+      {"neghip_66x66x66_uint8.raw", SampleType::UInt8, {66, 66, 66}, MaskShape::Ball},
+      {"chi_field_50x50x50_float32.raw", SampleType::Float32, {50, 50, 50}, MaskShape::Land}};
   for (const auto& c : cases) {
     RawFileSource raw(dir + c.name, c.dims, c.type);
     const VolumeMask mask(c.shape, c.dims);
@@ -222,21 +222,22 @@ TEST(MissingValues, AFillValueMarksMissingSamplesAsNaNDoes) {
   const std::vector<float> fill = maskedVolume(MaskShape::Ball, -999.f);
   ArraySource a(nan.data(), kDims), inner(fill.data(), kDims);
   MissingValueSource b(inner, -999.0);
-  const std::string pa = afam_test::scratchPath("nan.afam"), pb = afam_test::scratchPath("fill.afam");
-  encodeVolume(a, options(BoundKind::Rmse, 1e-2), pa);
+  const std::string na = afam_test::scratchPath("nan.afam"),
+                    nb = afam_test::scratchPath("fill.afam");
+  encodeVolume(a, options(BoundKind::Rmse, 1e-2), na);
   EncoderOptions opt = options(BoundKind::Rmse, 1e-2);
   opt.hasMissingValue = true;
   opt.missingValue = -999.0;
-  encodeVolume(b, opt, pb);
+  encodeVolume(b, opt, nb);
   EXPECT_GT(b.matches(), 0);
-  auto fa = AfamFile::open(pa), fb = AfamFile::open(pb);
+  auto fa = AfamFile::open(na), fb = AfamFile::open(nb);
   EXPECT_EQ(fb->header().missing, MissingKind::Value);
   EXPECT_EQ(fb->header().missingValue, -999.0);
   ASSERT_EQ(fa->entries().size(), fb->entries().size());
   for (size_t e = 0; e < fa->entries().size(); ++e) {  // bit for bit (mask words are no floats)
-    const std::vector<float> a = fa->readPayload(int64_t(e)), b = fb->readPayload(int64_t(e));
-    ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "entry " << e;
+    const std::vector<float> pa = fa->readPayload(int64_t(e)), pb = fb->readPayload(int64_t(e));
+    ASSERT_EQ(pa.size(), pb.size());
+    EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0) << "entry " << e;
   }
 }
 

@@ -219,13 +219,14 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
 /// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
 /// measured on the samples.
-bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
-                       double bound, BoundKind kind, double beat, Predictor form,
+bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, bool freeHoles, Int3 n,
+                       int degree, double bound, BoundKind kind, double beat, Predictor form,
                        BlockFitter& fitter, Candidate& out) {
+  const uint32_t* free = freeHoles ? valid : nullptr;
   std::vector<float> recon;
   bool lattice = true;
   auto passes = [&](double k) {
-    if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, recon)) {
+    if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, recon, free)) {
       lattice = false;
       return false;
     }
@@ -234,13 +235,13 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, Int3 
   const int best = largestPassingStep(passes);
   if (best < 0 || !lattice) return false;
   const double step = ladderStep(kind, bound, kStepFactors[best]);
-  if (estimateCodedBytes(s.data(), n, step, form) > beat)
+  if (estimateCodedBytes(s.data(), n, step, form, free) > beat)
     return false;  // cannot win: spare the coding
   Candidate c;
   c.kind = BlockKind::Interpolant;
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-  if (!encodeValues(s.data(), n, step, form, kZstdLevel, c.bytes, recon)) return false;
+  if (!encodeValues(s.data(), n, step, form, kZstdLevel, c.bytes, recon, free)) return false;
   ModelEntry probe;
   probe.kind = c.kind;
   probe.coded = true;
@@ -261,16 +262,25 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, Int3 
   return true;
 }
 
-/// The samples as an Interpolant in whichever form stores them smaller (keepSmallerForm).
+/// The samples as an Interpolant in whichever form stores them smaller (keepSmallerForm); with
+/// missing samples, coded with the holes free (their predictions, code 0) or as filled, whichever
+/// is smaller (the quantization step the ladder reaches differs between the two).
 bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
                  double bound, BoundKind kind, double beat, BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
-  Candidate integer, dbl;
-  const bool hasInteger = codeSamplesInForm(s, valid, n, degree, bound, kind, beat,
-                                            Predictor::IntegerInterpolation, fitter, integer);
-  const bool hasDouble = codeSamplesInForm(s, valid, n, degree, bound, kind, beat,
-                                           Predictor::Interpolation, fitter, dbl);
-  return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
+  bool found = false;
+  for (const bool freeHoles : {false, true}) {
+    if (freeHoles && !valid) break;
+    Candidate integer, dbl, best;
+    const bool hasInteger = codeSamplesInForm(s, valid, freeHoles, n, degree, bound, kind, beat,
+                                              Predictor::IntegerInterpolation, fitter, integer);
+    const bool hasDouble = codeSamplesInForm(s, valid, freeHoles, n, degree, bound, kind, beat,
+                                             Predictor::Interpolation, fitter, dbl);
+    if (!keepSmallerForm(hasInteger, integer, hasDouble, dbl, best)) continue;
+    if (!found || best.bytes.size() < out.bytes.size()) out = std::move(best);
+    found = true;
+  }
+  return found;
 }
 
 void storeCandidate(Candidate& c, BlockTask& t) {

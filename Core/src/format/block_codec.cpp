@@ -79,14 +79,16 @@ void visit(Predictor p, const Lattice& L, const double* q, Fn&& fn) {
 /// prediction + code * step, so each reconstructed value lies within step / 2 of its value.
 /// false when a code exceeds 2^50.
 bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor,
-                     std::vector<int64_t>& codes, std::vector<float>& reconstructed) {
+                     std::vector<int64_t>& codes, std::vector<float>& reconstructed,
+                     const uint32_t* valid) {
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   std::vector<double> r(count, 0.0);
   codes.clear();
   codes.reserve(count);
   bool ok = true;
   visit(predictor, Lattice{n}, r.data(), [&](int64_t i, double pred) {
-    const double q = std::nearbyint((double(values[i]) - pred) / step);
+    const bool free = valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0;
+    const double q = free ? 0.0 : std::nearbyint((double(values[i]) - pred) / step);
     if (!(std::fabs(q) <= kMaxCode)) {
       ok = false;
       r[size_t(i)] = double(values[i]);
@@ -110,10 +112,21 @@ Predictor choosePredictorForm(const float* values, size_t count, double step, Pr
   return family == Predictor::Lorenzo ? Predictor::IntegerLorenzo : Predictor::IntegerInterpolation;
 }
 
+namespace {
+bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
+                   std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
+                   const uint32_t* valid);
+}  // namespace
+
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
-                    std::vector<float>& reconstructed) {
+                    std::vector<float>& reconstructed, const uint32_t* valid) {
   if (!(step > 0) || !std::isfinite(step)) return false;
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  if (valid) {  // free values are their predictions: the predictor's order decides
+    std::vector<int64_t> codes;
+    int64_t base = 0;
+    return residualCodes(values, n, step, predictor, codes, reconstructed, base, valid);
+  }
   if (isIntegerForm(predictor)) {  // the reconstruction does not depend on the predictor
     int64_t base;
     std::vector<int32_t> k;
@@ -123,22 +136,24 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
     return true;
   }
   std::vector<int64_t> codes;
-  return predictQuantize(values, n, step, predictor, codes, reconstructed);
+  return predictQuantize(values, n, step, predictor, codes, reconstructed, nullptr);
 }
 
 namespace {
 
 /// The codes encodeValues would store for `values` (false when they do not fit), and the
-/// reconstruction; `base` is set for the integer forms.
+/// reconstruction; `base` is set for the integer forms; `valid` as in encodeValues.
 bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
-                   std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base) {
+                   std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
+                   const uint32_t* valid) {
   if (!(step > 0) || !std::isfinite(step) || uint8_t(predictor) > 3) return false;
   if (!isIntegerForm(predictor))
-    return predictQuantize(values, n, step, predictor, codes, reconstructed);
+    return predictQuantize(values, n, step, predictor, codes, reconstructed, valid);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   std::vector<int32_t> k, r;
   if (!codec::integerQuantize(values, count, step, base, k)) return false;
-  codec::integerResiduals(predictor, n, k, r);
+  codec::integerResiduals(predictor, n, k, r,
+                          predictor == Predictor::IntegerInterpolation ? valid : nullptr);
   codes.assign(r.begin(), r.end());
   reconstructed.resize(count);
   for (size_t i = 0; i < count; ++i) reconstructed[i] = codec::integerValue(base, k[i], step);
@@ -147,11 +162,12 @@ bool residualCodes(const float* values, Int3 n, double step, Predictor predictor
 
 }  // namespace
 
-double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor) {
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
+                          const uint32_t* valid) {
   std::vector<int64_t> codes;
   std::vector<float> recon;
   int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, recon, base))
+  if (!residualCodes(values, n, step, predictor, codes, recon, base, valid))
     return std::numeric_limits<double>::infinity();
   std::sort(codes.begin(), codes.end());
   double bits = 0;
@@ -166,11 +182,12 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
 }
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
-                  std::vector<uint8_t>& out, std::vector<float>& reconstructed) {
+                  std::vector<uint8_t>& out, std::vector<float>& reconstructed,
+                  const uint32_t* valid) {
   out.clear();
   std::vector<int64_t> codes;
   int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, reconstructed, base)) return false;
+  if (!residualCodes(values, n, step, predictor, codes, reconstructed, base, valid)) return false;
   std::vector<uint8_t> varints;
   varints.reserve(codes.size() + codes.size() / 4);
   for (const int64_t c : codes) codec::putVarint(codec::zigzag(c), varints);

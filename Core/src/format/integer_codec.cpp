@@ -203,8 +203,8 @@ bool integerQuantize(const float* values, size_t count, double step, int64_t& ba
   return true;
 }
 
-void integerResiduals(Predictor p, Int3 n, const std::vector<int32_t>& k,
-                      std::vector<int32_t>& residuals) {
+void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,
+                      const uint32_t* valid) {
   residuals.resize(k.size());
   Word* r = reinterpret_cast<Word*>(residuals.data());
   if (p == Predictor::IntegerLorenzo) {
@@ -212,10 +212,14 @@ void integerResiduals(Predictor p, Int3 n, const std::vector<int32_t>& k,
     lorenzoDifferences(n, r);
     return;
   }
-  const Word* kw = reinterpret_cast<const Word*>(k.data());
+  Word* kw = reinterpret_cast<Word*>(k.data());
   size_t pos = 0;
   interpolationRuns(n, kw, [&](int64_t first, int64_t step, int count, const Word* pred) {
-    for (int j = 0; j < count; ++j) r[pos++] = kw[first + j * step] - pred[j];
+    for (int j = 0; j < count; ++j) {
+      const int64_t i = first + j * step;
+      if (valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0) kw[i] = pred[j];  // free: predicted
+      r[pos++] = kw[i] - pred[j];
+    }
   });
 }
 

@@ -77,17 +77,22 @@ Predictor choosePredictorForm(const float* values, size_t count, double step, Pr
 /// predictor as given. Returns false (and leaves `out` empty) when a residual code would exceed
 /// 2^50 (step far too small), or, for an integer form, when the values do not fit it.
 /// `reconstructed` receives the decoded values (float), as decodeValues would produce them.
+/// `valid` (block_mask.hpp's words, for the samples of a block with missing ones; nullptr: every
+/// value counts): the values whose bit is clear are free, each coded as its own prediction (code
+/// 0, reconstructed as the prediction), which costs next to nothing; readers need no mask for it.
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
-                  std::vector<uint8_t>& out, std::vector<float>& reconstructed);
+                  std::vector<uint8_t>& out, std::vector<float>& reconstructed,
+                  const uint32_t* valid = nullptr);
 
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
 /// step).
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
-                    std::vector<float>& reconstructed);
+                    std::vector<float>& reconstructed, const uint32_t* valid = nullptr);
 
 /// Order-0 entropy, in bytes, of the codes encodeValues would produce (a cheap estimate of its
 /// coded size, to skip coding a candidate that cannot win); infinity when the step does not fit.
-double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor);
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
+                          const uint32_t* valid = nullptr);
 
 /// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
 /// `where` in the message) when the bytes are not a valid coded payload of that size.

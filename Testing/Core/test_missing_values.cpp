@@ -14,6 +14,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/encode/block_sampling.hpp"
+#include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"
@@ -272,5 +273,44 @@ TEST(MissingValues, AVolumeWithoutMissingSamplesIsWrittenAsBefore) {
   for (const ModelEntry& m : f->entries()) {
     EXPECT_FALSE(m.masked);
     EXPECT_NE(m.kind, BlockKind::Empty);
+  }
+}
+
+TEST(MissingValues, ARunWithHolesAtSomeStepsKeepsEveryStepsMaskAndCodesTheRestInTime) {
+  // Step 0 whole, steps 1 and 2 with the same ball missing: the run declares missing samples from
+  // its first step; masked blocks are coded on their own, the others still refer in time.
+  const std::vector<float> whole = afam_test::movingBlob(kDims, 0);
+  const std::vector<float> holes = maskedVolume(MaskShape::Ball);
+  ArraySource s0(whole.data(), kDims), s1(holes.data(), kDims), s2(holes.data(), kDims);
+  const std::string path = afam_test::scratchPath("run.afam");
+  RunOptions run;
+  run.keyInterval = 4;
+  const RunStats stats = encodeRun({&s0, &s1, &s2}, options(BoundKind::Rmse, 1e-2), run, path);
+  EXPECT_GT(stats.references[2], 0) << "step 2 repeats step 1: its blocks refer to it";
+  for (int64_t step = 0; step < 3; ++step) {
+    auto f = AfamFile::open(path, step);
+    EXPECT_EQ(f->header().missing, MissingKind::NaN);
+    int64_t masked = 0;
+    for (const ModelEntry& m : f->entries()) {
+      masked += m.masked;
+      if (m.masked) {
+        EXPECT_FALSE(m.reference || m.residual) << "step " << step;
+      }
+    }
+    EXPECT_EQ(masked > 0, step > 0) << "step " << step;
+    ArraySource truth(step == 0 ? whole.data() : holes.data(), kDims);
+    const Check c = checkEveryBlock(*f, truth);
+    EXPECT_EQ(c.maskMismatches, 0) << "step " << step;
+    EXPECT_EQ(c.missing > 0, step > 0) << "step " << step;
+    EXPECT_LE(c.worstRmse, stats.bound * (1 + 1e-6)) << "step " << step;
+  }
+  // A run written without missing samples refuses a later step with some, by name.
+  RunEncoder streaming(afam_test::scratchPath("streaming.afam"), options(BoundKind::Rmse, 1e-2), 4);
+  streaming.addStep(s0, 0.0);
+  try {
+    streaming.addStep(s1, 1.0);
+    ADD_FAILURE() << "a step with holes joined a run declared without";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("missing samples"), std::string::npos) << e.what();
   }
 }

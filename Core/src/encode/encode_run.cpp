@@ -51,7 +51,8 @@ std::string gridDifference(const StepGrid& first, const VolumeSource& step) {
 /// that (VolumeSource::knownRange).
 class RangedStep : public VolumeSource {
  public:
-  RangedStep(VolumeSource& s, double lo, double hi) : s_(s), lo_(lo), hi_(hi) {}
+  RangedStep(VolumeSource& s, double lo, double hi, bool missing)
+      : s_(s), lo_(lo), hi_(hi), missing_(missing) {}
   Index3 dims() const override { return s_.dims(); }
   std::array<double, 3> origin() const override { return s_.origin(); }
   std::array<double, 3> spacing() const override { return s_.spacing(); }
@@ -65,24 +66,28 @@ class RangedStep : public VolumeSource {
     hi = hi_;
     return true;
   }
+  bool knownMissing() const override { return missing_; }
   int bytesPerVoxel() const override { return s_.bytesPerVoxel(); }
   bool readsOnCallingThread() const override { return s_.readsOnCallingThread(); }
 
  private:
   VolumeSource& s_;
   double lo_, hi_;
+  bool missing_;
 };
 
 /// Where one step's models go: the run writer, references included. The writer is made at the
 /// first step's begin(), with the run's range and bound, or, when the run has none yet
-/// (`run` null), the first step's own range and the bound the encoder derived from it.
+/// (`run` null), the first step's own range and the bound the encoder derived from it; missing
+/// samples as `declared` says (RunEncoder::expectMissingSamples) or the first step has them.
 class StepSink : public ModelSink {
  public:
   StepSink(std::unique_ptr<RunWriter>& writer, const std::string& path, const VolumeHeader* run,
-           int keyInterval, double bound, double time)
+           const VolumeHeader& declared, int keyInterval, double bound, double time)
       : writer_(writer),
         path_(path),
         run_(run),
+        declared_(declared),
         keyInterval_(keyInterval),
         bound_(bound),
         time_(time) {}
@@ -90,6 +95,10 @@ class StepSink : public ModelSink {
     if (!writer_) {
       VolumeHeader header = h;  // the step's partition, with the run's range and bound
       double bound = bound_;
+      if (declared_.missing != MissingKind::None) {
+        header.missing = declared_.missing;
+        header.missingValue = declared_.missingValue;
+      }
       if (run_) {
         header.valueMin = run_->valueMin;
         header.valueMax = run_->valueMax;
@@ -100,6 +109,11 @@ class StepSink : public ModelSink {
       }
       writer_ = std::make_unique<RunWriter>(path_, header, keyInterval_, bound);
     }
+    if (h.missing != MissingKind::None && writer_->header().missing == MissingKind::None)
+      throw InvalidArgument(
+          "encode: the step at time " + std::to_string(time_) +
+          " has missing samples (NaN), and the run was written without: encode the run whole "
+          "(afam encode IN0 IN1 ... OUT), which marks it from the first step on");
     stepMin_ = h.valueMin;
     stepMax_ = h.valueMax;
     writer_->beginStep(time_);
@@ -122,6 +136,7 @@ class StepSink : public ModelSink {
   std::unique_ptr<RunWriter>& writer_;
   std::string path_;
   const VolumeHeader* run_;
+  const VolumeHeader& declared_;
   int keyInterval_;
   double bound_, time_, stepMin_ = 0, stepMax_ = 0;
 };
@@ -216,7 +231,8 @@ EncodeStats RunEncoder::addStep(VolumeSource& step, double time, EncodeTeam& tea
   // The first process writes the run; the others, a scratch run of their own (never committed).
   const bool writes = team.rank() == 0;
   const std::string path = writes ? s.path : s.path + ".rank" + std::to_string(team.rank());
-  StepSink sink(s.writer, path, s.rangeKnown ? &s.header : nullptr, s.keyInterval, s.bound, time);
+  StepSink sink(s.writer, path, s.rangeKnown ? &s.header : nullptr, s.header, s.keyInterval,
+                s.bound, time);
   StepRecorder recorder(sink);
   s.options.previous = s.previous.get();
   const EncodeStats stats = encodeVolume(
@@ -252,6 +268,13 @@ EncodeStats RunEncoder::addStep(VolumeSource& step, double time, EncodeTeam& tea
   s.stats.residuals.push_back(sink.residuals);
   if (!s.previous) s.previous = std::make_unique<WrittenStep>(*s.writer);
   return s.stats.steps.back();
+}
+
+void RunEncoder::expectMissingSamples() {
+  State& s = *s_;
+  if (s.writer) throw InvalidArgument("encode: missing samples are declared before the first step");
+  s.header.missing = s.options.hasMissingValue ? MissingKind::Value : MissingKind::NaN;
+  s.header.missingValue = s.options.hasMissingValue ? s.options.missingValue : 0.0;
 }
 
 void RunEncoder::setProgress(std::function<bool(double)> progress) {
@@ -302,14 +325,18 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   std::vector<RangedStep> ranged;  // each step's range, read once
   ranged.reserve(steps.size());
+  bool anyMissing = false;
   for (VolumeSource* s : steps) {
     double a, b;
-    volumeValueRange(*s, a, b);
-    ranged.emplace_back(*s, a, b);
+    bool missing = false;
+    volumeValueRange(*s, a, b, &missing);
+    ranged.emplace_back(*s, a, b, missing);
     lo = std::min(lo, a);
     hi = std::max(hi, b);
+    anyMissing = anyMissing || missing;
   }
   RunEncoder encoder(path, options, run.keyInterval, lo, hi);
+  if (anyMissing) encoder.expectMissingSamples();
   for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(ranged[k], times[k]);
   return encoder.commit();
 }
@@ -349,7 +376,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   if (writer->keyInterval() == 1) stepOptions.runCodedShare = 1.0;
   WrittenStep previous(*writer);
   stepOptions.previous = &previous;
-  StepSink sink(writer, path, &h, 0, stats.bound, time);
+  StepSink sink(writer, path, &h, h, 0, stats.bound, time);
   stats.steps.push_back(encodeVolume(step, stepOptions, sink));
   sink.end();
   stats.references.push_back(sink.references);

@@ -177,7 +177,10 @@ bool checkSlab(const std::vector<float>& buf, int64_t z, const VolumeSource& sou
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
                     EncodeTeam& team, double& vmin, double& vmax, bool& missing) {
   missing = false;
-  if (source.knownRange(vmin, vmax)) return;
+  if (source.knownRange(vmin, vmax)) {
+    missing = source.knownMissing();
+    return;
+  }
   const Index3 dims = source.dims();
   const int64_t plane = dims[0] * dims[1];
   const int64_t chunk =
@@ -497,13 +500,14 @@ class LevelEncoder {
 
 }  // namespace
 
-void volumeValueRange(VolumeSource& source, double& vmin, double& vmax) {
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing) {
   const Partition part(source.dims(), 1, 1);
   EncoderOptions opt;
   const EncodeProgress progress(part, opt);
   SoloTeam solo;
-  bool missing = false;
-  scanValueRange(source, part, progress, solo, vmin, vmax, missing);
+  bool found = false;
+  scanValueRange(source, part, progress, solo, vmin, vmax, found);
+  if (missing) *missing = found;
 }
 
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {

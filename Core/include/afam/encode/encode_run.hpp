@@ -68,6 +68,10 @@ class RunEncoder {
   /// The same, by every process of `team` (collective; each with its source of the step). Only
   /// the first process's statistics count every block (encodeVolume with a team).
   EncodeStats addStep(VolumeSource& step, double time, EncodeTeam& team);
+  /// Before the first step: the run has missing samples (NaN) at some step, which its header
+  /// declares from the first step on (encodeRun calls it when its first pass finds one). A run
+  /// without it refuses a later step with missing samples, by name.
+  void expectMissingSamples();
   /// The progress callback of the steps from now on (EncoderOptions::progress: fractions of the
   /// step; returning false cancels it, Cancelled).
   void setProgress(std::function<bool(double)> progress);

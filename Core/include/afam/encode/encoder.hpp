@@ -105,9 +105,9 @@ struct EncoderOptions {
   double missingValue = 0;
 };
 
-/// The value range of a volume (one pass unless the source knows it); NumericError naming the
-/// first sample that is NaN or Inf.
-void volumeValueRange(VolumeSource& source, double& vmin, double& vmax);
+/// The value range of a volume's valid samples (one pass unless the source knows it); NumericError
+/// naming the first sample that is infinite. `missing`: whether a sample is NaN (missing).
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing = nullptr);
 
 struct LevelStats {
   int64_t blocks = 0;         ///< micro-blocks of the level

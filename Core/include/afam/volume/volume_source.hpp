@@ -36,6 +36,9 @@ class VolumeSource {
     (void)hi;
     return false;
   }
+  /// With knownRange: whether some sample is NaN (missing), which the encoder then does not learn
+  /// from a pass of its own.
+  virtual bool knownMissing() const { return false; }
   /// Bytes per voxel of the original data (for the compression ratio).
   virtual int bytesPerVoxel() const { return 4; }
   /// true when readSlab may only run on the thread that called the encoder (e.g. it reads through

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,27 @@ Bytes encodedResidualRun(const std::string& scratch) {
   return encodedRunOf({&sources[0], &sources[1], &sources[2], &sources[3]}, 3, scratch);
 }
 
+// Marschner-Lobb with holes: masked blocks (coded masks before their models) and an empty block.
+Bytes encodedWithHoles(const std::string& scratch) {
+  const afam::Index3 dims{12, 10, 9};
+  std::vector<float> v(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+  afam::marschnerLobbSlab(afam::MarschnerLobb{}, dims, 0, dims[2], v.data());
+  size_t i = 0;
+  for (int64_t z = 0; z < dims[2]; ++z)
+    for (int64_t y = 0; y < dims[1]; ++y)
+      for (int64_t x = 0; x < dims[0]; ++x, ++i)
+        if (x < 5 || (x - 8) * (x - 8) + (y - 5) * (y - 5) + (z - 4) * (z - 4) < 6)
+          v[i] = std::numeric_limits<float>::quiet_NaN();
+  afam::ArraySource source(v.data(), dims);
+  afam::EncoderOptions o;
+  o.levels = 2;
+  o.blocksPerAxis = 3;
+  o.errorBound = 1e-2;
+  o.threads = 1;
+  afam::encodeVolume(source, o, scratch);
+  return readThenRemove(scratch);
+}
+
 void afamSeeds(const std::string& out) {
   const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
   using M = afam::EncodingMode;
@@ -133,6 +155,9 @@ void afamSeeds(const std::string& out) {
   const Bytes residuals = encodedResidualRun(scratch);  // residual chains
   writeSeed(dir, "residuals-fixall", 7, residuals);
   writeSeed(dir, "residuals-asis", 0, residuals);
+  const Bytes holes = encodedWithHoles(scratch);  // missing samples: masks and an empty block
+  writeSeed(dir, "holes-fixall", 7, holes);
+  writeSeed(dir, "holes-asis", 0, holes);
 }
 
 Bytes floatBytes(const std::vector<float>& f) {

@@ -12,9 +12,9 @@
 #include <iterator>
 #include <thread>
 
+#include "afam/base/atomic_write.hpp"
 #include "afam/base/errors.hpp"
 #include "afam/format/afam_file.hpp"
-#include "afam/format/atomic_write.hpp"
 #include "afam/scene/lod.hpp"
 
 namespace afam {

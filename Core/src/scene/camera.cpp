@@ -8,8 +8,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "afam/base/atomic_write.hpp"
 #include "afam/base/errors.hpp"
-#include "afam/format/atomic_write.hpp"
 
 namespace afam {
 namespace {

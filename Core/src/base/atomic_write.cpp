@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/format/atomic_write.hpp"
+#include "afam/base/atomic_write.hpp"
 
 #include <cstdio>
 #include <fstream>

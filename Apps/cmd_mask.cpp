@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// afam mask IN OUT.raw --shape ball|fov|land [--fill V] [--nearest FILLED.raw] : a volume with holes
-// (test and benchmark data for missing samples), and the same volume with its holes filled by
+// afam mask IN OUT.raw --shape ball|fov|land [--fill V] [--nearest FILLED.raw] : a volume with
+// holes (test and benchmark data for missing samples), and the same volume with its holes filled by
 // hand.
 
 #include <cstdio>
@@ -50,8 +50,8 @@ int runMask(int argc, char** argv) {
   const Index3 d = src.dims();
   const VolumeMask mask(parseMaskShape(args.str("shape", "ball")), d,
                         uint64_t(args.integer("seed", 1)));
-  const float fill = args.has("fill") ? float(args.real("fill", 0))
-                                      : std::numeric_limits<float>::quiet_NaN();
+  const float fill =
+      args.has("fill") ? float(args.real("fill", 0)) : std::numeric_limits<float>::quiet_NaN();
   MaskedSource masked(src, mask);
   std::vector<float> v(size_t(d[0] * d[1] * d[2]));
   masked.readSlab(0, d[2], v.data());
@@ -66,8 +66,8 @@ int runMask(int argc, char** argv) {
     for (float& x : v)
       if (x != x) x = fill;
   writeFloats(args.positional()[1], v);
-  std::printf("missing=%lld of %lld samples (%.2f%%)\n", (long long)missing,
-              (long long)v.size(), 100.0 * double(missing) / double(v.size()));
+  std::printf("missing=%lld of %lld samples (%.2f%%)\n", (long long)missing, (long long)v.size(),
+              100.0 * double(missing) / double(v.size()));
   return 0;
 }
 

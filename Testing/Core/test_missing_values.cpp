@@ -195,9 +195,9 @@ TEST(MissingValues, SmallerThanTheVolumeFilledWithTheNearestValidValue) {
     SampleType type;
     Index3 dims;
     MaskShape shape;
-  } cases[] = {{"neghip_66x66x66_uint8.raw", SampleType::UInt8, {66, 66, 66}, MaskShape::Ball},
-               {"chi_field_50x50x50_float32.raw", SampleType::Float32, {50, 50, 50},
-                MaskShape::Land}};
+  } cases[] = {
+      {"neghip_66x66x66_uint8.raw", SampleType::UInt8, {66, 66, 66}, MaskShape::Ball},
+      {"chi_field_50x50x50_float32.raw", SampleType::Float32, {50, 50, 50}, MaskShape::Land}};
   for (const auto& c : cases) {
     RawFileSource raw(dir + c.name, c.dims, c.type);
     const VolumeMask mask(c.shape, c.dims);
@@ -222,7 +222,8 @@ TEST(MissingValues, AFillValueMarksMissingSamplesAsNaNDoes) {
   const std::vector<float> fill = maskedVolume(MaskShape::Ball, -999.f);
   ArraySource a(nan.data(), kDims), inner(fill.data(), kDims);
   MissingValueSource b(inner, -999.0);
-  const std::string pa = afam_test::scratchPath("nan.afam"), pb = afam_test::scratchPath("fill.afam");
+  const std::string pa = afam_test::scratchPath("nan.afam"),
+                    pb = afam_test::scratchPath("fill.afam");
   encodeVolume(a, options(BoundKind::Rmse, 1e-2), pa);
   EncoderOptions opt = options(BoundKind::Rmse, 1e-2);
   opt.hasMissingValue = true;

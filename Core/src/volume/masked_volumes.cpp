@@ -63,8 +63,7 @@ VolumeMask::VolumeMask(MaskShape shape, Index3 dims, uint64_t seed) : shape_(sha
 bool VolumeMask::missing(int64_t x, int64_t y, int64_t z) const {
   switch (shape_) {
     case MaskShape::Ball: {
-      const double r =
-          0.25 * double(std::min({dims_[0], dims_[1], dims_[2]}) - 1);  // in samples
+      const double r = 0.25 * double(std::min({dims_[0], dims_[1], dims_[2]}) - 1);  // in samples
       const double dx = double(x) - 0.5 * double(dims_[0] - 1),
                    dy = double(y) - 0.5 * double(dims_[1] - 1),
                    dz = double(z) - 0.5 * double(dims_[2] - 1);
@@ -78,7 +77,7 @@ bool VolumeMask::missing(int64_t x, int64_t y, int64_t z) const {
     }
     case MaskShape::Land: {
       const double h = relief_[size_t(y * dims_[0] + x)];
-      if (h >= kSeaLevel) return true;  // land
+      if (h >= kSeaLevel) return true;                                     // land
       const double floor = (h - kShelfStart) / (kSeaLevel - kShelfStart);  // 0 deep .. 1 coast
       return fraction(z, dims_[2]) < floor;  // z = 0 the deepest plane
     }
@@ -112,9 +111,9 @@ void fillNearestValid(std::vector<float>& v, Index3 dims) {
     next.clear();
     for (int64_t i : front) {
       const int64_t x = i % sy, y = (i / sy) % dims[1], z = i / sz;
-      const int64_t nb[6] = {x > 0 ? i - 1 : -1,           x + 1 < dims[0] ? i + 1 : -1,
-                             y > 0 ? i - sy : -1,          y + 1 < dims[1] ? i + sy : -1,
-                             z > 0 ? i - sz : -1,          z + 1 < dims[2] ? i + sz : -1};
+      const int64_t nb[6] = {x > 0 ? i - 1 : -1,  x + 1 < dims[0] ? i + 1 : -1,
+                             y > 0 ? i - sy : -1, y + 1 < dims[1] ? i + sy : -1,
+                             z > 0 ? i - sz : -1, z + 1 < dims[2] ? i + sz : -1};
       for (int64_t j : nb)
         if (j >= 0 && !known[size_t(j)]) {
           known[size_t(j)] = 1;

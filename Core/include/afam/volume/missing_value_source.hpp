@@ -12,6 +12,10 @@
 
 namespace afam {
 
+/// Why `value` cannot mark missing samples of `type` ("" when it can): NaN, infinite, or for
+/// integer samples outside the type's range or not an integer; for float32, outside its range.
+std::string missingValueProblem(double value, SampleType type);
+
 class MissingValueSource : public VolumeSource {
  public:
   /// Throws InvalidArgument when `value` is NaN or infinite, or, for a source of integer samples

@@ -30,7 +30,7 @@ std::string missingValueProblem(double value, SampleType type) {
 }
 
 MissingValueSource::MissingValueSource(VolumeSource& inner, double value, SampleType type)
-    : inner_(inner), value_(float(value)) {
+    : WrappingSource(inner), value_(float(value)) {
   const std::string why = missingValueProblem(value, type);
   if (!why.empty()) {
     std::ostringstream msg;

@@ -12,7 +12,7 @@ void markInvalid(const uint8_t* valid, int64_t count, float* out) {
 }
 
 ValidMaskSource::ValidMaskSource(VolumeSource& inner, const uint8_t* valid)
-    : inner_(inner), valid_(valid) {}
+    : WrappingSource(inner), valid_(valid) {}
 
 void ValidMaskSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   inner_.readSlab(z0, zCount, out);
@@ -20,8 +20,7 @@ void ValidMaskSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   markInvalid(valid_ + z0 * d[0] * d[1], d[0] * d[1] * zCount, out);
 }
 
-void ValidMaskSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
-                               float* out) {
+void ValidMaskSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) {
   inner_.readRows(z0, zCount, y0, yCount, out);
   const Index3 d = dims();
   for (int64_t z = 0; z < zCount; ++z)  // the rows asked for, plane by plane

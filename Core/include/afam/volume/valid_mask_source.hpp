@@ -11,22 +11,15 @@
 
 namespace afam {
 
-class ValidMaskSource : public VolumeSource {
+class ValidMaskSource : public WrappingSource {
  public:
   /// `valid`: dims[0] * dims[1] * dims[2] bytes of `inner`'s grid, x fastest; a 0 byte marks the
   /// sample missing. The mask must outlive the source.
   ValidMaskSource(VolumeSource& inner, const uint8_t* valid);
-  Index3 dims() const override { return inner_.dims(); }
-  std::array<double, 3> origin() const override { return inner_.origin(); }
-  std::array<double, 3> spacing() const override { return inner_.spacing(); }
-  std::string name() const override { return inner_.name(); }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
-  int bytesPerVoxel() const override { return inner_.bytesPerVoxel(); }
-  bool readsOnCallingThread() const override { return inner_.readsOnCallingThread(); }
 
  private:
-  VolumeSource& inner_;
   const uint8_t* valid_;
 };
 

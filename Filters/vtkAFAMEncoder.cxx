@@ -304,8 +304,8 @@ std::string vtkAFAMEncoder::MissingMarksProblem(vtkImageData* input,
   }
   if (this->InputTimes.size() > 1)
   {
-    return "MissingValue applies to one volume: a run's steps mark missing samples with NaN or "
-           "the valid-point mask (turn EncodeTimeSteps off to encode one step)";
+    return "MissingValue applies to one volume: a run of time steps cannot hold missing samples "
+           "(turn EncodeTimeSteps off to encode the step shown)";
   }
   return vtkAFAMMissingValueProblem(this->MissingValue, type, arrayName);
 }

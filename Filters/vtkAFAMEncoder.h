@@ -169,8 +169,8 @@ public:
 
   ///@{
   /// With UseMissingValue (default off), the samples equal to MissingValue (default 0; a finite
-  /// value the array's type can hold) are missing too, and the file records the value. It applies
-  /// to one volume: a run of time steps marks missing samples with NaN or the mask.
+  /// value the array's type can hold) are missing too, and the file records the value. One volume
+  /// only: a run of time steps cannot hold missing samples yet (Core's run encoder refuses them).
   vtkSetMacro(UseMissingValue, bool);
   vtkGetMacro(UseMissingValue, bool);
   vtkBooleanMacro(UseMissingValue, bool);

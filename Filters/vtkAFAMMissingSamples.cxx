@@ -49,7 +49,8 @@ bool vtkAFAMFindValidMask(vtkPointData* pointData,
     mask.Copy = vtkSmartPointer<vtkUnsignedCharArray>::New();
     mask.Copy->DeepCopy(array);
   }
-  mask.Valid = static_cast<const uint8_t*>((mask.Copy ? mask.Copy.Get() : array)->GetVoidPointer(0));
+  mask.Valid =
+    static_cast<const uint8_t*>((mask.Copy ? mask.Copy.Get() : array)->GetVoidPointer(0));
   mask.Name = name;
   return true;
 }
@@ -64,8 +65,8 @@ std::string vtkAFAMMissingValueProblem(double value,
     return why;
   }
   std::ostringstream msg;
-  msg << "MissingValue " << value << " cannot mark missing samples of '" << arrayName
-      << "': it " << why;
+  msg << "MissingValue " << value << " cannot mark missing samples of '" << arrayName << "': it "
+      << why;
   return msg.str();
 }
 

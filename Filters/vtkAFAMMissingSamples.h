@@ -60,9 +60,15 @@ public:
     bool useValue,
     double value,
     afam::SampleType type);
-  afam::VolumeSource& Source() { return *this->Top; }
+  afam::VolumeSource& Source()
+  {
+    return *this->Top;
+  }
   /// A fill value was given and no sample read so far equalled it.
-  bool ValueNeverFound() const { return this->Filled && this->Filled->matches() == 0; }
+  bool ValueNeverFound() const
+  {
+    return this->Filled && this->Filled->matches() == 0;
+  }
 
 private:
   std::unique_ptr<afam::ValidMaskSource> Masked;

@@ -56,7 +56,8 @@ vtkIdType Points()
 /// the finest level, so that it is stored empty).
 double Field(vtkIdType i)
 {
-  const double x = static_cast<double>(i % Dims[0]), y = static_cast<double>((i / Dims[0]) % Dims[1]),
+  const double x = static_cast<double>(i % Dims[0]),
+               y = static_cast<double>((i / Dims[0]) % Dims[1]),
                z = static_cast<double>(i / (Dims[0] * Dims[1]));
   return std::sin(0.3 * x) * std::cos(0.25 * y) + 0.04 * z;
 }
@@ -177,7 +178,8 @@ void CheckDecoded(const Encoded& e, vtkDataArray* original, const std::string& w
 {
   if (!e.file || !e.decoded || e.decoded->GetNumberOfTuples() != Points())
   {
-    Check(false, what + ": encoded and read back (errors: " +
+    Check(false,
+      what + ": encoded and read back (errors: " +
         (e.errors.empty() ? std::string("none") : e.errors[0]) + ")");
     return;
   }
@@ -237,7 +239,8 @@ void MarkedMissing()
   const Encoded masked = Encode(probed);
   CheckDecoded(masked, truth, "vtkValidPointMask");
   Check(masked.missingKind == "nan", "vtkValidPointMask: AFAM_MissingKind " + masked.missingKind);
-  const Encoded unmasked = Encode(probed, [](vtkAFAMEncoder* e) { e->SetValidPointMaskArrayName(""); });
+  const Encoded unmasked =
+    Encode(probed, [](vtkAFAMEncoder* e) { e->SetValidPointMaskArrayName(""); });
   Check(unmasked.file && unmasked.missingKind == "none",
     "no mask name: every point valid (AFAM_MissingKind " + unmasked.missingKind + ")");
 

@@ -487,30 +487,51 @@ std::unique_ptr<afam::ArraySource> vtkAFAMEncoder::SourceOf(vtkImageData* input,
     std::array<double, 3>{ spacing[0], spacing[1], spacing[2] });
 }
 
+struct vtkAFAMEncoder::MarkedInput
+{
+  vtkAFAMArraySamples Samples; ///< what the sources read, kept while they do
+  std::unique_ptr<afam::ArraySource> Values;
+  vtkAFAMValidMask Mask;
+  std::unique_ptr<vtkAFAMMarkedSource> Marked;
+};
+
+std::unique_ptr<vtkAFAMEncoder::MarkedInput> vtkAFAMEncoder::MarkedSourceOf(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  bool useValue)
+{
+  auto in = std::make_unique<MarkedInput>();
+  in->Values = this->SourceOf(input, inputVector, in->Samples);
+  if (!in->Values)
+  {
+    return nullptr;
+  }
+  const std::string problem =
+    this->MissingMarksProblem(input, in->Samples.Type, in->Values->name(), in->Mask);
+  if (!problem.empty())
+  {
+    vtkErrorMacro(<< problem);
+    return nullptr;
+  }
+  in->Marked = std::make_unique<vtkAFAMMarkedSource>(
+    *in->Values, in->Mask.Valid, useValue, this->MissingValue, in->Samples.Type);
+  return in;
+}
+
 bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
   vtkInformationVector** inputVector,
   vtkMultiBlockDataSet* output)
 {
-  vtkAFAMArraySamples samples; // what the source reads, kept while it does
-  std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
-  vtkAFAMValidMask mask;
-  if (!source)
+  std::unique_ptr<MarkedInput> marked =
+    this->MarkedSourceOf(input, inputVector, this->UseMissingValue);
+  if (!marked)
   {
     return false;
   }
-  const std::string problem = this->MissingMarksProblem(input, samples.Type, source->name(), mask);
-  if (!problem.empty())
-  {
-    vtkErrorMacro(<< problem);
-    return false;
-  }
-  vtkAFAMMarkedSource marked(
-    *source, mask.Valid, this->UseMissingValue, this->MissingValue, samples.Type);
   const std::string path = NewModelPath();
-  this->KeepStatistics(afam::encodeVolume(marked.Source(), this->MakeOptions(), path));
-  if (marked.ValueNeverFound())
+  this->KeepStatistics(afam::encodeVolume(marked->Marked->Source(), this->MakeOptions(), path));
+  if (marked->Marked->ValueNeverFound())
   {
-    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, source->name()));
+    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, marked->Values->name()));
   }
   this->BuildOutput(path, output);
   return true;
@@ -582,22 +603,12 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   }
   else
   {
-    vtkAFAMArraySamples samples; // what the source reads, kept while it does
-    std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
-    vtkAFAMValidMask mask;
-    if (!source)
+    std::unique_ptr<MarkedInput> marked = this->MarkedSourceOf(input, inputVector, false);
+    if (!marked)
     {
       return false;
     }
-    const std::string problem =
-      this->MissingMarksProblem(input, samples.Type, source->name(), mask);
-    if (!problem.empty())
-    {
-      vtkErrorMacro(<< problem);
-      return false;
-    }
-    vtkAFAMMarkedSource marked(*source, mask.Valid, false, 0, samples.Type);
-    encoder.addStep(marked.Source(), time);
+    encoder.addStep(marked->Marked->Source(), time);
   }
   if (++this->NextStep < n)
   {

@@ -259,6 +259,13 @@ protected:
   std::unique_ptr<afam::ArraySource> SourceOf(vtkImageData* input,
     vtkInformationVector** inputVector,
     vtkAFAMArraySamples& samples);
+  /// The chosen array of the input as the encoder reads it (SourceOf) with its missing samples
+  /// marked: the valid-point mask, and the fill value when `useValue`. Null after reporting what
+  /// is wrong.
+  struct MarkedInput;
+  std::unique_ptr<MarkedInput> MarkedSourceOf(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    bool useValue);
   /// What is wrong with the missing-sample settings for the chosen array (`arrayName`, of `type`)
   /// of `input` ("" when nothing is); `mask` gets the valid-point mask, if the input has one.
   std::string MissingMarksProblem(vtkImageData* input,

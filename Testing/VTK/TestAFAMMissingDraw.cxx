@@ -26,7 +26,7 @@ namespace
 {
 const int N = 49, Width = 301, Height = 300;
 const double ParallelScale = 1.05;
-const int Margin = 5;        // voxels: the coarsest level's stride (4) and one more
+const int Margin = 5;         // voxels: the coarsest level's stride (4) and one more
 const int FirstMissingX = 30; // samples at x >= 30 are missing
 
 int failures = 0;
@@ -139,10 +139,11 @@ int main(int, char*[])
       validChanged += kind == 2 && !same;
       validDrawn += kind == 2 && !Near(&off[p], background, 8);
     }
-  std::cout << "missing-only pixels " << missingOnly << " (not background with Draw NaN off: "
-            << offNotBackground << ", not the NaN colour with it on: " << onNotNan
-            << "); valid-only pixels " << validOnly << " (drawn " << validDrawn
-            << ", changed by Draw NaN " << validChanged << ")\n";
+  std::cout << "missing-only pixels " << missingOnly
+            << " (not background with Draw NaN off: " << offNotBackground
+            << ", not the NaN colour with it on: " << onNotNan << "); valid-only pixels "
+            << validOnly << " (drawn " << validDrawn << ", changed by Draw NaN " << validChanged
+            << ")\n";
   Check(missingOnly > 5000, "the right of the image sees only missing samples");
   Check(offNotBackground == 0, "Draw NaN off: rays through missing samples only stay background");
   Check(onNotNan == 0, "Draw NaN on, NaN opacity 1: those rays are the NaN colour");

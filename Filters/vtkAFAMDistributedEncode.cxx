@@ -11,6 +11,9 @@
 #include "vtkAFAMControllerTeam.h"
 #include "vtkAFAMPieceSource.h"
 #include "vtkMPICommunicator.h"
+
+#include "afam/volume/missing_value_source.hpp"
+#include "afam/volume/valid_mask_source.hpp"
 #endif
 
 #include <sstream>
@@ -122,6 +125,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   vtkDataArray* array,
   const std::string& arrayError,
   const int wholeExtent[6],
+  const vtkAFAMPieceMarks& marks,
   const vtkAFAMTeamEncode& encode)
 {
   vtkAFAMControllerTeam team(controller);
@@ -161,7 +165,9 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   AgreeOnGeometry(team, piece, first, wholeExtent, origin, spacing);
 
   // Extents and sample types of every piece (-1: an empty piece).
-  const int mineType = empty ? -1 : static_cast<int>(samples.Type);
+  const bool masked = !empty && marks.Valid; // shared as float32 with NaN where it is 0
+  const int mineType =
+    empty ? -1 : static_cast<int>(masked ? afam::SampleType::Float32 : samples.Type);
   const int info[7] = { mine[0], mine[1], mine[2], mine[3], mine[4], mine[5], mineType };
   const std::vector<int> all = team.allGather(info, 7);
   std::vector<Extent> pieces(static_cast<size_t>(team.size()));
@@ -179,10 +185,14 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   // The values as they are where every piece has the same type, else this piece as float32.
   const auto exposed = static_cast<afam::SampleType>(type);
   std::vector<float> converted;
-  if (!empty && exposed != samples.Type)
+  if (!empty && (masked || exposed != samples.Type))
   {
     converted.resize(static_cast<size_t>(array->GetNumberOfTuples()));
     afam::samplesToFloat(samples.Type, samples.Data, converted.size(), converted.data());
+    if (masked)
+    {
+      afam::markInvalid(marks.Valid, static_cast<int64_t>(converted.size()), converted.data());
+    }
   }
   const void* values = empty ? nullptr : converted.empty() ? samples.Data : converted.data();
   vtkAFAMPieceSource source(*communicator->GetMPIComm()->GetHandle(),
@@ -196,7 +206,19 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
     spacing,
     bytes);
   vtkAFAMPiecesEncoded result;
-  result.stats = encode(source, team);
+  result.arrayName = name;
+  if (!marks.UseValue)
+  {
+    result.stats = encode(source, team);
+  }
+  else
+  {
+    afam::MissingValueSource filled(source, marks.Value, exposed);
+    result.stats = encode(filled, team);
+    std::vector<uint8_t> found{ static_cast<uint8_t>(filled.matches() > 0 ? 1 : 0) };
+    team.mergeFlags(found); // each rank read its share of the samples
+    result.missingValueFound = found[0] != 0;
+  }
   std::copy(mine.begin(), mine.end(), result.pieceExtent);
   result.remoteBytesRead = source.remoteBytesRead();
   return result;
@@ -214,6 +236,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController*,
   vtkDataArray*,
   const std::string&,
   const int*,
+  const vtkAFAMPieceMarks&,
   const vtkAFAMTeamEncode&)
 {
   throw afam::Error("encode: this build of the plugin has no MPI (VTK::ParallelMPI): encoding "

@@ -51,12 +51,22 @@ bool vtkAFAMGetSamples(vtkDataArray* array, vtkAFAMArraySamples& samples, std::s
 /// type vtkAFAMGetSamples refuses, or of no numbers at all (strings, variants).
 std::string vtkAFAMRefusedType(vtkAbstractArray* array);
 
+/// What marks a piece's missing samples besides NaN (checked beforehand: vtkAFAMMissingSamples.h).
+struct vtkAFAMPieceMarks
+{
+  const uint8_t* Valid = nullptr; ///< the piece's valid-point mask (0: missing), or none
+  bool UseValue = false;          ///< the samples equal to Value are missing
+  double Value = 0;
+};
+
 /// What one rank did in a distributed encode.
 struct vtkAFAMPiecesEncoded
 {
   afam::EncodeStats stats; ///< the whole volume's on rank 0 (encodeVolume with a team)
   int pieceExtent[6] = { 0, -1, 0, -1, 0, -1 }; ///< this rank's piece (empty: x1 < x0)
   uint64_t remoteBytesRead = 0;                 ///< samples read from other ranks' pieces, in bytes
+  bool missingValueFound = false; ///< with marks.UseValue: some rank's sample equalled it
+  std::string arrayName;          ///< the array the ranks encoded
 };
 
 /// What the ranks do with the volume their pieces make up, together (collective): e.g. encode it
@@ -67,12 +77,15 @@ using vtkAFAMTeamEncode =
 
 /// `array` is the chosen point array of `piece` (nullptr when `arrayError` says why none could be
 /// chosen; both unused where the piece is empty); `wholeExtent` is the pipeline's whole extent.
+/// A piece with a valid-point mask (`marks`) is shared as float32 with NaN where the mask is 0;
+/// a fill value marks the samples of the whole volume as they are read.
 /// Throws std::exception (afam::Error or afam::Cancelled) with the same message on every rank.
 vtkAFAMPiecesEncoded vtkAFAMEncodePieces(vtkMultiProcessController* controller,
   vtkImageData* piece,
   vtkDataArray* array,
   const std::string& arrayError,
   const int wholeExtent[6],
+  const vtkAFAMPieceMarks& marks,
   const vtkAFAMTeamEncode& encode);
 
 /// Whether this build can encode across ranks (the module was built with VTK::ParallelMPI).

@@ -4,6 +4,7 @@
 
 #include "vtkAFAMControllerTeam.h"
 #include "vtkAFAMDistributedEncode.h"
+#include "vtkAFAMMissingSamples.h"
 #include "vtkAFAMModelTree.h"
 
 #include "afam/format/afam_file.hpp"
@@ -43,6 +44,7 @@ vtkAFAMEncoder::vtkAFAMEncoder()
 {
   this->SetInputArrayToProcess(
     0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS);
+  this->SetValidPointMaskArrayName("vtkValidPointMask");
 }
 
 // A run being encoded, one execution a step.
@@ -56,6 +58,7 @@ vtkAFAMEncoder::~vtkAFAMEncoder()
 {
   this->DropRun();
   this->RemoveModelFile();
+  this->SetValidPointMaskArrayName(nullptr);
 }
 
 void vtkAFAMEncoder::DropRun()
@@ -137,7 +140,9 @@ vtkDataArray* vtkAFAMEncoder::ChooseArray(vtkImageData* input,
     for (int i = 0; i < pd->GetNumberOfArrays(); ++i)
     {
       vtkDataArray* a = pd->GetArray(i);
-      if (a && a->GetNumberOfComponents() == 1)
+      const bool mask = a && a->GetName() && this->ValidPointMaskArrayName &&
+        std::string(a->GetName()) == this->ValidPointMaskArrayName;
+      if (a && a->GetNumberOfComponents() == 1 && !mask)
       {
         single.push_back(a);
       }
@@ -209,6 +214,8 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
   options.mode = static_cast<afam::EncodingMode>(this->Mode);
   options.fixedNcp = this->FixedNcp;
   options.threads = this->NumberOfThreads;
+  options.hasMissingValue = this->UseMissingValue;
+  options.missingValue = this->MissingValue;
   options.progress = [this](double f)
   {
     this->UpdateProgress(0.95 * f);
@@ -272,6 +279,35 @@ void vtkAFAMEncoder::KeepStatistics(const afam::EncodeStats& stats)
   this->LastCompressionRatio = stats.bytesOut > 0
     ? static_cast<double>(stats.bytesIn) / static_cast<double>(stats.bytesOut)
     : 0;
+}
+
+std::string vtkAFAMEncoder::MissingMarksProblem(vtkImageData* input,
+  afam::SampleType type,
+  const std::string& arrayName,
+  vtkAFAMValidMask& mask)
+{
+  std::string error;
+  const char* maskName = this->ValidPointMaskArrayName;
+  if (!vtkAFAMFindValidMask(
+        input->GetPointData(), maskName, input->GetNumberOfPoints(), mask, error))
+  {
+    return error;
+  }
+  if (!mask.Valid && maskName && *maskName && std::string(maskName) != "vtkValidPointMask")
+  {
+    vtkWarningMacro(<< "the input has no point array '" << maskName
+                    << "' (ValidPointMaskArrayName): no mask applied");
+  }
+  if (!this->UseMissingValue)
+  {
+    return "";
+  }
+  if (this->InputTimes.size() > 1)
+  {
+    return "MissingValue applies to one volume: a run of time steps cannot hold missing samples "
+           "(turn EncodeTimeSteps off to encode the step shown)";
+  }
+  return vtkAFAMMissingValueProblem(this->MissingValue, type, arrayName);
 }
 
 void vtkAFAMEncoder::KeepRunStatistics(const afam::RunStats& stats)
@@ -451,18 +487,52 @@ std::unique_ptr<afam::ArraySource> vtkAFAMEncoder::SourceOf(vtkImageData* input,
     std::array<double, 3>{ spacing[0], spacing[1], spacing[2] });
 }
 
+struct vtkAFAMEncoder::MarkedInput
+{
+  vtkAFAMArraySamples Samples; ///< what the sources read, kept while they do
+  std::unique_ptr<afam::ArraySource> Values;
+  vtkAFAMValidMask Mask;
+  std::unique_ptr<vtkAFAMMarkedSource> Marked;
+};
+
+std::unique_ptr<vtkAFAMEncoder::MarkedInput> vtkAFAMEncoder::MarkedSourceOf(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  bool useValue)
+{
+  auto in = std::make_unique<MarkedInput>();
+  in->Values = this->SourceOf(input, inputVector, in->Samples);
+  if (!in->Values)
+  {
+    return nullptr;
+  }
+  const std::string problem =
+    this->MissingMarksProblem(input, in->Samples.Type, in->Values->name(), in->Mask);
+  if (!problem.empty())
+  {
+    vtkErrorMacro(<< problem);
+    return nullptr;
+  }
+  in->Marked = std::make_unique<vtkAFAMMarkedSource>(
+    *in->Values, in->Mask.Valid, useValue, this->MissingValue, in->Samples.Type);
+  return in;
+}
+
 bool vtkAFAMEncoder::EncodeWhole(vtkImageData* input,
   vtkInformationVector** inputVector,
   vtkMultiBlockDataSet* output)
 {
-  vtkAFAMArraySamples samples; // what the source reads, kept while it does
-  std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
-  if (!source)
+  std::unique_ptr<MarkedInput> marked =
+    this->MarkedSourceOf(input, inputVector, this->UseMissingValue);
+  if (!marked)
   {
     return false;
   }
   const std::string path = NewModelPath();
-  this->KeepStatistics(afam::encodeVolume(*source, this->MakeOptions(), path));
+  this->KeepStatistics(afam::encodeVolume(marked->Marked->Source(), this->MakeOptions(), path));
+  if (marked->Marked->ValueNeverFound())
+  {
+    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, marked->Values->name()));
+  }
   this->BuildOutput(path, output);
   return true;
 }
@@ -533,13 +603,12 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   }
   else
   {
-    vtkAFAMArraySamples samples; // what the source reads, kept while it does
-    std::unique_ptr<afam::ArraySource> source = this->SourceOf(input, inputVector, samples);
-    if (!source)
+    std::unique_ptr<MarkedInput> marked = this->MarkedSourceOf(input, inputVector, false);
+    if (!marked)
     {
       return false;
     }
-    encoder.addStep(*source, time);
+    encoder.addStep(marked->Marked->Source(), time);
   }
   if (++this->NextStep < n)
   {
@@ -582,15 +651,30 @@ vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* con
   std::string error;
   vtkDataArray* array =
     input->GetNumberOfPoints() > 0 ? this->ChooseArray(input, inputVector, error) : nullptr;
+  vtkAFAMValidMask mask; // this piece's, checked with the array (every rank agrees on errors)
+  afam::SampleType type{};
+  if (array && vtkAFAMSampleTypeOf(array->GetDataType(), type))
+  {
+    error =
+      this->MissingMarksProblem(input, type, array->GetName() ? array->GetName() : "scalars", mask);
+  }
+  vtkAFAMPieceMarks marks;
+  marks.Valid = mask.Valid;
+  marks.UseValue = this->UseMissingValue && this->InputTimes.size() < 2;
+  marks.Value = this->MissingValue;
   if (controller->GetLocalProcessId() == 0 && input->GetDirectionMatrix() &&
     !input->GetDirectionMatrix()->IsIdentity())
   {
     vtkWarningMacro(<< "the input's direction matrix is ignored: .afam volumes are axis-aligned");
   }
   const vtkAFAMPiecesEncoded done =
-    vtkAFAMEncodePieces(controller, input, array, error, whole, encode);
+    vtkAFAMEncodePieces(controller, input, array, error, whole, marks, encode);
   std::copy(done.pieceExtent, done.pieceExtent + 6, this->LastPieceExtent);
   this->LastRemoteBytesRead = static_cast<double>(done.remoteBytesRead);
+  if (marks.UseValue && !done.missingValueFound && controller->GetLocalProcessId() == 0)
+  {
+    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, done.arrayName));
+  }
   return done;
 }
 
@@ -626,6 +710,11 @@ void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Mode: " << this->Mode << "\n";
   os << indent << "FixedNcp: " << this->FixedNcp << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "EncodeTimeSteps: " << this->EncodeTimeSteps << "\n";
+  os << indent << "ValidPointMaskArrayName: "
+     << (this->ValidPointMaskArrayName ? this->ValidPointMaskArrayName : "(none)") << "\n";
+  os << indent << "UseMissingValue: " << this->UseMissingValue << "\n";
+  os << indent << "MissingValue: " << this->MissingValue << "\n";
   os << indent << "ModelFile: " << this->ModelFile << "\n";
   os << indent << "LastEncodeSeconds: " << this->LastEncodeSeconds << "\n";
   os << indent << "LastMaxRmse: " << this->LastMaxRmse << "\n";

@@ -16,6 +16,16 @@
  * in Core (encodeVolume); progress is reported and the abort flag (ParaView's abort button) cancels
  * it.
  *
+ * Missing samples (a land mask, outside a scan's field of view, points a probe did not reach): the
+ * array's NaN samples are always missing; so are the points where the valid-point mask array
+ * (ValidPointMaskArrayName, VTK's vtkValidPointMask by default, used when the input has it) is 0,
+ * and with UseMissingValue the samples equal to MissingValue. The models are fitted to the valid
+ * samples only, a block with none is stored empty, and readers and the mapper give NaN (drawn as
+ * nothing, or in the NaN colour) at the missing samples. A mask of the wrong type or size, a
+ * MissingValue that is NaN or that the array's type cannot hold, and an input with no valid
+ * sample are refused with an error that names them; a MissingValue no sample equals is warned
+ * about, and the encode goes on.
+ *
  * Under MPI (several ranks, e.g. `mpirun -np N pvbatch`), each rank gets its piece of the image
  * from the pipeline and fits a share of the blocks; rank 0 writes the one file and alone outputs
  * the models, which are those of a one-process encode of the whole image
@@ -41,11 +51,13 @@
 
 class vtkDataArray;
 struct vtkAFAMArraySamples;
+struct vtkAFAMValidMask;
 struct vtkAFAMPiecesEncoded;
 class vtkImageData;
 class vtkMultiProcessController;
 namespace afam
 {
+enum class SampleType : uint8_t;
 class ArraySource;
 class EncodeTeam;
 struct EncoderOptions;
@@ -147,6 +159,26 @@ public:
   ///@}
 
   ///@{
+  /// The point array whose 0 values mark missing samples: one component of char, signed char or
+  /// unsigned char values, as vtkProbeFilter and vtkResampleToImage leave it. Default
+  /// "vtkValidPointMask"; used when the input has it (an empty name: no mask). It is never the
+  /// array encoded when none is chosen.
+  vtkSetStringMacro(ValidPointMaskArrayName);
+  vtkGetStringMacro(ValidPointMaskArrayName);
+  ///@}
+
+  ///@{
+  /// With UseMissingValue (default off), the samples equal to MissingValue (default 0; a finite
+  /// value the array's type can hold) are missing too, and the file records the value. One volume
+  /// only: a run of time steps cannot hold missing samples yet (Core's run encoder refuses them).
+  vtkSetMacro(UseMissingValue, bool);
+  vtkGetMacro(UseMissingValue, bool);
+  vtkBooleanMacro(UseMissingValue, bool);
+  vtkSetMacro(MissingValue, double);
+  vtkGetMacro(MissingValue, double);
+  ///@}
+
+  ///@{
   /// Encoder threads, 0 = all cores (default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -227,6 +259,19 @@ protected:
   std::unique_ptr<afam::ArraySource> SourceOf(vtkImageData* input,
     vtkInformationVector** inputVector,
     vtkAFAMArraySamples& samples);
+  /// The chosen array of the input as the encoder reads it (SourceOf) with its missing samples
+  /// marked: the valid-point mask, and the fill value when `useValue`. Null after reporting what
+  /// is wrong.
+  struct MarkedInput;
+  std::unique_ptr<MarkedInput> MarkedSourceOf(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    bool useValue);
+  /// What is wrong with the missing-sample settings for the chosen array (`arrayName`, of `type`)
+  /// of `input` ("" when nothing is); `mask` gets the valid-point mask, if the input has one.
+  std::string MissingMarksProblem(vtkImageData* input,
+    afam::SampleType type,
+    const std::string& arrayName,
+    vtkAFAMValidMask& mask);
   void KeepRunStatistics(const afam::RunStats& stats);
   /// A CRC-32 of the input's chosen array with its grid and name (0 without one).
   uint32_t InputFingerprint(vtkImageData* input, vtkInformationVector** inputVector);
@@ -245,6 +290,9 @@ protected:
   int FixedNcp = 0;
   int NumberOfThreads = 0;
   bool EncodeTimeSteps = true;
+  char* ValidPointMaskArrayName = nullptr;
+  bool UseMissingValue = false;
+  double MissingValue = 0;
   // A run of the input's time steps: the times, the step the next execution encodes, the encoder
   // while the run is under way, and what the finished run was encoded from.
   std::vector<double> InputTimes;

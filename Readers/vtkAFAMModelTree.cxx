@@ -19,6 +19,7 @@
 #include "vtkTypeInt64Array.h"
 
 #include <algorithm>
+#include <limits>
 #include <climits>
 #include <cmath>
 #include <stdexcept>
@@ -222,6 +223,12 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
   AddTuple<vtkTypeInt64Array, vtkTypeInt64>(fd, StepArray, { static_cast<vtkTypeInt64>(step) });
   AddString(fd, BoundKindArray, afam::boundKindName(header.boundKind));
   AddTuple<vtkDoubleArray, double>(fd, BoundArray, { afam::absoluteBound(header) });
+  // What marked the source's missing samples (the decoded samples are NaN there whatever did).
+  AddString(fd, MissingKindArray, afam::missingKindName(header.missing));
+  AddTuple<vtkDoubleArray, double>(fd,
+    MissingValueArray,
+    { header.missing == afam::MissingKind::Value ? header.missingValue
+                                                 : std::numeric_limits<double>::quiet_NaN() });
   if (progress)
   {
     progress(1.0);

@@ -38,6 +38,8 @@ constexpr const char* DimensionsArray = "AFAM_Dimensions";     // root: volume s
 constexpr const char* StepArray = "AFAM_Step";                 // root: time step of a run
 constexpr const char* BoundKindArray = "AFAM_BoundKind";       // root: "rmse" or "max_error"
 constexpr const char* BoundArray = "AFAM_Bound";               // root: the bound, data units
+constexpr const char* MissingKindArray = "AFAM_MissingKind";   // root: "none", "nan" or "value"
+constexpr const char* MissingValueArray = "AFAM_MissingValue"; // root: the fill value (NaN if none)
 
 /// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A
 /// level's leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays

@@ -25,6 +25,7 @@ set(_afam_private
   Mapper/vtkAFAMCudaGLBuffer
   Filters/vtkAFAMDistributedEncode
   Filters/vtkAFAMControllerTeam
+  Filters/vtkAFAMMissingSamples
   )
 # Encoding across MPI ranks needs VTK::ParallelMPI (an optional dependency in vtk.module); without
 # it the encoder runs on one process and says so under several ranks.

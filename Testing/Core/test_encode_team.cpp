@@ -191,7 +191,7 @@ TEST(EncodeTeam, AnErrorOnOneMemberReachesEveryMember) {
   const Index3 dims{16, 16, 30};
   std::vector<float> v = mlVolume(dims);
   v[size_t((25 * 16 + 3) * 16 + 5)] =
-      std::numeric_limits<float>::infinity();  // plane 25: member 2 of 3 scans it
+      std::numeric_limits<float>::infinity();  // plane 25: member 2 of 3 scans it (NaN: missing)
   EncoderOptions opt;
   opt.levels = 2;
   opt.blocksPerAxis = 2;

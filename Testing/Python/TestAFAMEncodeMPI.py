@@ -4,6 +4,8 @@ only its piece of the volume, write one .afam file whose micro-models are, model
 axis, kind, errors, checksum, stored bytes), those of a one-process encode of the same volume:
   - ParaView's Wavelet (80 x 78 x 72, float), split along x by ParaView: the first rank's piece is
     half the volume and it reads samples from the other rank's piece;
+  - the same Wavelet with missing samples (NaN in a ball, a vtkValidPointMask array, a fill value
+    -999): the models of a one-process encode, and NaN exactly at the missing samples when decoded;
   - a uint8 raw volume through Apps/pvbatch/afam_encode.py (ParaView's raw reader reads each rank's
     piece; the ranks expose their uint8 samples and convert what they read), against the same
     script on one process and against `afam encode`;
@@ -81,6 +83,25 @@ if rank0["piece"] == [-40, 39, -37, 40, -35, 36] or rank0["piece"][1] < rank0["p
     u.fail("rank 0's piece %s is not a part of the volume: the input was not distributed" % rank0["piece"])
 if rank0["remote_bytes"] <= 0:
     u.fail("rank 0 read nothing from the other rank, yet its piece is half the volume")
+
+# Missing samples on pieces: each rank marks its own (NaN, its piece of the mask, the fill value).
+masked_1, _, _ = encode_case(1, "masked", "masked_1")
+masked_2, _, _ = encode_case(2, "masked", "masked_2")
+expect_same(masked_2, masked_1, "Wavelet with missing samples, 2 ranks against 1 process")
+masked_info = subprocess.run([afam, "info", masked_2], capture_output=True, text=True).stdout
+if "missing=value(-999)" not in masked_info:
+    u.fail("the 2-rank file does not record MissingValue -999:\n%s" % masked_info)
+decoded_raw = os.path.join(out, "masked_2_finest.raw")
+subprocess.run([afam, "decode", masked_2, decoded_raw], check=True, stdout=subprocess.DEVNULL)
+import numpy as np  # noqa: E402
+z, y, x = np.meshgrid(np.arange(-35, 37), np.arange(-37, 41), np.arange(-40, 40), indexing="ij")
+expected = (x * x + y * y + z * z < 144) | (x > 25) | (y > 30)
+decoded = np.fromfile(decoded_raw, dtype="<f4").reshape(expected.shape)
+wrong = int(np.count_nonzero(np.isnan(decoded) != expected))
+print("masked Wavelet, 2 ranks: %d of %d samples missing, %d decoded otherwise" %
+      (int(expected.sum()), expected.size, wrong), flush=True)
+if wrong or not expected.any():
+    u.fail("decoded NaN differ from the missing samples at %d points" % wrong)
 
 # A uint8 raw volume through afam_encode.py, 1 process and 2 ranks, and `afam encode`.
 raw = os.path.join(volumes, "ironProt_68x68x68_uint8.raw")

@@ -475,6 +475,10 @@ const char* boundKindName(BoundKind kind) {
   return kind == BoundKind::MaxError ? "max_error" : "rmse";
 }
 
+const char* missingKindName(MissingKind kind) {
+  return kind == MissingKind::Value ? "value" : kind == MissingKind::NaN ? "nan" : "none";
+}
+
 const char* modeName(EncodingMode mode) {
   switch (mode) {
     case EncodingMode::Adaptive:

@@ -86,7 +86,7 @@ bool VolumeMask::missing(int64_t x, int64_t y, int64_t z) const {
 }
 
 MaskedSource::MaskedSource(VolumeSource& inner, const VolumeMask& mask, float fill)
-    : inner_(inner), mask_(mask), fill_(fill) {}
+    : WrappingSource(inner), mask_(mask), fill_(fill) {}
 
 void MaskedSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   inner_.readSlab(z0, zCount, out);

@@ -10,10 +10,7 @@
 
 namespace afam {
 
-namespace {
-
-/// Why `value` cannot be a fill value of samples of `type` ("" when it can).
-std::string fillValueProblem(double value, SampleType type) {
+std::string missingValueProblem(double value, SampleType type) {
   std::ostringstream why;
   if (std::isnan(value)) {
     why << "is NaN (NaN samples are always missing; give the value that marks the others)";
@@ -32,11 +29,9 @@ std::string fillValueProblem(double value, SampleType type) {
   return why.str();
 }
 
-}  // namespace
-
 MissingValueSource::MissingValueSource(VolumeSource& inner, double value, SampleType type)
-    : inner_(inner), value_(float(value)) {
-  const std::string why = fillValueProblem(value, type);
+    : WrappingSource(inner), value_(float(value)) {
+  const std::string why = missingValueProblem(value, type);
   if (!why.empty()) {
     std::ostringstream msg;
     msg << "missing value " << value << " " << why;

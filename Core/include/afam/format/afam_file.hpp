@@ -42,6 +42,8 @@ enum class BoundKind : uint8_t { Rmse = 0, MaxError = 1 };
 enum class MissingKind : uint8_t { None = 0, NaN = 1, Value = 2 };
 /// "rmse" or "max_error" (`afam info`, the reader's field data).
 const char* boundKindName(BoundKind kind);
+/// "none", "nan" or "value" (the reader's field data).
+const char* missingKindName(MissingKind kind);
 
 /// Name used on the command line and in `afam info`: adaptive, inlevel, fixed, ds.
 const char* modeName(EncodingMode mode);

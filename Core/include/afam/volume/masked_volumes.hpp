@@ -36,19 +36,13 @@ class VolumeMask {
 };
 
 /// The inner source with the mask's samples read as `fill` (NaN by default: missing).
-class MaskedSource : public VolumeSource {
+class MaskedSource : public WrappingSource {
  public:
   MaskedSource(VolumeSource& inner, const VolumeMask& mask,
                float fill = std::numeric_limits<float>::quiet_NaN());
-  Index3 dims() const override { return inner_.dims(); }
-  std::array<double, 3> origin() const override { return inner_.origin(); }
-  std::array<double, 3> spacing() const override { return inner_.spacing(); }
-  std::string name() const override { return inner_.name(); }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
-  int bytesPerVoxel() const override { return inner_.bytesPerVoxel(); }
 
  private:
-  VolumeSource& inner_;
   const VolumeMask& mask_;
   float fill_;
 };

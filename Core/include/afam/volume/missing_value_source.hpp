@@ -12,25 +12,22 @@
 
 namespace afam {
 
-class MissingValueSource : public VolumeSource {
+/// Why `value` cannot mark missing samples of `type` ("" when it can): NaN, infinite, or for
+/// integer samples outside the type's range or not an integer; for float32, outside its range.
+std::string missingValueProblem(double value, SampleType type);
+
+class MissingValueSource : public WrappingSource {
  public:
   /// Throws InvalidArgument when `value` is NaN or infinite, or, for a source of integer samples
   /// (`type`), outside the type's range or not an integer (no sample could equal it).
   MissingValueSource(VolumeSource& inner, double value, SampleType type = SampleType::Float32);
-  Index3 dims() const override { return inner_.dims(); }
-  std::array<double, 3> origin() const override { return inner_.origin(); }
-  std::array<double, 3> spacing() const override { return inner_.spacing(); }
-  std::string name() const override { return inner_.name(); }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
-  int bytesPerVoxel() const override { return inner_.bytesPerVoxel(); }
-  bool readsOnCallingThread() const override { return inner_.readsOnCallingThread(); }
   /// Samples read so far that equalled the value (a caller warns when none did).
   int64_t matches() const { return matches_.load(); }
 
  private:
   void mark(float* v, int64_t count);
-  VolumeSource& inner_;
   float value_;
   std::atomic<int64_t> matches_{0};
 };

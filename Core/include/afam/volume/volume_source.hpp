@@ -76,6 +76,22 @@ class ArraySource : public VolumeSource {
   std::array<double, 3> origin_, spacing_;
 };
 
+/// A source that reads another and changes some of its samples (marks missing ones: a fill value,
+/// a mask): grid, name and sample size are the inner source's, which must outlive it.
+class WrappingSource : public VolumeSource {
+ public:
+  explicit WrappingSource(VolumeSource& inner) : inner_(inner) {}
+  Index3 dims() const override { return inner_.dims(); }
+  std::array<double, 3> origin() const override { return inner_.origin(); }
+  std::array<double, 3> spacing() const override { return inner_.spacing(); }
+  std::string name() const override { return inner_.name(); }
+  int bytesPerVoxel() const override { return inner_.bytesPerVoxel(); }
+  bool readsOnCallingThread() const override { return inner_.readsOnCallingThread(); }
+
+ protected:
+  VolumeSource& inner_;
+};
+
 /// Parses name_XxYxZ_type.raw (the convention of shared/data/volumes; type a sampleTypeName, or
 /// float or double); false if it does not match.
 bool parseRawName(const std::string& path, Index3& dims, SampleType& type);

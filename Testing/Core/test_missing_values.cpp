@@ -19,6 +19,8 @@
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/block_mask.hpp"
+#include "afam/format/step_extract.hpp"
+#include "afam/render/level_decode.hpp"
 #include "afam/volume/masked_volumes.hpp"
 #include "afam/volume/missing_value_source.hpp"
 #include "moving_blob.hpp"
@@ -304,6 +306,20 @@ TEST(MissingValues, ARunWithHolesAtSomeStepsKeepsEveryStepsMaskAndCodesTheRestIn
     EXPECT_EQ(c.missing > 0, step > 0) << "step " << step;
     EXPECT_LE(c.worstRmse, stats.bound * (1 + 1e-6)) << "step " << step;
   }
+  // A step extracted on its own keeps its holes (a version-3 file of one step) and decodes the
+  // same.
+  const std::string one = afam_test::scratchPath("step1.afam");
+  extractStep(path, 1, one);
+  auto alone = AfamFile::open(one), inRun = AfamFile::open(path, 1);
+  EXPECT_EQ(alone->version(), 3u);
+  EXPECT_EQ(alone->stepCount(), 1);
+  EXPECT_EQ(alone->header().missing, MissingKind::NaN);
+  const Index3 hi{kDims[0] - 1, kDims[1] - 1, kDims[2] - 1};
+  std::vector<float> a(holes.size()), b(holes.size());
+  decodeLevelBox(*alone, 1, {0, 0, 0}, hi, a.data());
+  decodeLevelBox(*inRun, 1, {0, 0, 0}, hi, b.data());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+  EXPECT_EQ(checkEveryBlock(*alone, s1).maskMismatches, 0);
   // A run written without missing samples refuses a later step with some, by name.
   RunEncoder streaming(afam_test::scratchPath("streaming.afam"), options(BoundKind::Rmse, 1e-2), 4);
   streaming.addStep(s0, 0.0);

@@ -1,17 +1,64 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/format/step_extract.hpp"
 
+#include <algorithm>
+#include <limits>
+#include <memory>
 #include <vector>
 
 #include "afam/base/errors.hpp"
 #include "afam/format/afam_file.hpp"
+#include "afam/format/run_writer.hpp"
 #include "file_layout.hpp"
 
 namespace afam {
 
+namespace {
+
+/// Where an extracted step goes: a version-2 file, or a version-3 file of one step when the
+/// header keeps what version 2 has no field for (a pointwise bound, missing samples).
+class ExtractWriter {
+ public:
+  ExtractWriter(const std::string& out, const AfamFile& file) {
+    const VolumeHeader& h = file.header();
+    if (h.boundKind == BoundKind::Rmse && h.missing == MissingKind::None) {
+      v2_ = std::make_unique<AfamWriter>(out, h);
+      return;
+    }
+    v3_ = std::make_unique<RunWriter>(out, h, 1, absoluteBound(h));
+    v3_->beginStep(file.stepTimes()[size_t(file.step())]);
+  }
+  void add(const ModelEntry& e, const float* control) {
+    if (v2_) return v2_->add(e, control);
+    ModelEntry stored = e;
+    stored.storedSize = payloadBytes(e.ncp);
+    v3_->addStored(stored, control);
+  }
+  void addStored(const ModelEntry& e, const void* bytes) {
+    if (v2_) return v2_->addStored(e, bytes);
+    v3_->addStored(e, bytes);
+  }
+  /// Commits; returns the file's bytes. `lo`, `hi`: the step's range (a version-3 step row).
+  uint64_t commit(float lo, float hi) {
+    if (v2_) {
+      v2_->commit();
+      return v2_->bytesWritten();
+    }
+    v3_->endStep(lo, hi);
+    return v3_->commit();
+  }
+
+ private:
+  std::unique_ptr<AfamWriter> v2_;
+  std::unique_ptr<RunWriter> v3_;
+};
+
+}  // namespace
+
 ExtractStats extractStep(const std::string& run, int64_t step, const std::string& out) {
   const std::shared_ptr<const AfamFile> file = AfamFile::open(run, step);
-  AfamWriter writer(out, file->header());
+  ExtractWriter writer(out, *file);
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
   ExtractStats stats;
   std::vector<uint8_t> stored;
   const std::vector<ModelEntry>& entries = file->entries();
@@ -41,9 +88,12 @@ ExtractStats extractStep(const std::string& run, int64_t step, const std::string
       ++stats.copied;
     }
     ++stats.models;
+    if (e.kind != BlockKind::Empty) {
+      lo = std::min(lo, e.minValue);
+      hi = std::max(hi, e.maxValue);
+    }
   }
-  writer.commit();
-  stats.bytesOut = writer.bytesWritten();
+  stats.bytesOut = writer.commit(lo, hi);
   return stats;
 }
 

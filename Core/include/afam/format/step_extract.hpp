@@ -16,7 +16,8 @@ struct ExtractStats {
   uint64_t bytesOut = 0;
 };
 
-/// Writes step `step` of the .afam file at `run` to `out` (version 2, atomically): a model that
+/// Writes step `step` of the .afam file at `run` to `out` (version 2, atomically; a version-3 file
+/// of one step when the run keeps a pointwise bound or has missing samples): a model that
 /// stands on one payload (an independent entry, or a reference to one) keeps its stored bytes; a
 /// model decoded from a residual chain is stored as the float32 control points it decodes to (a
 /// spline, or samples). Header, partition, range and bound are the run's. The payloads are

@@ -15,7 +15,9 @@ int runExtract(int argc, char** argv) {
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
-        "Writes time step K of a run as a file of one step (version 2) that decodes and draws\n"
+        "Writes time step K of a run as a file of one step (version 2; version 3 when the run "
+        "keeps a\n"
+        "pointwise bound or has missing samples) that decodes and draws\n"
         "exactly as the step does: models standing on one payload keep their stored bytes,\n"
         "models decoded from a residual chain are stored as the float32 control points they\n"
         "decode to. The run's range and bound are kept. Prints the models copied and resolved.\n",

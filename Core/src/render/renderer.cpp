@@ -35,7 +35,8 @@ const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
     floats = std::max(floats, slots[s].offset + models[s]->size());
   storage.resize(floats);
   for (size_t s = 0; s < slots.size(); ++s)
-    std::memcpy(storage.data() + slots[s].offset, slotHost[s], models[s]->size() * sizeof(float));
+    if (!models[s]->empty())  // an empty block's model has no floats
+      std::memcpy(storage.data() + slots[s].offset, slotHost[s], models[s]->size() * sizeof(float));
   return storage.data();
 }
 
@@ -291,7 +292,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   for (const Placement& m : placed) {
     int32_t& slot = slotOf[m.model.entry];
     if (slot < 0) {
-      if (hostPool)
+      if (hostPool && !m.data->empty())  // an empty block's model has no floats (and no data())
         std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
       slot = addSlot(m.model, fr, offset);
       fr.models.push_back(m.data);

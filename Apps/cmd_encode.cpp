@@ -61,7 +61,8 @@ int runEncode(int argc, char** argv) {
         "                    of view), as NaN samples always are: the bound holds on the valid\n"
         "                    samples, missing ones are stored as a compact mask per block (and\n"
         "                    blocks with none valid as empty), decoded and drawn as NaN (nothing,\n"
-        "                    or the NaN colour); a file with missing samples is format version 3\n"
+        "                    or the NaN colour); a file with missing samples is format version 3;\n"
+        "                    a run's steps all take it, and --append takes the run's\n"
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
         "of a\n"
         "                    constant, a coded spline and coded samples per block\n"
@@ -115,9 +116,10 @@ int runEncode(int argc, char** argv) {
     opt.search = SearchMethod::Exhaustive;
   else
     throw InvalidArgument("--search must be fast or exhaustive, not '" + search + "'");
-  if (args.has("missing-value") && (args.has("append") || args.positional().size() > 2))
-    throw InvalidArgument(
-        "--missing-value applies to one volume; a run's steps mark missing samples with NaN");
+  if (args.has("missing-value")) {
+    opt.hasMissingValue = true;
+    opt.missingValue = args.real("missing-value", 0);
+  }
   if (args.has("append")) return appendStepCommand(args, opt);
   if (args.positional().size() > 2) return encodeRunCommand(args, opt);
   if (args.has("times") || args.has("key-interval") || args.has("coded-share"))
@@ -126,9 +128,7 @@ int runEncode(int argc, char** argv) {
   const InputVolume input = openInput(args.positional()[0], args);
   VolumeSource* source = input.source.get();
   std::unique_ptr<MissingValueSource> filled;
-  if (args.has("missing-value")) {
-    opt.hasMissingValue = true;
-    opt.missingValue = args.real("missing-value", 0);
+  if (opt.hasMissingValue) {
     filled = std::make_unique<MissingValueSource>(*source, opt.missingValue,
                                                   parseSampleType(input.typeName));
     source = filled.get();

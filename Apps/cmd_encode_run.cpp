@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "afam/encode/encode_run.hpp"
+#include "afam/volume/missing_value_source.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
 #include "source_args.hpp"
@@ -37,6 +38,7 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
   const std::vector<std::string>& pos = args.positional();
   const std::string out = pos.back();
   std::vector<InputVolume> inputs;
+  std::vector<std::unique_ptr<MissingValueSource>> filled;  // --missing-value: per step
   std::vector<VolumeSource*> steps;
   for (size_t k = 0; k + 1 < pos.size(); ++k) {
     inputs.push_back(openInput(pos[k], args));
@@ -45,11 +47,23 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
       throw InvalidArgument("encode: step " + std::to_string(k) + " (" + pos[k] +
                             "): sample type " + inputs.back().typeName +
                             " differs from the first step's " + inputs.front().typeName);
+    if (opt.hasMissingValue) {
+      filled.push_back(std::make_unique<MissingValueSource>(
+          *steps.back(), opt.missingValue, parseSampleType(inputs.back().typeName)));
+      steps.back() = filled.back().get();
+    }
   }
   RunOptions run;
   if (args.has("times")) run.times = parseTimes(args.str("times"));
   run.keyInterval = int(args.integer("key-interval", 16));
   const RunStats s = encodeRun(steps, opt, run, out);
+  int64_t matches = 0;
+  for (const auto& f : filled) matches += f->matches();
+  if (opt.hasMissingValue && matches == 0)
+    std::fprintf(stderr,
+                 "afam encode: warning: no sample equals the missing value %s; every sample was "
+                 "encoded as valid\n",
+                 args.str("missing-value").c_str());
   if (args.has("quiet")) return 0;
   uint64_t bytesIn = 0, payload = 0;
   std::printf("encoded %zu steps -> %s\n", steps.size(), out.c_str());
@@ -77,6 +91,20 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
 int appendStepCommand(const Args& args, const EncoderOptions& opt) {
   const std::string run = args.positional()[0];
   const InputVolume input = openInput(args.str("append"), args);
+  // The run's fill value marks the step's missing samples as it did the run's.
+  const VolumeHeader h = AfamFile::open(run)->header();
+  if (opt.hasMissingValue &&
+      !(h.missing == MissingKind::Value && h.missingValue == opt.missingValue))
+    throw InvalidArgument("--missing-value " + args.str("missing-value") + ": the run " +
+                          (h.missing == MissingKind::Value
+                               ? "has the missing value " + std::to_string(h.missingValue)
+                               : std::string("has no missing value")));
+  std::unique_ptr<MissingValueSource> filled;
+  VolumeSource* source = input.source.get();
+  if (h.missing == MissingKind::Value) {
+    filled = std::make_unique<MissingValueSource>(*source, h.missingValue);
+    source = filled.get();
+  }
   double time = std::numeric_limits<double>::quiet_NaN();
   if (args.has("times")) {
     const std::vector<double> times = parseTimes(args.str("times"));
@@ -85,7 +113,7 @@ int appendStepCommand(const Args& args, const EncoderOptions& opt) {
   }
   if (args.has("key-interval"))
     throw InvalidArgument("--key-interval is the run's: it cannot change when appending");
-  const RunStats s = appendStep(*input.source, time, opt, run);
+  const RunStats s = appendStep(*source, time, opt, run);
   if (args.has("quiet")) return 0;
   const EncodeStats& st = s.steps[0];
   std::printf(

@@ -207,8 +207,9 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
 void checkMissing(bool missing, const EncoderOptions& opt, const VolumeSource& source, double vmin,
                   double vmax) {
   if (!(vmin <= vmax))
-    throw InvalidArgument("encode: " + source.name() + " has no valid sample (every sample is " +
-                          (opt.hasMissingValue ? "NaN or the missing value" : "NaN") + ")");
+    throw InvalidArgument(
+        "encode: " + source.name() + " has no valid sample (every sample is missing: NaN" +
+        (opt.hasMissingValue ? ", the missing value" : "") + ", or 0 in a valid-point mask)");
   if (missing && opt.mode == EncodingMode::Downsampled)
     throw InvalidArgument("encode: " + source.name() +
                           " has missing samples (NaN), which mode ds cannot store: use a spline "

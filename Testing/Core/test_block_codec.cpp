@@ -5,6 +5,7 @@
 // FormatError, never a crash.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -188,4 +189,52 @@ TEST(BlockCodec, DamagedIntegerPayloadsAreRefusedByName) {
     EXPECT_GT(refusedAmongDamaged(bytes, kIntegerCodedHeaderBytes, n, unsigned(p) * 31), 1000)
         << "predictor " << int(p);
   }
+}
+
+TEST(BlockCodec, FreeValuesKeepTheValidOnesAndStayWithinTheirSlackOfTheFilling) {
+  // A ball of free values (a block's holes, filled here with a far-off constant, as no filling
+  // should be): the valid values keep half a step whatever the slack; a free value is either its
+  // own prediction (code 0) or kept like a valid one, and with a finite slack it stays within
+  // slack + 1/2 steps of its filling; decoding gives the encoder's reconstruction bit for bit.
+  const Int3 n{21, 18, 15};
+  std::vector<float> v = field(n, 11);
+  std::vector<uint32_t> valid(size_t((v.size() + 31) / 32), 0u);
+  size_t i = 0, holes = 0;
+  for (int z = 0; z < n[2]; ++z)
+    for (int y = 0; y < n[1]; ++y)
+      for (int x = 0; x < n[0]; ++x, ++i) {
+        if ((x - 10) * (x - 10) + (y - 9) * (y - 9) + (z - 7) * (z - 7) < 36) {
+          v[i] = 500.f;
+          ++holes;
+        } else {
+          valid[i >> 5] |= 1u << (i & 31);
+        }
+      }
+  ASSERT_GT(holes, 500u);
+  const double step = 0.05;
+  for (const Predictor p : {Predictor::Interpolation, Predictor::IntegerInterpolation})
+    for (const int64_t slack : {int64_t(0), int64_t(16), FreeValues::kAnySlack}) {
+      SCOPED_TRACE(std::to_string(int(p)) + " slack " + std::to_string(slack));
+      std::vector<uint8_t> bytes;
+      std::vector<float> recon, decoded(v.size()), quantized;
+      const FreeValues free{valid.data(), slack};
+      ASSERT_TRUE(encodeValues(v.data(), n, step, p, 3, bytes, recon, free));
+      ASSERT_TRUE(quantizeValues(v.data(), n, step, p, quantized, free));
+      EXPECT_EQ(0, std::memcmp(recon.data(), quantized.data(), recon.size() * 4));
+      decodeValues(bytes.data(), bytes.size(), n, decoded.data(), "free");
+      EXPECT_EQ(0, std::memcmp(recon.data(), decoded.data(), recon.size() * 4));
+      double worstValid = 0, worstFree = 0;
+      for (size_t k = 0; k < v.size(); ++k) {
+        const double d = std::fabs(double(recon[k]) - double(v[k]));
+        double& worst = free.isFree(int64_t(k)) ? worstFree : worstValid;
+        worst = std::max(worst, d);
+      }
+      const double rounding = 1e-4;  // float32 near 500
+      EXPECT_LE(worstValid, step / 2 + rounding);
+      if (slack < FreeValues::kAnySlack) {
+        EXPECT_LE(worstFree, (double(slack) + 0.5) * step + rounding);
+      } else {
+        EXPECT_GT(worstFree, 50 * step);  // free everywhere: the predictions, not the filling
+      }
+    }
 }

@@ -80,15 +80,15 @@ void visit(Predictor p, const Lattice& L, const double* q, Fn&& fn) {
 /// false when a code exceeds 2^50.
 bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor,
                      std::vector<int64_t>& codes, std::vector<float>& reconstructed,
-                     const uint32_t* valid) {
+                     FreeValues free) {
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   std::vector<double> r(count, 0.0);
   codes.clear();
   codes.reserve(count);
   bool ok = true;
   visit(predictor, Lattice{n}, r.data(), [&](int64_t i, double pred) {
-    const bool free = valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0;
-    const double q = free ? 0.0 : std::nearbyint((double(values[i]) - pred) / step);
+    double q = std::nearbyint((double(values[i]) - pred) / step);
+    if (free.isFree(i) && std::fabs(q) <= double(free.slack)) q = 0.0;
     if (!(std::fabs(q) <= kMaxCode)) {
       ok = false;
       r[size_t(i)] = double(values[i]);
@@ -115,17 +115,17 @@ Predictor choosePredictorForm(const float* values, size_t count, double step, Pr
 namespace {
 bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
                    std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
-                   const uint32_t* valid);
+                   FreeValues free);
 }  // namespace
 
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
-                    std::vector<float>& reconstructed, const uint32_t* valid) {
+                    std::vector<float>& reconstructed, FreeValues free) {
   if (!(step > 0) || !std::isfinite(step)) return false;
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  if (valid) {  // free values are their predictions: the predictor's order decides
+  if (free.valid) {  // free values may be their predictions: the predictor's order decides
     std::vector<int64_t> codes;
     int64_t base = 0;
-    return residualCodes(values, n, step, predictor, codes, reconstructed, base, valid);
+    return residualCodes(values, n, step, predictor, codes, reconstructed, base, free);
   }
   if (isIntegerForm(predictor)) {  // the reconstruction does not depend on the predictor
     int64_t base;
@@ -136,24 +136,24 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
     return true;
   }
   std::vector<int64_t> codes;
-  return predictQuantize(values, n, step, predictor, codes, reconstructed, nullptr);
+  return predictQuantize(values, n, step, predictor, codes, reconstructed, FreeValues{});
 }
 
 namespace {
 
 /// The codes encodeValues would store for `values` (false when they do not fit), and the
-/// reconstruction; `base` is set for the integer forms; `valid` as in encodeValues.
+/// reconstruction; `base` is set for the integer forms; `free` as in encodeValues.
 bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
                    std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
-                   const uint32_t* valid) {
+                   FreeValues free) {
   if (!(step > 0) || !std::isfinite(step) || uint8_t(predictor) > 3) return false;
   if (!isIntegerForm(predictor))
-    return predictQuantize(values, n, step, predictor, codes, reconstructed, valid);
+    return predictQuantize(values, n, step, predictor, codes, reconstructed, free);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   std::vector<int32_t> k, r;
   if (!codec::integerQuantize(values, count, step, base, k)) return false;
   codec::integerResiduals(predictor, n, k, r,
-                          predictor == Predictor::IntegerInterpolation ? valid : nullptr);
+                          predictor == Predictor::IntegerInterpolation ? free : FreeValues{});
   codes.assign(r.begin(), r.end());
   reconstructed.resize(count);
   for (size_t i = 0; i < count; ++i) reconstructed[i] = codec::integerValue(base, k[i], step);
@@ -163,11 +163,11 @@ bool residualCodes(const float* values, Int3 n, double step, Predictor predictor
 }  // namespace
 
 double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
-                          const uint32_t* valid) {
+                          FreeValues free) {
   std::vector<int64_t> codes;
   std::vector<float> recon;
   int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, recon, base, valid))
+  if (!residualCodes(values, n, step, predictor, codes, recon, base, free))
     return std::numeric_limits<double>::infinity();
   std::sort(codes.begin(), codes.end());
   double bits = 0;
@@ -182,12 +182,11 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
 }
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
-                  std::vector<uint8_t>& out, std::vector<float>& reconstructed,
-                  const uint32_t* valid) {
+                  std::vector<uint8_t>& out, std::vector<float>& reconstructed, FreeValues free) {
   out.clear();
   std::vector<int64_t> codes;
   int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, reconstructed, base, valid)) return false;
+  if (!residualCodes(values, n, step, predictor, codes, reconstructed, base, free)) return false;
   std::vector<uint8_t> varints;
   varints.reserve(codes.size() + codes.size() / 4);
   for (const int64_t c : codes) codec::putVarint(codec::zigzag(c), varints);

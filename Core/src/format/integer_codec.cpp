@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -204,7 +205,7 @@ bool integerQuantize(const float* values, size_t count, double step, int64_t& ba
 }
 
 void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,
-                      const uint32_t* valid) {
+                      FreeValues free) {
   residuals.resize(k.size());
   Word* r = reinterpret_cast<Word*>(residuals.data());
   if (p == Predictor::IntegerLorenzo) {
@@ -217,7 +218,8 @@ void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<
   interpolationRuns(n, kw, [&](int64_t first, int64_t step, int count, const Word* pred) {
     for (int j = 0; j < count; ++j) {
       const int64_t i = first + j * step;
-      if (valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0) kw[i] = pred[j];  // free: predicted
+      if (free.isFree(i) && std::llabs(int64_t(kw[i]) - int64_t(pred[j])) <= free.slack)
+        kw[i] = pred[j];
       r[pos++] = kw[i] - pred[j];
     }
   });

@@ -24,11 +24,11 @@ inline float integerValue(int64_t base, int32_t k, double step) {
   return static_cast<float>((double(base) + double(k)) * step);
 }
 
-/// The residuals of k under an integer predictor, in the predictor's visiting order. With `valid`
-/// (block_mask.hpp's words; interpolation only), a point whose bit is clear is free: k there is set
-/// to its prediction and its residual is 0.
+/// The residuals of k under an integer predictor, in the predictor's visiting order. With free
+/// values (block_codec.hpp's FreeValues; interpolation only), a free point whose prediction lies
+/// within free.slack of its k takes the prediction as its k, and its residual is 0.
 void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,
-                      const uint32_t* valid = nullptr);
+                      FreeValues free = {});
 
 /// Codes the values of an integer predictor: header, then the residuals' zstd frame.
 void packInteger(Predictor p, double step, int64_t base, const std::vector<int32_t>& residuals,

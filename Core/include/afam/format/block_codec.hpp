@@ -73,26 +73,39 @@ inline bool payloadIsIntegerCoded(const uint8_t* stored, size_t bytes) {
 /// `family` itself.
 Predictor choosePredictorForm(const float* values, size_t count, double step, Predictor family);
 
+/// Values a block does not need (its missing samples, whose given values are the encoder's
+/// filling of the holes): those whose bit is clear in `valid` (block_mask.hpp's words; nullptr:
+/// every value counts) are free. A free value is coded as its own prediction (code 0, which costs
+/// next to nothing; readers need no mask for it) when that prediction lies within `slack` steps of
+/// the given value, and as given otherwise: slack 0 codes the filling as it is, kAnySlack frees
+/// every hole (their predictions may then wander far from the valid values near them, which costs
+/// the valid values' residuals; a slack of a few steps keeps them near the filling).
+struct FreeValues {
+  static constexpr int64_t kAnySlack = int64_t(1) << 62;
+  const uint32_t* valid = nullptr;
+  int64_t slack = kAnySlack;
+  /// Whether value i is free: its bit in `valid` is clear.
+  bool isFree(int64_t i) const { return valid && ((valid[i >> 5] >> (i & 31)) & 1u) == 0; }
+};
+
 /// Predicts, quantizes with `step` and codes `values` (n[0] * n[1] * n[2], x fastest) with the
 /// predictor as given. Returns false (and leaves `out` empty) when a residual code would exceed
 /// 2^50 (step far too small), or, for an integer form, when the values do not fit it.
 /// `reconstructed` receives the decoded values (float), as decodeValues would produce them.
-/// `valid` (block_mask.hpp's words, for the samples of a block with missing ones; nullptr: every
-/// value counts): the values whose bit is clear are free, each coded as its own prediction (code
-/// 0, reconstructed as the prediction), which costs next to nothing; readers need no mask for it.
+/// `free`: the values that need not be kept (FreeValues); the interpolation predictors only.
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
                   std::vector<uint8_t>& out, std::vector<float>& reconstructed,
-                  const uint32_t* valid = nullptr);
+                  FreeValues free = {});
 
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
 /// step).
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
-                    std::vector<float>& reconstructed, const uint32_t* valid = nullptr);
+                    std::vector<float>& reconstructed, FreeValues free = {});
 
 /// Order-0 entropy, in bytes, of the codes encodeValues would produce (a cheap estimate of its
 /// coded size, to skip coding a candidate that cannot win); infinity when the step does not fit.
 double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
-                          const uint32_t* valid = nullptr);
+                          FreeValues free = {});
 
 /// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
 /// `where` in the message) when the bytes are not a valid coded payload of that size.

@@ -65,15 +65,7 @@ class Args {
   }
   double real(const std::string& k, double def) const {
     if (!has(k)) return def;
-    const std::string s = str(k);
-    try {
-      size_t pos = 0;
-      const double v = std::stod(s, &pos);
-      if (pos != s.size()) throw 0;
-      return v;
-    } catch (...) {
-      throw InvalidArgument("--" + k + ": '" + s + "' is not a number");
-    }
+    return parseReal(str(k), "--" + k);
   }
   const std::vector<std::string>& positional() const { return positional_; }
   void expectPositional(size_t n, const std::string& usage) const {
@@ -90,6 +82,16 @@ class Args {
       return v;
     } catch (...) {
       throw InvalidArgument(what + ": '" + s + "' is not an integer");
+    }
+  }
+  static double parseReal(const std::string& s, const std::string& what) {
+    try {
+      size_t pos = 0;
+      const double v = std::stod(s, &pos);
+      if (pos != s.size()) throw 0;
+      return v;
+    } catch (...) {
+      throw InvalidArgument(what + ": '" + s + "' is not a number");
     }
   }
   /// "X,Y,Z" (or "XxYxZ") -> dims.

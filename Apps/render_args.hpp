@@ -32,7 +32,9 @@ inline const char* renderOptionsHelp() {
          "  --load-threads N       threads reading and decoding a frame's misses (default: all "
          "cores)\n"
          "  --miss-budget-ms M     wait at most M ms for misses; blocks still loading are drawn\n"
-         "                         from a resident coarser level (default: wait for all)\n";
+         "                         from a resident coarser level (default: wait for all)\n"
+         "  --nan-color R,G,B,A    draw missing samples in this colour with opacity A (each in\n"
+         "                         [0, 1]; default: missing samples are not drawn)\n";
 }
 
 inline const std::set<std::string>& renderValueOptions() {
@@ -40,7 +42,7 @@ inline const std::set<std::string>& renderValueOptions() {
                                           "prefetch",       "storage-mbps", "sample-distance",
                                           "shading",        "lod",          "pixel-budget",
                                           "threads",        "trajectory",   "load-threads",
-                                          "miss-budget-ms", "step"};
+                                          "miss-budget-ms", "step",         "nan-color"};
   return s;
 }
 
@@ -51,6 +53,23 @@ inline std::pair<int, int> parseSize(const std::string& s) {
   if (w < 1 || h < 1 || w > 16384 || h > 16384)
     throw InvalidArgument("--size: width and height must be in [1, 16384]");
   return {int(w), int(h)};
+}
+
+/// --nan-color R,G,B,A into the transfer function's NaN colour and opacity.
+inline void parseNanColor(const std::string& s, TransferFunction& tf) {
+  double v[4];
+  size_t at = 0;
+  for (int k = 0; k < 4; ++k) {
+    const size_t comma = s.find(',', at);
+    if ((k < 3) != (comma != std::string::npos))
+      throw InvalidArgument("--nan-color: give R,G,B,A (four numbers in [0, 1]), not '" + s + "'");
+    v[k] = Args::parseReal(s.substr(at, comma - at), "--nan-color");
+    if (!(v[k] >= 0 && v[k] <= 1))
+      throw InvalidArgument("--nan-color: " + s.substr(at, comma - at) + " is outside [0, 1]");
+    at = comma + 1;
+  }
+  tf.nanColor = {v[0], v[1], v[2]};
+  tf.nanOpacity = v[3];
 }
 
 inline RenderOptions parseRenderOptions(const Args& a) {
@@ -81,6 +100,7 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   const long long bytes = a.integer("cache-bytes", 0);
   if (blocks < 0 || bytes < 0) throw InvalidArgument("cache budgets must be >= 0");
   o.cache = CacheBudget{uint64_t(bytes), uint64_t(blocks)};
+  if (a.has("nan-color")) parseNanColor(a.str("nan-color"), o.transferFunction);
   o.prefetch = a.str("prefetch", "none");
   o.cold = a.has("cold");
   o.storageMBps = a.real("storage-mbps", 0);

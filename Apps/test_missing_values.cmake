@@ -2,8 +2,9 @@
 # Missing samples from the command line: `afam mask` makes a CT's field of view with a fill value;
 # `afam encode --missing-value` keeps the bound on the valid samples and the mask exactly (`afam
 # verify`), `afam info` says what marked them; a run takes the value at every step and an append
-# takes the run's; bad fill values and volumes without a valid sample are refused by name (run by
-# ctest with -DAFAM=<exe> -DWORK=<dir> -DVOLUMES=<Testing/Data/volumes>).
+# takes the run's; `afam render --nan-color` draws them; bad fill values and volumes without a
+# valid sample are refused by name (run by ctest with -DAFAM=<exe> -DWORK=<dir>
+# -DVOLUMES=<Testing/Data/volumes>).
 file(REMOVE_RECURSE "${WORK}")
 file(MAKE_DIRECTORY "${WORK}")
 include("${CMAKE_CURRENT_LIST_DIR}/cli_test_helpers.cmake")  # run_ok, run_fails
@@ -26,6 +27,26 @@ foreach (level 0 1)
     message(FATAL_ERROR "afam verify level ${level}: ${out}")
   endif ()
 endforeach ()
+# Drawn: by default missing samples are not drawn (a NaN opacity of 0 draws the same image);
+# --nan-color R,G,B,A draws them, over the field of view's corners.
+run_ok(out ${AFAM} trajectory orbit.dat --kind orbit --views 36 --distance 1.25)
+run_ok(out ${AFAM} render fov.afam --trajectory orbit.dat --view 9 --size 64 --out plain.png)
+run_ok(out ${AFAM} render fov.afam --trajectory orbit.dat --view 9 --size 64 --out none.png
+       --nan-color 1,0,0,0)
+run_ok(out ${AFAM} render fov.afam --trajectory orbit.dat --view 9 --size 64 --out red.png
+       --nan-color 1,0,0,1)
+run_ok(out ${AFAM} compare plain.png none.png)
+if (NOT out MATCHES "mse=0")
+  message(FATAL_ERROR "a NaN opacity of 0 changed the image: ${out}")
+endif ()
+run_ok(out ${AFAM} compare plain.png red.png)
+if (NOT out MATCHES "psnr=([0-9.]+)" OR CMAKE_MATCH_1 GREATER 20)
+  message(FATAL_ERROR "--nan-color did not draw the missing samples: ${out}")
+endif ()
+run_fails("give R,G,B,A" ${AFAM} render fov.afam --trajectory orbit.dat --out bad.png
+          --nan-color 1,0,0)
+run_fails("2 is outside \\[0, 1\\]" ${AFAM} render fov.afam --trajectory orbit.dat --out bad.png
+          --nan-color 1,0,0,2)
 # A run of two steps with the fill value, then an append of a third.
 run_ok(out ${AFAM} mask ${src} ball_64x64x93_float32.raw --shape ball --fill -1024)
 run_ok(out ${AFAM} encode fov_64x64x93_float32.raw ball_64x64x93_float32.raw run.afam

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/base/errors.hpp"
 #include "afam/encode/block_sampling.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
@@ -152,21 +153,30 @@ TEST(MissingFileRender, RaysThroughMissingSamplesOnlyStayBackgroundAndEmptyBlock
 }
 
 TEST(MissingFileRender, NanOpacityOneDrawsTheMissingRegionInTheNanColour) {
+  // With a transfer function of the user's, and with the file's preset (no table given), which
+  // keeps the NaN colour and opacity given with it.
   auto file = maskedFile();
-  const RenderOptions o = finestOptions(1.0);
-  Renderer r(file, o);
-  const Camera c = downTheAxis();
-  FrameStats st;
-  const ImageRGBA image = r.renderFrame(c, st);
-  EXPECT_EQ(st.culled.emptyBlocks, 0);  // drawn now: empty blocks are sampled (all NaN)
-  const std::vector<size_t> missing = missingOnlyPixels(r, c);
-  ASSERT_GT(missing.size(), 300u);
-  for (size_t p : missing) {
-    for (int k = 0; k < 3; ++k)
-      ASSERT_NEAR(image.rgba[p * 4 + k], float(o.transferFunction.nanColor[size_t(k)]), 1e-5f)
-          << "pixel " << p;
-    ASSERT_NEAR(image.rgba[p * 4 + 3], 1.f, 1e-5f) << "pixel " << p;
+  for (const bool preset : {false, true}) {
+    SCOPED_TRACE(preset ? "preset table" : "given table");
+    RenderOptions o = finestOptions(1.0);
+    o.hasTransferFunction = !preset;
+    Renderer r(file, o);
+    const Camera c = downTheAxis();
+    FrameStats st;
+    const ImageRGBA image = r.renderFrame(c, st);
+    EXPECT_EQ(st.culled.emptyBlocks, 0);  // drawn now: empty blocks are sampled (all NaN)
+    const std::vector<size_t> missing = missingOnlyPixels(r, c);
+    ASSERT_GT(missing.size(), 300u);
+    for (size_t p : missing) {
+      for (int k = 0; k < 3; ++k)
+        ASSERT_NEAR(image.rgba[p * 4 + k], float(o.transferFunction.nanColor[size_t(k)]), 1e-5f)
+            << "pixel " << p;
+      ASSERT_NEAR(image.rgba[p * 4 + 3], 1.f, 1e-5f) << "pixel " << p;
+    }
   }
+  RenderOptions bad = finestOptions(1.5);
+  bad.hasTransferFunction = false;
+  EXPECT_THROW(Renderer(file, bad), InvalidArgument);
 }
 
 TEST(MissingFileRender, DecodedLevelsAreNaNExactlyAtTheMissingSamples) {

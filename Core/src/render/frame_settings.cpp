@@ -38,6 +38,21 @@ const char* blendName(int mode) {
 
 }  // namespace
 
+namespace {
+
+/// The NaN colour and opacity's problem, or empty.
+std::string nanColorProblem(const TransferFunction& tf) {
+  const auto& nan = tf.nanColor;
+  if (std::isfinite(nan[0]) && std::isfinite(nan[1]) && std::isfinite(nan[2]) &&
+      tf.nanOpacity >= 0 && tf.nanOpacity <= 1)
+    return {};
+  return "the NaN colour (rgb " + number(nan[0]) + " " + number(nan[1]) + " " + number(nan[2]) +
+         ", opacity " + number(tf.nanOpacity) +
+         ") is not a finite colour with an opacity in [0, 1]";
+}
+
+}  // namespace
+
 std::string transferFunctionProblem(const TransferFunction& tf) {
   if (tf.colors.empty()) return "the colour transfer function has no points";
   if (tf.opacities.empty()) return "the opacity transfer function has no points";
@@ -54,12 +69,8 @@ std::string transferFunctionProblem(const TransferFunction& tf) {
       return "opacity point " + std::to_string(i) + " (value " + number(p.value) + ", opacity " +
              number(p.alpha) + ") is not a finite value with an opacity in [0, 1]";
   }
-  const auto& nan = tf.nanColor;
-  if (!std::isfinite(nan[0]) || !std::isfinite(nan[1]) || !std::isfinite(nan[2]) ||
-      !(tf.nanOpacity >= 0 && tf.nanOpacity <= 1))
-    return "the NaN colour (rgb " + number(nan[0]) + " " + number(nan[1]) + " " + number(nan[2]) +
-           ", opacity " + number(tf.nanOpacity) +
-           ") is not a finite colour with an opacity in [0, 1]";
+  const std::string nan = nanColorProblem(tf);
+  if (!nan.empty()) return nan;
   if (!(tf.referenceDistance > 0) || !std::isfinite(tf.referenceDistance))
     return "the opacity unit distance " + number(tf.referenceDistance) +
            " is not a finite number > 0";
@@ -104,7 +115,7 @@ std::string frameSettingsProblem(const FrameSettings& s) {
                                tableProblem(s), missBudgetProblem(s)})
     if (!p.empty()) return p;
   if (s.hasTransferFunction) return transferFunctionProblem(s.transferFunction);
-  return {};
+  return nanColorProblem(s.transferFunction);  // kept over the preset
 }
 
 FrameSettings acceptFrameSettings(const FrameSettings& wanted, const FrameSettings& kept,

@@ -88,7 +88,11 @@ void Renderer::setFrameSettings(const FrameSettings& settings) {
   const std::string problem = frameSettingsProblem(settings);
   if (!problem.empty()) throw InvalidArgument("renderer: " + problem);
   FrameSettings next = settings;
-  if (!next.hasTransferFunction) next.transferFunction = TransferFunction::preset(tfLo_, tfHi_);
+  if (!next.hasTransferFunction) {  // the preset, with the NaN colour and opacity as given
+    next.transferFunction = TransferFunction::preset(tfLo_, tfHi_);
+    next.transferFunction.nanColor = settings.transferFunction.nanColor;
+    next.transferFunction.nanOpacity = settings.transferFunction.nanOpacity;
+  }
   tf_ = next.transferFunction.table(next.tfTableSize, tfLo_, tfHi_);
   lod_ = LodSelector(next.lod);
   settings_ = std::move(next);

@@ -20,7 +20,9 @@ struct FrameSettings {
   bool shading = true;
   LodOptions lod;
   int tfTableSize = 1024;
-  bool hasTransferFunction = false;  ///< false: TransferFunction::preset over the file's range
+  /// false: TransferFunction::preset over the file's range, with transferFunction's NaN colour and
+  /// opacity (missing samples drawn or not, whichever table draws the rest).
+  bool hasTransferFunction = false;
   TransferFunction transferFunction;
   float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
   /// BlendMode (raycast.hpp): composite (0) or maximum / minimum / average intensity projection

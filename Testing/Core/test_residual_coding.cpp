@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -178,8 +179,6 @@ TEST(ResidualCoding, ARunLeavesHeadroomForReferencesWhereItDriftsSlowly) {
   }
   EXPECT_GT(refsRoom, refsFull + 20) << "blocks kept as references";
   EXPECT_LT(room.bytesOut, full.bytesOut) << "a smaller run";
-  EXPECT_EQ(room.steps[0].payloadBytes, full.steps[0].payloadBytes)
-      << "the first step, with nothing to tell how fast it moves, is coded to the bound";
   for (int64_t s = 0; s < 8; ++s) {
     auto f = AfamFile::open(b, s);
     EXPECT_LE(decodedRmse(*f, series.data[size_t(s)]), room.bound) << "step " << s;
@@ -187,6 +186,40 @@ TEST(ResidualCoding, ARunLeavesHeadroomForReferencesWhereItDriftsSlowly) {
   }
   std::remove(a.c_str());
   std::remove(b.c_str());
+}
+
+TEST(ResidualCoding, TheFirstStepGetsHeadroomByTrialWhereTheStepsAfterBuildOnIt) {
+  // Two runs of two steps: a blob moving by a quarter voxel (the second step builds on the first,
+  // whose finer models leave its residuals more of the bound) and two unrelated fields (headroom
+  // on the first step is only cost). RunEncoder, given one step at a time, codes the first step
+  // to the bound, or with headroom on every block when told; encodeRun tries both on its first
+  // steps and takes, block by block, the one that stored fewer bytes (on both runs fewer than
+  // either: 5,780 B against 6,044 and 5,980 B on the blob when written).
+  const std::vector<std::vector<float>> slow = {afam_test::movingBlob(kDims, 0, 0.25),
+                                                afam_test::movingBlob(kDims, 1, 0.25)};
+  std::vector<float> other = afam_test::movingBlob(kDims, 0);
+  for (float& v : other) v = 2.f * v - 20.f;  // about the waves' range
+  const std::vector<std::vector<float>> unrelated = {afam_test::driftingWaves(kDims, 0), other};
+  for (const auto* steps : {&slow, &unrelated}) {
+    const bool slowly = steps == &slow;
+    SCOPED_TRACE(slowly ? "slowly drifting" : "unrelated steps");
+    afam_test::InMemoryRun series(kDims, *steps);
+    EncoderOptions opt = afam_test::runTestOptions(3);
+    const std::string path = scratch("first_step.afam");
+    const RunStats trial = encodeRun(series.steps, opt, RunOptions{}, path);
+    auto stepped = [&](bool headroom) {
+      EncoderOptions o = opt;
+      if (headroom) o.firstStepHeadroom = [](int, Int3) { return true; };
+      RunEncoder encoder(path, o, 16, trial.valueMin, trial.valueMax);
+      for (size_t k = 0; k < steps->size(); ++k) encoder.addStep(*series.steps[k], double(k));
+      return encoder.commit().bytesOut;
+    };
+    const uint64_t toTheBound = stepped(false), everywhere = stepped(true);
+    EXPECT_LT(slowly ? everywhere : toTheBound, slowly ? toTheBound : everywhere)
+        << "where headroom pays: to the bound " << toTheBound << " B, everywhere " << everywhere;
+    EXPECT_LE(trial.bytesOut, std::min(toTheBound, everywhere))
+        << "to the bound " << toTheBound << " B, everywhere " << everywhere << " B";
+  }
 }
 
 TEST(ResidualCoding, AStepAtATimeEncodesTheRunEncodeRunWrites) {

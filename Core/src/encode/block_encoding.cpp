@@ -474,10 +474,11 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
         inTime ? fitter.error(t.samples.data(), e.samples, model) : ErrorStats{};
     // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
     // block moved little since the step before, and at a key step (the model the next steps
-    // refer to); a first step, with nothing to tell how fast its blocks move, is coded to the
-    // bound.
-    const bool headroom =
-        c.opt.runStep && before && (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound);
+    // refer to); at the first step, where the caller found that it pays (firstStepHeadroom).
+    const bool first = c.opt.runStep && !c.opt.previous && c.opt.firstStepHeadroom &&
+                       c.opt.firstStepHeadroom(c.level, t.ijk);
+    const bool headroom = first || (c.opt.runStep && before &&
+                                    (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound));
     const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
                            c.sourceName};
     if (inTime && keeps(c.opt.boundKind, moved, c.bound)) {

@@ -7,10 +7,12 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <set>
 #include <sstream>
 
 #include "afam/base/errors.hpp"
 #include "afam/format/run_writer.hpp"
+#include "block_encoding.hpp"
 #include "step_records.hpp"
 
 namespace afam {
@@ -83,14 +85,16 @@ class RangedStep : public VolumeSource {
 class StepSink : public ModelSink {
  public:
   StepSink(std::unique_ptr<RunWriter>& writer, const std::string& path, const VolumeHeader* run,
-           const VolumeHeader& declared, int keyInterval, double bound, double time)
+           const VolumeHeader& declared, int keyInterval, double bound, double time,
+           std::map<std::pair<int, Int3>, uint64_t>* blockBytes = nullptr)
       : writer_(writer),
         path_(path),
         run_(run),
         declared_(declared),
         keyInterval_(keyInterval),
         bound_(bound),
-        time_(time) {}
+        time_(time),
+        blockBytes_(blockBytes) {}
   void begin(const VolumeHeader& h) override {
     if (!writer_) {
       VolumeHeader header = h;  // the step's partition, with the run's range and bound
@@ -119,6 +123,7 @@ class StepSink : public ModelSink {
     writer_->beginStep(time_);
   }
   void add(const ModelEntry& e, const void* stored) override {
+    if (blockBytes_ && !e.reference) (*blockBytes_)[{e.level, e.block}] += e.storedSize;
     if (e.reference) {
       writer_->addReference(e);
       ++references;
@@ -139,6 +144,7 @@ class StepSink : public ModelSink {
   const VolumeHeader& declared_;
   int keyInterval_;
   double bound_, time_, stepMin_ = 0, stepMax_ = 0;
+  std::map<std::pair<int, Int3>, uint64_t>* blockBytes_;
 };
 
 /// The step before's models, read back from the run being written.
@@ -232,7 +238,7 @@ EncodeStats RunEncoder::addStep(VolumeSource& step, double time, EncodeTeam& tea
   const bool writes = team.rank() == 0;
   const std::string path = writes ? s.path : s.path + ".rank" + std::to_string(team.rank());
   StepSink sink(s.writer, path, s.rangeKnown ? &s.header : nullptr, s.header, s.keyInterval,
-                s.bound, time);
+                s.bound, time, writes ? &s.stats.blockBytes : nullptr);
   StepRecorder recorder(sink);
   s.options.previous = s.previous.get();
   const EncodeStats stats = encodeVolume(
@@ -281,6 +287,8 @@ void RunEncoder::setProgress(std::function<bool(double)> progress) {
   s_->options.progress = std::move(progress);
 }
 
+const RunStats& RunEncoder::stepStats() const { return s_->stats; }
+
 RunStats RunEncoder::commit() {
   SoloTeam solo;
   return commit(solo);
@@ -300,6 +308,46 @@ RunStats RunEncoder::commit(EncodeTeam& team) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
   return s.stats;
 }
+
+namespace {
+
+/// Bytes of each block over the first kHeadroomTrialSteps steps, encoded (never committed: the
+/// trial's temporary file goes with its encoder) with `options`.
+std::map<std::pair<int, Int3>, uint64_t> trialBlockBytes(
+    std::vector<RangedStep>& steps, const std::vector<double>& times, const EncoderOptions& options,
+    const RunOptions& run, double lo, double hi, bool missing, const std::string& path) {
+  RunEncoder trial(path, options, run.keyInterval, lo, hi);
+  if (missing) trial.expectMissingSamples();
+  const size_t count = std::min(steps.size(), size_t(kHeadroomTrialSteps));
+  for (size_t k = 0; k < count; ++k) trial.addStep(steps[k], times[k]);
+  return trial.stepStats().blockBytes;
+}
+
+/// encodeRun's trial of the first step's headroom (encode_run.hpp): the blocks that got it, or
+/// unset where no step can refer to another (one step, key interval 1, no headroom asked, or a
+/// mode without a bound).
+std::function<bool(int, Int3)> firstStepHeadroomByTrial(std::vector<RangedStep>& steps,
+                                                        const std::vector<double>& times,
+                                                        const EncoderOptions& options,
+                                                        const RunOptions& run, double lo, double hi,
+                                                        bool missing, const std::string& path) {
+  if (steps.size() < 2 || run.keyInterval < 2 || !(options.runCodedShare < 1) ||
+      !bounded(options.mode) || !options.compact)
+    return {};
+  EncoderOptions with = options, without = options;
+  with.firstStepHeadroom = [](int, Int3) { return true; };
+  without.progress = with.progress = nullptr;
+  const auto a = trialBlockBytes(steps, times, without, run, lo, hi, missing, path);
+  const auto b = trialBlockBytes(steps, times, with, run, lo, hi, missing, path);
+  auto chosen = std::make_shared<std::set<std::pair<int, Int3>>>();
+  for (const auto& [block, bytes] : b) {
+    const auto it = a.find(block);
+    if (it != a.end() && bytes < it->second) chosen->insert(block);
+  }
+  return [chosen](int level, Int3 block) { return chosen->count({level, block}) != 0; };
+}
+
+}  // namespace
 
 RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
                    const RunOptions& run, const std::string& path) {
@@ -335,7 +383,10 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
     hi = std::max(hi, b);
     anyMissing = anyMissing || missing;
   }
-  RunEncoder encoder(path, options, run.keyInterval, lo, hi);
+  EncoderOptions runOptions = options;
+  runOptions.firstStepHeadroom =
+      firstStepHeadroomByTrial(ranged, times, options, run, lo, hi, anyMissing, path);
+  RunEncoder encoder(path, runOptions, run.keyInterval, lo, hi);
   if (anyMissing) encoder.expectMissingSamples();
   for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(ranged[k], times[k]);
   return encoder.commit();

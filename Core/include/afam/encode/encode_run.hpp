@@ -11,8 +11,10 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
@@ -31,6 +33,9 @@ struct RunStats {
   std::vector<int64_t> residuals;     ///< per step, blocks stored as residuals on the step before
   double valueMin = 0, valueMax = 0;  ///< of the whole run
   double bound = 0;                   ///< absolute RMSE bound every block meets
+  /// Bytes stored for each block (level, block) over the steps so far (payloads, residuals and
+  /// masks; a reference stores none).
+  std::map<std::pair<int, Int3>, uint64_t> blockBytes;
   uint64_t bytesOut = 0;
   double seconds = 0;
 };
@@ -39,8 +44,16 @@ struct RunStats {
 /// atomically. Throws InvalidArgument naming the step and what differs, or the times; otherwise
 /// as encodeVolume. One step is written as a version-3 file of one step (the command line writes
 /// a single volume as version 2 through encodeVolume).
+///
+/// The first step's headroom (EncoderOptions::firstStepHeadroom) is decided by a trial: the first
+/// kHeadroomTrialSteps steps are encoded twice (nothing written), with the first step coded to
+/// the bound and with headroom on every block, and a block of the run's first step gets headroom
+/// where its bytes over those steps were fewer with it. Headroom pays where the next steps build
+/// on the block (a finer model leaves its residuals more of the bound) and costs where they do
+/// not (docs/BENCHMARKS.md, "The first step's headroom, by trial").
 RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions& options,
                    const RunOptions& run, const std::string& path);
+constexpr int kHeadroomTrialSteps = 2;
 
 /// A run encoded one step at a time, as a pipeline delivers them (ParaView's encoding filter on
 /// a time-varying input): the coding of encodeRun, held to a bound fixed at the first step
@@ -75,6 +88,8 @@ class RunEncoder {
   /// The progress callback of the steps from now on (EncoderOptions::progress: fractions of the
   /// step; returning false cancels it, Cancelled).
   void setProgress(std::function<bool(double)> progress);
+  /// The statistics of the steps encoded so far (bytesOut and seconds: 0 before commit).
+  const RunStats& stepStats() const;
   /// Writes the run (atomically, as encodeRun) and returns its statistics.
   RunStats commit();
   /// The same, collective: the first process writes the run, the others drop their scratch run.

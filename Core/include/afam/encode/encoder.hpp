@@ -92,12 +92,17 @@ struct EncoderOptions {
   /// Bounded modes, a run's steps (runStep, set by the run encoder): a block that is coded (on its
   /// own or as a residual) where it moved by at most kDriftForHeadroom bounds since the step
   /// before, or at a key step, is held to this share of the bound, the rest left to the steps
-  /// after, which keep its model as a reference while the data drifts by less. The first step,
-  /// blocks that move faster and a run of key interval 1 (no step refers to another) are coded
-  /// to the bound. 1 codes every block to the bound. In (0, 1].
+  /// after, which keep its model as a reference while the data drifts by less. The first step
+  /// (but for firstStepHeadroom's blocks), blocks that move faster and a run of key interval 1 (no
+  /// step refers to another) are coded to the bound. 1 codes every block to the bound. In (0, 1].
   /// Measured on real and generated runs: docs/BENCHMARKS.md, "Headroom for references".
   double runCodedShare = 0.7;
   bool runStep = false;
+  /// A run's first step (runStep, no step before): the blocks coded with runCodedShare's headroom,
+  /// as at a later key step; unset, none. encodeRun decides them by a trial of the first steps
+  /// (encode_run.hpp); a run given one step at a time cannot know, so its first step is coded to
+  /// the bound.
+  std::function<bool(int level, Int3 block)> firstStepHeadroom;
   /// The source's samples equal to missingValue were turned into NaN before they reached the
   /// encoder (MissingValueSource): the file records the value as what marked them. NaN samples
   /// are always missing: the bound holds on the others, and a reader gives NaN back.

@@ -153,8 +153,9 @@ TEST(MissingRender, NanOpacityDrawsMissingSamplesInTheNanColour) {
 }
 
 TEST(MissingRender, PartialNanOpacityIsCorrectedForTheSampleDistance) {
-  // A ray through missing samples only: k samples of opacity a per 0.02 taken every 0.01 give
-  // 1 - (1 - a)^(k / 2), whatever the sample distance (here 0.01 and 0.005).
+  // A ray through missing samples only, of length L: opacity a per 0.02 gives
+  // 1 - (1 - a)^(L / 0.02), whatever the sample distance (here 0.01 and 0.005; the ray's end
+  // samples stand for the parts of the ray they end, raycast.hpp's endWeight).
   for (float distance : {0.01f, 0.005f}) {
     MaskedSceneOptions o;
     o.drawMissing = true;
@@ -165,8 +166,8 @@ TEST(MissingRender, PartialNanOpacityIsCorrectedForTheSampleDistance) {
     const size_t p = missingOnlyPixels(s.view).front();
     RaySamples r;
     ASSERT_TRUE(raySamples(s.view, int(p % s.view.camera.width), int(p / s.view.camera.width), r));
-    const double k = double(r.kEnd - r.kBegin + 1);
-    const double expected = 1.0 - std::pow(1.0 - 0.02, k * distance / 0.02);
+    const double steps = double(r.tExit - r.tStart) / double(r.dt);
+    const double expected = 1.0 - std::pow(1.0 - 0.02, steps * distance / 0.02);
     EXPECT_NEAR(image.rgba[p * 4 + 3], expected, 2e-4) << "distance " << distance;
   }
 }

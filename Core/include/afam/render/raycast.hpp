@@ -72,7 +72,10 @@
 //  They end at min(box exit, maxDistance[pixel]) when the frame carries the per-pixel distances of
 //  opaque geometry (depth compositing with a scene; no sample lies behind an opaque surface).
 //  Samples are taken at t = k * sampleDistance (k integer, t measured from the eye), so samples do
-//  not shimmer when the box entry moves and all samplers see the same positions.
+//  not shimmer when the box entry moves and all samplers see the same positions. In compositing,
+//  sample k stands for [k dt, (k + 1) dt], the first one from the ray's start and the last one up
+//  to its end (endWeight), so the opacity varies continuously where the box faces or opaque
+//  geometry cut the lattice (no grid on the faces).
 //
 // ---------------------------------------------------------------------------------------------
 // Classification, shading, compositing
@@ -543,6 +546,7 @@ struct RaySamples {
   float o[3], d[3];
   float dt;
   int64_t kBegin, kEnd;
+  float tStart, tExit;  ///< the part of the ray sampled (box, near plane, opaque geometry)
 };
 AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
   pixelRay(f.camera, px, py, r.o, r.d);
@@ -555,7 +559,21 @@ AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
   r.dt = rayStep(f.camera, r.d, f.sampleDistance);
   r.kBegin = int64_t(ceilf(tStart / r.dt));
   r.kEnd = int64_t(floorf(tExit / r.dt));
+  r.tStart = tStart;
+  r.tExit = tExit;
   return true;
+}
+
+/// The length of ray sample k stands for, in steps: sample k stands for [k dt, (k + 1) dt], the
+/// first from the ray's start (1 to 2 steps), the last up to its end (0 to 1 step), a lone one for
+/// the whole ray. The opacity a ray gathers then changes continuously as the box entry, the exit
+/// or opaque geometry crosses the lattice (whole samples switching on and off there draw a grid
+/// on the volume's faces), and a ray cut short by geometry gathers no more than the whole ray.
+AFAM_HD float endWeight(const RaySamples& r, int64_t k) {
+  if (k != r.kBegin && k != r.kEnd) return 1.f;
+  const float lo = k == r.kBegin ? r.tStart : float(k) * r.dt;
+  const float hi = k == r.kEnd ? r.tExit : float(k + 1) * r.dt;
+  return rc::maxf(0.f, hi - lo) / r.dt;
 }
 
 /// March pixel (px, py) through the volume with any sampler; returns premultiplied RGBA.
@@ -569,6 +587,7 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
       f.sampleDistance / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : f.sampleDistance);
   for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
     const float t = float(k) * r.dt;
+    const float weight = endWeight(r, k);
     const float p[3] = {r.o[0] + t * d[0], r.o[1] + t * d[1], r.o[2] + t * d[2]};
     float value = 0.f;
     float g[3] = {0.f, 0.f, 0.f};
@@ -592,7 +611,7 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
         shadePhong(f, d, g, c);
       }
     }
-    if (ratio != 1.f) c.a = correctOpacity(c.a, ratio);
+    if (ratio * weight != 1.f) c.a = correctOpacity(c.a, ratio * weight);
     compositeFrontToBack(acc, c);
     if (acc.a >= f.terminationOpacity) break;
   }

@@ -52,6 +52,8 @@ struct vtkAFAMEncoder::RunUnderWay
 {
   std::unique_ptr<afam::RunEncoder> Encoder;
   std::string Path;
+  bool MissingValueFound = false; // at some step so far (UseMissingValue)
+  std::string ArrayName;          // the array encoded, for that warning
 };
 
 vtkAFAMEncoder::~vtkAFAMEncoder()
@@ -301,11 +303,6 @@ std::string vtkAFAMEncoder::MissingMarksProblem(vtkImageData* input,
   if (!this->UseMissingValue)
   {
     return "";
-  }
-  if (this->InputTimes.size() > 1)
-  {
-    return "MissingValue applies to one volume: a run of time steps cannot hold missing samples "
-           "(turn EncodeTimeSteps off to encode the step shown)";
   }
   return vtkAFAMMissingValueProblem(this->MissingValue, type, arrayName);
 }
@@ -583,6 +580,10 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
     this->Run->Path = NewModelPath();
     this->Run->Encoder =
       std::make_unique<afam::RunEncoder>(this->Run->Path, this->MakeOptions(), 16);
+    if (this->UseMissingValue) // the run declares the fill value from its first step on
+    {
+      this->Run->Encoder->expectMissingSamples();
+    }
   }
   const size_t k = this->NextStep;
   this->Run->Encoder->setProgress( // progress across the steps
@@ -595,20 +596,26 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   const double time = this->InputTimes[k];
   if (pieces)
   {
-    this->EncodePieces(controller,
+    const vtkAFAMPiecesEncoded done = this->EncodePieces(controller,
       input,
       inputVector,
       [&encoder, time](afam::VolumeSource& step, afam::EncodeTeam& team)
       { return encoder.addStep(step, time, team); });
+    this->Run->MissingValueFound = this->Run->MissingValueFound || done.missingValueFound;
+    this->Run->ArrayName = done.arrayName;
   }
   else
   {
-    std::unique_ptr<MarkedInput> marked = this->MarkedSourceOf(input, inputVector, false);
+    std::unique_ptr<MarkedInput> marked =
+      this->MarkedSourceOf(input, inputVector, this->UseMissingValue);
     if (!marked)
     {
       return false;
     }
     encoder.addStep(marked->Marked->Source(), time);
+    this->Run->MissingValueFound =
+      this->Run->MissingValueFound || !marked->Marked->ValueNeverFound();
+    this->Run->ArrayName = marked->Values->name();
   }
   if (++this->NextStep < n)
   {
@@ -616,6 +623,12 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
     return true;
   }
   request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+  if (this->UseMissingValue && !this->Run->MissingValueFound &&
+    controller->GetLocalProcessId() == 0)
+  {
+    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, this->Run->ArrayName)
+                    << " (at every step)");
+  }
   vtkAFAMControllerTeam team(controller);
   afam::SoloTeam solo;
   const afam::RunStats stats = encoder.commit(pieces ? static_cast<afam::EncodeTeam&>(team) : solo);
@@ -660,7 +673,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* con
   }
   vtkAFAMPieceMarks marks;
   marks.Valid = mask.Valid;
-  marks.UseValue = this->UseMissingValue && this->InputTimes.size() < 2;
+  marks.UseValue = this->UseMissingValue;
   marks.Value = this->MissingValue;
   if (controller->GetLocalProcessId() == 0 && input->GetDirectionMatrix() &&
     !input->GetDirectionMatrix()->IsIdentity())
@@ -671,7 +684,9 @@ vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* con
     vtkAFAMEncodePieces(controller, input, array, error, whole, marks, encode);
   std::copy(done.pieceExtent, done.pieceExtent + 6, this->LastPieceExtent);
   this->LastRemoteBytesRead = static_cast<double>(done.remoteBytesRead);
-  if (marks.UseValue && !done.missingValueFound && controller->GetLocalProcessId() == 0)
+  const bool oneVolume = !this->Run; // a run warns once, after its last step
+  if (marks.UseValue && oneVolume && !done.missingValueFound &&
+    controller->GetLocalProcessId() == 0)
   {
     vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, done.arrayName));
   }

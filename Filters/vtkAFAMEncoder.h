@@ -169,8 +169,9 @@ public:
 
   ///@{
   /// With UseMissingValue (default off), the samples equal to MissingValue (default 0; a finite
-  /// value the array's type can hold) are missing too, and the file records the value. One volume
-  /// only: a run of time steps cannot hold missing samples yet (Core's run encoder refuses them).
+  /// value the array's type can hold) are missing too, and the file records the value; a run of
+  /// time steps declares it from its first step, and the value marks missing samples at every
+  /// step (warned once when no step holds it).
   vtkSetMacro(UseMissingValue, bool);
   vtkGetMacro(UseMissingValue, bool);
   vtkBooleanMacro(UseMissingValue, bool);

@@ -5,9 +5,11 @@ run) encodes every step into one run, in order:
   within the bound (`afam verify --against` the steps' samples);
 - a new time on the output draws another step without encoding again (the same model file);
 - the writer saves the whole run; the steps drawn differ;
+- a fill value (UseMissingValue) marks missing samples at every step, each step's mask exact;
 - with "Encode All Time Steps" off, only the step shown is encoded (a file of one step)."""
 import glob
 import os
+import re
 import subprocess
 import sys
 
@@ -78,6 +80,27 @@ saved = os.path.join(out, "saved.afam")
 SaveData(saved, proxy=encoder)
 if "steps=3" not in subprocess.run([exe, "info", saved], capture_output=True, text=True).stdout:
     u.fail("the writer did not save the whole run")
+
+# A fill value marks missing samples at every step of a run: the file declares it from step 0 and
+# every step keeps its mask exactly (`afam verify --against`: missing=N mask_mismatches=0).
+holes = []
+for k, raw in enumerate(raws):
+    holes.append(os.path.join(out, "holes_%04d_%dx%dx%d_float32.raw" % ((k,) + dims)))
+    subprocess.check_call([exe, "mask", raw, holes[-1], "--shape", "ball", "--fill", "-5"],
+                          stdout=subprocess.DEVNULL)
+masked_source = XMLImageDataReader(FileName=u.raws_to_vti(holes, dims, "v"))
+masked = AdaptiveFAMEncoder(Input=masked_source, Levels=2, BlocksPerAxis=2,  # noqa: F821
+                            ErrorBound=0.01, UseMissingValue=1, MissingValue=-5.0)
+masked.UpdatePipeline(0.0)
+masked_info = subprocess.run([exe, "info", model_file(masked)], capture_output=True, text=True).stdout
+if "steps=3" not in masked_info or "missing=value(-5)" not in masked_info:
+    u.fail("a run with a fill value:\n%s" % masked_info)
+verify = subprocess.run([exe, "verify", model_file(masked), "--against"] + holes,
+                        capture_output=True, text=True)
+print(verify.stdout, flush=True)
+if verify.returncode != 0 or len(re.findall(r"missing=[1-9][0-9]* mask_mismatches=0",
+                                            verify.stdout)) != 3:
+    u.fail("a step of the run with a fill value lost its mask:\n%s%s" % (verify.stdout, verify.stderr))
 
 encoder.EncodeAllTimeSteps = 0
 encoder.UpdatePipeline(1.0)

@@ -15,7 +15,7 @@ int runEncode(int argc, char** argv) {
   Args args(argc, argv,
             {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
              "search", "spacing", "window", "times", "key-interval", "append", "coded-share",
-             "max-error", "missing-value"},
+             "max-error", "missing-value", "entropy"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
@@ -25,6 +25,7 @@ int runEncode(int argc, char** argv) {
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
       "       [--missing-value V] [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
+      "       [--entropy auto|zstd|lanes]\n"
       "       afam encode --append STEP RUN.afam [--times T] [--threads T]";
   if (args.help()) {
     std::printf(
@@ -66,6 +67,11 @@ int runEncode(int argc, char** argv) {
         "  --float-payloads  store float32 splines (the paper's payloads) instead of the smallest "
         "of a\n"
         "                    constant, a coded spline and coded samples per block\n"
+        "  --entropy S       entropy stage of coded payloads: auto (default: per payload a lanes\n"
+        "                    frame, interleaved rANS that a GPU decodes, unless zstd's is more\n"
+        "                    than 2%% smaller), zstd, or lanes (every coded payload "
+        "GPU-decodable,\n"
+        "                    larger on small and smooth volumes)\n"
         "  --isotropic-ncp   one NCP for all three axes (the paper's); by default blocks much "
         "smoother\n"
         "                    along some axes get fewer control points there\n"
@@ -102,6 +108,7 @@ int runEncode(int argc, char** argv) {
   opt.relativeBound = args.has("relative");
   opt.compact = !args.has("float-payloads");
   opt.perAxisNcp = !args.has("isotropic-ncp");
+  opt.entropy = parseEntropyStage(args.str("entropy", "auto"));
   opt.mode = parseMode(args.str("mode", "adaptive"));
   opt.fixedNcp = int(args.integer("ncp", 0));
   if (args.has("ncp") && opt.mode != EncodingMode::Fixed)

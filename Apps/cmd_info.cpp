@@ -80,7 +80,8 @@ int runInfo(int argc, char** argv) {
     std::map<int, int64_t> hist;
     uint64_t bytes = 0, paperL = 0;
     double maxRmse = 0, maxErr = 0;
-    int64_t complexCount = 0, kinds[5] = {0, 0, 0, 0, 0}, coded = 0, integer = 0, masked = 0;
+    int64_t complexCount = 0, kinds[5] = {0, 0, 0, 0, 0}, coded = 0, integer = 0, masked = 0,
+            lanes = 0;
     double codedBits = 0, codedValues = 0;
     const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
     for (int64_t i = s; i < e; ++i) {
@@ -93,6 +94,7 @@ int runInfo(int argc, char** argv) {
       if (m.coded) {
         ++coded;
         integer += m.integerCoded;
+        lanes += m.lanesCoded;
         codedBits += 8.0 * double(m.storedSize);
         codedValues += double(controlCount(m));
       }
@@ -111,9 +113,10 @@ int runInfo(int argc, char** argv) {
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
     std::printf(
         "\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld "
-        "integer_form=%lld bits_per_coded_value=%.3f",
+        "integer_form=%lld lanes_frames=%lld bits_per_coded_value=%.3f",
         (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3],
-        (long long)coded, (long long)integer, codedValues > 0 ? codedBits / codedValues : 0.0);
+        (long long)coded, (long long)integer, (long long)lanes,
+        codedValues > 0 ? codedBits / codedValues : 0.0);
     if (h.missing != MissingKind::None)
       std::printf(" empty=%lld masked=%lld", (long long)kinds[4], (long long)masked);
     std::printf("\n");

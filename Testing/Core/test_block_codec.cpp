@@ -64,7 +64,7 @@ TEST(BlockCodec, ReconstructionWithinHalfAStepAndDecodedBitForBit) {
         const std::vector<float> v = field(n, unsigned(n[0] * 7 + n[2]));
         std::vector<uint8_t> bytes;
         std::vector<float> recon, viaQuantize, decoded(v.size());
-        ASSERT_TRUE(encodeValues(v.data(), n, step, p, 9, bytes, recon));
+        ASSERT_TRUE(encodeValues(v.data(), n, step, p, EntropyCoding{9}, bytes, recon));
         ASSERT_TRUE(quantizeValues(v.data(), n, step, p, viaQuantize));
         EXPECT_EQ(recon, viaQuantize);
         double worst = 0;
@@ -83,7 +83,8 @@ TEST(BlockCodec, SmoothDataCodesFarBelowFloats) {
   const std::vector<float> v = field(n, 3);
   std::vector<uint8_t> bytes;
   std::vector<float> recon;
-  ASSERT_TRUE(encodeValues(v.data(), n, 0.2, Predictor::Interpolation, 9, bytes, recon));
+  ASSERT_TRUE(
+      encodeValues(v.data(), n, 0.2, Predictor::Interpolation, EntropyCoding{9}, bytes, recon));
   EXPECT_LT(bytes.size() * 8, v.size() * 4) << "under 4 bits a value at a step of 4 noise sigmas";
 }
 
@@ -92,10 +93,11 @@ TEST(BlockCodec, AbsurdStepsAndDamagedBytesAreRefused) {
   const std::vector<float> v = field(n, 9);
   std::vector<uint8_t> bytes;
   std::vector<float> recon, out(v.size());
-  EXPECT_FALSE(encodeValues(v.data(), n, 0.0, Predictor::Lorenzo, 3, bytes, recon));
-  EXPECT_FALSE(encodeValues(v.data(), n, 1e-30, Predictor::Lorenzo, 3, bytes, recon))
+  EXPECT_FALSE(encodeValues(v.data(), n, 0.0, Predictor::Lorenzo, EntropyCoding{3}, bytes, recon));
+  EXPECT_FALSE(encodeValues(v.data(), n, 1e-30, Predictor::Lorenzo, EntropyCoding{3}, bytes, recon))
       << "codes beyond 2^50";
-  ASSERT_TRUE(encodeValues(v.data(), n, 0.01, Predictor::Interpolation, 3, bytes, recon));
+  ASSERT_TRUE(
+      encodeValues(v.data(), n, 0.01, Predictor::Interpolation, EntropyCoding{3}, bytes, recon));
   std::vector<uint8_t> b = bytes;
   b[8] = 7;
   EXPECT_THROW(decodeValues(b.data(), b.size(), n, out.data(), "x"), FormatError);
@@ -120,8 +122,8 @@ TEST(BlockCodec, IntegerFormsAreChosenWhereTheyFitAndCodeNoLargerThanDoubleForms
       EXPECT_TRUE(isIntegerForm(form));
       std::vector<uint8_t> dbl, integer;
       std::vector<float> r1, r2;
-      ASSERT_TRUE(encodeValues(v.data(), n, step, family, 9, dbl, r1));
-      ASSERT_TRUE(encodeValues(v.data(), n, step, form, 9, integer, r2));
+      ASSERT_TRUE(encodeValues(v.data(), n, step, family, EntropyCoding{9}, dbl, r1));
+      ASSERT_TRUE(encodeValues(v.data(), n, step, form, EntropyCoding{9}, integer, r2));
       // Interpolation at a step of 4 noise sigmas is the exception: its integer form rounds the
       // predictions' fractions away and codes about 10% larger (the encoder keeps the smaller
       // form, block_encoding.cpp); everywhere else the forms code alike.
@@ -139,15 +141,18 @@ TEST(BlockCodec, IntegerFormsAreChosenWhereTheyFitAndCodeNoLargerThanDoubleForms
             Predictor::Interpolation);
   std::vector<uint8_t> bytes;
   std::vector<float> recon;
-  EXPECT_FALSE(encodeValues(wide.data(), n, 0.001, Predictor::IntegerLorenzo, 3, bytes, recon));
+  EXPECT_FALSE(encodeValues(wide.data(), n, 0.001, Predictor::IntegerLorenzo, EntropyCoding{3},
+                            bytes, recon));
   EXPECT_TRUE(bytes.empty());
-  EXPECT_TRUE(encodeValues(wide.data(), n, 0.001, Predictor::Lorenzo, 3, bytes, recon));
+  EXPECT_TRUE(
+      encodeValues(wide.data(), n, 0.001, Predictor::Lorenzo, EntropyCoding{3}, bytes, recon));
   // Values far from zero fit through the base: 1e6 + small variations at a step of 1e-3.
   std::vector<float> offset(count);
   for (size_t i = 0; i < count; ++i) offset[i] = 1e6f + 0.25f * float(i % 17);
   EXPECT_EQ(choosePredictorForm(offset.data(), count, 1e-3, Predictor::Lorenzo),
             Predictor::IntegerLorenzo);
-  ASSERT_TRUE(encodeValues(offset.data(), n, 1e-3, Predictor::IntegerLorenzo, 3, bytes, recon));
+  ASSERT_TRUE(encodeValues(offset.data(), n, 1e-3, Predictor::IntegerLorenzo, EntropyCoding{3},
+                           bytes, recon));
   std::vector<float> decoded(count);
   decodeValues(bytes.data(), bytes.size(), n, decoded.data(), "offset");
   EXPECT_EQ(decoded, recon);
@@ -164,7 +169,7 @@ TEST(BlockCodec, DamagedIntegerPayloadsAreRefusedByName) {
   std::vector<float> out(v.size()), recon;
   for (const Predictor p : {Predictor::IntegerLorenzo, Predictor::IntegerInterpolation}) {
     std::vector<uint8_t> bytes;
-    ASSERT_TRUE(encodeValues(v.data(), n, 0.01, p, 3, bytes, recon));
+    ASSERT_TRUE(encodeValues(v.data(), n, 0.01, p, EntropyCoding{3}, bytes, recon));
     std::vector<uint8_t> b = bytes;
     const int64_t hugeBase = int64_t(1) << 60;
     std::memcpy(b.data() + 9, &hugeBase, 8);
@@ -183,7 +188,7 @@ TEST(BlockCodec, DamagedIntegerPayloadsAreRefusedByName) {
     big[0] = float(1 << 25) * 0.01f;
     big[1] = -float(1 << 25) * 0.01f;
     std::vector<uint8_t> edge;
-    ASSERT_TRUE(encodeValues(big.data(), n, 0.01, p, 3, edge, recon));
+    ASSERT_TRUE(encodeValues(big.data(), n, 0.01, p, EntropyCoding{3}, edge, recon));
     decodeValues(edge.data(), edge.size(), n, out.data(), "edge");
     EXPECT_EQ(out, recon) << "the widest spread that fits decodes";
     EXPECT_GT(refusedAmongDamaged(bytes, kIntegerCodedHeaderBytes, n, unsigned(p) * 31), 1000)
@@ -218,7 +223,7 @@ TEST(BlockCodec, FreeValuesKeepTheValidOnesAndStayWithinTheirSlackOfTheFilling) 
       std::vector<uint8_t> bytes;
       std::vector<float> recon, decoded(v.size()), quantized;
       const FreeValues free{valid.data(), slack};
-      ASSERT_TRUE(encodeValues(v.data(), n, step, p, 3, bytes, recon, free));
+      ASSERT_TRUE(encodeValues(v.data(), n, step, p, EntropyCoding{3}, bytes, recon, free));
       ASSERT_TRUE(quantizeValues(v.data(), n, step, p, quantized, free));
       EXPECT_EQ(0, std::memcmp(recon.data(), quantized.data(), recon.size() * 4));
       decodeValues(bytes.data(), bytes.size(), n, decoded.data(), "free");

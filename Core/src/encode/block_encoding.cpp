@@ -100,7 +100,7 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
   ModelEntry& m = t.entry;
   m.kind = exact ? BlockKind::Samples : BlockKind::Spline;
   m.coded = false;
-  m.integerCoded = false;
+  m.integerCoded = m.lanesCoded = false;
   m.ncp = fr.ncp;
   m.degree = fr.degree;
   setError(t, fr.error);
@@ -148,7 +148,8 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
 /// The fitted spline's control points, Lorenzo-predicted in the given form and coded; the step is
 /// the largest of the ladder that keeps the model within the bound.
 bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
-                      BoundKind kind, Predictor form, BlockFitter& fitter, Candidate& out) {
+                      BoundKind kind, EntropyCoding coding, Predictor form, BlockFitter& fitter,
+                      Candidate& out) {
   // What quantization may spend: the rest of an RMSE in quadrature; of a pointwise bound, what
   // the fit's worst sample leaves (the model moves by at most step / 2 anywhere).
   const double budget =
@@ -179,8 +180,7 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   if (best < 0 || !lattice) return false;
   const double step = ladderStep(kind, budget, kStepFactors[best]);
   std::vector<uint8_t> bytes;
-  if (!encodeValues(fr.control.data(), fr.ncp, step, form, kZstdLevel, bytes, q.control))
-    return false;
+  if (!encodeValues(fr.control.data(), fr.ncp, step, form, coding, bytes, q.control)) return false;
   // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
   if (q.control == passed.control)
     q = std::move(passed);
@@ -208,11 +208,12 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 }
 
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
-                BoundKind kind, BlockFitter& fitter, Candidate& out) {
+                BoundKind kind, EntropyCoding coding, BlockFitter& fitter, Candidate& out) {
   Candidate integer, dbl;
   const bool hasInteger =
-      codeSplineInForm(fr, s, n, bound, kind, Predictor::IntegerLorenzo, fitter, integer);
-  const bool hasDouble = codeSplineInForm(fr, s, n, bound, kind, Predictor::Lorenzo, fitter, dbl);
+      codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::IntegerLorenzo, fitter, integer);
+  const bool hasDouble =
+      codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::Lorenzo, fitter, dbl);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
@@ -220,8 +221,8 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
 /// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
 /// measured on the samples.
 bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64_t holeSlack,
-                       Int3 n, int degree, double bound, BoundKind kind, double beat,
-                       Predictor form, BlockFitter& fitter, Candidate& out) {
+                       Int3 n, int degree, double bound, BoundKind kind, EntropyCoding coding,
+                       double beat, Predictor form, BlockFitter& fitter, Candidate& out) {
   const FreeValues free{valid, holeSlack};
   std::vector<float> recon;
   bool lattice = true;
@@ -241,11 +242,12 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   c.kind = BlockKind::Interpolant;
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-  if (!encodeValues(s.data(), n, step, form, kZstdLevel, c.bytes, recon, free)) return false;
+  if (!encodeValues(s.data(), n, step, form, coding, c.bytes, recon, free)) return false;
   ModelEntry probe;
   probe.kind = c.kind;
   probe.coded = true;
   probe.integerCoded = isIntegerForm(form);
+  probe.lanesCoded = payloadIsLanesCoded(c.bytes.data(), c.bytes.size());
   probe.ncp = c.ncp;
   probe.degree = c.degree;
   probe.size = payloadBytes(n);
@@ -275,15 +277,16 @@ constexpr int64_t kHoleSlacks[] = {0, kNearFillSteps, FreeValues::kAnySlack};
 /// missing samples, with each way of coding the holes (kHoleSlacks), whichever is smallest (the
 /// quantization step the ladder reaches differs between them).
 bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
-                 double bound, BoundKind kind, double beat, BlockFitter& fitter, Candidate& out) {
+                 double bound, BoundKind kind, EntropyCoding coding, double beat,
+                 BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
   bool found = false;
   for (const int64_t slack : kHoleSlacks) {
     if (slack > 0 && !valid) break;
     Candidate integer, dbl, best;
-    const bool hasInteger = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, beat,
+    const bool hasInteger = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
                                               Predictor::IntegerInterpolation, fitter, integer);
-    const bool hasDouble = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, beat,
+    const bool hasDouble = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
                                              Predictor::Interpolation, fitter, dbl);
     if (!keepSmallerForm(hasInteger, integer, hasDouble, dbl, best)) continue;
     if (!found || best.bytes.size() < out.bytes.size()) out = std::move(best);
@@ -297,6 +300,7 @@ void storeCandidate(Candidate& c, BlockTask& t) {
   m.kind = c.kind;
   m.coded = c.kind != BlockKind::Constant;
   m.integerCoded = m.coded && payloadIsIntegerCoded(c.bytes.data(), c.bytes.size());
+  m.lanesCoded = m.coded && payloadIsLanesCoded(c.bytes.data(), c.bytes.size());
   m.ncp = c.ncp;
   m.degree = c.degree;
   setError(t, c.error);
@@ -317,16 +321,17 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   FitResult fr;
   fitBlock(c, e, fitter, kFitShare * c.bound, t, fr);
   const int64_t count = int64_t(t.samples.size());
-  const bool haveSpline = !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
-                          codeSpline(fr, t.samples, e.samples, c.bound, kind, fitter, best);
+  const bool haveSpline =
+      !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
+      codeSpline(fr, t.samples, e.samples, c.bound, kind, entropyCoding(c.opt), fitter, best);
   // Samples pay when the spline is missing or spends more than a bit per sample (masked blocks,
   // whose fitted splines also follow the filled holes, always try them); they are coded only when
   // their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
   const double beat =
       haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
   if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count || !t.mask.empty()) &&
-      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, beat, fitter,
-                  other) &&
+      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind,
+                  entropyCoding(c.opt), beat, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;
@@ -384,6 +389,7 @@ void referPrevious(const ModelEntry& previous, const ErrorStats& moved, BlockTas
   m.kind = previous.kind;
   m.coded = previous.coded;
   m.integerCoded = previous.integerCoded;
+  m.lanesCoded = previous.lanesCoded;
   m.ncp = previous.ncp;
   m.degree = previous.degree;
   m.reference = true;
@@ -400,7 +406,7 @@ namespace {
 void storeEmpty(const FitContext& c, const BlockExtent& e, BlockTask& t) {
   ModelEntry& m = t.entry;
   m.kind = BlockKind::Empty;
-  m.coded = m.integerCoded = m.masked = false;
+  m.coded = m.integerCoded = m.lanesCoded = m.masked = false;
   for (int a = 0; a < 3; ++a) {
     m.degree[a] = effectiveDegree(c.opt.degree, e.samples[a]);
     m.ncp[a] = m.degree[a] + 1;

@@ -58,6 +58,11 @@ constexpr double kStepFactors[] = {4.0, 3.2,  2.6, 2.1,  1.7, 1.4, 1.15,
                                    1.0, 0.85, 0.7, 0.55, 0.4, 0.3};
 constexpr int kZstdLevel = 15;
 
+/// How the encoder's coded payloads are entropy coded (the options' stage at kZstdLevel).
+inline EntropyCoding entropyCoding(const EncoderOptions& opt) {
+  return EntropyCoding{kZstdLevel, opt.entropy};
+}
+
 /// The quantization step of ladder factor k for an error budget: factors of the step whose
 /// rounding alone would spend the budget, 2 sqrt(3) x budget for an RMSE (uniform rounding's RMSE
 /// is step / sqrt(12)), 2 x budget for a pointwise bound (its worst case is step / 2).

@@ -25,6 +25,7 @@ FitResult applyResidual(const ModelEntry& before, const FitResult& model,
   ModelEntry probe = before;  // the kind and NCP; this payload's coding
   probe.coded = true;
   probe.integerCoded = payloadIsIntegerCoded(bytes.data(), bytes.size());
+  probe.lanesCoded = payloadIsLanesCoded(bytes.data(), bytes.size());
   probe.storedSize = bytes.size();
   probe.size = payloadBytes(before.ncp);
   std::vector<float> residual(model.control.size());
@@ -93,7 +94,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   if (best < 0) return false;
   std::vector<uint8_t> bytes;
   if (!encodeValues(delta.data(), model.ncp, ladderStep(kind, budget, kStepFactors[best]), form,
-                    kZstdLevel, bytes, q) ||
+                    entropyCoding(c.opt), bytes, q) ||
       bytes.size() >= t.stored.size())
     return false;
   const FitResult decoded = applyResidual(
@@ -104,6 +105,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   m.kind = before.kind;
   m.coded = true;
   m.integerCoded = payloadIsIntegerCoded(bytes.data(), bytes.size());
+  m.lanesCoded = payloadIsLanesCoded(bytes.data(), bytes.size());
   m.ncp = before.ncp;
   m.degree = before.degree;
   m.reference = false;

@@ -157,13 +157,15 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
                 uint16_t extraFlags) {
   const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
   if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
-  if ((r.flags & ~uint16_t(0x3ff | extraFlags)) != 0)
+  if ((r.flags & ~uint16_t(0x3ff | kLanesFlag | extraFlags)) != 0)
     throw bad("unknown entry flags " + std::to_string(r.flags));
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
   m.integerCoded = (r.flags & 0x200) != 0;
+  m.lanesCoded = (r.flags & kLanesFlag) != 0;
   m.masked = (r.flags & kMaskedFlag) != 0;
   if (m.integerCoded && !m.coded) throw bad("integer form flagged on an uncoded payload");
+  if (m.lanesCoded && !m.coded) throw bad("lanes frame flagged on an uncoded payload");
   m.samples = e.samples;
   for (int a = 0; a < 3; ++a) {
     m.ncp[a] = r.ncp[a];
@@ -262,15 +264,26 @@ size_t checkModelToWrite(const std::string& path, const VolumeHeader& vh,
                              partition.linearIndex(in.level, in.block));
 }
 
+namespace {
+/// Bytes of a stored payload's mask section (0 when unmasked).
+size_t maskSkip(const ModelEntry& m, const uint8_t* bytes) {
+  if (!m.masked || m.storedSize < 4) return 0;
+  uint32_t coded = 0;
+  std::memcpy(&coded, bytes, 4);
+  return std::min<size_t>(maskSectionBytes(coded), m.storedSize);
+}
+}  // namespace
+
 bool storedIsIntegerCoded(const ModelEntry& m, const void* stored) {
   const auto* bytes = static_cast<const uint8_t*>(stored);
-  size_t skip = 0;
-  if (m.masked && m.storedSize >= 4) {
-    uint32_t coded = 0;
-    std::memcpy(&coded, bytes, 4);
-    skip = std::min<size_t>(maskSectionBytes(coded), m.storedSize);
-  }
+  const size_t skip = maskSkip(m, bytes);
   return m.coded && payloadIsIntegerCoded(bytes + skip, m.storedSize - skip);
+}
+
+bool storedIsLanesCoded(const ModelEntry& m, const void* stored) {
+  const auto* bytes = static_cast<const uint8_t*>(stored);
+  const size_t skip = maskSkip(m, bytes);
+  return m.coded && payloadIsLanesCoded(bytes + skip, m.storedSize - skip);
 }
 
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
@@ -284,8 +297,8 @@ IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
   r.maxError = m.maxError;
   r.checksum = m.checksum;
   r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
-                                  (m.integerCoded ? 0x200 : 0) | (m.masked ? kMaskedFlag : 0) |
-                                  extraFlags);
+                                  (m.integerCoded ? 0x200 : 0) | (m.lanesCoded ? kLanesFlag : 0) |
+                                  (m.masked ? kMaskedFlag : 0) | extraFlags);
   r.storedBytes = static_cast<uint32_t>(m.storedSize);
   if (m.kind == BlockKind::Empty) r.offset = r.checksum = r.storedBytes = 0;
   return r;
@@ -447,6 +460,8 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     std::fill(out, out + count, c);
   } else if (e.coded && e.integerCoded != payloadIsIntegerCoded(stored, e.storedSize)) {
     throw FormatError(where + ": coded payload's predictor disagrees with the index's flags");
+  } else if (e.coded && e.lanesCoded != payloadIsLanesCoded(stored, e.storedSize)) {
+    throw FormatError(where + ": coded payload's frame disagrees with the index's flags");
   } else if (e.kind == BlockKind::Interpolant) {
     thread_local std::vector<float> samples;
     thread_local BlockFitter fitter;
@@ -660,6 +675,28 @@ void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) 
   throwIfChanged(identityOfDescriptor(fd_));
 }
 
+std::vector<uint8_t> AfamFile::readStored(int64_t entry) const {
+  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
+    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
+  const ModelEntry& e = entries_[static_cast<size_t>(entry)];
+  if (e.residual || e.kind == BlockKind::Empty)
+    throw InvalidArgument(path_ + ": " + Partition::blockName(e.level, e.block) +
+                          " is not stored as one payload");
+  std::vector<uint8_t> stored(e.storedSize);
+  try {
+    preadAll(fd_, stored.data(), e.storedSize, e.offset, path_,
+             "payload of " + Partition::blockName(e.level, e.block));
+    if (crc32(stored.data(), e.storedSize) != e.checksum)
+      throw FormatError(path_ + ": payload checksum mismatch at " +
+                        Partition::blockName(e.level, e.block));
+  } catch (const FormatError&) {
+    throwIfChanged(identityOfDescriptor(fd_));
+    throw;
+  }
+  throwIfChanged(identityOfDescriptor(fd_));
+  return stored;
+}
+
 void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* out) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
@@ -768,6 +805,7 @@ void AfamWriter::addStored(const ModelEntry& in, const void* stored) {
   ModelEntry& m = entries_[slot];
   m = in;
   m.integerCoded = storedIsIntegerCoded(in, stored);
+  m.lanesCoded = storedIsLanesCoded(in, stored);
   m.offset = offset;
   m.size = decodedBytes(in);
   m.checksum = crc;

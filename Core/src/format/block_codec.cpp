@@ -181,8 +181,9 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
   return double(isIntegerForm(predictor) ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + bits / 8;
 }
 
-bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
-                  std::vector<uint8_t>& out, std::vector<float>& reconstructed, FreeValues free) {
+bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
+                  EntropyCoding coding, std::vector<uint8_t>& out,
+                  std::vector<float>& reconstructed, FreeValues free) {
   out.clear();
   std::vector<int64_t> codes;
   int64_t base = 0;
@@ -197,7 +198,7 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
     out.resize(kIntegerCodedHeaderBytes);
     std::memcpy(out.data() + kCodedHeaderBytes, &base, 8);
   }
-  codec::appendZstdFrame(varints, zstdLevel, out);
+  codec::appendEntropyFrame(varints, coding, out);
   return true;
 }
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What both forms of the block codec (block_codec.cpp: double forms and the public functions;
-// integer_codec.cpp: integer forms) share: zstd contexts, the calling thread's scratch buffers,
-// zigzag varints and the payload's error messages. Internal to Core/src/format.
+// integer_codec.cpp: integer forms) share: the entropy stages (zstd contexts, lanes frames), the
+// calling thread's scratch buffers, zigzag varints and the payload's error messages. Internal to
+// Core/src/format.
 #pragma once
 
 #include <zstd.h>
@@ -14,6 +15,8 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/entropy/lanes_coder.hpp"
+#include "afam/format/block_codec.hpp"
 #include "afam/format/partition.hpp"
 
 namespace afam::codec {
@@ -69,16 +72,48 @@ inline void appendZstdFrame(const std::vector<uint8_t>& bytes, int level,
   out.resize(head + z);
 }
 
+/// Appends the frame `coding` asks for: zstd, lanes, or (Auto) the lanes frame unless the zstd
+/// frame is more than kLanesMargin smaller.
+inline void appendEntropyFrame(const std::vector<uint8_t>& bytes, EntropyCoding coding,
+                               std::vector<uint8_t>& out) {
+  const size_t head = out.size();
+  if (coding.stage != EntropyStage::Lanes) appendZstdFrame(bytes, coding.zstdLevel, out);
+  if (coding.stage == EntropyStage::Zstd) return;
+  std::vector<uint8_t> frame;
+  lanes::appendFrame(bytes, frame);
+  const double zstdBytes = double(out.size() - head);
+  if (coding.stage == EntropyStage::Lanes ||
+      double(frame.size()) <= (1 + kLanesMargin) * zstdBytes) {
+    out.resize(head);
+    out.insert(out.end(), frame.begin(), frame.end());
+  }
+}
+
 /// The error of a payload that does not decode: "<where>: coded payload <what>".
 inline FormatError badPayload(const char* where, const std::string& what) {
   return FormatError(std::string(where) + ": coded payload " + what);
 }
 
-/// Decompresses the zstd frame [frame, frame + bytes) into the calling thread's buffer (`Tag`
-/// 0 of uint8_t) with at most `capacity` bytes, and `padding` zero bytes after what it holds;
-/// returns the buffer and sets `got`.
+/// Decodes the lanes frame [frame, frame + bytes) as unpackFrame does.
+inline const uint8_t* unpackLanesFrame(const uint8_t* frame, size_t bytes, size_t capacity,
+                                       size_t padding, const char* where, size_t& got) {
+  const size_t symbols = lanes::frameSymbols(frame, bytes);
+  uint8_t* out = threadBuffer<uint8_t>(std::min(symbols, capacity) + padding);
+  const char* error = nullptr;
+  const int64_t n = lanes::decodeFrame(frame, bytes, out, capacity, &error);
+  if (n < 0) throw badPayload(where, std::string("lanes frame ") + error);
+  got = size_t(n);
+  std::fill(out + got, out + got + padding, uint8_t(0));
+  return out;
+}
+
+/// Decompresses the frame [frame, frame + bytes) (zstd, or lanes) into the calling thread's
+/// buffer (`Tag` 0 of uint8_t) with at most `capacity` bytes, and `padding` zero bytes after what
+/// it holds; returns the buffer and sets `got`.
 inline const uint8_t* unpackFrame(const uint8_t* frame, size_t bytes, size_t capacity,
                                   size_t padding, const char* where, size_t& got) {
+  if (lanes::isLanesFrame(frame, bytes))
+    return unpackLanesFrame(frame, bytes, capacity, padding, where, got);
   const unsigned long long framed = ZSTD_getFrameContentSize(frame, bytes);
   if (framed == ZSTD_CONTENTSIZE_ERROR)
     throw badPayload(where, "does not decompress (not a zstd frame)");

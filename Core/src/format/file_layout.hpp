@@ -24,6 +24,7 @@ constexpr uint32_t kEndianTag = 0x01020304u;
 constexpr uint64_t kAlign = 64;        // start of the payload area
 constexpr uint32_t kPayloadAlign = 4;  // payload offsets (float32 arrays, uploaded unchanged)
 constexpr int kMaxLevels = 16;
+constexpr uint16_t kLanesFlag = 1u << 13;  // entry flags bit 13: the coded payload's frame is lanes
 constexpr uint16_t kMaskedFlag = 1u << 12;  // v3 entry flags bit 12: the payload starts with a mask
 
 // On-disk header of versions 1, 2 and 3 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
@@ -183,6 +184,8 @@ void decodeChain(int fd, const std::string& path, const ModelEntry& e,
 /// Whether a stored payload is coded in an integer form (index flag bit 9), looking past a masked
 /// payload's mask section.
 bool storedIsIntegerCoded(const ModelEntry& m, const void* stored);
+/// Whether its coded payload's frame is a lanes frame (index flag bit 13).
+bool storedIsLanesCoded(const ModelEntry& m, const void* stored);
 /// The on-disk entry of a model, `extraFlags` or-ed into its flags.
 IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags);
 /// A header with the volume's description, the partition and `version` (checksum not set).

@@ -89,6 +89,7 @@ PayloadPart payloadPart(const IndexEntryV1& r, const ModelEntry& parsed, const S
   p.checksum = r.checksum;
   p.coded = parsed.coded;
   p.integerCoded = parsed.integerCoded;
+  p.lanesCoded = parsed.lanesCoded;
   p.step = s;
   return p;
 }
@@ -163,6 +164,7 @@ void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileH
   m.size = parsed.size;
   m.coded = newest.coded;
   m.integerCoded = newest.integerCoded;
+  m.lanesCoded = newest.lanesCoded;
   m.storedSize = newest.storedSize;
   m.offset = newest.offset;
   m.checksum = newest.checksum;
@@ -357,6 +359,7 @@ ModelEntry& RunWriter::writePayload(size_t slot, const ModelEntry& in, const voi
   ModelEntry& m = current_[slot];
   m = in;
   m.integerCoded = storedIsIntegerCoded(in, stored);
+  m.lanesCoded = storedIsLanesCoded(in, stored);
   m.offset = offset;
   m.size = decodedBytes(in);
   m.checksum = crc;
@@ -429,9 +432,9 @@ void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
   chain = previousChains_[slot];
   if (chain.empty())  // the step before's model is one payload: the chain's first
     chain.push_back(PayloadPart{before.offset, before.storedSize, before.checksum, before.coded,
-                                before.integerCoded, before.ownerStep});
-  chain.push_back(
-      PayloadPart{m.offset, m.storedSize, m.checksum, true, m.integerCoded, m.ownerStep});
+                                before.integerCoded, before.ownerStep, before.lanesCoded});
+  chain.push_back(PayloadPart{m.offset, m.storedSize, m.checksum, true, m.integerCoded, m.ownerStep,
+                              m.lanesCoded});
   m.chainLength = static_cast<uint32_t>(chain.size());
   depth_[slot] = previousDepth_[slot] + 1;
 }

@@ -70,7 +70,7 @@ ExtractStats extractStep(const std::string& run, int64_t step, const std::string
       const std::vector<float> control = file->readPayload(int64_t(i));
       e.residual = false;
       e.coded = false;
-      e.integerCoded = false;
+      e.integerCoded = e.lanesCoded = false;
       if (e.kind == BlockKind::Interpolant) e.kind = BlockKind::Spline;  // its control points
       e.reference = false;
       e.ownerStep = 0;

@@ -82,23 +82,39 @@ Payload LruCache::residentModelBefore(const AfamFile& f, int64_t entry) {
   return it == map_.end() ? nullptr : it->second.data;
 }
 
+void LruCache::setStoredForm(StoredForm form) {
+  std::lock_guard<std::mutex> g(mutex_);
+  storedForm_ = form;
+}
+
 Payload LruCache::load(const AfamFile& f, int64_t entry) {
   const ModelEntry& e = f.entries().at(size_t(entry));
-  auto data = std::make_shared<std::vector<float>>(e.size / sizeof(float));
+  StoredForm form;
+  {
+    std::lock_guard<std::mutex> g(mutex_);
+    form = storedForm_;
+  }
+  const bool stored = form && e.kind != BlockKind::Empty && !e.residual && form(e);
+  auto data = std::make_shared<CachedModel>(stored ? 0 : e.size / sizeof(float));
   if (e.kind == BlockKind::Empty) return data;  // no valid sample: no payload, nothing to read
   const auto t0 = Clock::now();
   // A residual whose model at the step before is resident costs one payload, not its chain.
-  const Payload before = residentModelBefore(f, entry);
+  Payload before = stored ? nullptr : residentModelBefore(f, entry);
+  if (before && before->isStored()) before = nullptr;  // no floats to add to
   try {
-    f.readPayloadOnto(entry, before ? before->data() : nullptr, data->data());
+    if (stored)
+      data->stored = f.readStored(entry);
+    else
+      f.readPayloadOnto(entry, before ? before->data() : nullptr, data->data());
   } catch (const FormatError& ex) {
     damage_->record(f, entry, ex.what());
     throw;
   }
-  throttle(e.size, t0);
+  const uint64_t read = e.size;  // the model's bytes, as for every load (stats and the cap)
+  throttle(read, t0);
   const double s = std::chrono::duration<double>(Clock::now() - t0).count();
   std::lock_guard<std::mutex> g(mutex_);
-  stats_.bytesRead += e.size;
+  stats_.bytesRead += read;
   stats_.blocksRead++;
   stats_.residualsOnResident += before ? 1 : 0;
   stats_.readSeconds += s;
@@ -168,7 +184,7 @@ Payload LruCache::getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool
   }
   lock.lock();
   loading_.erase(key);
-  const uint64_t bytes = data->size() * sizeof(float);
+  const uint64_t bytes = data->bytes();
   if (purpose == Purpose::Prefetch) {
     stats_.prefetchLoads++;
     stats_.prefetchBytes += bytes;

@@ -21,9 +21,11 @@ namespace {
 class StandIns {
  public:
   StandIns(const AfamFile& f, const BlockRef& damaged) {
-    const IntactLoader load = [&f](int64_t entry) -> std::shared_ptr<const std::vector<float>> {
+    const IntactLoader load = [&f](int64_t entry) -> Payload {
       try {
-        return std::make_shared<const std::vector<float>>(f.readPayload(entry));
+        auto model = std::make_shared<CachedModel>(f.entries()[size_t(entry)].size / sizeof(float));
+        f.readPayload(entry, model->data());
+        return Payload(std::move(model));
       } catch (const FormatError&) {
         return nullptr;  // damaged too: replaceDamaged looks further
       }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <limits>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -28,15 +29,43 @@ void PreparedFrame::bind() {
   view.tfSize = int32_t(tf.size() / 4);
 }
 
+namespace {
+
+/// Floats of a placed model: its control points (a model in the stored form has none yet).
+uint64_t modelFloats(const AfamFile& file, const Placement& m) {
+  return m.data->isStored() ? uint64_t(controlCount(file.entries()[size_t(m.model.entry)]))
+                            : m.data->size();
+}
+
+/// Writes a model's floats at `out`: copied, or decoded from its stored form (NaN, drawn as
+/// nothing, where its payload does not decode: its checksum held, so the caster that asked for
+/// the stored form reports it).
+void writeModel(const ModelEntry& e, const CachedModel& m, float* out, uint64_t floats) {
+  if (!m.isStored()) {
+    if (!m.empty()) std::memcpy(out, m.data(), m.size() * sizeof(float));
+    return;
+  }
+  try {
+    decodeStoredPayload(e, m.stored.data(), out, Partition::blockName(e.level, e.block));
+  } catch (const FormatError&) {
+    std::fill(out, out + floats, std::numeric_limits<float>::quiet_NaN());
+  }
+}
+
+}  // namespace
+
+uint64_t PreparedFrame::slotFloats(size_t s) const {
+  return models[s]->isStored() ? slotFloatCount(slots[s]) : models[s]->size();
+}
+
 const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
   if (view.pool || slots.empty()) return view.pool;
   uint64_t floats = 0;
   for (size_t s = 0; s < slots.size(); ++s)
-    floats = std::max(floats, slots[s].offset + models[s]->size());
+    floats = std::max(floats, slots[s].offset + slotFloats(s));
   storage.resize(floats);
   for (size_t s = 0; s < slots.size(); ++s)
-    if (!models[s]->empty())  // an empty block's model has no floats
-      std::memcpy(storage.data() + slots[s].offset, slotHost[s], models[s]->size() * sizeof(float));
+    writeModel(*slotEntries[s], *models[s], storage.data() + slots[s].offset, slotFloats(s));
   return storage.data();
 }
 
@@ -175,7 +204,7 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
   std::vector<Placement> placed;
   placed.reserve(sel.visible.size());
   const std::unordered_set<int64_t> missed(missing.begin(), missing.end());
-  static const Payload noFloats = std::make_shared<const std::vector<float>>();
+  static const Payload noFloats = std::make_shared<const CachedModel>();
   for (const BlockRef& b : sel.visible) {
     if (isEmptyBlock(b)) {
       placed.push_back(Placement{b, b, noFloats});
@@ -289,19 +318,21 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   std::unordered_map<int64_t, int32_t> slotOf;
   uint64_t poolFloats = 0;
   for (const Placement& m : placed)
-    if (slotOf.emplace(m.model.entry, -1).second) poolFloats += m.data->size();
+    if (slotOf.emplace(m.model.entry, -1).second) poolFloats += modelFloats(*file_, m);
   if (hostPool) fr.pool.resize(poolFloats);
   fr.slots.reserve(slotOf.size());
   uint64_t offset = 0;
   for (const Placement& m : placed) {
     int32_t& slot = slotOf[m.model.entry];
     if (slot < 0) {
-      if (hostPool && !m.data->empty())  // an empty block's model has no floats (and no data())
-        std::memcpy(fr.pool.data() + offset, m.data->data(), m.data->size() * sizeof(float));
+      const ModelEntry& e = file_->entries()[size_t(m.model.entry)];
+      const uint64_t floats = modelFloats(*file_, m);
+      if (hostPool) writeModel(e, *m.data, fr.pool.data() + offset, floats);
       slot = addSlot(m.model, fr, offset);
       fr.models.push_back(m.data);
-      fr.slotHost.push_back(m.data->data());
-      offset += m.data->size();
+      fr.slotHost.push_back(m.data->isStored() ? nullptr : m.data->data());
+      fr.slotEntries.push_back(&e);
+      offset += floats;
     }
     fillCells(m.region, slot, fr);
   }
@@ -358,6 +389,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
   if (resources_.cold) cache_->dropOsCache();
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
+  cache_->setStoredForm(caster_->storedForm());  // null again once a GPU caster has failed
   prepare(camera, fr, st, caster_->readsHostPool());
   history_.push_back(camera);
   if (history_.size() > kPredictorHistory) history_.erase(history_.begin());
@@ -391,6 +423,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
   prefetcher_->finish();      // the paper's rendering_done: prefetching stops with the frame
   loader_->cancelPrefetch();  // (a load under way completes)
   cache_->clearPinned();
+  for (const auto& [entry, why] : st.cast.damaged) cache_->damage().record(*file_, entry, why);
   for (std::string& r : cache_->damage().takeReports()) st.damageReports.push_back(std::move(r));
   st.knownDamagedBlocks = int64_t(cache_->damage().count());
   const CacheStats after = cache_->stats();

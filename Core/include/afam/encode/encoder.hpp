@@ -40,6 +40,7 @@
 #include "afam/encode/encode_team.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/encode/ncp_search.hpp"
+#include "afam/entropy/entropy_stage.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/spline/fit.hpp"
@@ -84,6 +85,10 @@ struct EncoderOptions {
   /// Searched blocks whose samples are much smoother along some axes get fewer control points
   /// there (refineNcpPerAxis); false: the paper's one NCP for all axes.
   bool perAxisNcp = true;
+  /// Compact payloads: their entropy stage (entropy_stage.hpp): per payload a lanes frame unless
+  /// zstd's is clearly smaller, or one of them everywhere (Lanes: every coded payload
+  /// GPU-decodable).
+  EntropyStage entropy = EntropyStage::Auto;
   /// Called from the calling thread with the fraction done in [0, 1]; return false to cancel
   /// (encodeVolume then throws afam::Cancelled; nothing is written).
   std::function<bool(double fraction)> progress;

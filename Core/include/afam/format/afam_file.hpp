@@ -99,7 +99,8 @@ struct PayloadPart {
   uint64_t offset = 0, storedSize = 0;
   uint32_t checksum = 0;
   bool coded = false, integerCoded = false;
-  int64_t step = 0;  ///< the step whose payloads hold it
+  int64_t step = 0;         ///< the step whose payloads hold it
+  bool lanesCoded = false;  ///< its frame is a lanes frame (entry flag bit 13)
 };
 
 struct ModelEntry {
@@ -115,6 +116,7 @@ struct ModelEntry {
   BlockKind kind = BlockKind::Spline;
   bool coded = false;         ///< quantized, predicted and zstd-coded (block_codec.hpp)
   bool integerCoded = false;  ///< coded with an integer form (index flag bit 9; set by the writer)
+  bool lanesCoded = false;    ///< its frame is a lanes frame (index flag bit 13; set by the writer)
   uint64_t storedSize =
       0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
   /// Version 3 (a run of steps): the model is the same block's model of an earlier step,
@@ -222,6 +224,10 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   void readPayloadOnto(int64_t entry, const float* previous, void* out) const;
   /// Reads and returns the payload as floats.
   std::vector<float> readPayload(int64_t entry) const;
+  /// The entry's payload as stored (entry.storedSize bytes), CRC verified, not decoded: for a
+  /// decoder elsewhere (a GPU's). Throws as readPayload does; InvalidArgument for an entry that
+  /// is not one payload (a residual's chain, an empty block).
+  std::vector<uint8_t> readStored(int64_t entry) const;
   /// Throws FileChangedError (naming the path and what changed) when the file is no longer the
   /// one opened: rewritten or truncated in place, replaced by another file (rename) or removed.
   /// One fstat and one stat; renderers call it once per frame, before reading.

@@ -32,17 +32,23 @@
 //            x, then y, then z from the known points at +-s (cubic (-a + 9b + 9c - d) / 16 where
 //            +-3s exist, linear (b + c) / 2 where +-s exist, else the one neighbour; the integer
 //            forms round both down). Suits samples.
-// Codes are zigzag varints (1 byte when |code| < 64) compressed by zstd.
+// Codes are zigzag varints (1 byte when |code| < 64), then an entropy stage: a zstd frame, or a
+// lanes frame (entropy/lanes_coder.hpp: interleaved rANS, decoded by a GPU warp as by a CPU core);
+// by default the lanes frame unless zstd's is more than 2% smaller (EntropyCoding). zstd wins on
+// small and smooth payloads (its matches code runs of zeros); lanes on noisy ones (about 1%
+// smaller on a scan's splines, and the GPU decodes them).
 //
 // Coded payload bytes: [0, 8) f64 step; [8] u8 predictor; integer forms: [9, 17) i64 base; then
-// one zstd frame holding the varints, one per value, in the predictor's visiting order (raster
-// order for Lorenzo).
+// one frame (zstd, or lanes: it starts with "AFL1") holding the varints, one per value, in the
+// predictor's visiting order (raster order for Lorenzo).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "afam/entropy/entropy_stage.hpp"
+#include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/partition.hpp"
 
 namespace afam {
@@ -66,6 +72,17 @@ constexpr size_t kIntegerCodedHeaderBytes = 17;
 /// Whether a stored coded payload names an integer form (what index flag bit 9 says of it).
 inline bool payloadIsIntegerCoded(const uint8_t* stored, size_t bytes) {
   return bytes > kCodedHeaderBytes && isIntegerForm(Predictor(stored[8]));
+}
+
+/// Bytes of a stored coded payload's header (before its frame): 9, or 17 for the integer forms.
+inline size_t codedHeaderBytes(const uint8_t* stored, size_t bytes) {
+  return payloadIsIntegerCoded(stored, bytes) ? kIntegerCodedHeaderBytes : kCodedHeaderBytes;
+}
+
+/// Whether a stored coded payload's frame is a lanes frame (what index flag bit 13 says of it).
+inline bool payloadIsLanesCoded(const uint8_t* stored, size_t bytes) {
+  const size_t head = codedHeaderBytes(stored, bytes);
+  return bytes > head && lanes::isLanesFrame(stored + head, bytes - head);
 }
 
 /// The form to code `values` (count of them) with at `step`: the integer form of `family`
@@ -93,9 +110,9 @@ struct FreeValues {
 /// 2^50 (step far too small), or, for an integer form, when the values do not fit it.
 /// `reconstructed` receives the decoded values (float), as decodeValues would produce them.
 /// `free`: the values that need not be kept (FreeValues); the interpolation predictors only.
-bool encodeValues(const float* values, Int3 n, double step, Predictor predictor, int zstdLevel,
-                  std::vector<uint8_t>& out, std::vector<float>& reconstructed,
-                  FreeValues free = {});
+bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
+                  EntropyCoding coding, std::vector<uint8_t>& out,
+                  std::vector<float>& reconstructed, FreeValues free = {});
 
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
 /// step).

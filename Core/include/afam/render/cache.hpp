@@ -33,6 +33,12 @@
 // residual whose model at the step before is resident is decoded from it: one payload, not the
 // chain back to its key step (AfamFile::readPayloadOnto; the same floats).
 //
+// Stored form: for a caster that decodes payloads itself (a GPU's; setStoredForm), the models it
+// decodes are kept as their payloads as stored (CRC-checked, not decoded: a compressed payload
+// is 14-55 times smaller than its floats), and the budget counts those bytes. Such a model has no
+// floats (CachedModel::stored holds it); PreparedFrame::hostPool decodes it when a frame is cast
+// on the CPU after all.
+//
 // Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
 // the lock, and a block being loaded by one thread is waited for, not read twice.
 #pragma once
@@ -48,6 +54,7 @@
 #include <vector>
 
 #include "afam/format/afam_file.hpp"
+#include "afam/render/cached_model.hpp"
 #include "afam/render/damage.hpp"
 
 namespace afam {
@@ -68,8 +75,6 @@ struct CacheStats {
   double readSeconds = 0;      ///< wall time inside reads, including the bandwidth sleep
   double throttleSeconds = 0;  ///< of which sleeping for the bandwidth cap
 };
-
-using Payload = std::shared_ptr<const std::vector<float>>;
 
 class LruCache {
  public:
@@ -100,6 +105,10 @@ class LruCache {
   /// A resident entry's payload, marked most recently used, without counting a lookup (the frame
   /// takes a miss it had loaded for it, which the load counted); null when it is not resident.
   Payload takeLoaded(int64_t entry);
+
+  /// Entries `form` accepts are loaded in the stored form from now on (null: every load decodes).
+  /// Resident models keep the form they were loaded in.
+  void setStoredForm(StoredForm form);
 
   void setPinned(const std::vector<int64_t>& entries);
   void clearPinned();
@@ -152,6 +161,7 @@ class LruCache {
   double capBytesPerSecond_ = 0;
   std::mutex deviceMutex_;
   std::chrono::steady_clock::time_point deviceFree_{};
+  StoredForm storedForm_ = nullptr;
 };
 
 }  // namespace afam

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "afam/format/afam_file.hpp"
+#include "afam/render/cached_model.hpp"
 #include "afam/scene/lod.hpp"
 
 namespace afam {
@@ -50,11 +51,11 @@ class DamageLog {
 struct Placement {
   BlockRef model;
   BlockRef region;
-  std::shared_ptr<const std::vector<float>> data;
+  Payload data;
 };
 
 /// Loads an entry's payload; returns null when the entry is damaged.
-using IntactLoader = std::function<std::shared_ptr<const std::vector<float>>(int64_t entry)>;
+using IntactLoader = std::function<Payload(int64_t entry)>;
 
 /// Appends to `out` what covers the region of the damaged block `damaged` (see above). Returns the
 /// number of placements appended (0: the region stays empty).

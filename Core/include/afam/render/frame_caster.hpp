@@ -12,8 +12,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "afam/render/cached_model.hpp"
 #include "afam/render/image.hpp"
 #include "afam/scene/depth_limits.hpp"
 
@@ -59,6 +61,10 @@ struct CastResult {
   /// What went otherwise than asked, one sentence each, each said once per caster, e.g.
   /// "GPU model pool too small ...; this frame on the CPU".
   std::vector<std::string> messages;
+  /// Models the caster decoded itself and found damaged (a GPU's decoder: their payloads passed
+  /// their checksums but do not decode): the frame's entry and why. This frame drew nothing
+  /// there; the renderer records them as damaged, so later frames draw what stands in for them.
+  std::vector<std::pair<int64_t, std::string>> damaged;
 };
 
 class FrameCaster {
@@ -80,6 +86,9 @@ class FrameCaster {
   /// False when the caster reads each slot's floats from PreparedFrame::slotHost (the cached
   /// models), so that the renderer leaves the frame's pool empty: no per-frame copy of the models.
   virtual bool readsHostPool() const { return true; }
+  /// Entries whose models the caster decodes itself from their stored payloads (a GPU's decoder):
+  /// the cache keeps those in the stored form (cache.hpp). Null: the cache decodes every model.
+  virtual StoredForm storedForm() const { return nullptr; }
 };
 
 /// The CPU ray caster (renderCpu) on `threads` threads (0: all cores); ignores device targets.

@@ -103,12 +103,19 @@ struct PreparedFrame {
   /// modelKey of the slots' models, slot order: a GPU caster's pool keeps models by them, so that
   /// the steps of a run share what they share.
   std::vector<uint64_t> keys;
-  /// The cached models of the slots, slot order (kept alive for the frame), and their floats.
-  std::vector<std::shared_ptr<const std::vector<float>>> models;
+  /// The cached models of the slots, slot order (kept alive for the frame), and their floats
+  /// (null for a model in the stored form: CachedModel::stored holds its payload).
+  std::vector<Payload> models;
   std::vector<const float*> slotHost;
+  /// The slots' index entries (the file's, valid while the renderer is): what decodes a model
+  /// held in the stored form.
+  std::vector<const ModelEntry*> slotEntries;
   void bind();  ///< points view at the vectors above (view.pool null while pool is empty)
-  /// view.pool, or, when the pool was left empty, the slots' floats copied into `storage`.
+  /// view.pool, or, when the pool was left empty, the slots' floats copied into `storage` (models
+  /// in the stored form decoded there; one that does not decode is NaN: drawn as nothing).
   const float* hostPool(std::vector<float>& storage) const;
+  /// Floats of slot s's model (its control points, and a masked model's mask words).
+  uint64_t slotFloats(size_t s) const;
 };
 
 /// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel

@@ -40,7 +40,7 @@ fi
 # --- GPU tests.
 "$tests" --gtest_color=no >"$logs/tests.log" 2>&1
 test_rc=$?
-grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage|gpu-missing)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
+grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage|gpu-missing|gpu-decode)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
 status "GPU tests" "$(grep -E '^\[  PASSED  \]' "$logs/tests.log" | head -1) $(grep -E '^\[  FAILED  \] [0-9]' "$logs/tests.log" | head -1) $(grep -E '^\[  SKIPPED \] [0-9]' "$logs/tests.log" | head -1)"
 worst=$(grep -E '^\[gpu-vs-cpu\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
 status "GPU vs CPU worst diff" "${worst:-?}/255 over $(grep -c '^\[gpu-vs-cpu\]' "$logs/tests.log") images (bar <= 2/255, exact kernels)"
@@ -103,6 +103,22 @@ print('max diff %d/255, %d px differ' % (abs(a-b).max(), (abs(a-b).max(axis=2)>0
   status "afam replay user_1 gpu (12)" "$(grep "median_latency_ms=" "$e2e/replay_gpu12.log" | tail -1)"
 else
   status "afam end to end" "not run: no afam binary"
+fi
+
+# --- GPU decoding (issue 27): a scan made large (half the bar's size per axis, 281 M voxels), encoded with the defaults, every payload decoded on the GPU and on one CPU thread in one
+# run (bench_gpu_decode checks the floats are equal).
+dec="$build/Testing/Cuda/bench_gpu_decode"
+if [ -x "$dec" ] && [ -x "$afam" ]; then
+  scan="$e2e/scan_602x740x632_uint8.raw"
+  "$afam" enlarge "$root/Testing/Data/volumes/HeadMRVolume_48x62x42_uint8.raw" "$scan" \
+    --dims 602,740,632 --noise 2.5 >/dev/null &&
+    "$afam" encode "$scan" "$e2e/scan.afam" --error-bound 1e-2 --relative --quiet &&
+    "$dec" "$e2e/scan.afam" --rounds 5 >"$logs/gpu_decode.log" 2>&1
+  rm -f "$scan"
+  pick() { grep "^$1 " "$logs/gpu_decode.log" | grep -oE "$2" | tr '\n' ' '; }
+  status "GPU decode (scan, defaults)" "$(pick gpu_decode 'decodable=[0-9]+|decoded_bytes=[0-9]+|gbps=[0-9.]+|mismatches=[0-9]+')"
+  status "  one CPU thread, same run" "$(pick cpu_decode 'gbps=[0-9.]+')"
+  grep -E "^\[gpu-decode\]" "$logs/tests.log" | tail -1 | sed 's/^/  frames: /' >>"$logs/summary.txt"
 fi
 
 echo

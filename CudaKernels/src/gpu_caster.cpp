@@ -1,8 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/cuda/gpu_caster.hpp"
 
+#include <cstdlib>
+#include <cstring>
+#include <deque>
+#include <limits>
+#include <string>
 #include <vector>
 
+#include "afam/base/errors.hpp"
+#include "afam/cuda/gpu_block_decoder.hpp"
 #include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/device_selection.hpp"
 #include "afam/render/renderer.hpp"
@@ -45,9 +52,50 @@ std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads,
 bool gpuCasterBuilt() { return true; }
 
 GpuCaster::GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads)
-    : gpu_(std::move(gpu)),
-      threads_(threads),
-      description_(gpuDescription(gpu_->pool().device())) {}
+    : gpu_(std::move(gpu)), threads_(threads), description_(gpuDescription(gpu_->pool().device())) {
+  const char* decode = std::getenv("AFAM_GPU_DECODE");
+  decodeOnGpu_ = !(decode && std::strcmp(decode, "0") == 0);
+}
+
+StoredForm GpuCaster::storedForm() const {
+  return failed_ || !decodeOnGpu_ ? nullptr : &gpuDecodesEntry;
+}
+
+namespace {
+
+/// What the GPU is given of a frame's models: stored payloads it decodes (stored[s].bytes set)
+/// and floats (host[s]); a model in the stored form that the GPU's decoder does not take is
+/// decoded here (NaN and reported in `damaged` where it does not decode).
+struct FrameModels {
+  std::vector<GpuStoredSlot> stored;
+  std::vector<const float*> host;
+  std::deque<std::vector<float>> decodedHere;  // stable addresses
+
+  FrameModels(const PreparedFrame& frame, CastResult& result) : host(frame.slotHost) {
+    for (size_t s = 0; s < frame.models.size(); ++s) {
+      const CachedModel& m = *frame.models[s];
+      if (!m.isStored()) continue;
+      const ModelEntry& e = *frame.slotEntries[s];
+      if (stored.empty()) stored.resize(frame.models.size());
+      if (gpuDecodable(e, m.stored.data())) {
+        stored[s] =
+            GpuStoredSlot{m.stored.data(), m.stored.size(), gpuDecodeJob(e, m.stored.data(), 0, 0)};
+        continue;
+      }
+      std::vector<float>& out = decodedHere.emplace_back(frame.slotFloats(s));
+      try {
+        decodeStoredPayload(e, m.stored.data(), out.data(), Partition::blockName(e.level, e.block));
+      } catch (const FormatError& error) {
+        std::fill(out.begin(), out.end(), std::numeric_limits<float>::quiet_NaN());
+        result.damaged.push_back({frame.entries[s], error.what()});
+      }
+      host[s] = out.data();
+    }
+  }
+  const GpuStoredSlot* storedSlots() const { return stored.empty() ? nullptr : stored.data(); }
+};
+
+}  // namespace
 
 GpuCaster::~GpuCaster() = default;
 
@@ -56,6 +104,14 @@ void* GpuCaster::stream() const { return gpu_->pool().stream(); }
 const PoolStats& GpuCaster::poolStats() const { return gpu_->pool().stats(); }
 
 const GpuFrameTimes& GpuCaster::lastTimes() const { return gpu_->lastTimes(); }
+
+void GpuCaster::reportDecodeFailures(const PreparedFrame& frame, CastResult& result) {
+  for (const auto& [key, status] : gpu_->pool().takeDecodeFailures())
+    for (size_t s = 0; s < frame.keys.size() && s < frame.entries.size(); ++s)
+      if (frame.keys[s] == key)
+        result.damaged.push_back({frame.entries[s], std::string("payload does not decode (") +
+                                                        gpuDecodeStatusText(status) + ")"});
+}
 
 CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets,
                            ImageRGBA& image) {
@@ -74,9 +130,10 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
     castOnCpu();
     return result;
   }
-  // The cached models themselves: the pool copies only those it does not hold yet.
+  // The cached models themselves: the pool copies (or decodes) only those it does not hold yet.
+  const FrameModels models(frame, result);
   const float* const* slotHost =
-      frame.slotHost.size() == size_t(frame.view.slotCount) ? frame.slotHost.data() : nullptr;
+      models.host.size() == size_t(frame.view.slotCount) ? models.host.data() : nullptr;
   const uint64_t* slotKeys =
       frame.keys.size() == size_t(frame.view.slotCount) ? frame.keys.data() : nullptr;
   const bool onDevice = targets.deviceRgba && floats <= targets.deviceRgbaFloats;
@@ -90,7 +147,8 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
   };
   try {
     if (onDevice) {
-      gpu_->renderToDevice(view, slotKeys, targets.deviceRgba, nullptr, depth, slotHost);
+      gpu_->renderToDevice(view, slotKeys, targets.deviceRgba, nullptr, depth, slotHost,
+                           models.storedSlots());
       result.depthLimitedPixels = gpu_->lastTimes().depthLimitedPixels;
       image.width = w;
       image.height = h;
@@ -99,9 +157,10 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
     } else {
       limitsOnHost();
       image.resize(w, h);
-      gpu_->render(view, slotKeys, image.rgba.data(), nullptr, slotHost);
+      gpu_->render(view, slotKeys, image.rgba.data(), nullptr, slotHost, models.storedSlots());
     }
     result.onGpu = true;
+    reportDecodeFailures(frame, result);
     const GpuFrameTimes& t = gpu_->lastTimes();
     if (t.totalMs > 0) {
       result.gpuUploadMs = t.uploadMs;

@@ -231,7 +231,8 @@ struct GpuRenderer::Impl {
   /// Makes every slot's model resident, uploads the frame tables and returns the device view.
   /// All copies are queued on `stream`; kernels queued after it see the data.
   FrameView upload(const FrameView& v, const uint64_t* keys, uint64_t* modelsUploaded,
-                   uint64_t* bytesUploaded, const float* const* slotHost = nullptr) {
+                   uint64_t* bytesUploaded, const float* const* slotHost = nullptr,
+                   const GpuStoredSlot* stored = nullptr) {
     if (v.camera.width < 1 || v.camera.height < 1)
       throw InvalidArgument("GpuRenderer: image size " + std::to_string(v.camera.width) + " x " +
                             std::to_string(v.camera.height) + " is empty");
@@ -275,8 +276,13 @@ struct GpuRenderer::Impl {
         continue;
       }
       const uint64_t key = keys ? keys[s] : defaultSlotKey(slot);
-      const float* host = slotHost ? slotHost[s] : v.pool + slot.offset;
-      const size_t byteOffset = pool.acquire(key, host, size_t(floats) * sizeof(float));
+      const size_t bytes = size_t(floats) * sizeof(float);
+      const bool decode = stored && stored[s].bytes;
+      const float* host = decode ? nullptr : slotHost ? slotHost[s] : v.pool + slot.offset;
+      const size_t byteOffset =
+          decode ? pool.acquireStored(key, stored[s].bytes, stored[s].storedBytes, bytes,
+                                      stored[s].job)
+                 : pool.acquire(key, host, bytes);
       slot.offset = byteOffset / sizeof(float);
       slots[s] = slot;
     }
@@ -353,16 +359,17 @@ GpuModelPool& GpuRenderer::pool() { return impl_->pool; }
 const GpuModelPool& GpuRenderer::pool() const { return impl_->pool; }
 
 void GpuRenderer::render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
-                         GpuFrameTimes* times, const float* const* slotHost) {
-  cast(view, slotKeys, nullptr, rgba, times, nullptr, slotHost);
+                         GpuFrameTimes* times, const float* const* slotHost,
+                         const GpuStoredSlot* stored) {
+  cast(view, slotKeys, nullptr, rgba, times, nullptr, slotHost, stored);
 }
 
 void GpuRenderer::renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
                                  GpuFrameTimes* times, const DeviceDepth* depth,
-                                 const float* const* slotHost) {
+                                 const float* const* slotHost, const GpuStoredSlot* stored) {
   if (!deviceRgba) throw InvalidArgument("renderToDevice: no device image");
   cast(view, slotKeys, deviceRgba, nullptr, times, depth && depth->depth ? depth : nullptr,
-       slotHost);
+       slotHost, stored);
 }
 
 namespace {
@@ -390,7 +397,7 @@ int64_t GpuRenderer::depthLimitsToHost(const DeviceDepth& depth, std::vector<flo
 
 void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget,
                        float* hostRgba, GpuFrameTimes* times, const DeviceDepth* depth,
-                       const float* const* slotHost) {
+                       const float* const* slotHost, const GpuStoredSlot* stored) {
   if (simulateFailure_)
     throw GpuError("CUDA error cudaErrorContextIsDestroyed (709): simulated loss of the context",
                    __FILE__, __LINE__, "cudaErrorContextIsDestroyed", 709);
@@ -401,7 +408,7 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   float* target = deviceTarget ? deviceTarget : reinterpret_cast<float*>(m.deviceImage);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
   GpuFrameTimes t;
-  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded, slotHost);
+  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded, slotHost, stored);
   if (depth) {  // the limits come from the device depth, not from view.maxDistance
     checkDepthSize(*depth, view.camera.width, view.camera.height);
     m.depthLimits(*depth, pixels);

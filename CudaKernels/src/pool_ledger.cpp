@@ -68,6 +68,16 @@ void PoolLedger::release(size_t offset, size_t size) {
   free_[offset] = size;
 }
 
+void PoolLedger::forget(uint64_t key) {
+  const auto it = entries_.find(key);
+  if (it == entries_.end()) return;
+  release(it->second.offset, it->second.size);
+  stats_.residentBytes -= it->second.size;
+  --stats_.residentModels;
+  lru_.erase(it->second.lru);
+  entries_.erase(it);
+}
+
 bool PoolLedger::evictOldest() {
   if (lru_.empty()) return false;
   const uint64_t key = lru_.back();

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <unistd.h>
+#include <cmath>
 #include <cstdio>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,34 @@ inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode 
     o.errorBound = bound;
     o.mode = mode;
     o.fixedNcp = fixedNcp;
+    o.threads = 2;
+    afam::encodeVolume(src, o, path);
+  }
+  return afam::AfamFile::open(path);
+}
+
+/// A smooth field with a scan's noise (0.5% of its range) in a 96^3 volume, two levels of 4^3
+/// finest blocks, bound 1e-2, with the given entropy stage: coded splines (in lanes frames under
+/// Lanes), the payloads a GPU decodes. Encoded once per process and stage.
+inline std::shared_ptr<const afam::AfamFile> encodeNoisyField(afam::EntropyStage stage) {
+  const std::string path = tempPath(std::string("noisy_field_") + afam::entropyStageName(stage));
+  if (::access(path.c_str(), R_OK) != 0) {
+    const int n = 96;
+    std::vector<float> v(size_t(n) * n * n);
+    std::mt19937 rng(2);
+    std::normal_distribution<double> noise(0, 0.005);
+    size_t i = 0;
+    for (int z = 0; z < n; ++z)
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+          v[i++] = float(0.5 + 0.5 * std::sin(x / 7.0) * std::cos(y / 9.0) * std::sin(z / 11.0) +
+                         noise(rng));
+    afam::ArraySource src(v.data(), {n, n, n});
+    afam::EncoderOptions o;
+    o.levels = 2;
+    o.blocksPerAxis = 4;
+    o.errorBound = 1e-2;
+    o.entropy = stage;
     o.threads = 2;
     afam::encodeVolume(src, o, path);
   }

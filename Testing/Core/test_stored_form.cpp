@@ -5,43 +5,20 @@
 // models such a caster reports damaged are recorded, reported once and stood in for.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstring>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
 #include "afam/render/renderer.hpp"
-#include "scratch_dir.hpp"
+#include "render_test_util.hpp"
 
 using namespace afam;
 
 namespace {
 
-/// A noisy blob (a scan's kind of payloads: coded splines in lanes frames, constants around it).
 std::shared_ptr<const AfamFile> noisyFile() {
-  const std::string path = afam_test::scratchPath("stored_form.afam");
-  const int n = 48;
-  std::vector<float> v(size_t(n) * n * n);
-  std::mt19937 rng(2);
-  std::normal_distribution<double> noise(0, 0.02);
-  size_t i = 0;
-  for (int z = 0; z < n; ++z)
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        const double r = std::hypot(x - 24.0, y - 20.0, z - 26.0) / 16;
-        v[i++] = float(r < 1 ? 1 - r * r + noise(rng) : 0.0);
-      }
-  ArraySource src(v.data(), {n, n, n});
-  EncoderOptions o;
-  o.levels = 2;
-  o.blocksPerAxis = 4;
-  o.errorBound = 2e-3;
-  o.entropy = EntropyStage::Lanes;
-  o.threads = 2;
-  encodeVolume(src, o, path);
-  return AfamFile::open(path);
+  return afam_test::encodeNoisyField(EntropyStage::Lanes);
 }
 
 bool codedOrConstant(const ModelEntry& e) { return e.coded || e.kind == BlockKind::Constant; }

@@ -9,7 +9,8 @@ namespace afam::lanes {
 namespace {
 
 /// Frequencies summing to kScale, at least 1 for every byte that occurs, proportional to the
-/// counts otherwise; the rounding goes to (or comes from) the most frequent bytes, deterministically.
+/// counts otherwise; the rounding goes to (or comes from) the most frequent bytes,
+/// deterministically.
 std::array<uint32_t, 256> normalise(const std::array<uint64_t, 256>& count, uint64_t total) {
   std::array<uint32_t, 256> f{};
   if (total == 0) {

@@ -28,9 +28,12 @@ struct EntropyCoding {
 /// "auto", "zstd", "lanes".
 inline const char* entropyStageName(EntropyStage stage) {
   switch (stage) {
-    case EntropyStage::Auto: return "auto";
-    case EntropyStage::Zstd: return "zstd";
-    case EntropyStage::Lanes: return "lanes";
+    case EntropyStage::Auto:
+      return "auto";
+    case EntropyStage::Zstd:
+      return "zstd";
+    case EntropyStage::Lanes:
+      return "lanes";
   }
   return "?";
 }

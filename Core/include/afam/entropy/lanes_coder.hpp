@@ -59,11 +59,11 @@ AFAM_HD uint32_t readU16(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[
 
 /// What a frame's header says, and where its parts lie (offsets from the frame's first byte).
 struct FrameLayout {
-  uint32_t symbols = 0;     ///< V
-  int lanes = 0;            ///< L
-  size_t statesAt = 0;      ///< first state
-  size_t wordsAt = 0;       ///< first word
-  uint32_t words = 0;       ///< words in the frame
+  uint32_t symbols = 0;         ///< V
+  int lanes = 0;                ///< L
+  size_t statesAt = 0;          ///< first state
+  size_t wordsAt = 0;           ///< first word
+  uint32_t words = 0;           ///< words in the frame
   const char* error = nullptr;  ///< why the frame is not one (nullptr: it is)
 };
 

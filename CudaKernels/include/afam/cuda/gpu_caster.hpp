@@ -41,6 +41,12 @@ class GpuCaster : public FrameCaster {
   std::string description() const override { return description_; }
   /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident.
   bool readsHostPool() const override { return false; }
+  /// The models the GPU decodes (gpuDecodesEntry), while it works: the cache keeps them as their
+  /// stored payloads, and a miss costs the copy of its compressed bytes and a decoding kernel.
+  StoredForm storedForm() const override;
+  /// Off: every model is decoded on the CPU and uploaded as floats (the default is on, unless
+  /// the environment sets AFAM_GPU_DECODE=0; benchmarks compare both).
+  void setDecodeOnGpu(bool on) { decodeOnGpu_ = on; }
 
   void* stream() const;
   /// True once a frame's CUDA work failed for another reason than memory (e.g. a lost context).
@@ -53,10 +59,13 @@ class GpuCaster : public FrameCaster {
 
  private:
   GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads);
+  /// The frame's models the GPU's decoder refused (CastResult::damaged).
+  void reportDecodeFailures(const PreparedFrame& frame, CastResult& result);
   std::unique_ptr<GpuRenderer> gpu_;
   int threads_;
   std::string description_;
-  bool warned_ = false;  ///< a frame too large for the pool was reported
+  bool warned_ = false;      ///< a frame too large for the pool was reported
+  bool decodeOnGpu_ = true;  ///< AFAM_GPU_DECODE=0 turns it off (benchmarks: the CPU's decoding)
   bool failed_ = false;
 };
 

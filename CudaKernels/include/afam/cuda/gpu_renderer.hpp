@@ -50,6 +50,14 @@ struct GpuKernelTiming {
   double median() const;
 };
 
+/// A slot whose model the pool decodes on the GPU from its stored payload
+/// (GpuModelPool::acquireStored) when it is not resident.
+struct GpuStoredSlot {
+  const uint8_t* bytes = nullptr;  ///< null: the slot's model is floats (slotHost or view.pool)
+  size_t storedBytes = 0;
+  GpuDecodeJob job;  ///< gpuDecodeJob's kind and NCP
+};
+
 class GpuRenderer {
  public:
   /// poolBudgetBytes: device memory for resident models. Throws GpuOutOfMemory / GpuError.
@@ -64,8 +72,11 @@ class GpuRenderer {
   /// extent and size). Throws GpuOutOfMemory when the frame's models exceed the pool budget.
   /// slotHost (optional): slot s's floats at slotHost[s] on the host instead of view.pool +
   /// offset (a frame that references cached models, copied only when not resident here).
+  /// stored (optional): slot s's model as its stored payload where stored[s].bytes is set, decoded
+  /// on the GPU when not resident (GpuModelPool::takeDecodeFailures tells which did not decode).
   void render(const FrameView& view, const uint64_t* slotKeys, float* rgba,
-              GpuFrameTimes* times = nullptr, const float* const* slotHost = nullptr);
+              GpuFrameTimes* times = nullptr, const float* const* slotHost = nullptr,
+              const GpuStoredSlot* stored = nullptr);
   /// As render(), but the image is cast into `deviceRgba` (device memory of width*height*4
   /// floats, e.g. an OpenGL buffer mapped into CUDA) and left there: nothing comes back to the
   /// host (downloadMs 0). The caller keeps `deviceRgba` valid until the call returns.
@@ -73,7 +84,8 @@ class GpuRenderer {
   /// (rayLimitFromDepth, the CPU's math), used in place of view.maxDistance.
   void renderToDevice(const FrameView& view, const uint64_t* slotKeys, float* deviceRgba,
                       GpuFrameTimes* times = nullptr, const DeviceDepth* depth = nullptr,
-                      const float* const* slotHost = nullptr);
+                      const float* const* slotHost = nullptr,
+                      const GpuStoredSlot* stored = nullptr);
   /// The same limits brought to the host (width * height floats, row 0 = top; a frame cast on the
   /// CPU after all). Returns the number of limited pixels.
   int64_t depthLimitsToHost(const DeviceDepth& depth, std::vector<float>& limits);
@@ -116,7 +128,8 @@ class GpuRenderer {
   /// Casts into deviceTarget (or the renderer's own device image when null), then copies the
   /// image to hostRgba when given.
   void cast(const FrameView& view, const uint64_t* slotKeys, float* deviceTarget, float* hostRgba,
-            GpuFrameTimes* times, const DeviceDepth* depth, const float* const* slotHost);
+            GpuFrameTimes* times, const DeviceDepth* depth, const float* const* slotHost,
+            const GpuStoredSlot* stored);
   struct Impl;
   std::unique_ptr<Impl> impl_;
   bool poison_ = false;

@@ -44,6 +44,8 @@ class PoolLedger {
   Placement acquire(uint64_t key, size_t bytes);
   /// Drops every model (e.g. the data set changed).
   void clear();
+  /// Drops model `key` if it is resident (its bytes turned out unusable, e.g. did not decode).
+  void forget(uint64_t key);
 
   bool resident(uint64_t key) const { return entries_.count(key) != 0; }
   const PoolStats& stats() const { return stats_; }

@@ -37,10 +37,12 @@ double entropyBytes(const std::vector<uint8_t>& v) {
   return bits / 8;
 }
 
-int64_t decode(const std::vector<uint8_t>& frame, std::vector<uint8_t>& out, std::string& error) {
+int64_t decode(const std::vector<uint8_t>& frame, std::vector<uint8_t>& out, std::string& error,
+               bool vectorPath = true) {
   out.assign(lanes::frameSymbols(frame.data(), frame.size()) + 1, 0xAB);
   const char* e = nullptr;
-  const int64_t n = lanes::decodeFrame(frame.data(), frame.size(), out.data(), out.size(), &e);
+  const int64_t n =
+      lanes::decodeFrame(frame.data(), frame.size(), out.data(), out.size(), &e, vectorPath);
   error = e ? e : "";
   return n;
 }
@@ -61,6 +63,9 @@ TEST(LanesCoder, EveryStreamComesBackByteForByteNearItsEntropy) {
     std::string error;
     ASSERT_EQ(decode(frame, out, error), int64_t(s.size())) << error;
     EXPECT_TRUE(std::equal(s.begin(), s.end(), out.begin())) << s.size() << " bytes";
+    std::vector<uint8_t> scalar;  // the CPU's vector path (where it has one) and the scalar loop
+    ASSERT_EQ(decode(frame, scalar, error, false), int64_t(s.size())) << error;
+    EXPECT_EQ(scalar, out);
     EXPECT_EQ(frame[8], lanes::lanesFor(s.size()));
     if (s.size() >= 2048) {  // the table and states amortised: within 1% and 160 B of H0
       EXPECT_LE(double(frame.size()), 1.01 * entropyBytes(s) + 160 + 4 * 32) << s.size();
@@ -78,8 +83,10 @@ TEST(LanesCoder, DamagedFramesAreRefusedWithTheReason) {
   lanes::appendFrame(s, frame);
   std::string error;
   auto refused = [&](std::vector<uint8_t> f, const std::string& why) {
-    EXPECT_EQ(decode(f, out, error), -1) << why;
-    EXPECT_EQ(error, why);
+    for (const bool vectorPath : {true, false}) {
+      EXPECT_EQ(decode(f, out, error, vectorPath), -1) << why;
+      EXPECT_EQ(error, why);
+    }
   };
   std::vector<uint8_t> f = frame;
   f[0] = 'X';
@@ -115,6 +122,9 @@ TEST(LanesCoder, DamagedFramesAreRefusedWithTheReason) {
     const size_t at = f.size() - 1 - rng() % 2000;
     f[at] = uint8_t(f[at] ^ (1u << (rng() % 8)));
     caught += decode(f, out, error) == -1;
+    std::vector<uint8_t> scalar;  // the same verdict and bytes on both paths
+    EXPECT_EQ(decode(f, scalar, error, false), decode(f, out, error));
+    EXPECT_EQ(scalar, out);
   }
   EXPECT_GE(caught, 195);
 }

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <array>
 
+#include "lanes_simd.hpp"
+
 namespace afam::lanes {
 
 namespace {
@@ -90,7 +92,7 @@ void appendFrame(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& out) {
 }
 
 int64_t decodeFrame(const uint8_t* frame, size_t bytes, uint8_t* out, size_t capacity,
-                    const char** error) {
+                    const char** error, bool vectorPath) {
   uint32_t frequency[256];
   const FrameLayout f = parseFrame(frame, bytes, frequency);
   if (f.error) {
@@ -116,6 +118,8 @@ int64_t decodeFrame(const uint8_t* frame, size_t bytes, uint8_t* out, size_t cap
   uint32_t pos = 0;
   const size_t V = f.symbols;
   size_t i = 0;
+  if (L == kMaxLanes && vectorPath && vectorPathAvailable())
+    decodeSteps32(x, table, words, f.words, pos, out, V, i);
   // Whole steps while the words cannot run out (a step reads at most L): no bounds test, the
   // renormalisation without a branch.
   while (i + size_t(L) <= V && pos + uint32_t(L) <= f.words) {

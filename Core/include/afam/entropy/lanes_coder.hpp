@@ -133,9 +133,11 @@ void appendFrame(const std::vector<uint8_t>& bytes, std::vector<uint8_t>& out);
 int lanesFor(size_t symbols);
 
 /// Decodes a frame of `bytes` bytes into out (capacity at least the frame's V). Returns V; throws
-/// nothing: on a damaged frame returns -1 and sets *error to what is wrong.
+/// nothing: on a damaged frame returns -1 and sets *error to what is wrong. Frames of 32 lanes go
+/// through the CPU's vector path where it has one (AVX2; `vectorPath` false: never, for tests
+/// that compare the two).
 int64_t decodeFrame(const uint8_t* frame, size_t bytes, uint8_t* out, size_t capacity,
-                    const char** error);
+                    const char** error, bool vectorPath = true);
 
 /// V of a frame (its bytes 4-8), 0 when the frame is too short to say.
 inline uint32_t frameSymbols(const uint8_t* frame, size_t bytes) {

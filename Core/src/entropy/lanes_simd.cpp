@@ -36,12 +36,12 @@ __attribute__((target("avx2"))) inline __m256i step8(__m256i x, const uint32_t* 
                                                      uint8_t* out,
                                                      const std::array<int32_t, 8>* expand) {
   const __m256i low12 = _mm256_set1_epi32(int(kScale - 1));
-  const __m256i e = _mm256_i32gather_epi32(reinterpret_cast<const int*>(table),
-                                           _mm256_and_si256(x, low12), 4);
+  const __m256i e =
+      _mm256_i32gather_epi32(reinterpret_cast<const int*>(table), _mm256_and_si256(x, low12), 4);
   // Bytes: the low byte of each 32-bit entry, packed into 8 bytes.
-  const __m256i pick = _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
-                                        -1, 0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1,
-                                        -1, -1);
+  const __m256i pick =
+      _mm256_setr_epi8(0, 4, 8, 12, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 4, 8, 12, -1,
+                       -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
   const __m256i packed = _mm256_permutevar8x32_epi32(_mm256_shuffle_epi8(e, pick),
                                                      _mm256_setr_epi32(0, 4, 1, 1, 1, 1, 1, 1));
   _mm_storel_epi64(reinterpret_cast<__m128i*>(out), _mm256_castsi256_si128(packed));

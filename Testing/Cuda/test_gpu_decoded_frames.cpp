@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Models decoded on the GPU inside the frame (the cache's stored form, GpuModelPool::acquireStored):
-// a renderer whose misses are decoded on the GPU draws the image of one whose models were decoded
-// on the CPU, bit for bit, frame after frame; its RAM cache holds the compressed payloads (fewer
-// bytes); no block is reported damaged.
+// Models decoded on the GPU inside the frame (the cache's stored form,
+// GpuModelPool::acquireStored): a renderer whose misses are decoded on the GPU draws the image of
+// one whose models were decoded on the CPU, bit for bit, frame after frame; its RAM cache holds the
+// compressed payloads (fewer bytes); no block is reported damaged.
 #include <gtest/gtest.h>
 
 #include <cstdio>

@@ -43,7 +43,8 @@ void writeSeed(const std::string& dir, const std::string& name, uint8_t control,
 
 // An .afam file of Marschner-Lobb on dims, encoded in `mode`; returns its bytes.
 Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, int blocks,
-                const std::string& scratch) {
+                const std::string& scratch,
+                afam::EntropyStage entropy = afam::EntropyStage::Auto) {
   std::vector<float> v(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
   afam::marschnerLobbSlab(afam::MarschnerLobb{}, dims, 0, dims[2], v.data());
   afam::ArraySource source(v.data(), dims);
@@ -52,6 +53,7 @@ Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, i
   o.blocksPerAxis = blocks;
   o.errorBound = 1e-2;
   o.mode = mode;
+  o.entropy = entropy;
   o.threads = 1;
   afam::encodeVolume(source, o, scratch);
   Bytes b = readFile(scratch);
@@ -149,6 +151,10 @@ void afamSeeds(const std::string& out) {
     writeSeed(dir, std::string(c.name) + "-fixall", 7, b);  // checksums recomputed after mutation
     writeSeed(dir, std::string(c.name) + "-asis", 0, b);    // checksums left as mutated
   }
+  // Coded payloads in lanes frames (interleaved rANS, entropy/lanes_coder.hpp).
+  const Bytes lanes = encodedMl({11, 9, 8}, M::Adaptive, 2, 2, scratch, afam::EntropyStage::Lanes);
+  writeSeed(dir, "lanes-fixall", 7, lanes);
+  writeSeed(dir, "lanes-asis", 0, lanes);
   const Bytes run = encodedRun(scratch);  // format version 3, references included
   writeSeed(dir, "run-fixall", 7, run);
   writeSeed(dir, "run-asis", 0, run);

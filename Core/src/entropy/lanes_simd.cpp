@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "lanes_simd.hpp"
 
+#include "afam/base/cpu_features.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if AFAM_HAVE_AVX2_PATH
 #include <immintrin.h>
 
 #include <array>
@@ -31,10 +32,9 @@ const std::array<std::array<int32_t, 8>, 256>& expandTable() {
 
 /// Eight lanes' step: their bytes written at out, their states moved and renormalised, pos
 /// advanced by the words they took.
-__attribute__((target("avx2"))) inline __m256i step8(__m256i x, const uint32_t* table,
-                                                     const uint8_t* words, uint32_t& pos,
-                                                     uint8_t* out,
-                                                     const std::array<int32_t, 8>* expand) {
+AFAM_TARGET_AVX2 inline __m256i step8(__m256i x, const uint32_t* table, const uint8_t* words,
+                                      uint32_t& pos, uint8_t* out,
+                                      const std::array<int32_t, 8>* expand) {
   const __m256i low12 = _mm256_set1_epi32(int(kScale - 1));
   const __m256i e =
       _mm256_i32gather_epi32(reinterpret_cast<const int*>(table), _mm256_and_si256(x, low12), 4);
@@ -63,15 +63,11 @@ __attribute__((target("avx2"))) inline __m256i step8(__m256i x, const uint32_t* 
 
 }  // namespace
 
-bool vectorPathAvailable() {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2;
-}
+bool vectorPathAvailable() { return cpuHasAvx2(); }
 
-__attribute__((target("avx2"))) void decodeSteps32(uint32_t* x, const uint32_t* table,
-                                                   const uint8_t* words, uint32_t wordCount,
-                                                   uint32_t& pos, uint8_t* out, size_t symbols,
-                                                   size_t& i) {
+AFAM_TARGET_AVX2 void decodeSteps32(uint32_t* x, const uint32_t* table, const uint8_t* words,
+                                    uint32_t wordCount, uint32_t& pos, uint8_t* out, size_t symbols,
+                                    size_t& i) {
   const std::array<int32_t, 8>* expand = expandTable().data();
   __m256i v[4];
   for (int k = 0; k < 4; ++k)

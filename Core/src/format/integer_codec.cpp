@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "afam/base/cpu_features.hpp"
 #include "codec_common.hpp"
 
 namespace afam::codec {
@@ -105,9 +106,8 @@ void lorenzoDifferences(Int3 n, Word* r) {
     for (int64_t x = sy - 1; x >= 1; --x) r[row * sy + x] -= r[row * sy + x - 1];
 }
 
-// AVX2 where the CPU has it (chosen at load time): the y and z passes and the conversion to
-// float are plain loops the compiler vectorizes, twice as wide there.
-__attribute__((target_clones("avx2", "default"))) void lorenzoSums(Int3 n, Word* r) {
+/// The prefix sums along x, y and z (the inverse of lorenzoDifferences), compiled twice below.
+__attribute__((always_inline)) inline void lorenzoSumsBody(Int3 n, Word* r) {
   const int64_t sy = n[0], sz = int64_t(n[0]) * n[1];
   const int64_t rows = int64_t(n[1]) * n[2];
   int64_t row = 0;
@@ -138,6 +138,14 @@ __attribute__((target_clones("avx2", "default"))) void lorenzoSums(Int3 n, Word*
     const Word* q = p - sz;
     for (int64_t i = 0; i < sz; ++i) p[i] += q[i];
   }
+}
+
+// AVX2 where the CPU has it: the y and z passes are plain loops the compiler vectorizes, twice as
+// wide there.
+AFAM_TARGET_AVX2 void lorenzoSumsAvx2(Int3 n, Word* r) { lorenzoSumsBody(n, r); }
+void lorenzoSumsBaseline(Int3 n, Word* r) { lorenzoSumsBody(n, r); }
+void lorenzoSums(Int3 n, Word* r) {
+  cpuHasAvx2() ? lorenzoSumsAvx2(n, r) : lorenzoSumsBaseline(n, r);
 }
 
 /// The residuals of the zstd-decompressed varints v (got bytes, zero padding after them) into r.
@@ -178,13 +186,26 @@ void readVarints(const uint8_t* v, size_t got, size_t count, Word* r, const char
 
 /// out = (base + k) * step for every k, after checking every k lies in the range an encoder
 /// writes and every value is a finite float.
-__attribute__((target_clones("avx2", "default"))) void toFloats(const Word* k, size_t count,
-                                                                int64_t base, double step,
-                                                                float* out, const char* where) {
+/// out = (base + k) * step (the loop the compiler vectorizes), compiled twice below.
+__attribute__((always_inline)) inline void convertBody(const Word* k, size_t count, int64_t base,
+                                                       double step, float* out) {
+  for (size_t i = 0; i < count; ++i) out[i] = integerValue(base, int32_t(k[i]), step);
+}
+AFAM_TARGET_AVX2 void convertAvx2(const Word* k, size_t count, int64_t base, double step,
+                                  float* out) {
+  convertBody(k, count, base, step, out);
+}
+void convertBaseline(const Word* k, size_t count, int64_t base, double step, float* out) {
+  convertBody(k, count, base, step, out);
+}
+
+void toFloats(const Word* k, size_t count, int64_t base, double step, float* out,
+              const char* where) {
   uint32_t outside = 0;
   for (size_t i = 0; i < count; ++i) outside |= uint32_t(k[i] + (kLimit - 1)) > 2u * (kLimit - 1);
   if (outside) throw badPayload(where, "decodes beyond its range");
-  for (size_t i = 0; i < count; ++i) out[i] = integerValue(base, int32_t(k[i]), step);
+  cpuHasAvx2() ? convertAvx2(k, count, base, step, out)
+               : convertBaseline(k, count, base, step, out);
   if ((std::fabs(double(base)) + kLimit) * step >
       std::numeric_limits<float>::max())  // only then can one be
     for (size_t i = 0; i < count; ++i)

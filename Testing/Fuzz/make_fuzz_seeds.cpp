@@ -43,8 +43,7 @@ void writeSeed(const std::string& dir, const std::string& name, uint8_t control,
 
 // An .afam file of Marschner-Lobb on dims, encoded in `mode`; returns its bytes.
 Bytes encodedMl(const afam::Index3& dims, afam::EncodingMode mode, int levels, int blocks,
-                const std::string& scratch,
-                afam::EntropyStage entropy = afam::EntropyStage::Auto) {
+                const std::string& scratch, afam::EntropyStage entropy = afam::EntropyStage::Auto) {
   std::vector<float> v(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
   afam::marschnerLobbSlab(afam::MarschnerLobb{}, dims, 0, dims[2], v.data());
   afam::ArraySource source(v.data(), dims);

@@ -2,6 +2,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMCoreRenderer.h"
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include "afam/cuda/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
 #include "afam/format/afam_file.hpp"
 #include "afam/render/renderer.hpp"
@@ -116,6 +120,11 @@ void vtkAFAMCoreRenderer::Open(const std::string& path, long long step)
       m.Renderer->setNextStep(m.Next);
       m.File = next;
       this->OpenStep = step;
+#ifdef __GLIBC__
+      // The decoded models a step change evicts were freed on the load threads, whose heaps keep
+      // the pages: hand them back, so that resident memory follows the cache's budget.
+      malloc_trim(0);
+#endif
       return;
     }
   }

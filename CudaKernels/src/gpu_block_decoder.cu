@@ -644,30 +644,27 @@ struct GpuBlockDecoder::Impl {
     sharedCapacity = sharedLimit = bytes / sizeof(uint32_t);
   }
 
-  /// Device buffer *p holds at least `bytes` (grown by half again when it does not; the batch
-  /// before has finished, so nothing in flight reads it).
+  /// Buffer *p (device memory, or pinned host memory) holds at least `bytes`; a device buffer
+  /// grows by half again at least. The batch before has finished, so nothing in flight reads it.
   template <typename T>
-  static void reserveDevice(T*& p, size_t& capacity, size_t bytes) {
+  static void reserve(T*& p, size_t& capacity, size_t bytes, bool pinnedHost) {
     if (bytes <= capacity) return;
-    const size_t want = std::max(bytes, capacity + capacity / 2);
-    if (p) AFAM_CUDA_CHECK(cudaFree(p));
+    const size_t want = pinnedHost ? bytes : std::max(bytes, capacity + capacity / 2);
+    if (p) AFAM_CUDA_CHECK(pinnedHost ? cudaFreeHost(p) : cudaFree(p));
     p = nullptr;
     capacity = 0;
     void* raw = nullptr;
-    AFAM_CUDA_CHECK(cudaMalloc(&raw, want));
+    AFAM_CUDA_CHECK(pinnedHost ? cudaMallocHost(&raw, want) : cudaMalloc(&raw, want));
     p = static_cast<T*>(raw);
     capacity = want;
   }
   template <typename T>
+  static void reserveDevice(T*& p, size_t& capacity, size_t bytes) {
+    reserve(p, capacity, bytes, false);
+  }
+  template <typename T>
   static void reserveHost(T*& p, size_t& capacity, size_t bytes) {
-    if (bytes <= capacity) return;
-    if (p) AFAM_CUDA_CHECK(cudaFreeHost(p));
-    p = nullptr;
-    capacity = 0;
-    void* raw = nullptr;
-    AFAM_CUDA_CHECK(cudaMallocHost(&raw, bytes));
-    p = static_cast<T*>(raw);
-    capacity = bytes;
+    reserve(p, capacity, bytes, true);
   }
 
   /// Device tables of a batch, after upload().

@@ -4,11 +4,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <deque>
-#include <limits>
 #include <string>
 #include <vector>
 
-#include "afam/base/errors.hpp"
 #include "afam/cuda/gpu_block_decoder.hpp"
 #include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/device_selection.hpp"
@@ -83,12 +81,8 @@ struct FrameModels {
         continue;
       }
       std::vector<float>& out = decodedHere.emplace_back(frame.slotFloats(s));
-      try {
-        decodeStoredPayload(e, m.stored.data(), out.data(), Partition::blockName(e.level, e.block));
-      } catch (const FormatError& error) {
-        std::fill(out.begin(), out.end(), std::numeric_limits<float>::quiet_NaN());
-        result.damaged.push_back({frame.entries[s], error.what()});
-      }
+      const std::string damage = frame.writeSlot(s, out.data());
+      if (!damage.empty()) result.damaged.push_back({frame.entries[s], damage});
       host[s] = out.data();
     }
   }

@@ -663,11 +663,10 @@ void AfamFile::checkUnchanged() const {
 
 void AfamFile::readPayload(int64_t entry, void* out) const { readPayloadOnto(entry, nullptr, out); }
 
-void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) const {
-  // The descriptor is checked after the read, whatever its outcome: bytes read while (or after)
-  // another process rewrote the file are neither returned nor recorded as damage.
+template <typename Read>
+void AfamFile::readUnlessChanged(Read&& read) const {
   try {
-    readVerifiedPayload(entry, previous, out);
+    read();
   } catch (const FormatError&) {
     throwIfChanged(identityOfDescriptor(fd_));
     throw;
@@ -675,32 +674,36 @@ void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) 
   throwIfChanged(identityOfDescriptor(fd_));
 }
 
-std::vector<uint8_t> AfamFile::readStored(int64_t entry) const {
+const ModelEntry& AfamFile::entryAt(int64_t entry) const {
   if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
     throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
-  const ModelEntry& e = entries_[static_cast<size_t>(entry)];
+  return entries_[static_cast<size_t>(entry)];
+}
+
+void AfamFile::readChecked(const ModelEntry& e, void* out, size_t bytes) const {
+  preadAll(fd_, out, bytes, e.offset, path_,
+           "payload of " + Partition::blockName(e.level, e.block));
+  if (crc32(out, bytes) != e.checksum)
+    throw FormatError(path_ + ": payload checksum mismatch at " +
+                      Partition::blockName(e.level, e.block));
+}
+
+void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) const {
+  readUnlessChanged([&] { readVerifiedPayload(entry, previous, out); });
+}
+
+std::vector<uint8_t> AfamFile::readStored(int64_t entry) const {
+  const ModelEntry& e = entryAt(entry);
   if (e.residual || e.kind == BlockKind::Empty)
     throw InvalidArgument(path_ + ": " + Partition::blockName(e.level, e.block) +
                           " is not stored as one payload");
   std::vector<uint8_t> stored(e.storedSize);
-  try {
-    preadAll(fd_, stored.data(), e.storedSize, e.offset, path_,
-             "payload of " + Partition::blockName(e.level, e.block));
-    if (crc32(stored.data(), e.storedSize) != e.checksum)
-      throw FormatError(path_ + ": payload checksum mismatch at " +
-                        Partition::blockName(e.level, e.block));
-  } catch (const FormatError&) {
-    throwIfChanged(identityOfDescriptor(fd_));
-    throw;
-  }
-  throwIfChanged(identityOfDescriptor(fd_));
+  readUnlessChanged([&] { readChecked(e, stored.data(), stored.size()); });
   return stored;
 }
 
 void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* out) const {
-  if (entry < 0 || entry >= static_cast<int64_t>(entries_.size()))
-    throw InvalidArgument(path_ + ": entry " + std::to_string(entry) + " out of range");
-  const ModelEntry& e = entries_[static_cast<size_t>(entry)];
+  const ModelEntry& e = entryAt(entry);
   const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
   if (e.residual) {  // its chain of payloads in time
     decodeChain(fd_, path_, e, chain(entry), previous, static_cast<float*>(out));
@@ -708,20 +711,12 @@ void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* o
   }
   if (e.kind == BlockKind::Empty) return;     // no payload
   if (e.storedSize == e.size && !e.masked) {  // uncoded floats: read in place
-    preadAll(fd_, out, e.size, e.offset, path_,
-             "payload of " + Partition::blockName(e.level, e.block));
-    if (crc32(out, e.size) != e.checksum)
-      throw FormatError(path_ + ": payload checksum mismatch at " +
-                        Partition::blockName(e.level, e.block));
+    readChecked(e, out, e.size);
     return;
   }
   thread_local std::vector<uint8_t> stored;
   stored.resize(e.storedSize);
-  preadAll(fd_, stored.data(), e.storedSize, e.offset, path_,
-           "payload of " + Partition::blockName(e.level, e.block));
-  if (crc32(stored.data(), e.storedSize) != e.checksum)
-    throw FormatError(path_ + ": payload checksum mismatch at " +
-                      Partition::blockName(e.level, e.block));
+  readChecked(e, stored.data(), e.storedSize);
   decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
 }
 

@@ -110,11 +110,10 @@ Payload LruCache::load(const AfamFile& f, int64_t entry) {
     damage_->record(f, entry, ex.what());
     throw;
   }
-  const uint64_t read = e.size;  // the model's bytes, as for every load (stats and the cap)
-  throttle(read, t0);
+  throttle(e.size, t0);  // the model's bytes, in either form (the cap and the stats)
   const double s = std::chrono::duration<double>(Clock::now() - t0).count();
   std::lock_guard<std::mutex> g(mutex_);
-  stats_.bytesRead += read;
+  stats_.bytesRead += e.size;
   stats_.blocksRead++;
   stats_.residualsOnResident += before ? 1 : 0;
   stats_.readSeconds += s;

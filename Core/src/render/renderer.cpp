@@ -38,18 +38,19 @@ uint64_t modelFloats(const AfamFile& file, const Placement& m) {
 }
 
 /// Writes a model's floats at `out`: copied, or decoded from its stored form (NaN, drawn as
-/// nothing, where its payload does not decode: its checksum held, so the caster that asked for
-/// the stored form reports it).
-void writeModel(const ModelEntry& e, const CachedModel& m, float* out, uint64_t floats) {
+/// nothing, where its payload does not decode: returns why, else an empty string).
+std::string writeModel(const ModelEntry& e, const CachedModel& m, float* out, uint64_t floats) {
   if (!m.isStored()) {
     if (!m.empty()) std::memcpy(out, m.data(), m.size() * sizeof(float));
-    return;
+    return {};
   }
   try {
     decodeStoredPayload(e, m.stored.data(), out, Partition::blockName(e.level, e.block));
-  } catch (const FormatError&) {
+  } catch (const FormatError& error) {
     std::fill(out, out + floats, std::numeric_limits<float>::quiet_NaN());
+    return error.what();
   }
+  return {};
 }
 
 }  // namespace
@@ -58,14 +59,19 @@ uint64_t PreparedFrame::slotFloats(size_t s) const {
   return models[s]->isStored() ? slotFloatCount(slots[s]) : models[s]->size();
 }
 
+std::string PreparedFrame::writeSlot(size_t s, float* out) const {
+  return writeModel(*slotEntries[s], *models[s], out, slotFloats(s));
+}
+
 const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
   if (view.pool || slots.empty()) return view.pool;
   uint64_t floats = 0;
   for (size_t s = 0; s < slots.size(); ++s)
     floats = std::max(floats, slots[s].offset + slotFloats(s));
   storage.resize(floats);
-  for (size_t s = 0; s < slots.size(); ++s)
-    writeModel(*slotEntries[s], *models[s], storage.data() + slots[s].offset, slotFloats(s));
+  // A stored model that does not decode is NaN (drawn as nothing); the caster that asked for the
+  // stored form reports it.
+  for (size_t s = 0; s < slots.size(); ++s) writeSlot(s, storage.data() + slots[s].offset);
   return storage.data();
 }
 

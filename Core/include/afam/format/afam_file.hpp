@@ -244,6 +244,13 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   void readVerifiedPayload(int64_t entry, const float* previous,
                            void* out) const;           ///< readPayloadOnto without the change check
   void throwIfChanged(const FileIdentity& now) const;  ///< FileChangedError unless now == identity_
+  /// Runs `read`, then checks the descriptor whatever its outcome (bytes read while or after
+  /// another process rewrote the file are neither returned nor taken for damage).
+  template <typename Read>
+  void readUnlessChanged(Read&& read) const;
+  const ModelEntry& entryAt(int64_t entry) const;  ///< InvalidArgument when out of range
+  /// One pread of `bytes` stored bytes of e into out, CRC verified (FormatError naming the block).
+  void readChecked(const ModelEntry& e, void* out, size_t bytes) const;
   std::string path_;
   int fd_ = -1;
   uint32_t version_ = 0;

@@ -116,6 +116,9 @@ struct PreparedFrame {
   const float* hostPool(std::vector<float>& storage) const;
   /// Floats of slot s's model (its control points, and a masked model's mask words).
   uint64_t slotFloats(size_t s) const;
+  /// Writes slot s's slotFloats(s) floats at out: copied, or decoded from the stored form (NaN
+  /// where its payload does not decode). Returns why it did not decode; empty when it did.
+  std::string writeSlot(size_t s, float* out) const;
 };
 
 /// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel

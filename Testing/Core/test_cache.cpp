@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 #include "afam/predict/predictor_factory.hpp"
 #include "afam/render/cache.hpp"
 #include "afam/render/prefetch.hpp"
@@ -60,6 +61,21 @@ TEST(Cache, BudgetsAreNeverExceeded) {
       }
     }
   }
+}
+
+TEST(Cache, TheByteBudgetCountsDecodingScratch) {
+  auto file = smallFile();  // uncoded models: loading them takes no scratch
+  ASSERT_EQ(file->entries()[0].storedSize, 500u);
+  releaseThreadScratch();
+  ASSERT_EQ(threadScratchBytes(), 0u);
+  LruCache cache(file, CacheBudget{2000, 0});
+  threadScratch<uint8_t>(ScratchSlot::Words, 1400);  // decoding scratch held by this thread
+  for (int64_t e = 0; e < 6; ++e) cache.get(e);
+  EXPECT_EQ(cache.residentBlocks(), 1u);  // 2000 - 1400 leaves room for one 500 B model
+  releaseThreadScratch();
+  for (int64_t e = 0; e < 6; ++e) cache.get(e);
+  EXPECT_EQ(cache.residentBlocks(), 4u);
+  EXPECT_EQ(cache.residentBytes(), 2000u);
 }
 
 TEST(Cache, PrefetchNeverEvictsPinnedBlocks) {

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_mask.hpp"
 #include "afam/format/temporary_file.hpp"
@@ -714,10 +715,9 @@ void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* o
     readChecked(e, out, e.size);
     return;
   }
-  thread_local std::vector<uint8_t> stored;
-  stored.resize(e.storedSize);
-  readChecked(e, stored.data(), e.storedSize);
-  decodeStoredPayload(e, stored.data(), static_cast<float*>(out), where);
+  uint8_t* stored = threadScratch<uint8_t>(ScratchSlot::Stored, e.storedSize);
+  readChecked(e, stored, e.storedSize);
+  decodeStoredPayload(e, stored, static_cast<float*>(out), where);
 }
 
 const std::vector<PayloadPart>& AfamFile::chain(int64_t entry) const {

@@ -21,7 +21,6 @@ namespace {
 using codec::coarsestSpacing;
 using codec::Lattice;
 using codec::lorenzo;
-using codec::threadBuffer;
 
 constexpr double kMaxCode = 1125899906842624.0;  // 2^50: residual codes beyond are refused
 
@@ -217,7 +216,7 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
   size_t got = 0;
   const uint8_t* varints = codec::unpackFrame(data + kCodedHeaderBytes, bytes - kCodedHeaderBytes,
                                               count * 10, 0, where, got);
-  double* r = threadBuffer<double>(count);
+  double* r = threadScratch<double>(ScratchSlot::Doubles, count);
   size_t pos = 0;
   visit(Predictor(data[8]), Lattice{n}, r, [&](int64_t i, double pred) {
     uint64_t u;

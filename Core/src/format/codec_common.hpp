@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/partition.hpp"
@@ -36,19 +37,6 @@ inline ZSTD_CCtx* threadCCtx() {
 inline ZSTD_DCtx* threadDCtx() {
   thread_local std::unique_ptr<ZSTD_DCtx, DCtxDeleter> ctx(ZSTD_createDCtx());
   return ctx.get();
-}
-
-/// A buffer of at least `count` T owned by the calling thread, its contents left as they were;
-/// `Tag` tells apart buffers of one type used at the same time.
-template <typename T, int Tag = 0>
-T* threadBuffer(size_t count) {
-  thread_local std::unique_ptr<T[]> buffer;
-  thread_local size_t capacity = 0;
-  if (capacity < count) {
-    buffer.reset(new T[count]);
-    capacity = count;
-  }
-  return buffer.get();
 }
 
 inline void putVarint(uint64_t u, std::vector<uint8_t>& out) {
@@ -98,7 +86,7 @@ inline FormatError badPayload(const char* where, const std::string& what) {
 inline const uint8_t* unpackLanesFrame(const uint8_t* frame, size_t bytes, size_t capacity,
                                        size_t padding, const char* where, size_t& got) {
   const size_t symbols = lanes::frameSymbols(frame, bytes);
-  uint8_t* out = threadBuffer<uint8_t>(std::min(symbols, capacity) + padding);
+  uint8_t* out = threadScratch<uint8_t>(ScratchSlot::Frame, std::min(symbols, capacity) + padding);
   const char* error = nullptr;
   const int64_t n = lanes::decodeFrame(frame, bytes, out, capacity, &error);
   if (n < 0) throw badPayload(where, std::string("lanes frame ") + error);
@@ -108,7 +96,7 @@ inline const uint8_t* unpackLanesFrame(const uint8_t* frame, size_t bytes, size_
 }
 
 /// Decompresses the frame [frame, frame + bytes) (zstd, or lanes) into the calling thread's
-/// buffer (`Tag` 0 of uint8_t) with at most `capacity` bytes, and `padding` zero bytes after what
+/// scratch (ScratchSlot::Frame) with at most `capacity` bytes, and `padding` zero bytes after what
 /// it holds; returns the buffer and sets `got`.
 inline const uint8_t* unpackFrame(const uint8_t* frame, size_t bytes, size_t capacity,
                                   size_t padding, const char* where, size_t& got) {
@@ -118,7 +106,7 @@ inline const uint8_t* unpackFrame(const uint8_t* frame, size_t bytes, size_t cap
   if (framed == ZSTD_CONTENTSIZE_ERROR)
     throw badPayload(where, "does not decompress (not a zstd frame)");
   if (framed != ZSTD_CONTENTSIZE_UNKNOWN && framed < capacity) capacity = size_t(framed);
-  uint8_t* out = threadBuffer<uint8_t>(capacity + padding);
+  uint8_t* out = threadScratch<uint8_t>(ScratchSlot::Frame, capacity + padding);
   got = ZSTD_decompressDCtx(threadDCtx(), out, capacity, frame, bytes);
   if (ZSTD_isError(got))
     throw badPayload(where, std::string("does not decompress (") + ZSTD_getErrorName(got) + ")");

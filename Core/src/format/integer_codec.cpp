@@ -65,7 +65,7 @@ void interpolationRuns(Int3 n, const Word* k, Op&& op) {
   const Lattice L{n};
   const int S = coarsestSpacing(n);
   lorenzo(L, k, S, [&](int64_t i, Word p) { op(i, int64_t(1), 1, &p); });
-  Word* pred = threadBuffer<Word, 3>(size_t(std::max({n[0], n[1], n[2]})));
+  Word* pred = threadScratch<Word>(ScratchSlot::Predictions, size_t(std::max({n[0], n[1], n[2]})));
   const int64_t sy = n[0], sz = int64_t(n[0]) * n[1];
   for (int s = S / 2; s >= 1; s /= 2) {
     const int s2 = 2 * s;
@@ -265,13 +265,13 @@ void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const 
   const uint8_t* varints =
       unpackFrame(data + kIntegerCodedHeaderBytes, bytes - kIntegerCodedHeaderBytes, count * 5,
                   5 * 64 + 8, where, got);
-  Word* r = threadBuffer<Word, 1>(count);
+  Word* r = threadScratch<Word>(ScratchSlot::Words, count);
   readVarints(varints, got, count, r, where);
   Word* k = r;
   if (Predictor(data[8]) == Predictor::IntegerLorenzo) {
     lorenzoSums(n, k);
   } else {
-    k = threadBuffer<Word, 2>(count);
+    k = threadScratch<Word>(ScratchSlot::MoreWords, count);
     size_t pos = 0;
     interpolationRuns(n, k, [&](int64_t first, int64_t stride, int run, const Word* pred) {
       Word* at = k + first;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 #include "file_layout.hpp"
 
 namespace afam {
@@ -16,16 +17,16 @@ namespace layout {
 namespace {
 
 /// One part's stored bytes, read and checked against its CRC.
-const uint8_t* readPart(int fd, const std::string& path, const ModelEntry& e, const PayloadPart& p,
-                        std::vector<uint8_t>& buffer) {
+const uint8_t* readPart(int fd, const std::string& path, const ModelEntry& e,
+                        const PayloadPart& p) {
   const std::string block = Partition::blockName(e.level, e.block);
-  buffer.resize(p.storedSize);
-  preadAll(fd, buffer.data(), p.storedSize, p.offset, path,
+  uint8_t* buffer = threadScratch<uint8_t>(ScratchSlot::ChainStored, p.storedSize);
+  preadAll(fd, buffer, p.storedSize, p.offset, path,
            "payload of " + block + " at step " + std::to_string(p.step));
-  if (crc32(buffer.data(), p.storedSize) != p.checksum)
+  if (crc32(buffer, p.storedSize) != p.checksum)
     throw FormatError(path + ": payload checksum mismatch at " + block + " of step " +
                       std::to_string(p.step));
-  return buffer.data();
+  return buffer;
 }
 
 }  // namespace
@@ -33,10 +34,8 @@ const uint8_t* readPart(int fd, const std::string& path, const ModelEntry& e, co
 void decodeChain(int fd, const std::string& path, const ModelEntry& e,
                  const std::vector<PayloadPart>& chain, const float* previous, float* out) {
   if (chain.size() < 2) throw InvalidArgument(path + ": decodeChain of a model of one payload");
-  thread_local std::vector<uint8_t> stored;
-  thread_local std::vector<float> residual;
   const size_t count = e.size / sizeof(float);
-  residual.resize(count);
+  float* residual = threadScratch<float>(ScratchSlot::Residual, count);
   // From the model before the newest residual when the caller has it (the same floats a whole
   // chain sums to, as it was summed the same way), else from the chain's first payload.
   size_t first = 0;
@@ -53,8 +52,8 @@ void decodeChain(int fd, const std::string& path, const ModelEntry& e,
     part.storedSize = p.storedSize;
     const std::string where =
         path + ": " + Partition::blockName(e.level, e.block) + " of step " + std::to_string(p.step);
-    const uint8_t* bytes = readPart(fd, path, e, p, stored);
-    decodeStoredPayload(part, bytes, k == 0 ? out : residual.data(), where);
+    const uint8_t* bytes = readPart(fd, path, e, p);
+    decodeStoredPayload(part, bytes, k == 0 ? out : residual, where);
     if (k == 0) continue;
     for (size_t i = 0; i < count; ++i) out[i] = out[i] + residual[i];
   }

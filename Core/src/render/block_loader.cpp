@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 
 namespace afam {
 
@@ -120,10 +121,16 @@ void BlockLoader::loadOtherStep(std::unique_lock<std::mutex>& lock) {
 
 void BlockLoader::run() {
   std::unique_lock<std::mutex> lock(mutex_);
+  const auto hasWork = [this] {
+    return quit_ || !frameQueue_.empty() || !prefetchQueue_.empty() || !stepQueue_.empty();
+  };
   for (;;) {
-    work_.wait(lock, [this] {
-      return quit_ || !frameQueue_.empty() || !prefetchQueue_.empty() || !stepQueue_.empty();
-    });
+    if (!hasWork()) {  // idle: the decoding scratch goes back until the next burst of loads
+      lock.unlock();
+      releaseThreadScratch();
+      lock.lock();
+    }
+    work_.wait(lock, hasWork);
     if (quit_) return;
     if (frameQueue_.empty() && prefetchQueue_.empty()) {
       loadOtherStep(lock);

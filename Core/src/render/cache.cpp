@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 
 namespace afam {
 
@@ -122,7 +123,8 @@ Payload LruCache::load(const AfamFile& f, int64_t entry) {
 
 bool LruCache::makeRoom(uint64_t bytes, bool mayEvictPinned) {
   auto fits = [&] {
-    return (budget_.bytes == 0 || resident_ + bytes <= budget_.bytes) &&
+    return (budget_.bytes == 0 ||
+            resident_ + reserved_ + threadScratchBytes() + bytes <= budget_.bytes) &&
            (budget_.blocks == 0 || map_.size() + 1 <= budget_.blocks);
   };
   if (budget_.bytes != 0 && bytes > budget_.bytes) return false;
@@ -171,17 +173,23 @@ Payload LruCache::getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool
   if (purpose == Purpose::Frame) stats_.misses++;
   if (wasHit) *wasHit = false;
   loading_.insert(key);
+  // Room for the model before it is decoded (its floats: the stored form is smaller).
+  const uint64_t reserve = f->entries()[size_t(entry)].size;
+  makeRoom(reserve, purpose == Purpose::Frame);
+  reserved_ += reserve;
   lock.unlock();
   Payload data;
   try {
     data = load(*f, entry);
   } catch (...) {
     lock.lock();
+    reserved_ -= reserve;
     loading_.erase(key);
     loaded_.notify_all();
     throw;
   }
   lock.lock();
+  reserved_ -= reserve;
   loading_.erase(key);
   const uint64_t bytes = data->bytes();
   if (purpose == Purpose::Prefetch) {

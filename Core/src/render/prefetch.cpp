@@ -2,6 +2,7 @@
 #include "afam/render/prefetch.hpp"
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 
 namespace afam {
 
@@ -61,7 +62,9 @@ void Prefetcher::run() {
     uint64_t loaded = 0;
     try {
       if (job) job(stop_, loaded);
+      releaseThreadScratch();  // until the next job
     } catch (...) {
+      releaseThreadScratch();
       // A failed prefetch read is not fatal. A damaged payload never gets here (the cache records
       // it and skips it); another error (I/O) is met again by the frame that needs the block,
       // which reports it.

@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_scratch.hpp"
 #include "afam/predict/predictor_factory.hpp"
 
 namespace afam {
@@ -72,6 +73,7 @@ const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
   // A stored model that does not decode is NaN (drawn as nothing); the caster that asked for the
   // stored form reports it.
   for (size_t s = 0; s < slots.size(); ++s) writeSlot(s, storage.data() + slots[s].offset);
+  releaseThreadScratch();  // of the stored models decoded here
   return storage.data();
 }
 
@@ -233,6 +235,7 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st
     st.damagedBlocks++;
     if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
   }
+  releaseThreadScratch();  // of a model this thread decoded itself
   return placed;
 }
 

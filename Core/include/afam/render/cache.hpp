@@ -4,7 +4,10 @@
 // Budgets: a byte budget and a block-count budget (the paper keeps 200 micro-models); 0 means
 // unlimited. Neither is ever exceeded: before a payload is inserted, least-recently-used blocks are
 // evicted until it fits. A payload larger than the byte budget on its own is returned to the
-// caller without being cached (counted as a miss and a bypass).
+// caller without being cached (counted as a miss and a bypass). The byte budget is the memory
+// decoded models take, not only the resident ones: a load makes room for its model before it
+// reads (the model exists while it is decoded), and the decoding scratch threads hold
+// (threadScratchBytes) counts too, so that resident memory follows the budget.
 //
 // Pinning: the renderer pins the blocks of the frame being rendered (setPinned). Prefetch loads
 // (Purpose::Prefetch) never evict a pinned block: when only pinned blocks are left to evict, the
@@ -156,6 +159,7 @@ class LruCache {
   std::unordered_map<uint64_t, Node> map_;
   std::unordered_set<uint64_t> loading_, pinned_;
   uint64_t resident_ = 0;
+  uint64_t reserved_ = 0;      // by loads under way, for the models they decode
   uint64_t peakResident_ = 0;  // for takePeakResidentBytes
   CacheStats stats_;
   double capBytesPerSecond_ = 0;

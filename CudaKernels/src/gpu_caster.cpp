@@ -116,7 +116,8 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
   view.maxDistance = targets.maxDistance;
   std::vector<float> pool;  // the models side by side, only for a frame cast on the CPU after all
   auto castOnCpu = [&] {
-    view.pool = frame.hostPool(pool);
+    view = frame.hostView(pool);
+    view.maxDistance = targets.maxDistance;
     image.resize(w, h);
     renderCpu(view, image, threads_);
   };

@@ -302,6 +302,7 @@ struct GpuRenderer::Impl {
     d.maxDistance =
         v.maxDistance ? reinterpret_cast<const float*>(deviceTables + depthOffset) : nullptr;
     d.pool = static_cast<const float*>(pool.arena());
+    d.slotData = nullptr;  // host pointers: the models are in the pool
     return d;
   }
 };

@@ -82,7 +82,7 @@ struct LinearScanSampler {
     if (slot < 0) return false;
     const FrameSlot& s = f.slots[slot];
     float gv[3] = {0, 0, 0};
-    value = sampleSplineSlot<G>(s, f.pool, x, gv);
+    value = sampleSplineSlot<G>(s, f.pool + s.offset, x, gv);
     if (G)
       for (int a = 0; a < 3; ++a) gradient[a] = gv[a] * f.voxelPerUnit[a];
     return true;

@@ -76,15 +76,15 @@ TEST(MissingRender, PositionIsMissingWhereItsNearestSampleIs) {
     if (std::fabs(x - std::floor(x) - 0.5f) < 1e-3f) continue;  // a tie: either sample
     const float at[3] = {x, 3.3f, 7.7f};
     const bool expected = std::lround(x) < afam_test::kFirstMissingX;
-    EXPECT_EQ(slotSampleValid(masked, s.pool.data(), at), expected) << "x " << x;
+    EXPECT_EQ(slotSampleValid(masked, s.pool.data() + masked.offset, at), expected) << "x " << x;
     float g[3] = {1, 1, 1};
-    const float v = sampleSlot<true>(masked, s.pool.data(), at, g);
+    const float v = sampleSlot<true>(masked, s.pool.data() + masked.offset, at, g);
     EXPECT_EQ(isMissing(v), !expected) << "x " << x;
     if (!expected) {
       EXPECT_EQ(g[0] * g[0] + g[1] * g[1] + g[2] * g[2], 0.f);
     }
     const float e[3] = {x + 12.f, 3.3f, 7.7f};
-    EXPECT_TRUE(isMissing(sampleSlot<false>(empty, s.pool.data(), e, nullptr)));
+    EXPECT_TRUE(isMissing(sampleSlot<false>(empty, nullptr, e, nullptr)));
   }
 }
 

@@ -8,10 +8,9 @@ namespace afam {
 
 CastResult CpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets,
                            ImageRGBA& image) {
-  FrameView view = frame.view;
+  std::vector<float> pool;  // used only by a frame whose models are not all floats
+  FrameView view = frame.hostView(pool);
   view.maxDistance = targets.maxDistance;
-  std::vector<float> pool;
-  view.pool = frame.hostPool(pool);
   renderCpu(view, image, threads_);
   return CastResult{};
 }

@@ -77,6 +77,17 @@ const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
   return storage.data();
 }
 
+FrameView PreparedFrame::hostView(std::vector<float>& storage) const {
+  FrameView v = view;
+  const bool floats =
+      std::none_of(models.begin(), models.end(), [](const Payload& m) { return m->isStored(); });
+  if (!v.pool && floats && slotHost.size() == slots.size())
+    v.slotData = slotHost.data();
+  else
+    v.pool = hostPool(storage);
+  return v;
+}
+
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
                    FrameSettings settings, std::shared_ptr<DamageLog> damage)
     : file_(std::move(file)), resources_(std::move(resources)) {

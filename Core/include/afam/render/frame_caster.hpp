@@ -99,6 +99,8 @@ class CpuCaster : public FrameCaster {
                   ImageRGBA& image) override;
   bool castsOnGpu() const override { return false; }
   std::string description() const override { return "CPU"; }
+  /// The rays read the cached models themselves (PreparedFrame::hostView).
+  bool readsHostPool() const override { return false; }
 
  private:
   int threads_;

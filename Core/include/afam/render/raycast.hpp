@@ -37,7 +37,9 @@
 // ---------------------------------------------------------------------------------------------
 // Slots and the float pool
 // ---------------------------------------------------------------------------------------------
-//  slots[s] describes one resident model; its floats start at pool + slots[s].offset.
+//  slots[s] describes one resident model; its floats start at pool + slots[s].offset, or, where
+//  the frame references the cached models themselves (a CPU frame: slotData set, no pool), at
+//  slotData[s] (slotModel()).
 //  * kSlotSpline: B-spline micro-model (Adaptive-FAM and FAM). knots[a] = Knots::make(ncp, degree);
 //    control points ncp.x*ncp.y*ncp.z, x fastest (the .afam payload unchanged).
 //  * kSlotRaw: downsampled raw block (DS). knots[a].ncp = samples+2 (one ghost sample per side,
@@ -165,6 +167,9 @@ struct FrameView {
   const FrameSlot* slots = nullptr;
   int32_t slotCount = 0;
   const float* pool = nullptr;  ///< control points / raw samples of all slots
+  /// Host frames only: slot s's floats at slotData[s] (the cached model itself, its offset
+  /// unused); null: at pool + offset (a device frame's pool, or a copy).
+  const float* const* slotData = nullptr;
 
   // Transfer function.
   const float* tf = nullptr;  ///< tfSize RGBA entries, interleaved
@@ -272,13 +277,13 @@ AFAM_HD int32_t lookupSlot(const FrameView& f, const float* x) {
 
 /// Spline slot: value (and gradient in voxel units, d/dx) at voxel coordinate x.
 template <bool WithGradient>
-AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* pool, const float* x,
+AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* data, const float* x,
                                float* gVoxel) {
   ModelView m;
   m.knots[0] = s.knots[0];
   m.knots[1] = s.knots[1];
   m.knots[2] = s.knots[2];
-  m.control = pool + s.offset;
+  m.control = data;
   const float u = (x[0] - s.lo[0]) * s.invExtent[0];
   const float v = (x[1] - s.lo[1]) * s.invExtent[1];
   const float w = (x[2] - s.lo[2]) * s.invExtent[2];
@@ -322,8 +327,7 @@ AFAM_HD float trilinearRaw(const FrameSlot& s, const float* data, float tx, floa
 
 /// Raw (DS) slot: trilinear value and central-difference gradient in voxel units.
 template <bool WithGradient>
-AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* pool, const float* x, float* gVoxel) {
-  const float* data = pool + s.offset;
+AFAM_HD float sampleRawSlot(const FrameSlot& s, const float* data, const float* x, float* gVoxel) {
   float t[3], perVoxel[3];
   for (int a = 0; a < 3; ++a) {
     const int n = s.knots[a].ncp - 2;  // real samples on this axis
@@ -366,7 +370,7 @@ AFAM_HD bool isMissing(float value) { return value != value; }
 
 /// Whether voxel coordinate x of slot s is valid: its nearest sample of the mask's grid is (an
 /// unmasked slot: always; an empty slot: never).
-AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* pool, const float* x) {
+AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* data, const float* x) {
   if (s.kind == kSlotEmpty) return false;
   if (s.maskSamples[0] <= 0) return true;
   int64_t index = 0;
@@ -377,27 +381,32 @@ AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* pool, const float*
     k = k > n - 1 ? n - 1 : k;
     index = index * n + k;
   }
-  return maskBit(pool + s.offset + s.maskOffset, index);
+  return maskBit(data + s.maskOffset, index);
 }
 
 /// Value (and gradient in voxel units) of slot s at voxel coordinate x, missingValue() (gradient
 /// 0) where the slot's sample there is missing: every model sampler's evaluation.
 template <bool WithGradient, int FixedDegree = -1>
-AFAM_HD float sampleSlot(const FrameSlot& stored, const float* pool, const float* x,
+AFAM_HD float sampleSlot(const FrameSlot& stored, const float* data, const float* x,
                          float* gVoxel) {
-  if (!slotSampleValid(stored, pool, x)) {
+  if (!slotSampleValid(stored, data, x)) {
     if (WithGradient) gVoxel[0] = gVoxel[1] = gVoxel[2] = 0.f;
     return missingValue();
   }
-  if (stored.kind == kSlotRaw) return sampleRawSlot<WithGradient>(stored, pool, x, gVoxel);
+  if (stored.kind == kSlotRaw) return sampleRawSlot<WithGradient>(stored, data, x, gVoxel);
   if (FixedDegree > 0) {
     FrameSlot s = stored;
     s.knots[0].degree = FixedDegree;
     s.knots[1].degree = FixedDegree;
     s.knots[2].degree = FixedDegree;
-    return sampleSplineSlot<WithGradient>(s, pool, x, gVoxel);
+    return sampleSplineSlot<WithGradient>(s, data, x, gVoxel);
   }
-  return sampleSplineSlot<WithGradient>(stored, pool, x, gVoxel);
+  return sampleSplineSlot<WithGradient>(stored, data, x, gVoxel);
+}
+
+/// The first float of slot s's model.
+AFAM_HD const float* slotModel(const FrameView& f, int32_t s) {
+  return f.slotData ? f.slotData[s] : f.pool + f.slots[s].offset;
 }
 
 /// Voxel coordinate x of a normalised-frame point p and the slot covering it (-1: culled / empty):
@@ -432,7 +441,7 @@ struct ModelSamplerT {
     const int32_t slot = locateSample(f, p, x);
     if (slot < 0) return false;
     float gv[3] = {0.f, 0.f, 0.f};
-    value = sampleSlot<WithGradient, FixedDegree>(f.slots[slot], f.pool, x, gv);
+    value = sampleSlot<WithGradient, FixedDegree>(f.slots[slot], slotModel(f, slot), x, gv);
     if (WithGradient) voxelToNormalisedGradient(f, gv, gradient);
     return true;
   }

@@ -114,6 +114,9 @@ struct PreparedFrame {
   /// view.pool, or, when the pool was left empty, the slots' floats copied into `storage` (models
   /// in the stored form decoded there; one that does not decode is NaN: drawn as nothing).
   const float* hostPool(std::vector<float>& storage) const;
+  /// The view a host caster casts: reading each slot's cached model where the pool was left
+  /// empty and every model has its floats (slotData = slotHost), else hostPool's floats.
+  FrameView hostView(std::vector<float>& storage) const;
   /// Floats of slot s's model (its control points, and a masked model's mask words).
   uint64_t slotFloats(size_t s) const;
   /// Writes slot s's slotFloats(s) floats at out: copied, or decoded from the stored form (NaN

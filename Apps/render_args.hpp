@@ -22,6 +22,9 @@ inline const char* renderOptionsHelp() {
          "  --cold                 evict the file from the OS page cache before each point of "
          "view\n"
          "  --storage-mbps R       emulate storage of R MB/s (1 MB = 1e6 B; sleeps after reads)\n"
+         "  --models compact|float how the cache keeps integer-coded models: a table and a 1- or\n"
+         "                         2-byte code a control point where that is smaller (default),\n"
+         "                         or float32 (the same images)\n"
          "  --sample-distance D    ray sample spacing in the normalised [-1,1]^3 frame (default "
          "0.005)\n"
          "  --shading on|off       Phong shading from the model's gradient (default on)\n"
@@ -42,7 +45,8 @@ inline const std::set<std::string>& renderValueOptions() {
                                           "prefetch",       "storage-mbps", "sample-distance",
                                           "shading",        "lod",          "pixel-budget",
                                           "threads",        "trajectory",   "load-threads",
-                                          "miss-budget-ms", "step",         "nan-color"};
+                                          "miss-budget-ms", "step",         "nan-color",
+                                          "models"};
   return s;
 }
 
@@ -105,6 +109,10 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   o.cold = a.has("cold");
   o.storageMBps = a.real("storage-mbps", 0);
   if (o.storageMBps < 0) throw InvalidArgument("--storage-mbps must be >= 0");
+  const std::string models = a.str("models", "compact");
+  if (models != "compact" && models != "float")
+    throw InvalidArgument("--models must be compact or float, not '" + models + "'");
+  o.compactModels = models == "compact";
   const auto& names = predictorNames();
   if (std::find(names.begin(), names.end(), o.prefetch) == names.end())
     throw InvalidArgument("--prefetch must be none, linear, appa, forecache or lstm, not '" +

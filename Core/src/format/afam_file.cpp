@@ -438,6 +438,17 @@ const char* blockKindName(BlockKind kind) {
   return "unknown";
 }
 
+namespace {
+/// Throws unless a coded payload's predictor form and frame agree with the index's flags.
+void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::string& where) {
+  if (!e.coded || e.kind == BlockKind::Constant) return;
+  if (e.integerCoded != payloadIsIntegerCoded(stored, e.storedSize))
+    throw FormatError(where + ": coded payload's predictor disagrees with the index's flags");
+  if (e.lanesCoded != payloadIsLanesCoded(stored, e.storedSize))
+    throw FormatError(where + ": coded payload's frame disagrees with the index's flags");
+}
+}  // namespace
+
 void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
                          const std::string& where) {
   if (e.kind == BlockKind::Empty) return;
@@ -455,23 +466,19 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     return;
   }
   const size_t count = e.size / sizeof(float);
+  checkPayloadFlags(e, stored, where);
   if (e.kind == BlockKind::Constant) {
     float c;
     std::memcpy(&c, stored, 4);
     std::fill(out, out + count, c);
-  } else if (e.coded && e.integerCoded != payloadIsIntegerCoded(stored, e.storedSize)) {
-    throw FormatError(where + ": coded payload's predictor disagrees with the index's flags");
-  } else if (e.coded && e.lanesCoded != payloadIsLanesCoded(stored, e.storedSize)) {
-    throw FormatError(where + ": coded payload's frame disagrees with the index's flags");
   } else if (e.kind == BlockKind::Interpolant) {
-    thread_local std::vector<float> samples;
     thread_local BlockFitter fitter;
     thread_local FitResult fit;
-    samples.resize(count);
-    decodeValues(stored, e.storedSize, e.ncp, samples.data(), where.c_str());
+    float* samples = threadScratch<float>(ScratchSlot::Samples, count);
+    decodeValues(stored, e.storedSize, e.ncp, samples, where.c_str());
     try {
-      fitter.fitInto(samples.data(), e.ncp, e.ncp,
-                     std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
+      fitter.fitInto(samples, e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}),
+                     false, fit);
     } catch (const Error& ex) {
       throw FormatError(where + ": interpolant does not decode: " + ex.what());
     }
@@ -691,6 +698,26 @@ void AfamFile::readChecked(const ModelEntry& e, void* out, size_t bytes) const {
 
 void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) const {
   readUnlessChanged([&] { readVerifiedPayload(entry, previous, out); });
+}
+
+CompactForm AfamFile::readCompact(int64_t entry, double maxShare, std::vector<float>& out) const {
+  const ModelEntry& e = entryAt(entry);
+  if (!e.coded || !e.integerCoded || e.masked || e.residual ||
+      (e.kind != BlockKind::Spline && e.kind != BlockKind::Samples) ||
+      header_.mode == EncodingMode::Downsampled) {
+    out.resize(e.size / sizeof(float));
+    readPayload(entry, out.data());
+    return CompactForm{};
+  }
+  const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
+  CompactForm form;
+  readUnlessChanged([&] {
+    uint8_t* stored = threadScratch<uint8_t>(ScratchSlot::Stored, e.storedSize);
+    readChecked(e, stored, e.storedSize);
+    checkPayloadFlags(e, stored, where);
+    form = decodeValuesCompact(stored, e.storedSize, e.ncp, maxShare, out, where.c_str());
+  });
+  return form;
 }
 
 std::vector<uint8_t> AfamFile::readStored(int64_t entry) const {

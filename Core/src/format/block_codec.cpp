@@ -201,7 +201,9 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
   return true;
 }
 
-void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
+namespace {
+/// A coded payload's quantization step, after checking its header.
+double checkedStep(const uint8_t* data, size_t bytes, const char* where) {
   if (bytes < kCodedHeaderBytes + 1) throw codec::badPayload(where, "shorter than its header");
   double step;
   std::memcpy(&step, data, 8);
@@ -209,6 +211,22 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
     throw codec::badPayload(where, "has an invalid quantization step");
   if (data[8] > uint8_t(Predictor::IntegerInterpolation))
     throw codec::badPayload(where, "names unknown predictor " + std::to_string(data[8]));
+  return step;
+}
+}  // namespace
+
+CompactForm decodeValuesCompact(const uint8_t* data, size_t bytes, Int3 n, double maxShare,
+                                std::vector<float>& out, const char* where) {
+  checkedStep(data, bytes, where);
+  if (isIntegerForm(Predictor(data[8])))
+    return codec::decodeIntegerCompact(data, bytes, n, maxShare, out, where);
+  out.resize(size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  decodeValues(data, bytes, n, out.data(), where);
+  return CompactForm{};
+}
+
+void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
+  const double step = checkedStep(data, bytes, where);
   if (isIntegerForm(Predictor(data[8]))) return codec::decodeInteger(data, bytes, n, out, where);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   // The varints (at most 10 a value) in the thread's buffer; the doubles likewise, reused

@@ -199,17 +199,70 @@ void convertBaseline(const Word* k, size_t count, int64_t base, double step, flo
   convertBody(k, count, base, step, out);
 }
 
-void toFloats(const Word* k, size_t count, int64_t base, double step, float* out,
-              const char* where) {
+/// Throws unless every k lies in the range an encoder writes.
+void checkRange(const Word* k, size_t count, const char* where) {
   uint32_t outside = 0;
   for (size_t i = 0; i < count; ++i) outside |= uint32_t(k[i] + (kLimit - 1)) > 2u * (kLimit - 1);
   if (outside) throw badPayload(where, "decodes beyond its range");
-  cpuHasAvx2() ? convertAvx2(k, count, base, step, out)
-               : convertBaseline(k, count, base, step, out);
-  if ((std::fabs(double(base)) + kLimit) * step >
-      std::numeric_limits<float>::max())  // only then can one be
-    for (size_t i = 0; i < count; ++i)
-      if (!std::isfinite(out[i])) throw badPayload(where, "decodes to a value beyond float32");
+}
+
+/// Throws unless (base + k) * step is a finite float for every |k| < kLimit that may occur.
+void checkFinite(const float* out, size_t count, int64_t base, double step, const char* where) {
+  if ((std::fabs(double(base)) + kLimit) * step <= std::numeric_limits<float>::max()) return;
+  for (size_t i = 0; i < count; ++i)  // only then can one be
+    if (!std::isfinite(out[i])) throw badPayload(where, "decodes to a value beyond float32");
+}
+
+/// An integer payload's integers, checked to lie in the encoder's range, in the calling thread's
+/// scratch.
+struct IntegerWords {
+  const Word* k;
+  int64_t base;
+  double step;
+};
+
+IntegerWords decodeWords(const uint8_t* data, size_t bytes, Int3 n, const char* where) {
+  if (bytes < kIntegerCodedHeaderBytes + 1) throw badPayload(where, "shorter than its header");
+  double step;
+  int64_t base;
+  std::memcpy(&step, data, 8);
+  std::memcpy(&base, data + 9, 8);
+  if (!(base > -(int64_t(1) << 52) && base < (int64_t(1) << 52)))
+    throw badPayload(where, "has an invalid base");
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  size_t got = 0;
+  const uint8_t* varints =
+      unpackFrame(data + kIntegerCodedHeaderBytes, bytes - kIntegerCodedHeaderBytes, count * 5,
+                  5 * 64 + 8, where, got);
+  Word* r = threadScratch<Word>(ScratchSlot::Words, count);
+  readVarints(varints, got, count, r, where);
+  Word* k = r;
+  if (Predictor(data[8]) == Predictor::IntegerLorenzo) {
+    lorenzoSums(n, k);
+  } else {
+    k = threadScratch<Word>(ScratchSlot::MoreWords, count);
+    size_t pos = 0;
+    interpolationRuns(n, k, [&](int64_t first, int64_t stride, int run, const Word* pred) {
+      Word* at = k + first;
+      const Word* res = r + pos;
+      if (stride == 1)
+        for (int j = 0; j < run; ++j) at[j] = pred[j] + res[j];
+      else
+        for (int j = 0; j < run; ++j) at[j * stride] = pred[j] + res[j];
+      pos += size_t(run);
+    });
+  }
+  checkRange(k, count, where);
+  return IntegerWords{k, base, step};
+}
+
+/// Writes k - lo as Code into bytes (the codes of a compact model).
+template <typename Code>
+void writeCodes(const Word* k, size_t count, int32_t lo, unsigned char* bytes) {
+  for (size_t i = 0; i < count; ++i) {
+    const Code c = Code(int32_t(k[i]) - lo);
+    std::memcpy(bytes + i * sizeof(Code), &c, sizeof(Code));
+  }
 }
 
 }  // namespace
@@ -253,37 +306,41 @@ void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<
 }
 
 void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
-  if (bytes < kIntegerCodedHeaderBytes + 1) throw badPayload(where, "shorter than its header");
-  double step;
-  int64_t base;
-  std::memcpy(&step, data, 8);
-  std::memcpy(&base, data + 9, 8);
-  if (!(base > -(int64_t(1) << 52) && base < (int64_t(1) << 52)))
-    throw badPayload(where, "has an invalid base");
+  const IntegerWords w = decodeWords(data, bytes, n, where);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  size_t got = 0;
-  const uint8_t* varints =
-      unpackFrame(data + kIntegerCodedHeaderBytes, bytes - kIntegerCodedHeaderBytes, count * 5,
-                  5 * 64 + 8, where, got);
-  Word* r = threadScratch<Word>(ScratchSlot::Words, count);
-  readVarints(varints, got, count, r, where);
-  Word* k = r;
-  if (Predictor(data[8]) == Predictor::IntegerLorenzo) {
-    lorenzoSums(n, k);
-  } else {
-    k = threadScratch<Word>(ScratchSlot::MoreWords, count);
-    size_t pos = 0;
-    interpolationRuns(n, k, [&](int64_t first, int64_t stride, int run, const Word* pred) {
-      Word* at = k + first;
-      const Word* res = r + pos;
-      if (stride == 1)
-        for (int j = 0; j < run; ++j) at[j] = pred[j] + res[j];
-      else
-        for (int j = 0; j < run; ++j) at[j * stride] = pred[j] + res[j];
-      pos += size_t(run);
-    });
+  cpuHasAvx2() ? convertAvx2(w.k, count, w.base, w.step, out)
+               : convertBaseline(w.k, count, w.base, w.step, out);
+  checkFinite(out, count, w.base, w.step, where);
+}
+
+CompactForm decodeIntegerCompact(const uint8_t* data, size_t bytes, Int3 n, double maxShare,
+                                 std::vector<float>& out, const char* where) {
+  const IntegerWords w = decodeWords(data, bytes, n, where);
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  int32_t lo = kLimit, hi = -kLimit;
+  for (size_t i = 0; i < count; ++i) {
+    lo = std::min(lo, int32_t(w.k[i]));
+    hi = std::max(hi, int32_t(w.k[i]));
   }
-  toFloats(k, count, base, step, out, where);
+  const uint64_t span = count ? uint64_t(int64_t(hi) - lo) + 1 : 1;
+  CompactForm form;
+  form.width = span <= 256 ? 1 : span <= 65536 ? 2 : 0;
+  const uint64_t floats = span + (uint64_t(count) * uint64_t(form.width) + 3) / 4;
+  if (form.width == 0 || double(floats) > maxShare * double(count)) {
+    out.resize(count);
+    decodeInteger(data, bytes, n, out.data(), where);  // decodes again: rare (wide codes)
+    return CompactForm{};
+  }
+  form.table = uint32_t(span);
+  out.assign(floats, 0.f);
+  for (uint64_t j = 0; j < span; ++j) out[j] = integerValue(w.base, lo + int32_t(j), w.step);
+  checkFinite(out.data(), span, w.base, w.step, where);
+  unsigned char* codes = reinterpret_cast<unsigned char*>(out.data() + span);
+  if (form.width == 1)
+    writeCodes<uint8_t>(w.k, count, lo, codes);
+  else
+    writeCodes<uint16_t>(w.k, count, lo, codes);
+  return form;
 }
 
 }  // namespace afam::codec

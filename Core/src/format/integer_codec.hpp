@@ -37,4 +37,9 @@ void packInteger(Predictor p, double step, int64_t base, const std::vector<int32
 /// Decodes an integer-form payload (data[8] names an integer predictor) into out.
 void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);
 
+/// Decodes an integer-form payload into its compact form (block_codec.hpp's CompactForm) when
+/// that takes at most maxShare of the floats' bytes, else into floats (width 0).
+CompactForm decodeIntegerCompact(const uint8_t* data, size_t bytes, Int3 n, double maxShare,
+                                 std::vector<float>& out, const char* where);
+
 }  // namespace afam::codec

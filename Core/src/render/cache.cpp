@@ -83,6 +83,11 @@ Payload LruCache::residentModelBefore(const AfamFile& f, int64_t entry) {
   return it == map_.end() ? nullptr : it->second.data;
 }
 
+void LruCache::setCompactForm(bool on) {
+  std::lock_guard<std::mutex> g(mutex_);
+  compactForm_ = on;
+}
+
 void LruCache::setStoredForm(StoredForm form) {
   std::lock_guard<std::mutex> g(mutex_);
   storedForm_ = form;
@@ -91,20 +96,25 @@ void LruCache::setStoredForm(StoredForm form) {
 Payload LruCache::load(const AfamFile& f, int64_t entry) {
   const ModelEntry& e = f.entries().at(size_t(entry));
   StoredForm form;
+  bool compactForm;
   {
     std::lock_guard<std::mutex> g(mutex_);
     form = storedForm_;
+    compactForm = compactForm_;
   }
   const bool stored = form && e.kind != BlockKind::Empty && !e.residual && form(e);
-  auto data = std::make_shared<CachedModel>(stored ? 0 : e.size / sizeof(float));
+  const bool compact = compactForm && !stored && !e.residual;
+  auto data = std::make_shared<CachedModel>(stored || compact ? 0 : e.size / sizeof(float));
   if (e.kind == BlockKind::Empty) return data;  // no valid sample: no payload, nothing to read
   const auto t0 = Clock::now();
   // A residual whose model at the step before is resident costs one payload, not its chain.
-  Payload before = stored ? nullptr : residentModelBefore(f, entry);
-  if (before && before->isStored()) before = nullptr;  // no floats to add to
+  Payload before = stored || compact ? nullptr : residentModelBefore(f, entry);
+  if (before && !before->hasFloats()) before = nullptr;  // no floats to add to
   try {
     if (stored)
       data->stored = f.readStored(entry);
+    else if (compact)
+      data->compact = f.readCompact(entry, kCompactShare, *data);
     else
       f.readPayloadOnto(entry, before ? before->data() : nullptr, data->data());
   } catch (const FormatError& ex) {

@@ -101,6 +101,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
   loader_ = std::make_unique<BlockLoader>(*cache_, resources_.loadThreads);
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
+  cache_->setCompactForm(resources_.compactModels);
   prefetcher_ = std::make_unique<Prefetcher>();
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
   // table and ForeCache's visibility are computed for them): later edits change what is drawn,
@@ -298,6 +299,15 @@ FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset
   return s;
 }
 
+void setCompactForm(const CompactForm& form, FrameSlot& slot, uint64_t& key) {
+  if (form.width == 0) return;
+  slot.codeWidth = form.width;
+  slot.codeTable = form.table;
+  // A GPU pool keeps models by key: the compact and the float form of one model are two models
+  // there (model keys are file offsets, far below 2^62).
+  key |= uint64_t(form.width) << 62;
+}
+
 int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
   fr.slots.push_back(modelSlot(*file_, model, offset));
   fr.entries.push_back(model.entry);
@@ -349,6 +359,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
       const uint64_t floats = modelFloats(*file_, m);
       if (hostPool) writeModel(e, *m.data, fr.pool.data() + offset, floats);
       slot = addSlot(m.model, fr, offset);
+      setCompactForm(m.data->compact, fr.slots.back(), fr.keys.back());
       fr.models.push_back(m.data);
       fr.slotHost.push_back(m.data->isStored() ? nullptr : m.data->data());
       fr.slotEntries.push_back(&e);

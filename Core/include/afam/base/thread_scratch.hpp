@@ -21,6 +21,7 @@ enum class ScratchSlot {
   Stored,       ///< a payload's stored bytes
   ChainStored,  ///< a payload of a chain in time
   Residual,     ///< a chain's decoded residual
+  Samples,      ///< an interpolant's decoded samples
   Count
 };
 

@@ -25,6 +25,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "afam/format/compact_form.hpp"
 #include "afam/format/file_identity.hpp"
 #include "afam/format/partition.hpp"
 
@@ -224,6 +225,12 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   void readPayloadOnto(int64_t entry, const float* previous, void* out) const;
   /// Reads and returns the payload as floats.
   std::vector<float> readPayload(int64_t entry) const;
+  /// The entry's model as a cache keeps it: in its compact form (block_codec.hpp's CompactForm:
+  /// a table of values and a 1- or 2-byte code a control point) when it is one integer-coded
+  /// payload of a spline or samples model, unmasked, and that form takes at most maxShare of the
+  /// floats' bytes; else the floats readPayload gives (width 0). out is resized to what it holds.
+  /// Throws as readPayload does.
+  CompactForm readCompact(int64_t entry, double maxShare, std::vector<float>& out) const;
   /// The entry's payload as stored (entry.storedSize bytes), CRC verified, not decoded: for a
   /// decoder elsewhere (a GPU's). Throws as readPayload does; InvalidArgument for an entry that
   /// is not one payload (a residual's chain, an empty block).

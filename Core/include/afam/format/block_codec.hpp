@@ -49,6 +49,7 @@
 
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/entropy/lanes_coder.hpp"
+#include "afam/format/compact_form.hpp"
 #include "afam/format/partition.hpp"
 
 namespace afam {
@@ -127,5 +128,11 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
 /// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
 /// `where` in the message) when the bytes are not a valid coded payload of that size.
 void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);
+
+/// Decodes a coded payload as decodeValues does, into its compact form when it is integer-coded
+/// and that form takes at most maxShare of the floats' bytes; otherwise out holds the floats
+/// (width 0). out is resized to what it holds.
+CompactForm decodeValuesCompact(const uint8_t* data, size_t bytes, Int3 n, double maxShare,
+                                std::vector<float>& out, const char* where);
 
 }  // namespace afam

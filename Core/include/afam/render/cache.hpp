@@ -42,6 +42,12 @@
 // floats (CachedModel::stored holds it); PreparedFrame::hostPool decodes it when a frame is cast
 // on the CPU after all.
 //
+// Compact form: a decoded model whose values are integers times a step (an integer-coded
+// payload) is kept as a table of its distinct values and a 1- or 2-byte code a control point where
+// that is at most three quarters of its floats (CachedModel::compact, block_codec.hpp's
+// CompactForm): an 8- or 16-bit scan's samples in 8 or 16 bits, and the budget counts those bytes.
+// The casters read the codes through the table (FrameSlot::codeWidth): the same floats.
+//
 // Thread-safe: the frame thread and one prefetch thread use it concurrently; reads happen outside
 // the lock, and a block being loaded by one thread is waited for, not read twice.
 #pragma once
@@ -112,6 +118,11 @@ class LruCache {
   /// Entries `form` accepts are loaded in the stored form from now on (null: every load decodes).
   /// Resident models keep the form they were loaded in.
   void setStoredForm(StoredForm form);
+  /// Whether decoded models are kept in their compact form where it takes at most kCompactShare
+  /// of their floats' bytes (AfamFile::readCompact; on by default): the same values, in a table
+  /// and a 1- or 2-byte code a control point. Resident models keep the form they were loaded in.
+  void setCompactForm(bool on);
+  static constexpr double kCompactShare = 0.75;
 
   void setPinned(const std::vector<int64_t>& entries);
   void clearPinned();
@@ -166,6 +177,7 @@ class LruCache {
   std::mutex deviceMutex_;
   std::chrono::steady_clock::time_point deviceFree_{};
   StoredForm storedForm_ = nullptr;
+  bool compactForm_ = true;
 };
 
 }  // namespace afam

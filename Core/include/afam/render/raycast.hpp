@@ -134,12 +134,18 @@ struct FrameSlot {
   /// Masked slots: floats from `offset` to the first mask word (the control points before them),
   /// so the mask moves with the model when a GPU pool places it elsewhere.
   uint32_t maskOffset = 0;
+  /// A spline model kept as codes (CachedModel's compact form): codeWidth bytes a control point
+  /// (1 or 2; 0: float32 points), its table of codeTable floats first, the codes right after
+  /// them (packed, the last float padded).
+  int32_t codeWidth = 0;
+  uint32_t codeTable = 0;
 };
 
 /// Floats of a slot's model in the pool: control points (or raw samples) and mask words.
 AFAM_HD uint64_t slotFloatCount(const FrameSlot& s) {
   if (s.kind == kSlotEmpty) return 0;
-  const uint64_t control = uint64_t(s.knots[0].ncp) * s.knots[1].ncp * s.knots[2].ncp;
+  uint64_t control = uint64_t(s.knots[0].ncp) * s.knots[1].ncp * s.knots[2].ncp;
+  if (s.codeWidth > 0) control = s.codeTable + (control * uint64_t(s.codeWidth) + 3) / 4;
   if (s.maskSamples[0] <= 0) return control;
   return control +
          uint64_t(maskWordCount(int64_t(s.maskSamples[0]) * s.maskSamples[1] * s.maskSamples[2]));
@@ -284,6 +290,10 @@ AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* data, const floa
   m.knots[1] = s.knots[1];
   m.knots[2] = s.knots[2];
   m.control = data;
+  if (s.codeWidth > 0) {
+    m.codes = data + s.codeTable;
+    m.codeWidth = s.codeWidth;
+  }
   const float u = (x[0] - s.lo[0]) * s.invExtent[0];
   const float v = (x[1] - s.lo[1]) * s.invExtent[1];
   const float w = (x[2] - s.lo[2]) * s.invExtent[2];

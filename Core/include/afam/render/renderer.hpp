@@ -53,6 +53,9 @@ struct RendererResources {
   bool cold = false;              ///< drop the file from the OS page cache before each frame
   double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none
   std::string prefetch = "none";  ///< none | linear | appa | forecache | lstm
+  /// Integer-coded models cached in their compact form (cache.hpp; false: float32 control
+  /// points, for comparison). The same images either way.
+  bool compactModels = true;
 };
 
 /// Both at once, for front ends that set everything in one place (the command line, benchmarks).
@@ -127,6 +130,9 @@ struct PreparedFrame {
 /// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
 /// coordinates), its floats at `offset` of the pool.
 FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset);
+/// A slot of a model cached in the compact form `form` (width 0: floats, nothing changes): its
+/// code width and table, and its pool key told apart from the float form's.
+void setCompactForm(const CompactForm& form, FrameSlot& slot, uint64_t& key);
 
 class Renderer {
  public:

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The cache keeps integer-coded models in their compact form by default (cache.hpp): a frame drawn
+// from them is the frame drawn from floats, bit for bit, and the cache holds fewer bytes.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "afam/encode/encoder.hpp"
+#include "afam/volume/enlarged_scan.hpp"
+#include "afam/render/renderer.hpp"
+#include "render_test_util.hpp"
+
+using namespace afam;
+
+namespace {
+
+/// The repository's head MRI made four times as large with scan noise (afam enlarge's generator) and
+/// encoded at 1e-2 of its range with the defaults: its blocks are integer-coded splines, as a real
+/// scan's mostly are.
+std::shared_ptr<const AfamFile> noisyScan() {
+  const std::string path = afam_test::tempPath("compact_frames_scan");
+  if (::access(path.c_str(), R_OK) != 0) {
+    std::ifstream in(std::string(AFAM_TEST_DATA_DIR) + "/volumes/HeadMRVolume_48x62x42_uint8.raw",
+                     std::ios::binary);
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(bytes.size(), size_t(48 * 62 * 42));
+    std::vector<float> v(bytes.size());
+    for (size_t i = 0; i < v.size(); ++i) v[i] = float(uint8_t(bytes[i]));
+    EnlargedScanSource src(std::move(v), {48, 62, 42}, {192, 248, 168}, 2.5, 1, 0, 255);
+    EncoderOptions o;
+    o.errorBound = 1e-2;
+    o.relativeBound = true;
+    o.threads = 2;
+    encodeVolume(src, o, path);
+  }
+  return AfamFile::open(path);
+}
+
+}  // namespace
+
+TEST(CompactFrames, TheCacheKeepsCodesAndTheFrameIsTheFloatsFrame) {
+  const auto file = noisyScan();
+  int64_t integer = 0;
+  for (const ModelEntry& e : file->entries()) integer += e.integerCoded;
+  ASSERT_GE(integer, 40);
+  RenderOptions o;
+  o.threads = 2;
+  o.loadThreads = 2;
+  o.lod.bandWidth = 100;  // every block finest
+  o.transferFunction = afam_test::ramp(0, 255, 80, 0.3);
+  const Camera cam = Camera::lookAt({1.2, 1.4, 1.0}, {0, 0, 0}, {0, 0, 1}, 50, 64, 64);
+  Renderer compact(file, o), floats(file, o);
+  floats.cache().setCompactForm(false);
+  FrameStats a, b;
+  const ImageRGBA got = compact.renderFrame(cam, a);
+  const ImageRGBA want = floats.renderFrame(cam, b);
+  ASSERT_EQ(got.rgba.size(), want.rgba.size());
+  EXPECT_EQ(0, std::memcmp(got.rgba.data(), want.rgba.data(), got.rgba.size() * sizeof(float)));
+  // The splines' control points take 1- or 2-byte codes: the cache holds under half the bytes.
+  EXPECT_EQ(compact.cache().residentBlocks(), floats.cache().residentBlocks());
+  EXPECT_LT(2 * compact.cache().residentBytes(), floats.cache().residentBytes())
+      << compact.cache().residentBytes() << " vs " << floats.cache().residentBytes();
+}

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <random>
 #include <thread>
 
@@ -66,13 +68,31 @@ TEST(Cache, BudgetsAreNeverExceeded) {
 TEST(Cache, TheByteBudgetCountsDecodingScratch) {
   auto file = smallFile();  // uncoded models: loading them takes no scratch
   ASSERT_EQ(file->entries()[0].storedSize, 500u);
-  releaseThreadScratch();
   ASSERT_EQ(threadScratchBytes(), 0u);
   LruCache cache(file, CacheBudget{2000, 0});
-  threadScratch<uint8_t>(ScratchSlot::Words, 1400);  // decoding scratch held by this thread
+  std::mutex m;
+  std::condition_variable cv;
+  bool holding = false, done = false;
+  std::thread decoder([&] {  // a thread holding 1408 B of decoding scratch until told
+    threadScratch<uint8_t>(ScratchSlot::Words, 1400);
+    std::unique_lock<std::mutex> lock(m);
+    holding = true;
+    cv.notify_all();
+    cv.wait(lock, [&] { return done; });
+  });
+  {
+    std::unique_lock<std::mutex> lock(m);
+    cv.wait(lock, [&] { return holding; });
+  }
   for (int64_t e = 0; e < 6; ++e) cache.get(e);
-  EXPECT_EQ(cache.residentBlocks(), 1u);  // 2000 - 1400 leaves room for one 500 B model
-  releaseThreadScratch();
+  EXPECT_EQ(cache.residentBlocks(), 1u);  // 2000 - 1408 leaves room for one 500 B model
+  {
+    std::lock_guard<std::mutex> lock(m);
+    done = true;
+  }
+  cv.notify_all();
+  decoder.join();  // its scratch is freed with it
+  EXPECT_EQ(threadScratchBytes(), 0u);
   for (int64_t e = 0; e < 6; ++e) cache.get(e);
   EXPECT_EQ(cache.residentBlocks(), 4u);
   EXPECT_EQ(cache.residentBytes(), 2000u);

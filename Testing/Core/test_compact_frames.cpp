@@ -12,17 +12,17 @@
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
-#include "afam/volume/enlarged_scan.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/volume/enlarged_scan.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;
 
 namespace {
 
-/// The repository's head MRI made four times as large with scan noise (afam enlarge's generator) and
-/// encoded at 1e-2 of its range with the defaults: its blocks are integer-coded splines, as a real
-/// scan's mostly are.
+/// The repository's head MRI made four times as large with scan noise (afam enlarge's generator)
+/// and encoded at 1e-2 of its range with the defaults: its blocks are integer-coded splines, as a
+/// real scan's mostly are.
 std::shared_ptr<const AfamFile> noisyScan() {
   const std::string path = afam_test::tempPath("compact_frames_scan");
   if (::access(path.c_str(), R_OK) != 0) {

@@ -30,7 +30,7 @@ void* allocate(size_t bytes) {
     if (p == MAP_FAILED) throw std::bad_alloc();
     return p;
   }
-  void* p = std::aligned_alloc(64, (bytes + 63) / 64 * 64);
+  void* p = std::aligned_alloc(64, bytes);  // a multiple of 64 (threadScratch rounds)
   if (!p) throw std::bad_alloc();
   return p;
 }
@@ -46,15 +46,16 @@ void deallocate(void* p, size_t bytes) {
 struct Slots {
   void* data[size_t(ScratchSlot::Count)] = {};
   size_t bytes[size_t(ScratchSlot::Count)] = {};
-  void release() {
+  void release(size_t keepBelow) {
     for (size_t s = 0; s < size_t(ScratchSlot::Count); ++s) {
+      if (bytes[s] < keepBelow) continue;
       deallocate(data[s], bytes[s]);
       held.fetch_sub(bytes[s], std::memory_order_relaxed);
       data[s] = nullptr;
       bytes[s] = 0;
     }
   }
-  ~Slots() { release(); }
+  ~Slots() { release(0); }
 };
 
 Slots& mine() {
@@ -68,7 +69,8 @@ void* threadScratch(ScratchSlot slot, size_t bytes) {
   Slots& m = mine();
   const size_t s = size_t(slot);
   if (m.bytes[s] < bytes || !m.data[s]) {
-    const size_t size = bytes >= kMapAtLeast ? pageRounded(bytes) : std::max<size_t>(bytes, 64);
+    const size_t size =
+        bytes >= kMapAtLeast ? pageRounded(bytes) : (std::max<size_t>(bytes, 1) + 63) / 64 * 64;
     void* p = allocate(size);
     deallocate(m.data[s], m.bytes[s]);
     held.fetch_add(size, std::memory_order_relaxed);
@@ -79,7 +81,7 @@ void* threadScratch(ScratchSlot slot, size_t bytes) {
   return m.data[s];
 }
 
-void releaseThreadScratch() { mine().release(); }
+void releaseThreadScratch() { mine().release(kMapAtLeast); }
 
 uint64_t threadScratchBytes() { return held.load(std::memory_order_relaxed); }
 

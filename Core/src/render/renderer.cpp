@@ -299,13 +299,9 @@ FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset
   return s;
 }
 
-void setCompactForm(const CompactForm& form, FrameSlot& slot, uint64_t& key) {
-  if (form.width == 0) return;
+void setCompactForm(const CompactForm& form, FrameSlot& slot) {
   slot.codeWidth = form.width;
-  slot.codeTable = form.table;
-  // A GPU pool keeps models by key: the compact and the float form of one model are two models
-  // there (model keys are file offsets, far below 2^62).
-  key |= uint64_t(form.width) << 62;
+  slot.codeTable = form.width ? form.table : 0;
 }
 
 int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {
@@ -359,7 +355,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
       const uint64_t floats = modelFloats(*file_, m);
       if (hostPool) writeModel(e, *m.data, fr.pool.data() + offset, floats);
       slot = addSlot(m.model, fr, offset);
-      setCompactForm(m.data->compact, fr.slots.back(), fr.keys.back());
+      setCompactForm(m.data->compact, fr.slots.back());
       fr.models.push_back(m.data);
       fr.slotHost.push_back(m.data->isStored() ? nullptr : m.data->data());
       fr.slotEntries.push_back(&e);

@@ -34,8 +34,9 @@ T* threadScratch(ScratchSlot slot, size_t count) {
   return static_cast<T*>(threadScratch(slot, count * sizeof(T)));
 }
 
-/// Frees every slot of the calling thread (large ones go straight back to the system). A thread's
-/// slots are also freed when it ends.
+/// Frees the calling thread's large slots (64 KiB or more: mapped on their own, they go straight
+/// back to the system); smaller ones stay, counted, so that a thread decoding small blocks frame
+/// after frame does not map them again each time. A thread's slots are all freed when it ends.
 void releaseThreadScratch();
 
 /// Bytes held in scratch by every thread together.

@@ -17,4 +17,14 @@ struct CompactForm {
   uint32_t table = 0;
 };
 
+/// The `count` values of a model in compact form `f` (its floats at `data`) as float32, into out.
+inline void expandCompact(const float* data, CompactForm f, uint64_t count, float* out) {
+  const auto* codes = reinterpret_cast<const unsigned char*>(data + f.table);
+  for (uint64_t i = 0; i < count; ++i) {
+    uint32_t code = codes[i * uint64_t(f.width)];
+    if (f.width == 2) code |= uint32_t(codes[i * 2 + 1]) << 8;  // little-endian, as written
+    out[i] = data[code];
+  }
+}
+
 }  // namespace afam

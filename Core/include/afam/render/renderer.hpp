@@ -130,9 +130,9 @@ struct PreparedFrame {
 /// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
 /// coordinates), its floats at `offset` of the pool.
 FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset);
-/// A slot of a model cached in the compact form `form` (width 0: floats, nothing changes): its
-/// code width and table, and its pool key told apart from the float form's.
-void setCompactForm(const CompactForm& form, FrameSlot& slot, uint64_t& key);
+/// A slot of a model cached in the compact form `form` (width 0: floats): its code width and
+/// table.
+void setCompactForm(const CompactForm& form, FrameSlot& slot);
 
 class Renderer {
  public:

@@ -151,6 +151,11 @@ AFAM_HD_FORCEINLINE float evaluateModelWith(const ModelView& m, const Points& po
 template <bool WithGradient>
 AFAM_HD float evaluateModel(const ModelView& m, float u, float v, float w, float* gradient) {
   using detail::evaluateModelWith;
+#if defined(__CUDA_ARCH__)
+  // A GPU pool holds float32 points (the caster expands a compact model as it uploads it): one
+  // evaluation in the kernels, whose registers the code readers would cost (8% a frame, H100).
+  return evaluateModelWith<WithGradient>(m, detail::FloatPoints{m.control}, u, v, w, gradient);
+#endif
   if (m.codeWidth == 1)
     return evaluateModelWith<WithGradient>(
         m, detail::CodedPoints<uint8_t>{m.control, static_cast<const unsigned char*>(m.codes)}, u,

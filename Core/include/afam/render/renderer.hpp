@@ -76,6 +76,8 @@ struct FrameStats {
   /// needs it, which then fails with the same error.
   std::vector<std::string> loadErrors;
   int64_t slots = 0;  ///< models in the FrameView
+  /// Bytes of the frame's models (copied into a frame pool only for a caster that reads one;
+  /// the CPU's reads the cached models, a GPU's its own pool).
   uint64_t poolBytes = 0;
   /// The cache's resident bytes at the end of the frame, and the most it held during the frame
   /// (frame and prefetch loads); both stay within the cache's byte budget.

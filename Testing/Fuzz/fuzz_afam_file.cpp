@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Fuzz target: the .afam reader. AfamFile::open (header, index), then readPayload of every entry
-// and the decoding of each payload, then one level decoded as a whole; for a run of steps, the
-// same again at its last step.
+// and the decoding of each payload (and its compact form, which must expand to the same floats),
+// then one level decoded as a whole; for a run of steps, the same again at its last step.
 // Input: one control byte (which checksums to recompute after mutation, afam_checksums.hpp),
 // then the file's bytes. Any exception of the afam error types is a clean refusal; anything else
 // (a crash, a sanitizer report, another exception type) is a finding.
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "afam/base/errors.hpp"
@@ -40,8 +41,16 @@ bool atMost(const Sizes& n, int64_t limit) {
 void decodeEntry(const afam::AfamFile& file, int64_t i, std::vector<float>& samples) {
   const afam::ModelEntry& e = file.entries()[static_cast<size_t>(i)];
   const std::vector<float> payload = file.readPayload(i);
-  if (!atMost(e.samples, kMaxDecodedSamples)) return;
+  if (!atMost(e.samples, kMaxDecodedSamples) || !atMost(e.ncp, kMaxDecodedSamples)) return;
   afam::decodeBlockSamples(e, payload.data(), file.header().mode, samples);
+  // The compact form a cache keeps must read back as the same floats.
+  std::vector<float> compact;
+  const afam::CompactForm f = file.readCompact(i, 0.75, compact);
+  if (f.width == 0) return;
+  std::vector<float> expanded(payload.size());
+  afam::expandCompact(compact.data(), f, expanded.size(), expanded.data());
+  if (std::memcmp(expanded.data(), payload.data(), payload.size() * sizeof(float)) != 0)
+    __builtin_trap();
 }
 
 void decodeCoarsestLevel(const afam::AfamFile& file) {

@@ -55,8 +55,9 @@ TEST(CompactFrames, TheCacheKeepsCodesAndTheFrameIsTheFloatsFrame) {
   o.lod.bandWidth = 100;  // every block finest
   o.transferFunction = afam_test::ramp(0, 255, 80, 0.3);
   const Camera cam = Camera::lookAt({1.2, 1.4, 1.0}, {0, 0, 0}, {0, 0, 1}, 50, 64, 64);
-  Renderer compact(file, o), floats(file, o);
-  floats.cache().setCompactForm(false);
+  RenderOptions asFloats = o;
+  asFloats.compactModels = false;
+  Renderer compact(file, o), floats(file, asFloats);
   FrameStats a, b;
   const ImageRGBA got = compact.renderFrame(cam, a);
   const ImageRGBA want = floats.renderFrame(cam, b);
@@ -66,4 +67,26 @@ TEST(CompactFrames, TheCacheKeepsCodesAndTheFrameIsTheFloatsFrame) {
   EXPECT_EQ(compact.cache().residentBlocks(), floats.cache().residentBlocks());
   EXPECT_LT(2 * compact.cache().residentBytes(), floats.cache().residentBytes())
       << compact.cache().residentBytes() << " vs " << floats.cache().residentBytes();
+}
+
+TEST(CompactFrames, ACasterThatReadsFloatsOnlyGetsFloats) {
+  // A GPU caster's kernels read float32 points: the cache keeps such a caster's models as floats
+  // rather than have them expanded every frame.
+  class FloatsOnly : public CpuCaster {
+   public:
+    FloatsOnly() : CpuCaster(2) {}
+    bool readsCompactForm() const override { return false; }
+  };
+  const auto file = noisyScan();
+  RenderOptions o;
+  o.threads = 2;
+  o.lod.bandWidth = 100;
+  const Camera cam = Camera::lookAt({1.2, 1.4, 1.0}, {0, 0, 0}, {0, 0, 1}, 50, 32, 32);
+  Renderer compact(file, o), floats(file, o);
+  floats.setCaster(std::make_unique<FloatsOnly>());
+  FrameStats a, b;
+  compact.renderFrame(cam, a);
+  floats.renderFrame(cam, b);
+  EXPECT_EQ(compact.cache().residentBlocks(), floats.cache().residentBlocks());
+  EXPECT_LT(2 * compact.cache().residentBytes(), floats.cache().residentBytes());
 }

@@ -62,8 +62,9 @@ TEST(StoredForm, DecodedWhereCastOnTheCpuAndTheSameImage) {
   int64_t lanes = 0;
   for (const ModelEntry& e : file->entries()) lanes += e.lanesCoded;
   ASSERT_GT(lanes, 8);
-  Renderer plain(file, options());
-  plain.cache().setCompactForm(false);  // the float32 models, which the stored bytes are against
+  RenderOptions asFloats = options();
+  asFloats.compactModels = false;  // the float32 models, which the stored bytes are against
+  Renderer plain(file, asFloats);
   FrameStats a, b;
   const ImageRGBA want = plain.renderFrame(camera(), a);
   Renderer held(file, options());

@@ -305,12 +305,18 @@ void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<
   });
 }
 
-void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
-  const IntegerWords w = decodeWords(data, bytes, n, where);
-  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+namespace {
+/// out = (base + k) * step for the `count` integers of w, each a finite float.
+void toFloats(const IntegerWords& w, size_t count, float* out, const char* where) {
   cpuHasAvx2() ? convertAvx2(w.k, count, w.base, w.step, out)
                : convertBaseline(w.k, count, w.base, w.step, out);
   checkFinite(out, count, w.base, w.step, where);
+}
+}  // namespace
+
+void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where) {
+  toFloats(decodeWords(data, bytes, n, where), size_t(n[0]) * size_t(n[1]) * size_t(n[2]), out,
+           where);
 }
 
 CompactForm decodeIntegerCompact(const uint8_t* data, size_t bytes, Int3 n, double maxShare,
@@ -328,7 +334,7 @@ CompactForm decodeIntegerCompact(const uint8_t* data, size_t bytes, Int3 n, doub
   const uint64_t floats = span + (uint64_t(count) * uint64_t(form.width) + 3) / 4;
   if (form.width == 0 || double(floats) > maxShare * double(count)) {
     out.resize(count);
-    decodeInteger(data, bytes, n, out.data(), where);  // decodes again: rare (wide codes)
+    toFloats(w, count, out.data(), where);
     return CompactForm{};
   }
   form.table = uint32_t(span);

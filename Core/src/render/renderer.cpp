@@ -101,7 +101,6 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
   cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
   loader_ = std::make_unique<BlockLoader>(*cache_, resources_.loadThreads);
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
-  cache_->setCompactForm(resources_.compactModels);
   prefetcher_ = std::make_unique<Prefetcher>();
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
   // table and ForeCache's visibility are computed for them): later edits change what is drawn,
@@ -417,6 +416,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
   const CacheStats before = cache_->stats();
   PreparedFrame fr;
   cache_->setStoredForm(caster_->storedForm());  // null again once a GPU caster has failed
+  cache_->setCompactForm(resources_.compactModels && caster_->readsCompactForm());
   prepare(camera, fr, st, caster_->readsHostPool());
   history_.push_back(camera);
   if (history_.size() > kPredictorHistory) history_.erase(history_.begin());

@@ -89,6 +89,10 @@ class FrameCaster {
   /// Entries whose models the caster decodes itself from their stored payloads (a GPU's decoder):
   /// the cache keeps those in the stored form (cache.hpp). Null: the cache decodes every model.
   virtual StoredForm storedForm() const { return nullptr; }
+  /// Whether the caster reads models in the compact form (FrameSlot::codeWidth) as they are; a
+  /// caster that does not (a GPU's) leaves the cache keeping float32 models, which it takes
+  /// without converting them every frame.
+  virtual bool readsCompactForm() const { return true; }
 };
 
 /// The CPU ray caster (renderCpu) on `threads` threads (0: all cores); ignores device targets.

@@ -41,6 +41,9 @@ class GpuCaster : public FrameCaster {
   std::string description() const override { return description_; }
   /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident.
   bool readsHostPool() const override { return false; }
+  /// The kernels read float32 points (a compact model left from a CPU caster is expanded as it is
+  /// uploaded).
+  bool readsCompactForm() const override { return false; }
   /// The models the GPU decodes (gpuDecodesEntry), while it works: the cache keeps them as their
   /// stored payloads, and a miss costs the copy of its compressed bytes and a decoding kernel.
   StoredForm storedForm() const override;

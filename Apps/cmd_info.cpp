@@ -81,7 +81,7 @@ int runInfo(int argc, char** argv) {
     uint64_t bytes = 0, paperL = 0;
     double maxRmse = 0, maxErr = 0;
     int64_t complexCount = 0, kinds[5] = {0, 0, 0, 0, 0}, coded = 0, integer = 0, masked = 0,
-            lanes = 0;
+            lanes = 0, rounded = 0;
     double codedBits = 0, codedValues = 0;
     const int64_t s = f->levelStart(l), e = s + part.blockCount(l);
     for (int64_t i = s; i < e; ++i) {
@@ -91,6 +91,7 @@ int runInfo(int argc, char** argv) {
       bytes += m.storedSize;
       ++kinds[int(m.kind)];
       masked += m.masked;
+      rounded += m.roundedPoints;
       if (m.coded) {
         ++coded;
         integer += m.integerCoded;
@@ -113,10 +114,10 @@ int runInfo(int argc, char** argv) {
     for (const auto& kv : hist) std::printf(" %d:%lld", kv.first, (long long)kv.second);
     std::printf(
         "\n         kinds: spline=%lld samples=%lld constant=%lld interpolant=%lld coded=%lld "
-        "integer_form=%lld lanes_frames=%lld bits_per_coded_value=%.3f",
+        "integer_form=%lld lanes_frames=%lld bits_per_coded_value=%.3f rounded_points=%lld",
         (long long)kinds[0], (long long)kinds[1], (long long)kinds[2], (long long)kinds[3],
         (long long)coded, (long long)integer, (long long)lanes,
-        codedValues > 0 ? codedBits / codedValues : 0.0);
+        codedValues > 0 ? codedBits / codedValues : 0.0, (long long)rounded);
     if (h.missing != MissingKind::None)
       std::printf(" empty=%lld masked=%lld", (long long)kinds[4], (long long)masked);
     std::printf("\n");

@@ -2,15 +2,20 @@
 // Helpers of the renderer tests: small Marschner-Lobb encodings written to temporary files.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
+#include "afam/render/renderer.hpp"
 #include "afam/scene/transfer_function.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 #include "scratch_dir.hpp"
@@ -81,6 +86,49 @@ inline afam::TransferFunction ramp(double lo, double hi, double from, double red
   tf.opacities = {{lo, 0.0}, {from, 0.0}, {hi, 0.8}};
   tf.referenceDistance = 0.02;
   return tf;
+}
+
+/// The repository's head MRI (48 x 62 x 42 uint8) as floats, x fastest.
+inline std::vector<float> headMri() {
+  std::ifstream in(std::string(AFAM_TEST_DATA_DIR) + "/volumes/HeadMRVolume_48x62x42_uint8.raw",
+                   std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(bytes.size(), size_t(48 * 62 * 42));
+  std::vector<float> v(bytes.size());
+  for (size_t i = 0; i < v.size(); ++i) v[i] = float(uint8_t(bytes[i]));
+  return v;
+}
+
+/// What two renderers of one file hold after drawing the same frame, one whose cache keeps models
+/// in their compact form and one whose cache keeps floats.
+struct CompactAndFloats {
+  uint64_t compactBytes = 0, floatBytes = 0;
+  size_t compactBlocks = 0, floatBlocks = 0;
+};
+
+/// Draws one frame of `file` (every block at the finest level, ramp(0, 255, from, 0.3), size^2
+/// pixels) with a compact cache and with a float cache, records a failure unless the two images
+/// are equal bit for bit, and tells what each cache holds.
+inline CompactAndFloats drawCompactAndFloats(const std::shared_ptr<const afam::AfamFile>& file,
+                                             double from, int size) {
+  afam::RenderOptions o;
+  o.threads = 2;
+  o.loadThreads = 2;
+  o.lod.bandWidth = 100;  // every block finest
+  o.transferFunction = ramp(0, 255, from, 0.3);
+  const afam::Camera cam =
+      afam::Camera::lookAt({1.2, 1.4, 1.0}, {0, 0, 0}, {0, 0, 1}, 50, size, size);
+  afam::RenderOptions asFloats = o;
+  asFloats.compactModels = false;
+  afam::Renderer compact(file, o), floats(file, asFloats);
+  afam::FrameStats a, b;
+  const afam::ImageRGBA got = compact.renderFrame(cam, a);
+  const afam::ImageRGBA want = floats.renderFrame(cam, b);
+  EXPECT_EQ(got.rgba.size(), want.rgba.size());
+  if (got.rgba.size() == want.rgba.size())
+    EXPECT_EQ(0, std::memcmp(got.rgba.data(), want.rgba.data(), got.rgba.size() * sizeof(float)));
+  return {compact.cache().residentBytes(), floats.cache().residentBytes(),
+          compact.cache().residentBlocks(), floats.cache().residentBlocks()};
 }
 
 }  // namespace afam_test

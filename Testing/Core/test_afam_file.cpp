@@ -16,6 +16,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/format/afam_file.hpp"
+#include "file_bytes.hpp"
 #include "scratch_dir.hpp"
 
 using namespace afam;
@@ -327,16 +328,6 @@ void patchHeader(std::vector<char>& b, size_t off, const void* v, size_t n) {
   const uint32_t crc = crc32(b.data(), 1020);
   std::memcpy(&b[1020], &crc, 4);
 }
-// Rewrites index fields and both checksums.
-void patchIndex(std::vector<char>& b, size_t entry, size_t field, const void* v, size_t n) {
-  uint64_t count;
-  std::memcpy(&count, &b[144], 8);
-  std::memcpy(&b[1024 + entry * 40 + field], v, n);
-  const uint32_t icrc = crc32(&b[1024], size_t(count) * 40);
-  std::memcpy(&b[140], &icrc, 4);
-  const uint32_t crc = crc32(b.data(), 1020);
-  std::memcpy(&b[1020], &crc, 4);
-}
 }  // namespace
 
 TEST_F(CorruptFile, AbsurdCountsAndSizes) {
@@ -374,27 +365,30 @@ TEST_F(CorruptFile, AbsurdCountsAndSizes) {
 
 TEST_F(CorruptFile, OffsetsPastTheEnd) {
   const uint64_t past = uint64_t(size_) + 64;
-  const std::string w =
-      expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &past, 8); });
+  const std::string w = expectFormatError(
+      path_, [&](std::vector<char>& b) { afam_test::patchIndex(b, 3, 0, &past, 8); });
   EXPECT_NE(w.find("outside"), std::string::npos) << w;
   const uint64_t wrap = ~uint64_t(0) - 63;
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 3, 0, &wrap, 8); });
+  expectFormatError(path_, [&](std::vector<char>& b) { afam_test::patchIndex(b, 3, 0, &wrap, 8); });
   uint64_t payloadOffset;
   std::memcpy(&payloadOffset, &readAll(path_)[160], 8);
   const uint64_t misaligned = payloadOffset + 2;
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 0, 0, &misaligned, 8); });
+  expectFormatError(path_,
+                    [&](std::vector<char>& b) { afam_test::patchIndex(b, 0, 0, &misaligned, 8); });
   const uint64_t before = payloadOffset - 64;  // inside the index
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 0, 0, &before, 8); });
+  expectFormatError(path_,
+                    [&](std::vector<char>& b) { afam_test::patchIndex(b, 0, 0, &before, 8); });
   const uint16_t hugeNcp[3] = {65535, 65535, 65535};
-  const std::string n =
-      expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, hugeNcp, 6); });
+  const std::string n = expectFormatError(
+      path_, [&](std::vector<char>& b) { afam_test::patchIndex(b, 2, 8, hugeNcp, 6); });
   EXPECT_NE(n.find("NCP 65535"), std::string::npos) << n;
   const uint16_t zeroNcp[3] = {0, 1, 1};
-  expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 8, zeroNcp, 6); });
+  expectFormatError(path_,
+                    [&](std::vector<char>& b) { afam_test::patchIndex(b, 2, 8, zeroNcp, 6); });
   for (const uint16_t flags :
        {uint16_t(0x200), uint16_t(3), uint16_t(0x102)}) {  // unknown bit, kind, coded constant
-    const std::string f =
-        expectFormatError(path_, [&](std::vector<char>& b) { patchIndex(b, 2, 14, &flags, 2); });
+    const std::string f = expectFormatError(
+        path_, [&](std::vector<char>& b) { afam_test::patchIndex(b, 2, 14, &flags, 2); });
     EXPECT_NE(f.find("index entry 2"), std::string::npos) << f;
   }
   const uint32_t alignment = 3;

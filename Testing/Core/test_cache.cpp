@@ -68,6 +68,7 @@ TEST(Cache, BudgetsAreNeverExceeded) {
 TEST(Cache, TheByteBudgetCountsDecodingScratch) {
   auto file = smallFile();  // uncoded models: loading them takes no scratch
   ASSERT_EQ(file->entries()[0].storedSize, 500u);
+  releaseAllThreadScratch();  // what tests before this one left on this thread
   ASSERT_EQ(threadScratchBytes(), 0u);
   LruCache cache(file, CacheBudget{2000, 0});
   std::mutex m;

@@ -26,12 +26,7 @@ namespace {
 std::shared_ptr<const AfamFile> noisyScan() {
   const std::string path = afam_test::tempPath("compact_frames_scan");
   if (::access(path.c_str(), R_OK) != 0) {
-    std::ifstream in(std::string(AFAM_TEST_DATA_DIR) + "/volumes/HeadMRVolume_48x62x42_uint8.raw",
-                     std::ios::binary);
-    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(bytes.size(), size_t(48 * 62 * 42));
-    std::vector<float> v(bytes.size());
-    for (size_t i = 0; i < v.size(); ++i) v[i] = float(uint8_t(bytes[i]));
+    std::vector<float> v = afam_test::headMri();
     EnlargedScanSource src(std::move(v), {48, 62, 42}, {192, 248, 168}, 2.5, 1, 0, 255);
     EncoderOptions o;
     o.errorBound = 1e-2;
@@ -49,24 +44,10 @@ TEST(CompactFrames, TheCacheKeepsCodesAndTheFrameIsTheFloatsFrame) {
   int64_t integer = 0;
   for (const ModelEntry& e : file->entries()) integer += e.integerCoded;
   ASSERT_GE(integer, 40);
-  RenderOptions o;
-  o.threads = 2;
-  o.loadThreads = 2;
-  o.lod.bandWidth = 100;  // every block finest
-  o.transferFunction = afam_test::ramp(0, 255, 80, 0.3);
-  const Camera cam = Camera::lookAt({1.2, 1.4, 1.0}, {0, 0, 0}, {0, 0, 1}, 50, 64, 64);
-  RenderOptions asFloats = o;
-  asFloats.compactModels = false;
-  Renderer compact(file, o), floats(file, asFloats);
-  FrameStats a, b;
-  const ImageRGBA got = compact.renderFrame(cam, a);
-  const ImageRGBA want = floats.renderFrame(cam, b);
-  ASSERT_EQ(got.rgba.size(), want.rgba.size());
-  EXPECT_EQ(0, std::memcmp(got.rgba.data(), want.rgba.data(), got.rgba.size() * sizeof(float)));
+  const afam_test::CompactAndFloats c = afam_test::drawCompactAndFloats(file, 80, 64);
   // The splines' control points take 1- or 2-byte codes: the cache holds under half the bytes.
-  EXPECT_EQ(compact.cache().residentBlocks(), floats.cache().residentBlocks());
-  EXPECT_LT(2 * compact.cache().residentBytes(), floats.cache().residentBytes())
-      << compact.cache().residentBytes() << " vs " << floats.cache().residentBytes();
+  EXPECT_EQ(c.compactBlocks, c.floatBlocks);
+  EXPECT_LT(2 * c.compactBytes, c.floatBytes) << c.compactBytes << " vs " << c.floatBytes;
 }
 
 TEST(CompactFrames, ACasterThatReadsFloatsOnlyGetsFloats) {

@@ -9,7 +9,7 @@
 using namespace afam;
 
 TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
-  releaseThreadScratch();
+  releaseAllThreadScratch();  // what tests before this one left on this thread
   const uint64_t before = threadScratchBytes();
   ASSERT_EQ(before, 0u);  // no other thread holds any
   auto* small = threadScratch<uint8_t>(ScratchSlot::Frame, 1000);
@@ -34,4 +34,6 @@ TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
   releaseThreadScratch();  // the large slot goes, the small one stays
   EXPECT_EQ(threadScratchBytes() - before, 1024u);
   EXPECT_EQ(threadScratch<uint8_t>(ScratchSlot::Frame, 10), small);
+  releaseAllThreadScratch();  // the small one too
+  EXPECT_EQ(threadScratchBytes(), before);
 }

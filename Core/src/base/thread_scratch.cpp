@@ -83,6 +83,8 @@ void* threadScratch(ScratchSlot slot, size_t bytes) {
 
 void releaseThreadScratch() { mine().release(kMapAtLeast); }
 
+void releaseAllThreadScratch() { mine().release(0); }
+
 uint64_t threadScratchBytes() { return held.load(std::memory_order_relaxed); }
 
 }  // namespace afam

@@ -9,6 +9,7 @@
 
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_mask.hpp"
+#include "afam/format/rounded_points.hpp"
 #include "hole_fill.hpp"
 
 namespace afam {
@@ -114,6 +115,7 @@ struct Candidate {
   Int3 ncp{}, degree{};
   ErrorStats error;
   std::vector<uint8_t> bytes;
+  bool roundedPoints = false;  ///< an interpolant whose bytes end with its points' shift
 };
 
 bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint32_t* valid,
@@ -217,6 +219,35 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
+/// Shifts j tried for an interpolant's rounded points (q = its samples' step / 2^j), from the
+/// largest step: an RMSE bound leaves most interpolants room for j of 1 or 2.
+constexpr int kPointShifts[] = {0, 1, 2, 3, 4};
+
+/// Rounds a coded interpolant's points (rounded_points.hpp) with the largest step q its shifts
+/// give whose rounded model still meets the bound on the block's samples and whose codes span at
+/// most 65,536 steps (a cache then keeps it in 1 or 2 bytes a point): j appended to the payload,
+/// the error of the rounded model kept. The candidate as it is when no shift does.
+void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, BoundKind kind,
+                            BlockFitter& fitter, const FitResult& model, Candidate& c) {
+  double step = 0;
+  std::memcpy(&step, c.bytes.data(), sizeof step);  // the coded samples' step, as a reader reads it
+  FitResult rounded = model;
+  std::vector<int64_t> k(model.control.size());
+  for (const int j : kPointShifts) {
+    const double q = std::ldexp(step, -j);
+    rounded.control = model.control;
+    if (!roundPoints(rounded.control.data(), rounded.control.size(), q, k.data())) return;
+    const auto [lo, hi] = std::minmax_element(k.begin(), k.end());
+    if (*hi - *lo >= 65536) return;  // a smaller step spans more
+    const ErrorStats e = fitter.error(s.data(), n, rounded);
+    if (!keeps(kind, e, bound)) continue;
+    c.bytes.push_back(uint8_t(j));
+    c.error = e;
+    c.roundedPoints = true;
+    return;
+  }
+}
+
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
 /// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
 /// measured on the samples.
@@ -260,6 +291,7 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   c.error = fitter.error(s.data(), n, model);
   if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
+  if (!valid) roundInterpolantPoints(s, n, bound, kind, fitter, model, c);
   out = std::move(c);
   return true;
 }
@@ -301,6 +333,7 @@ void storeCandidate(Candidate& c, BlockTask& t) {
   m.coded = c.kind != BlockKind::Constant;
   m.integerCoded = m.coded && payloadIsIntegerCoded(c.bytes.data(), c.bytes.size());
   m.lanesCoded = m.coded && payloadIsLanesCoded(c.bytes.data(), c.bytes.size());
+  m.roundedPoints = c.roundedPoints;
   m.ncp = c.ncp;
   m.degree = c.degree;
   setError(t, c.error);
@@ -390,6 +423,7 @@ void referPrevious(const ModelEntry& previous, const ErrorStats& moved, BlockTas
   m.coded = previous.coded;
   m.integerCoded = previous.integerCoded;
   m.lanesCoded = previous.lanesCoded;
+  m.roundedPoints = previous.roundedPoints;
   m.ncp = previous.ncp;
   m.degree = previous.degree;
   m.reference = true;

@@ -26,6 +26,7 @@ FitResult applyResidual(const ModelEntry& before, const FitResult& model,
   probe.coded = true;
   probe.integerCoded = payloadIsIntegerCoded(bytes.data(), bytes.size());
   probe.lanesCoded = payloadIsLanesCoded(bytes.data(), bytes.size());
+  probe.roundedPoints = false;  // a residual's points are never rounded
   probe.storedSize = bytes.size();
   probe.size = payloadBytes(before.ncp);
   std::vector<float> residual(model.control.size());
@@ -108,6 +109,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   m.lanesCoded = payloadIsLanesCoded(bytes.data(), bytes.size());
   m.ncp = before.ncp;
   m.degree = before.degree;
+  m.roundedPoints = false;
   m.reference = false;
   m.residual = true;
   setError(t, es);

@@ -17,6 +17,7 @@
 #include "afam/base/thread_scratch.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_mask.hpp"
+#include "afam/format/rounded_points.hpp"
 #include "afam/format/temporary_file.hpp"
 #include "afam/spline/fit.hpp"
 #include "file_layout.hpp"
@@ -111,6 +112,8 @@ std::string modelProblem(const ModelEntry& m, EncodingMode mode, int headerDegre
     return "an empty block has no payload and no mask";
   if (m.kind == BlockKind::Constant && m.coded) return "a constant block is never coded";
   if (m.kind == BlockKind::Interpolant && !m.coded) return "an interpolant block is always coded";
+  if (m.roundedPoints && m.kind != BlockKind::Interpolant)
+    return std::string("rounded points flagged on a ") + blockKindName(m.kind);
   for (int a = 0; a < 3; ++a) {
     const AxisRule r = axisRule(m.kind, mode, headerDegree, e.samples[a]);
     if (m.ncp[a] < r.ncpLo || m.ncp[a] > r.ncpHi || m.degree[a] != r.degree || m.ncp[a] > 65535)
@@ -133,7 +136,8 @@ uint64_t uncodedBytes(const ModelEntry& m) {
 /// either (at least 8 bytes: its length and a zstd frame).
 std::string storedSizeProblem(const ModelEntry& m) {
   const uint64_t mask = m.masked ? 8 : 0;
-  const uint64_t codedMin = (m.integerCoded ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + 1;
+  const uint64_t codedMin = (m.integerCoded ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + 1 +
+                            (m.roundedPoints ? kRoundedPointsBytes : 0);
   const bool ok = m.coded ? m.storedSize >= codedMin + mask
                           : (m.masked ? m.storedSize >= uncodedBytes(m) + mask
                                       : m.storedSize == uncodedBytes(m));
@@ -158,13 +162,14 @@ void parseEntry(const IndexEntryV1& r, uint32_t version, const VolumeHeader& vh,
                 uint16_t extraFlags) {
   const auto bad = [&](const std::string& what) { return FormatError(where + ": " + what); };
   if (version == 1 && (r.flags != 0 || r.storedBytes != 0)) throw bad("unknown entry flags");
-  if ((r.flags & ~uint16_t(0x3ff | kLanesFlag | extraFlags)) != 0)
+  if ((r.flags & ~uint16_t(0x3ff | kLanesFlag | kRoundedPointsFlag | extraFlags)) != 0)
     throw bad("unknown entry flags " + std::to_string(r.flags));
   m.kind = static_cast<BlockKind>(r.flags & 0xff);
   m.coded = (r.flags & 0x100) != 0;
   m.integerCoded = (r.flags & 0x200) != 0;
   m.lanesCoded = (r.flags & kLanesFlag) != 0;
   m.masked = (r.flags & kMaskedFlag) != 0;
+  m.roundedPoints = (r.flags & kRoundedPointsFlag) != 0;
   if (m.integerCoded && !m.coded) throw bad("integer form flagged on an uncoded payload");
   if (m.lanesCoded && !m.coded) throw bad("lanes frame flagged on an uncoded payload");
   m.samples = e.samples;
@@ -299,7 +304,8 @@ IndexEntryV1 rawEntry(const ModelEntry& m, uint16_t extraFlags) {
   r.checksum = m.checksum;
   r.flags = static_cast<uint16_t>(static_cast<uint16_t>(m.kind) | (m.coded ? 0x100 : 0) |
                                   (m.integerCoded ? 0x200 : 0) | (m.lanesCoded ? kLanesFlag : 0) |
-                                  (m.masked ? kMaskedFlag : 0) | extraFlags);
+                                  (m.masked ? kMaskedFlag : 0) |
+                                  (m.roundedPoints ? kRoundedPointsFlag : 0) | extraFlags);
   r.storedBytes = static_cast<uint32_t>(m.storedSize);
   if (m.kind == BlockKind::Empty) r.offset = r.checksum = r.storedBytes = 0;
   return r;
@@ -449,6 +455,29 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 }
 }  // namespace
 
+/// An interpolant's model into out: its coded samples decoded and the spline of the header's
+/// degree fitted through them, its points rounded when the entry says so (their codes into
+/// `codes` when it is not null).
+void decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
+                       const std::string& where) {
+  thread_local BlockFitter fitter;
+  thread_local FitResult fit;
+  const size_t count = size_t(controlCount(e));
+  const size_t coded = e.storedSize - (e.roundedPoints ? kRoundedPointsBytes : 0);
+  float* samples = threadScratch<float>(ScratchSlot::Samples, count);
+  decodeValues(stored, coded, e.ncp, samples, where.c_str());
+  try {
+    fitter.fitInto(samples, e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}),
+                   false, fit);
+  } catch (const Error& ex) {
+    throw FormatError(where + ": interpolant does not decode: " + ex.what());
+  }
+  std::memcpy(out, fit.control.data(), count * sizeof(float));
+  if (e.roundedPoints &&
+      !roundPoints(out, count, roundedPointStep(stored, e.storedSize, where.c_str()), codes))
+    throw FormatError(where + ": interpolant's points do not round to its point step");
+}
+
 void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
                          const std::string& where) {
   if (e.kind == BlockKind::Empty) return;
@@ -472,17 +501,7 @@ void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
     std::memcpy(&c, stored, 4);
     std::fill(out, out + count, c);
   } else if (e.kind == BlockKind::Interpolant) {
-    thread_local BlockFitter fitter;
-    thread_local FitResult fit;
-    float* samples = threadScratch<float>(ScratchSlot::Samples, count);
-    decodeValues(stored, e.storedSize, e.ncp, samples, where.c_str());
-    try {
-      fitter.fitInto(samples, e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}),
-                     false, fit);
-    } catch (const Error& ex) {
-      throw FormatError(where + ": interpolant does not decode: " + ex.what());
-    }
-    std::memcpy(out, fit.control.data(), count * sizeof(float));
+    decodeInterpolant(e, stored, out, nullptr, where);
   } else if (e.coded) {
     decodeValues(stored, e.storedSize, e.ncp, out, where.c_str());
   } else {
@@ -702,6 +721,8 @@ void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) 
 
 CompactForm AfamFile::readCompact(int64_t entry, double maxShare, std::vector<float>& out) const {
   const ModelEntry& e = entryAt(entry);
+  const bool rounded = e.roundedPoints && !e.masked && !e.residual;
+  if (rounded) return readRoundedCompact(e, maxShare, out);
   if (!e.coded || !e.integerCoded || e.masked || e.residual ||
       (e.kind != BlockKind::Spline && e.kind != BlockKind::Samples) ||
       header_.mode == EncodingMode::Downsampled) {
@@ -716,6 +737,26 @@ CompactForm AfamFile::readCompact(int64_t entry, double maxShare, std::vector<fl
     readChecked(e, stored, e.storedSize);
     checkPayloadFlags(e, stored, where);
     form = decodeValuesCompact(stored, e.storedSize, e.ncp, maxShare, out, where.c_str());
+  });
+  return form;
+}
+
+CompactForm AfamFile::readRoundedCompact(const ModelEntry& e, double maxShare,
+                                         std::vector<float>& out) const {
+  const std::string where = path_ + ": " + Partition::blockName(e.level, e.block);
+  const size_t count = size_t(controlCount(e));
+  CompactForm form;
+  readUnlessChanged([&] {
+    uint8_t* stored = threadScratch<uint8_t>(ScratchSlot::Stored, e.storedSize);
+    readChecked(e, stored, e.storedSize);
+    checkPayloadFlags(e, stored, where);
+    int64_t* codes = threadScratch<int64_t>(ScratchSlot::PointCodes, count);
+    out.resize(count);
+    decodeInterpolant(e, stored, out.data(), codes, where);
+    const double q = roundedPointStep(stored, e.storedSize, where.c_str());
+    // Width 0 leaves out as it is: the floats decodeInterpolant gave.
+    form = packCompact(
+        codes, count, maxShare, [q](int64_t k) { return pointValue(k, q); }, out);
   });
   return form;
 }

@@ -26,6 +26,7 @@ constexpr uint32_t kPayloadAlign = 4;  // payload offsets (float32 arrays, uploa
 constexpr int kMaxLevels = 16;
 constexpr uint16_t kLanesFlag = 1u << 13;  // entry flags bit 13: the coded payload's frame is lanes
 constexpr uint16_t kMaskedFlag = 1u << 12;  // v3 entry flags bit 12: the payload starts with a mask
+constexpr uint16_t kRoundedPointsFlag = 1u << 14;  // bit 14: an interpolant's points are rounded
 
 // On-disk header of versions 1, 2 and 3 (one layout; docs/FORMAT.md): 1024 bytes, little-endian;
 // each member's byte offset and size beside it (@offset, size), checked by the static_asserts

@@ -256,15 +256,6 @@ IntegerWords decodeWords(const uint8_t* data, size_t bytes, Int3 n, const char* 
   return IntegerWords{k, base, step};
 }
 
-/// Writes k - lo as Code into bytes (the codes of a compact model).
-template <typename Code>
-void writeCodes(const Word* k, size_t count, int32_t lo, unsigned char* bytes) {
-  for (size_t i = 0; i < count; ++i) {
-    const Code c = Code(int32_t(k[i]) - lo);
-    std::memcpy(bytes + i * sizeof(Code), &c, sizeof(Code));
-  }
-}
-
 }  // namespace
 
 bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
@@ -323,29 +314,16 @@ CompactForm decodeIntegerCompact(const uint8_t* data, size_t bytes, Int3 n, doub
                                  std::vector<float>& out, const char* where) {
   const IntegerWords w = decodeWords(data, bytes, n, where);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  int32_t lo = kLimit, hi = -kLimit;
-  for (size_t i = 0; i < count; ++i) {
-    lo = std::min(lo, int32_t(w.k[i]));
-    hi = std::max(hi, int32_t(w.k[i]));
-  }
-  const uint64_t span = count ? uint64_t(int64_t(hi) - lo) + 1 : 1;
-  CompactForm form;
-  form.width = span <= 256 ? 1 : span <= 65536 ? 2 : 0;
-  const uint64_t floats = span + (uint64_t(count) * uint64_t(form.width) + 3) / 4;
-  if (form.width == 0 || double(floats) > maxShare * double(count)) {
+  const auto* k = reinterpret_cast<const int32_t*>(w.k);  // the words are two's complement
+  const CompactForm form = packCompact(
+      k, count, maxShare, [&w](int64_t v) { return integerValue(w.base, int32_t(v), w.step); },
+      out);
+  if (form.width == 0) {
     out.resize(count);
     toFloats(w, count, out.data(), where);
-    return CompactForm{};
+    return form;
   }
-  form.table = uint32_t(span);
-  out.assign(floats, 0.f);
-  for (uint64_t j = 0; j < span; ++j) out[j] = integerValue(w.base, lo + int32_t(j), w.step);
-  checkFinite(out.data(), span, w.base, w.step, where);
-  unsigned char* codes = reinterpret_cast<unsigned char*>(out.data() + span);
-  if (form.width == 1)
-    writeCodes<uint8_t>(w.k, count, lo, codes);
-  else
-    writeCodes<uint16_t>(w.k, count, lo, codes);
+  checkFinite(out.data(), form.table, w.base, w.step, where);
   return form;
 }
 

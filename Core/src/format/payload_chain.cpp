@@ -49,6 +49,7 @@ void decodeChain(int fd, const std::string& path, const ModelEntry& e,
     part.coded = p.coded;
     part.integerCoded = p.integerCoded;
     part.lanesCoded = p.lanesCoded;
+    part.roundedPoints = p.roundedPoints;
     part.storedSize = p.storedSize;
     const std::string where =
         path + ": " + Partition::blockName(e.level, e.block) + " of step " + std::to_string(p.step);

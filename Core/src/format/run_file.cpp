@@ -90,6 +90,7 @@ PayloadPart payloadPart(const IndexEntryV1& r, const ModelEntry& parsed, const S
   p.coded = parsed.coded;
   p.integerCoded = parsed.integerCoded;
   p.lanesCoded = parsed.lanesCoded;
+  p.roundedPoints = parsed.roundedPoints;
   p.step = s;
   return p;
 }
@@ -136,6 +137,8 @@ void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileH
     }
     if (inTime == kResidualFlag && e.kind == BlockKind::Constant)
       throw FormatError(where + ": a residual on a constant at step " + std::to_string(s));
+    if (inTime == kResidualFlag && e.roundedPoints)
+      throw FormatError(where + ": a residual with rounded points at step " + std::to_string(s));
     if (kindKnown && (e.kind != parsed.kind || e.ncp != parsed.ncp))
       throw FormatError(where + ": step " + std::to_string(s) + "'s " + blockKindName(e.kind) +
                         " does not match the residual on it");
@@ -165,6 +168,7 @@ void resolveInTime(IndexOf& index, const std::vector<StepRow>& rows, const FileH
   m.coded = newest.coded;
   m.integerCoded = newest.integerCoded;
   m.lanesCoded = newest.lanesCoded;
+  m.roundedPoints = newest.roundedPoints;
   m.storedSize = newest.storedSize;
   m.offset = newest.offset;
   m.checksum = newest.checksum;
@@ -417,6 +421,8 @@ void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
   const size_t slot = checkModelToWrite(path_, header_, partition_, levelStart_, in);
   const std::string name = Partition::blockName(in.level, in.block);
   if (!in.coded) throw InvalidArgument(path_ + ": " + name + ": a residual must be coded");
+  if (in.roundedPoints)
+    throw InvalidArgument(path_ + ": " + name + ": a residual cannot have rounded points");
   std::lock_guard<std::mutex> lock(mutex_);
   if (inStep_ && (previous_.empty() || previousDepth_[slot] + 1 >= keyInterval_))
     throw InvalidArgument(path_ + ": " + name + " cannot be coded on the step before");

@@ -22,6 +22,7 @@ enum class ScratchSlot {
   ChainStored,  ///< a payload of a chain in time
   Residual,     ///< a chain's decoded residual
   Samples,      ///< an interpolant's decoded samples
+  PointCodes,   ///< a rounded interpolant's point codes
   Count
 };
 
@@ -36,8 +37,11 @@ T* threadScratch(ScratchSlot slot, size_t count) {
 
 /// Frees the calling thread's large slots (64 KiB or more: mapped on their own, they go straight
 /// back to the system); smaller ones stay, counted, so that a thread decoding small blocks frame
-/// after frame does not map them again each time. A thread's slots are all freed when it ends.
+/// after frame does not map them again each time. A thread's slots are all freed when it ends, or
+/// by releaseAllThreadScratch (a thread about to wait long, whose small slots should not count
+/// against a cache's budget meanwhile).
 void releaseThreadScratch();
+void releaseAllThreadScratch();
 
 /// Bytes held in scratch by every thread together.
 uint64_t threadScratchBytes();

@@ -100,8 +100,9 @@ struct PayloadPart {
   uint64_t offset = 0, storedSize = 0;
   uint32_t checksum = 0;
   bool coded = false, integerCoded = false;
-  int64_t step = 0;         ///< the step whose payloads hold it
-  bool lanesCoded = false;  ///< its frame is a lanes frame (entry flag bit 13)
+  int64_t step = 0;            ///< the step whose payloads hold it
+  bool lanesCoded = false;     ///< its frame is a lanes frame (entry flag bit 13)
+  bool roundedPoints = false;  ///< an interpolant with rounded points (entry flag bit 14)
 };
 
 struct ModelEntry {
@@ -118,6 +119,9 @@ struct ModelEntry {
   bool coded = false;         ///< quantized, predicted and zstd-coded (block_codec.hpp)
   bool integerCoded = false;  ///< coded with an integer form (index flag bit 9; set by the writer)
   bool lanesCoded = false;    ///< its frame is a lanes frame (index flag bit 13; set by the writer)
+  /// An interpolant whose fitted control points are rounded to a step (index flag bit 14): its
+  /// payload ends with the step's shift (rounded_points.hpp). Never a residual.
+  bool roundedPoints = false;
   uint64_t storedSize =
       0;  ///< bytes on disk (= size for uncoded splines and samples, 4 for constants)
   /// Version 3 (a run of steps): the model is the same block's model of an earlier step,
@@ -227,9 +231,9 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   std::vector<float> readPayload(int64_t entry) const;
   /// The entry's model as a cache keeps it: in its compact form (block_codec.hpp's CompactForm:
   /// a table of values and a 1- or 2-byte code a control point) when it is one integer-coded
-  /// payload of a spline or samples model, unmasked, and that form takes at most maxShare of the
-  /// floats' bytes; else the floats readPayload gives (width 0). out is resized to what it holds.
-  /// Throws as readPayload does.
+  /// payload of a spline or samples model or an interpolant with rounded points, unmasked, and
+  /// that form takes at most maxShare of the floats' bytes; else the floats readPayload gives
+  /// (width 0). out is resized to what it holds. Throws as readPayload does.
   CompactForm readCompact(int64_t entry, double maxShare, std::vector<float>& out) const;
   /// The entry's payload as stored (entry.storedSize bytes), CRC verified, not decoded: for a
   /// decoder elsewhere (a GPU's). Throws as readPayload does; InvalidArgument for an entry that
@@ -258,6 +262,9 @@ class AfamFile {  // read-only; opening reads only header and index (of one step
   const ModelEntry& entryAt(int64_t entry) const;  ///< InvalidArgument when out of range
   /// One pread of `bytes` stored bytes of e into out, CRC verified (FormatError naming the block).
   void readChecked(const ModelEntry& e, void* out, size_t bytes) const;
+  /// readCompact of an unmasked interpolant with rounded points (one payload).
+  CompactForm readRoundedCompact(const ModelEntry& e, double maxShare,
+                                 std::vector<float>& out) const;
   std::string path_;
   int fd_ = -1;
   uint32_t version_ = 0;

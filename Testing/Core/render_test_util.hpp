@@ -7,8 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -86,17 +84,6 @@ inline afam::TransferFunction ramp(double lo, double hi, double from, double red
   tf.opacities = {{lo, 0.0}, {from, 0.0}, {hi, 0.8}};
   tf.referenceDistance = 0.02;
   return tf;
-}
-
-/// The repository's head MRI (48 x 62 x 42 uint8) as floats, x fastest.
-inline std::vector<float> headMri() {
-  std::ifstream in(std::string(AFAM_TEST_DATA_DIR) + "/volumes/HeadMRVolume_48x62x42_uint8.raw",
-                   std::ios::binary);
-  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(bytes.size(), size_t(48 * 62 * 42));
-  std::vector<float> v(bytes.size());
-  for (size_t i = 0; i < v.size(); ++i) v[i] = float(uint8_t(bytes[i]));
-  return v;
 }
 
 /// What two renderers of one file hold after drawing the same frame, one whose cache keeps models

@@ -14,6 +14,7 @@
 #include "afam/encode/encoder.hpp"
 #include "afam/render/renderer.hpp"
 #include "afam/volume/enlarged_scan.hpp"
+#include "head_mri.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;

@@ -20,6 +20,7 @@
 #include "afam/spline/fit.hpp"
 #include "afam/volume/enlarged_scan.hpp"
 #include "file_bytes.hpp"
+#include "head_mri.hpp"
 #include "render_test_util.hpp"
 
 using namespace afam;
@@ -49,7 +50,8 @@ std::shared_ptr<const AfamFile> noisyHeadFile() {
 }
 
 /// The samples of block `e` of the finest level, x fastest.
-std::vector<float> blockSamples(const std::vector<float>& volume, Index3 dims, const BlockExtent& e) {
+std::vector<float> blockSamples(const std::vector<float>& volume, Index3 dims,
+                                const BlockExtent& e) {
   std::vector<float> s;
   for (int64_t z = e.lo[2]; z <= e.hi[2]; ++z)
     for (int64_t y = e.lo[1]; y <= e.hi[1]; ++y)
@@ -87,7 +89,8 @@ TEST(RoundedPoints, ANoisyScansInterpolantsAreRoundedWithinTheBound) {
     for (const float c : model.control)  // each point a multiple of q, as the reader keeps it
       ASSERT_TRUE(sameBits(c, pointValue(pointCode(c, q), q))) << c << " at step " << q;
     if (e.level != finest) continue;
-    const std::vector<float> s = blockSamples(volume, dims, file->partition().extent(e.level, e.block));
+    const std::vector<float> s =
+        blockSamples(volume, dims, file->partition().extent(e.level, e.block));
     const ErrorStats err = fitter.error(s.data(), e.samples, model);
     EXPECT_LE(err.rmse, bound) << Partition::blockName(e.level, e.block);
     EXPECT_NEAR(err.rmse, e.rmse, 1e-3 * bound);  // the index tells the rounded model's error

@@ -61,30 +61,18 @@ StoredForm GpuCaster::storedForm() const {
 
 namespace {
 
-/// What the GPU is given of a frame's models: stored payloads it decodes (stored[s].bytes set)
-/// and floats (host[s]); a model in the stored form that the GPU's decoder does not take is
-/// decoded here (NaN and reported in `damaged` where it does not decode), and a model in the
-/// compact form (left from a CPU caster) is expanded to its floats here (the kernels read float32
-/// points): `slots` is then the frame's with those slots as floats (empty: the frame's are).
+/// What the GPU is given of a frame's models: stored payloads it decodes (stored[s].bytes set),
+/// and floats or compact models (host[s]; the pool expands a compact one into its staging memory
+/// when it is not resident); a model in the stored form that the GPU's decoder does not take is
+/// decoded here (NaN and reported in `damaged` where it does not decode).
 struct FrameModels {
   std::vector<GpuStoredSlot> stored;
   std::vector<const float*> host;
   std::deque<std::vector<float>> decodedHere;  // stable addresses
-  std::vector<FrameSlot> slots;
 
   FrameModels(const PreparedFrame& frame, CastResult& result) : host(frame.slotHost) {
     for (size_t s = 0; s < frame.models.size(); ++s) {
       const CachedModel& m = *frame.models[s];
-      if (m.compact.width > 0) {
-        if (slots.empty()) slots = frame.slots;
-        FrameSlot& slot = slots[s];
-        slot.codeWidth = 0;
-        slot.codeTable = 0;
-        std::vector<float>& out = decodedHere.emplace_back(slotFloatCount(slot));
-        expandCompact(m.data(), m.compact, out.size(), out.data());
-        host[s] = out.data();  // the floats of the float form: its pool key too
-        continue;
-      }
       if (!m.isStored()) continue;
       const ModelEntry& e = *frame.slotEntries[s];
       if (stored.empty()) stored.resize(frame.models.size());
@@ -144,7 +132,6 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
       models.host.size() == size_t(frame.view.slotCount) ? models.host.data() : nullptr;
   const uint64_t* slotKeys =
       frame.keys.size() == size_t(frame.view.slotCount) ? frame.keys.data() : nullptr;
-  if (!models.slots.empty()) view.slots = models.slots.data();
   const bool onDevice = targets.deviceRgba && floats <= targets.deviceRgbaFloats;
   const DeviceDepth* depth = targets.deviceDepth.depth ? &targets.deviceDepth : nullptr;
   const uint64_t uploadsBefore = poolStats().uploads;

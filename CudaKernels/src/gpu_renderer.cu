@@ -276,13 +276,17 @@ struct GpuRenderer::Impl {
         continue;
       }
       const uint64_t key = keys ? keys[s] : defaultSlotKey(slot);
-      const size_t bytes = size_t(floats) * sizeof(float);
       const bool decode = stored && stored[s].bytes;
       const float* host = decode ? nullptr : slotHost ? slotHost[s] : v.pool + slot.offset;
+      const CompactForm form{slot.codeWidth, slot.codeTable};
+      slot.codeWidth = 0;  // the pool holds float32 points: the kernels read those only
+      slot.codeTable = 0;
+      const size_t bytes = size_t(slotFloats(slot)) * sizeof(float);
       const size_t byteOffset =
-          decode ? pool.acquireStored(key, stored[s].bytes, stored[s].storedBytes, bytes,
-                                      stored[s].job)
-                 : pool.acquire(key, host, bytes);
+          decode           ? pool.acquireStored(key, stored[s].bytes, stored[s].storedBytes, bytes,
+                                                stored[s].job)
+          : form.width > 0 ? pool.acquireCompact(key, host, form, bytes)
+                           : pool.acquire(key, host, bytes);
       slot.offset = byteOffset / sizeof(float);
       slots[s] = slot;
     }

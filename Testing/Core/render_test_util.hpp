@@ -49,16 +49,19 @@ inline std::shared_ptr<const afam::AfamFile> encodeMl(int n, afam::EncodingMode 
   return afam::AfamFile::open(path);
 }
 
-/// A smooth field with a scan's noise (0.5% of its range) in a 96^3 volume, two levels of 4^3
-/// finest blocks, bound 1e-2, with the given entropy stage: coded splines (in lanes frames under
-/// Lanes), the payloads a GPU decodes. Encoded once per process and stage.
-inline std::shared_ptr<const afam::AfamFile> encodeNoisyField(afam::EntropyStage stage) {
-  const std::string path = tempPath(std::string("noisy_field_") + afam::entropyStageName(stage));
+/// A smooth field with a scan's noise (`sigma`, 0.5% of its range by default) in a 96^3 volume,
+/// two levels of 4^3 finest blocks, bound 1e-2, with the given entropy stage: coded splines (in
+/// lanes frames under Lanes), the payloads a GPU decodes; with noise above the bound (3%), coded
+/// samples (interpolants). Encoded once per process, stage and sigma.
+inline std::shared_ptr<const afam::AfamFile> encodeNoisyField(afam::EntropyStage stage,
+                                                              double sigma = 0.005) {
+  const std::string path = tempPath(std::string("noisy_field_") + afam::entropyStageName(stage) +
+                                    "_" + std::to_string(sigma));
   if (::access(path.c_str(), R_OK) != 0) {
     const int n = 96;
     std::vector<float> v(size_t(n) * n * n);
     std::mt19937 rng(2);
-    std::normal_distribution<double> noise(0, 0.005);
+    std::normal_distribution<double> noise(0, sigma);
     size_t i = 0;
     for (int z = 0; z < n; ++z)
       for (int y = 0; y < n; ++y)

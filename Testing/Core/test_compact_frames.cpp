@@ -52,8 +52,7 @@ TEST(CompactFrames, TheCacheKeepsCodesAndTheFrameIsTheFloatsFrame) {
 }
 
 TEST(CompactFrames, ACasterThatReadsFloatsOnlyGetsFloats) {
-  // A GPU caster's kernels read float32 points: the cache keeps such a caster's models as floats
-  // rather than have them expanded every frame.
+  // A caster that cannot read the compact form gets float32 models from the cache.
   class FloatsOnly : public CpuCaster {
    public:
     FloatsOnly() : CpuCaster(2) {}

@@ -89,9 +89,9 @@ class FrameCaster {
   /// Entries whose models the caster decodes itself from their stored payloads (a GPU's decoder):
   /// the cache keeps those in the stored form (cache.hpp). Null: the cache decodes every model.
   virtual StoredForm storedForm() const { return nullptr; }
-  /// Whether the caster reads models in the compact form (FrameSlot::codeWidth) as they are; a
-  /// caster that does not (a GPU's) leaves the cache keeping float32 models, which it takes
-  /// without converting them every frame.
+  /// Whether the caster reads models in the compact form (FrameSlot::codeWidth); a caster that
+  /// does not leaves the cache keeping float32 models. The CPU caster reads the codes; the GPU
+  /// caster's pool expands a compact model once, when it uploads it.
   virtual bool readsCompactForm() const { return true; }
 };
 

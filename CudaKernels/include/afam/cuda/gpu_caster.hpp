@@ -39,11 +39,9 @@ class GpuCaster : public FrameCaster {
   void* deviceStream() const override { return stream(); }
   /// "NVIDIA H200 (sm_90, ...)".
   std::string description() const override { return description_; }
-  /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident.
+  /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident,
+  /// expanding a compact one to the float32 points the kernels read as it copies it.
   bool readsHostPool() const override { return false; }
-  /// The kernels read float32 points (a compact model left from a CPU caster is expanded as it is
-  /// uploaded).
-  bool readsCompactForm() const override { return false; }
   /// The models the GPU decodes (gpuDecodesEntry), while it works: the cache keeps them as their
   /// stored payloads, and a miss costs the copy of its compressed bytes and a decoding kernel.
   StoredForm storedForm() const override;

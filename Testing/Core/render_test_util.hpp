@@ -115,8 +115,9 @@ inline CompactAndFloats drawCompactAndFloats(const std::shared_ptr<const afam::A
   const afam::ImageRGBA got = compact.renderFrame(cam, a);
   const afam::ImageRGBA want = floats.renderFrame(cam, b);
   EXPECT_EQ(got.rgba.size(), want.rgba.size());
-  if (got.rgba.size() == want.rgba.size())
+  if (got.rgba.size() == want.rgba.size()) {
     EXPECT_EQ(0, std::memcmp(got.rgba.data(), want.rgba.data(), got.rgba.size() * sizeof(float)));
+  }
   return {compact.cache().residentBytes(), floats.cache().residentBytes(),
           compact.cache().residentBlocks(), floats.cache().residentBlocks()};
 }

@@ -52,8 +52,12 @@ TEST(GpuCompactModels, ThePoolExpandsCompactModelsOnceAndDrawsTheFloatsImage) {
     EXPECT_EQ(0, std::memcmp(got.rgba.data(), want.rgba.data(), got.rgba.size() * sizeof(float)))
         << "view " << v;
     EXPECT_EQ(a.cast.modelsUploaded, b.cast.modelsUploaded) << "view " << v;
-    if (v == 0) EXPECT_GT(a.cast.modelsUploaded, 32);
-    if (v == 1) EXPECT_EQ(a.cast.modelsUploaded, 0);  // the same view: every model resident
+    if (v == 0) {
+      EXPECT_GT(a.cast.modelsUploaded, 32);
+    }
+    if (v == 1) {
+      EXPECT_EQ(a.cast.modelsUploaded, 0);  // the same view: every model resident
+    }
     std::printf("[gpu-compact] view %d: slots=%lld uploaded=%lld cache %llu B (floats: %llu B)\n",
                 v, (long long)a.slots, (long long)a.cast.modelsUploaded,
                 (unsigned long long)a.cacheBytes, (unsigned long long)b.cacheBytes);

@@ -25,6 +25,7 @@ FRAMES="${FRAMES:-60}"
 CACHE_MB="${CACHE_MB:-256}"
 [[ -x $AFAM ]] || { echo "compact_models.sh: no afam executable at $AFAM" >&2; exit 1; }
 work="${WORK:-$(mktemp -d)}"
+mkdir -p "$work"
 [[ -n ${WORK:-} ]] || trap 'rm -rf "$work"' EXIT
 raw="$work/head_${DIMS//,/x}_uint8.raw"
 file="$work/head_${DIMS//,/x}.afam"

@@ -20,14 +20,32 @@ struct CompactForm {
   uint32_t table = 0;
 };
 
+namespace detail {
+template <typename Code>
+void expandCodes(const float* table, const unsigned char* bytes, uint64_t count, float* out) {
+  for (uint64_t i = 0; i < count; ++i) {
+    Code code;
+    std::memcpy(&code, bytes + i * sizeof(Code), sizeof(Code));  // little-endian, as written
+    out[i] = table[code];
+  }
+}
+
+template <typename Code, typename K>
+void writeCodes(const K* k, uint64_t count, int64_t first, unsigned char* bytes) {
+  for (uint64_t i = 0; i < count; ++i) {
+    const auto code = Code(int64_t(k[i]) - first);
+    std::memcpy(bytes + i * sizeof(Code), &code, sizeof(Code));
+  }
+}
+}  // namespace detail
+
 /// The `count` values of a model in compact form `f` (its floats at `data`) as float32, into out.
 inline void expandCompact(const float* data, CompactForm f, uint64_t count, float* out) {
   const auto* codes = reinterpret_cast<const unsigned char*>(data + f.table);
-  for (uint64_t i = 0; i < count; ++i) {
-    uint32_t code = codes[i * uint64_t(f.width)];
-    if (f.width == 2) code |= uint32_t(codes[i * 2 + 1]) << 8;  // little-endian, as written
-    out[i] = data[code];
-  }
+  if (f.width == 1)
+    detail::expandCodes<uint8_t>(data, codes, count, out);
+  else
+    detail::expandCodes<uint16_t>(data, codes, count, out);
 }
 
 /// The compact form of `count` values given by their integer codes k (value valueOf(k), the float
@@ -37,22 +55,26 @@ template <typename Code, typename ValueOf>
 CompactForm packCompact(const Code* k, uint64_t count, double maxShare, ValueOf valueOf,
                         std::vector<float>& out) {
   if (count == 0) return CompactForm{};
-  const auto [lo, hi] = std::minmax_element(k, k + count);
-  const uint64_t span = uint64_t(int64_t(*hi) - int64_t(*lo)) + 1;
+  Code lo = k[0], hi = k[0];
+  for (uint64_t i = 1; i < count; ++i) {  // values, not positions: this loop vectorizes
+    lo = std::min(lo, k[i]);
+    hi = std::max(hi, k[i]);
+  }
+  const uint64_t span = uint64_t(int64_t(hi) - int64_t(lo)) + 1;
   CompactForm form;
   form.width = span <= 256 ? 1 : span <= 65536 ? 2 : 0;
   const uint64_t floats = span + (count * uint64_t(form.width) + 3) / 4;
   if (form.width == 0 || double(floats) > maxShare * double(count)) return CompactForm{};
   form.table = uint32_t(span);
-  const int64_t first = int64_t(*lo);
-  out.assign(floats, 0.f);
+  const int64_t first = int64_t(lo);
+  out.resize(floats);
+  out.back() = 0.f;  // the last float's padding
   for (uint64_t j = 0; j < span; ++j) out[j] = valueOf(first + int64_t(j));
   auto* codes = reinterpret_cast<unsigned char*>(out.data() + span);
-  for (uint64_t i = 0; i < count; ++i) {
-    const auto c = uint16_t(int64_t(k[i]) - first);  // little-endian, as expandCompact reads
-    codes[i * uint64_t(form.width)] = uint8_t(c & 0xff);
-    if (form.width == 2) codes[i * 2 + 1] = uint8_t(c >> 8);
-  }
+  if (form.width == 1)
+    detail::writeCodes<uint8_t>(k, count, first, codes);
+  else
+    detail::writeCodes<uint16_t>(k, count, first, codes);
   return form;
 }
 

@@ -446,7 +446,30 @@ __global__ void __launch_bounds__(kThreads)
 }
 
 // ------------------------------------------------------------------------------------------------
-// Kernel C: a block per constant or uncoded job.
+// Kernel C: a block per constant, uncoded or compact job.
+
+/// A compact job's points: each code read through the table (compact_form.hpp's expandCompact,
+/// the same floats); a size that does not fit the form, or a code past the table, is its status.
+__device__ void expandCompactJob(const GpuDecodeJob& job, const uint8_t* stored, uint64_t count,
+                                 uint32_t* out, uint32_t& status) {
+  const uint64_t width = job.codeWidth;
+  const bool fits = (width == 1 || width == 2) && job.payloadOffset % 4 == 0 &&
+                    job.storedBytes == 4 * (uint64_t(job.codeTable) + (count * width + 3) / 4);
+  if (!fits) {
+    if (threadIdx.x == 0) status = code(Status::StoredSize);
+    return;
+  }
+  const uint32_t* table = reinterpret_cast<const uint32_t*>(stored);
+  const uint8_t* codes = stored + 4 * uint64_t(job.codeTable);
+  bool past = false;
+  for (uint64_t i = threadIdx.x; i < count; i += kThreads) {
+    uint32_t c = codes[i * width];
+    if (width == 2) c |= uint32_t(codes[i * 2 + 1]) << 8;  // little-endian, as written
+    past |= c >= job.codeTable;
+    out[i] = past ? 0u : table[c];
+  }
+  if (past) status = code(Status::Range);
+}
 
 __global__ void __launch_bounds__(kThreads)
     simpleKernel(const GpuDecodeJob* __restrict__ jobs, const uint32_t* __restrict__ simple,
@@ -464,6 +487,10 @@ __global__ void __launch_bounds__(kThreads)
     }
     const uint32_t c = lanes::readU32(stored);
     for (uint64_t i = threadIdx.x; i < count; i += kThreads) out[i] = c;
+    return;
+  }
+  if (job.kind == GpuDecodeKind::Compact) {
+    expandCompactJob(job, stored, count, out, status[index]);
     return;
   }
   if (job.kind != GpuDecodeKind::Floats || job.storedBytes != 4 * count) {
@@ -566,6 +593,25 @@ struct BatchLayout {
 uint64_t jobPoints(const GpuDecodeJob& j) {
   return uint64_t(uint32_t(j.ncp[0])) * uint32_t(j.ncp[1]) * uint32_t(j.ncp[2]);
 }
+
+}  // namespace
+
+GpuDecodeJob gpuCompactJob(CompactForm form, Int3 ncp, uint64_t payloadOffset,
+                           uint64_t outputOffset) {
+  GpuDecodeJob j;
+  j.kind = GpuDecodeKind::Compact;
+  j.ncp[0] = ncp[0];
+  j.ncp[1] = ncp[1];
+  j.ncp[2] = ncp[2];
+  j.codeWidth = uint8_t(form.width);
+  j.codeTable = form.table;
+  j.payloadOffset = payloadOffset;
+  j.outputOffset = outputOffset;
+  j.storedBytes = compactFormBytes(form, jobPoints(j));
+  return j;
+}
+
+namespace {
 
 BatchLayout layOut(const std::vector<GpuDecodeJob>& jobs, uint64_t sharedLimit) {
   BatchLayout b;

@@ -147,34 +147,25 @@ void GpuModelPool::beginFrame() {
   impl_->ledger.beginFrame();
 }
 
-/// Places model `key` of `bytes` bytes; when it is not resident, `fill` writes its bytes into the
-/// staging memory and their upload is queued, in whole 256-byte granules (the ledger allocates
-/// those), so that neighbouring uploads merge.
-template <typename Fill>
-size_t GpuModelPool::acquireFilled(uint64_t key, size_t bytes, Fill fill) {
-  Impl& m = *impl_;
-  const PoolLedger::Placement place = m.ledger.acquire(key, bytes);
+size_t GpuModelPool::acquire(uint64_t key, const void* host, size_t bytes) {
+  const PoolLedger::Placement place = impl_->ledger.acquire(key, bytes);
   if (place.uploadNeeded && bytes > 0) {
+    // Copy whole 256-byte granules (the ledger allocates those), so neighbouring uploads merge.
     const size_t padded = (bytes + 255) & ~size_t(255);
-    m.reserveStaging(padded);
-    unsigned char* dst = m.staging + m.stagingUsed;
-    fill(dst);
+    impl_->reserveStaging(padded);
+    unsigned char* dst = impl_->staging + impl_->stagingUsed;
+    std::memcpy(dst, host, bytes);
     std::memset(dst + bytes, 0, padded - bytes);
-    m.pending.push_back({m.stagingUsed, place.offset, padded, false});
-    m.stagingUsed += padded;
+    impl_->pending.push_back({impl_->stagingUsed, place.offset, padded, false});
+    impl_->stagingUsed += padded;
   }
   return place.offset;
 }
 
-size_t GpuModelPool::acquire(uint64_t key, const void* host, size_t bytes) {
-  return acquireFilled(key, bytes, [&](unsigned char* dst) { std::memcpy(dst, host, bytes); });
-}
-
-size_t GpuModelPool::acquireCompact(uint64_t key, const float* data, CompactForm form,
+size_t GpuModelPool::acquireCompact(uint64_t key, const float* data, CompactForm form, Int3 ncp,
                                     size_t bytes) {
-  return acquireFilled(key, bytes, [&](unsigned char* dst) {
-    expandCompact(data, form, bytes / sizeof(float), reinterpret_cast<float*>(dst));
-  });
+  const GpuDecodeJob job = gpuCompactJob(form, ncp, 0, 0);
+  return acquireStored(key, reinterpret_cast<const uint8_t*>(data), job.storedBytes, bytes, job);
 }
 
 size_t GpuModelPool::acquireStored(uint64_t key, const uint8_t* stored, size_t storedBytes,

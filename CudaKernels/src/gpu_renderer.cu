@@ -285,7 +285,9 @@ struct GpuRenderer::Impl {
       const size_t byteOffset =
           decode           ? pool.acquireStored(key, stored[s].bytes, stored[s].storedBytes, bytes,
                                                 stored[s].job)
-          : form.width > 0 ? pool.acquireCompact(key, host, form, bytes)
+          : form.width > 0 ? pool.acquireCompact(
+                                 key, host, form,
+                                 {slot.knots[0].ncp, slot.knots[1].ncp, slot.knots[2].ncp}, bytes)
                            : pool.acquire(key, host, bytes);
       slot.offset = byteOffset / sizeof(float);
       slots[s] = slot;

@@ -308,3 +308,62 @@ TEST(GpuBlockDecoder, DamagedPayloadsAreRefusedWhereTheCpuRefusesThem) {
 
 }  // namespace
 }  // namespace afam
+
+namespace afam {
+
+TEST(GpuBlockDecoder, ExpandsCompactModelsAsTheHostAndRefusesACodePastTheTable) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  // Two models in a cache's compact form, 1- and 2-byte codes, side by side in one payload
+  // buffer; then the second with a code past its table.
+  std::mt19937 rng(5);
+  const Int3 ncp{13, 11, 9};
+  const uint64_t count = 13 * 11 * 9;
+  std::vector<uint8_t> payloads;
+  std::vector<GpuDecodeJob> jobs;
+  std::vector<std::vector<float>> forms;
+  std::vector<CompactForm> shapes;
+  for (const int64_t span : {200, 3000}) {
+    std::vector<int32_t> k(count);
+    for (int32_t& v : k) v = int32_t(rng() % uint32_t(span)) - 7;
+    std::vector<float> form;
+    const CompactForm f = packCompact(
+        k.data(), count, 0.75, [](int64_t v) { return float(double(v) * 0.37); }, form);
+    ASSERT_EQ(f.width, span <= 256 ? 1 : 2);
+    jobs.push_back(gpuCompactJob(f, ncp, payloads.size(), count * jobs.size()));
+    EXPECT_EQ(jobs.back().storedBytes, form.size() * 4);
+    const auto* bytes = reinterpret_cast<const uint8_t*>(form.data());
+    payloads.insert(payloads.end(), bytes, bytes + form.size() * 4);
+    payloads.resize((payloads.size() + 255) & ~size_t(255));
+    forms.push_back(form);
+    shapes.push_back(f);
+  }
+  auto run = [&](std::vector<float>& out) {
+    DeviceBuffer device(payloads.size()), output(2 * count * 4);
+    device.upload(payloads.data(), payloads.size());
+    output.fill(0xff);
+    GpuBlockDecoder decoder;
+    const std::vector<uint32_t> status =
+        decoder.decode(jobs, device.data(), output.floats(), nullptr);
+    out.resize(2 * count);
+    output.download(out.data(), out.size() * 4);
+    return status;
+  };
+  std::vector<float> gpu;
+  std::vector<uint32_t> status = run(gpu);
+  for (size_t j = 0; j < 2; ++j) {
+    EXPECT_EQ(status[j], 0u) << gpuDecodeStatusText(status[j]);
+    std::vector<float> want(count);
+    expandCompact(forms[j].data(), shapes[j], count, want.data());
+    EXPECT_EQ(0, std::memcmp(want.data(), gpu.data() + j * count, count * 4)) << "job " << j;
+  }
+  // The second model's 100th code set past its table (2-byte codes, little-endian).
+  const uint64_t at = jobs[1].payloadOffset + 4 * uint64_t(shapes[1].table) + 2 * 100;
+  payloads[at] = 0xff;
+  payloads[at + 1] = 0xff;
+  status = run(gpu);
+  EXPECT_EQ(status[0], 0u);
+  EXPECT_EQ(status[1], uint32_t(GpuDecodeStatus::Range)) << gpuDecodeStatusText(status[1]);
+}
+
+}  // namespace afam

@@ -10,7 +10,8 @@
 // scratch (interleaved rANS, a lane per rANS state); a block per coded job parses the varints (a
 // block-wide scan of the bytes that end a value), sums the Lorenzo residuals along x, y and z (in
 // shared memory when the job fits, else in its output) and converts to float; a block per constant
-// or uncoded job fills or copies. Each job gets a status word (GpuDecodeStatus): a damaged payload
+// or uncoded job fills or copies, and one per model in a cache's compact form reads its codes
+// through its table. Each job gets a status word (GpuDecodeStatus): a damaged payload
 // is reported for its job, never read past its bytes, and leaves the other jobs' output as the CPU
 // decodes it. On an H100: 215 GB/s of decoded floats for a 602 x 740 x 632 scan's file, about 250
 // times one CPU core (bench_gpu_decode).
@@ -31,6 +32,7 @@ enum class GpuDecodeKind : uint8_t {
   Constant = 0,        ///< 4 bytes: one float32, repeated ncp product times
   Floats = 1,          ///< the float32 control points themselves (4 * ncp product bytes)
   IntegerLorenzo = 2,  ///< coded (block_codec.hpp): integer Lorenzo form, lanes frame
+  Compact = 3,  ///< a cached model's compact form (compact_form.hpp): its table, then its codes
 };
 
 /// One payload to decode (trivially copyable: the batch is uploaded as it is).
@@ -41,7 +43,20 @@ struct GpuDecodeJob {
   int32_t ncp[3] = {0, 0, 0};  ///< control points per axis (x fastest in the output)
   uint32_t frameSymbols = 0;  ///< IntegerLorenzo: the frame's V as the host read it (sizes scratch)
   GpuDecodeKind kind = GpuDecodeKind::Constant;
+  uint8_t codeWidth = 0;   ///< Compact: bytes a code (1 or 2)
+  uint32_t codeTable = 0;  ///< Compact: floats of the table before the codes
 };
+
+/// The job that expands a model kept in compact form `form` (`ncp` control points per axis, the
+/// form's floats at payloadOffset) into float32 points at outputOffset.
+GpuDecodeJob gpuCompactJob(CompactForm form, Int3 ncp, uint64_t payloadOffset,
+                           uint64_t outputOffset);
+
+/// Bytes of a model's compact form (`count` points): its table and its codes, the last float
+/// padded.
+inline uint64_t compactFormBytes(CompactForm form, uint64_t count) {
+  return 4 * (uint64_t(form.table) + (count * uint64_t(form.width) + 3) / 4);
+}
 
 /// A job's status word after decoding: 0 when it decoded, else what is wrong with its payload.
 enum class GpuDecodeStatus : uint32_t {

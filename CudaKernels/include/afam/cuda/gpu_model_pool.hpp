@@ -10,10 +10,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-
 #include <utility>
 #include <vector>
-#include "afam/format/compact_form.hpp"
 
 #include "afam/cuda/gpu_block_decoder.hpp"
 #include "afam/cuda/pool_ledger.hpp"
@@ -35,10 +33,11 @@ class GpuModelPool {
   /// are copied to pinned staging now and queued for upload. Throws GpuOutOfMemory when this
   /// frame's models do not fit in the budget (nothing is evicted that this frame uses).
   size_t acquire(uint64_t key, const void* host, size_t bytes);
-  /// As acquire(), for a model given in its compact form (`data`, compact_form.hpp's `form`) whose
-  /// float32 points take `bytes`: when it is not resident, its points are expanded straight into
-  /// the staging memory, so that a resident model costs nothing and a missing one no copy more.
-  size_t acquireCompact(uint64_t key, const float* data, CompactForm form, size_t bytes);
+  /// As acquire(), for a model given in its compact form (`data`, compact_form.hpp's `form`, `ncp`
+  /// control points per axis, whose float32 points take `bytes`): when it is not resident, its
+  /// table and codes are staged and uploaded (a quarter or half of its floats) and expanded into
+  /// its place on the GPU by flush(), as a stored payload is decoded.
+  size_t acquireCompact(uint64_t key, const float* data, CompactForm form, Int3 ncp, size_t bytes);
   /// As acquire(), for a model given as its stored payload (`stored`, `storedBytes` of them) that
   /// decodes to `bytes` bytes as `job` says (gpuDecodeJob: its kind and NCP; the pool sets its
   /// offsets): when it is not resident, its stored bytes are staged now, and uploaded and decoded
@@ -63,9 +62,6 @@ class GpuModelPool {
 
  private:
   struct Impl;
-  /// acquire()'s placing and staging, `fill` writing a missing model's bytes (gpu_model_pool.cpp).
-  template <typename Fill>
-  size_t acquireFilled(uint64_t key, size_t bytes, Fill fill);
   std::unique_ptr<Impl> impl_;
 };
 

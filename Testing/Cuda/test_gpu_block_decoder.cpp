@@ -317,8 +317,8 @@ TEST(GpuBlockDecoder, ExpandsCompactModelsAsTheHostAndRefusesACodePastTheTable) 
   // Two models in a cache's compact form, 1- and 2-byte codes, side by side in one payload
   // buffer; then the second with a code past its table.
   std::mt19937 rng(5);
-  const Int3 ncp{13, 11, 9};
-  const uint64_t count = 13 * 11 * 9;
+  const Int3 ncp{40, 40, 40};  // enough points for a 3000-value table to pay
+  const uint64_t count = 40 * 40 * 40;
   std::vector<uint8_t> payloads;
   std::vector<GpuDecodeJob> jobs;
   std::vector<std::vector<float>> forms;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "afam/base/errors.hpp"
+#include "afam/format/rounded_points.hpp"
 #include "codec_common.hpp"
 #include "integer_codec.hpp"
 
@@ -262,6 +263,34 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
     if (!std::isfinite(v)) throw codec::badPayload(where, "decodes to a value beyond float32");
     out[i] = v;
   }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Rounded interpolant points (rounded_points.hpp). This file is compiled with -ffp-contract=off:
+// the sum below must round the product first.
+
+namespace {
+/// x rounded to the nearest integer, ties to even, for |x| < 2^51: adding 1.5 * 2^52 leaves no
+/// fraction bits (the default rounding mode rounds there), subtracting it gives the integer back.
+inline double roundHalfEven(double x) {
+  constexpr double kShift = 6755399441055744.0;  // 1.5 * 2^52
+  return (x + kShift) - kShift;
+}
+}  // namespace
+
+int64_t pointCode(float c, double q) { return int64_t(roundHalfEven(double(c) * (1.0 / q))); }
+
+bool roundPoints(float* points, size_t count, double q, int64_t* k) {
+  const double inverse = 1.0 / q;
+  for (size_t i = 0; i < count; ++i) {
+    const double x = double(points[i]) * inverse;
+    if (!(std::fabs(x) < kMaxPointCode)) return false;
+    const double code = roundHalfEven(x);
+    points[i] = static_cast<float>(code * q);
+    if (!std::isfinite(points[i])) return false;
+    if (k) k[i] = int64_t(code);
+  }
+  return true;
 }
 
 }  // namespace afam

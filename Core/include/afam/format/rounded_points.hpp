@@ -2,8 +2,8 @@
 // Interpolants whose control points are rounded to a step (index flag bit 14, docs/FORMAT.md).
 // An interpolant stores its block's samples coded; its model is the spline fitted through them,
 // whose control points are arbitrary floats. A rounded interpolant's payload ends with one more
-// byte j, and every fitted point c becomes k q, k = llround(c / q), with q the coded samples' step
-// (the payload's first 8 bytes) divided by 2^j. A cache then keeps the model as a table of its
+// byte j, and every fitted point c becomes k q, k = c / q rounded (pointCode), q the coded samples'
+// step (the payload's first 8 bytes) divided by 2^j. A cache then keeps the model as a table of its
 // values and a 1- or 2-byte code a point (compact_form.hpp) instead of float32: an 8-bit scan's
 // interpolants in a quarter of the bytes. The encoder chooses j where the rounded model still
 // meets the bound on the block's samples (the B-spline basis is a convex combination, so no model
@@ -25,8 +25,8 @@ constexpr size_t kRoundedPointsBytes = 1;
 /// Largest j a reader takes: q = step / 2^40 rounds points far below float32's resolution for any
 /// value the step could code.
 constexpr int kMaxPointShift = 40;
-/// Codes are exact while |c / q| stays below this (double's integers, with room).
-constexpr double kMaxPointCode = 4503599627370496.0;  // 2^52
+/// Codes are exact while |c / q| stays below this (double's integers, with room for rounding).
+constexpr double kMaxPointCode = 1125899906842624.0;  // 2^50
 
 /// The step q of a rounded interpolant's points: its coded samples' step / 2^j, j the payload's
 /// last byte. FormatError naming `where` when the step is not a positive finite number or
@@ -42,22 +42,16 @@ inline double roundedPointStep(const uint8_t* stored, size_t bytes, const char* 
   return std::ldexp(step, -shift);
 }
 
-/// A point's code at step q, and the float a reader keeps for a code.
-inline int64_t pointCode(float c, double q) { return std::llround(double(c) / q); }
+/// A point's code at step q: c * (1 / q) in binary64, rounded to the nearest integer, ties to
+/// even (block_codec.cpp, compiled without FMA contraction, so that every build codes alike; a
+/// product, not a quotient, as decoding rounds every point of a block).
+int64_t pointCode(float c, double q);
+/// The float a reader keeps for code k.
 inline float pointValue(int64_t k, double q) { return static_cast<float>(double(k) * q); }
 
-/// Rounds `count` points to step q in place (their codes into k unless it is null). False, with
-/// the points partly rounded, when one is not finite or lies kMaxPointCode steps or more from 0,
-/// or rounds to a value beyond float32.
-inline bool roundPoints(float* points, size_t count, double q, int64_t* k) {
-  for (size_t i = 0; i < count; ++i) {
-    if (!(std::fabs(double(points[i]) / q) < kMaxPointCode)) return false;
-    const int64_t code = pointCode(points[i], q);
-    points[i] = pointValue(code, q);
-    if (!std::isfinite(points[i])) return false;
-    if (k) k[i] = code;
-  }
-  return true;
-}
+/// Rounds `count` points to step q in place, as pointCode and pointValue do (their codes into k
+/// unless it is null). False, with the points partly rounded, when one is not finite or lies
+/// kMaxPointCode steps or more from 0, or rounds to a value beyond float32.
+bool roundPoints(float* points, size_t count, double q, int64_t* k);
 
 }  // namespace afam

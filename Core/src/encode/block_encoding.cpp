@@ -101,7 +101,7 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
   ModelEntry& m = t.entry;
   m.kind = exact ? BlockKind::Samples : BlockKind::Spline;
   m.coded = false;
-  m.integerCoded = m.lanesCoded = false;
+  m.integerCoded = m.lanesCoded = m.roundedPoints = false;
   m.ncp = fr.ncp;
   m.degree = fr.degree;
   setError(t, fr.error);
@@ -455,7 +455,7 @@ namespace {
 void storeEmpty(const FitContext& c, const BlockExtent& e, BlockTask& t) {
   ModelEntry& m = t.entry;
   m.kind = BlockKind::Empty;
-  m.coded = m.integerCoded = m.lanesCoded = m.masked = false;
+  m.coded = m.integerCoded = m.lanesCoded = m.masked = m.roundedPoints = false;
   for (int a = 0; a < 3; ++a) {
     m.degree[a] = effectiveDegree(c.opt.degree, e.samples[a]);
     m.ncp[a] = m.degree[a] + 1;

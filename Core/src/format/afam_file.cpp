@@ -750,13 +750,14 @@ CompactForm AfamFile::readRoundedCompact(const ModelEntry& e, double maxShare,
     uint8_t* stored = threadScratch<uint8_t>(ScratchSlot::Stored, e.storedSize);
     readChecked(e, stored, e.storedSize);
     checkPayloadFlags(e, stored, where);
+    // Into scratch, so that `out` is allocated once, at the size of the form it keeps.
+    float* points = threadScratch<float>(ScratchSlot::Points, count);
     int64_t* codes = threadScratch<int64_t>(ScratchSlot::PointCodes, count);
-    out.resize(count);
-    decodeInterpolant(e, stored, out.data(), codes, where);
+    decodeInterpolant(e, stored, points, codes, where);
     const double q = roundedPointStep(stored, e.storedSize, where.c_str());
-    // Width 0 leaves out as it is: the floats decodeInterpolant gave.
     form = packCompact(
         codes, count, maxShare, [q](int64_t k) { return pointValue(k, q); }, out);
+    if (form.width == 0) out.assign(points, points + count);
   });
   return form;
 }

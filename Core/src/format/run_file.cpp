@@ -438,9 +438,10 @@ void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
   chain = previousChains_[slot];
   if (chain.empty())  // the step before's model is one payload: the chain's first
     chain.push_back(PayloadPart{before.offset, before.storedSize, before.checksum, before.coded,
-                                before.integerCoded, before.ownerStep, before.lanesCoded});
+                                before.integerCoded, before.ownerStep, before.lanesCoded,
+                                before.roundedPoints});
   chain.push_back(PayloadPart{m.offset, m.storedSize, m.checksum, true, m.integerCoded, m.ownerStep,
-                              m.lanesCoded});
+                              m.lanesCoded, false});
   m.chainLength = static_cast<uint32_t>(chain.size());
   depth_[slot] = previousDepth_[slot] + 1;
 }

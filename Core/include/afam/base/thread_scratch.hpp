@@ -22,7 +22,8 @@ enum class ScratchSlot {
   ChainStored,  ///< a payload of a chain in time
   Residual,     ///< a chain's decoded residual
   Samples,      ///< an interpolant's decoded samples
-  PointCodes,   ///< a rounded interpolant's point codes
+  Points,       ///< a rounded interpolant's points, before the cache's compact form
+  PointCodes,   ///< their codes
   Count
 };
 

@@ -20,6 +20,7 @@
 #include "afam/base/hash.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 
 namespace {
@@ -131,6 +132,31 @@ Bytes encodedWithHoles(const std::string& scratch) {
   return readThenRemove(scratch);
 }
 
+// A smooth field under noise above the bound: interpolants with rounded points (index flag bit
+// 14, the step's shift as each payload's last byte). Throws if none comes out rounded.
+Bytes encodedRounded(const std::string& scratch) {
+  const afam::Index3 dims{12, 11, 10};
+  std::vector<float> v(static_cast<size_t>(dims[0] * dims[1] * dims[2]));
+  uint32_t state = 12345;
+  for (size_t i = 0; i < v.size(); ++i) {
+    state = state * 1664525u + 1013904223u;  // a fixed sequence: the same seed every time
+    v[i] = float(std::sin(0.3 * double(i % 12)) + 0.2 * (double(state >> 8) / 16777216.0 - 0.5));
+  }
+  afam::ArraySource source(v.data(), dims);
+  afam::EncoderOptions o;
+  o.levels = 1;
+  o.blocksPerAxis = 2;
+  o.errorBound = 1e-2;
+  o.relativeBound = true;
+  o.threads = 1;
+  afam::encodeVolume(source, o, scratch);
+  int rounded = 0;
+  const auto file = afam::AfamFile::open(scratch);
+  for (const afam::ModelEntry& e : file->entries()) rounded += e.roundedPoints;
+  if (rounded == 0) throw std::runtime_error("the rounded-points seed has no rounded interpolant");
+  return readThenRemove(scratch);
+}
+
 void afamSeeds(const std::string& out) {
   const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
   using M = afam::EncodingMode;
@@ -163,6 +189,9 @@ void afamSeeds(const std::string& out) {
   const Bytes holes = encodedWithHoles(scratch);  // missing samples: masks and an empty block
   writeSeed(dir, "holes-fixall", 7, holes);
   writeSeed(dir, "holes-asis", 0, holes);
+  const Bytes rounded = encodedRounded(scratch);  // interpolants with rounded points
+  writeSeed(dir, "rounded-fixall", 7, rounded);
+  writeSeed(dir, "rounded-asis", 0, rounded);
 }
 
 Bytes floatBytes(const std::vector<float>& f) {

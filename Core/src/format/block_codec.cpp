@@ -280,17 +280,28 @@ inline double roundHalfEven(double x) {
 
 int64_t pointCode(float c, double q) { return int64_t(roundHalfEven(double(c) * (1.0 / q))); }
 
-bool roundPoints(float* points, size_t count, double q, int64_t* k) {
+namespace {
+/// roundPoints without a branch a point (so that the loop vectorizes): a point out of range is
+/// coded as 0 and reported by the result.
+template <bool KeepCodes>
+bool roundEvery(float* points, size_t count, double q, int64_t* k) {
   const double inverse = 1.0 / q;
+  bool ok = true;
   for (size_t i = 0; i < count; ++i) {
     const double x = double(points[i]) * inverse;
-    if (!(std::fabs(x) < kMaxPointCode)) return false;
-    const double code = roundHalfEven(x);
-    points[i] = static_cast<float>(code * q);
-    if (!std::isfinite(points[i])) return false;
-    if (k) k[i] = int64_t(code);
+    const bool inRange = std::fabs(x) < kMaxPointCode;  // false for NaN too
+    const double code = roundHalfEven(inRange ? x : 0.0);
+    const float value = static_cast<float>(code * q);
+    ok &= inRange & (std::fabs(value) <= std::numeric_limits<float>::max());
+    points[i] = value;
+    if (KeepCodes) k[i] = int64_t(code);
   }
-  return true;
+  return ok;
+}
+}  // namespace
+
+bool roundPoints(float* points, size_t count, double q, int64_t* k) {
+  return k ? roundEvery<true>(points, count, q, k) : roundEvery<false>(points, count, q, nullptr);
 }
 
 }  // namespace afam

@@ -50,8 +50,8 @@ int64_t pointCode(float c, double q);
 inline float pointValue(int64_t k, double q) { return static_cast<float>(double(k) * q); }
 
 /// Rounds `count` points to step q in place, as pointCode and pointValue do (their codes into k
-/// unless it is null). False, with the points partly rounded, when one is not finite or lies
-/// kMaxPointCode steps or more from 0, or rounds to a value beyond float32.
+/// unless it is null). False, with the points not all as pointValue gives them, when one is not
+/// finite or lies kMaxPointCode steps or more from 0, or rounds to a value beyond float32.
 bool roundPoints(float* points, size_t count, double q, int64_t* k);
 
 }  // namespace afam

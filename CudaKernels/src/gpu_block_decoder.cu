@@ -454,7 +454,7 @@ __device__ void expandCompactJob(const GpuDecodeJob& job, const uint8_t* stored,
                                  uint32_t* out, uint32_t& status) {
   const uint64_t width = job.codeWidth;
   const bool fits = (width == 1 || width == 2) && job.payloadOffset % 4 == 0 &&
-                    job.storedBytes == 4 * (uint64_t(job.codeTable) + (count * width + 3) / 4);
+                    job.storedBytes == 4 * compactFloats(job.codeTable, width, count);
   if (!fits) {
     if (threadIdx.x == 0) status = code(Status::StoredSize);
     return;
@@ -607,7 +607,7 @@ GpuDecodeJob gpuCompactJob(CompactForm form, Int3 ncp, uint64_t payloadOffset,
   j.codeTable = form.table;
   j.payloadOffset = payloadOffset;
   j.outputOffset = outputOffset;
-  j.storedBytes = compactFormBytes(form, jobPoints(j));
+  j.storedBytes = 4 * compactFloats(form.table, uint64_t(form.width), jobPoints(j));
   return j;
 }
 

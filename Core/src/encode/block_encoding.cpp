@@ -248,7 +248,7 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
     if (!roundPoints(rounded.control.data(), rounded.control.size(), q, k.data()))
       return spanFits = false;
     const auto [lo, hi] = std::minmax_element(k.begin(), k.end());
-    if (*hi - *lo >= 65536) return spanFits = false;  // a smaller step spans more
+    if (uint64_t(*hi - *lo) >= kMaxCompactSpan) return spanFits = false;  // smaller steps span more
     e = fitter.error(s.data(), n, rounded);
     return keeps(kind, e, allowed);
   };

@@ -457,9 +457,9 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 
 /// An interpolant's model into out: its coded samples decoded and the spline of the header's
 /// degree fitted through them, its points rounded when the entry says so (their codes into
-/// `codes` when it is not null).
-void decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
-                       const std::string& where) {
+/// `codes` when it is not null). Returns the points' step (0: not rounded).
+double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
+                         const std::string& where) {
   thread_local BlockFitter fitter;
   thread_local FitResult fit;
   const size_t count = size_t(controlCount(e));
@@ -473,9 +473,11 @@ void decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, i
     throw FormatError(where + ": interpolant does not decode: " + ex.what());
   }
   std::memcpy(out, fit.control.data(), count * sizeof(float));
-  if (e.roundedPoints &&
-      !roundPoints(out, count, roundedPointStep(stored, e.storedSize, where.c_str()), codes))
+  if (!e.roundedPoints) return 0;
+  const double q = roundedPointStep(stored, e.storedSize, where.c_str());
+  if (!roundPoints(out, count, q, codes))
     throw FormatError(where + ": interpolant's points do not round to its point step");
+  return q;
 }
 
 void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
@@ -721,8 +723,7 @@ void AfamFile::readPayloadOnto(int64_t entry, const float* previous, void* out) 
 
 CompactForm AfamFile::readCompact(int64_t entry, double maxShare, std::vector<float>& out) const {
   const ModelEntry& e = entryAt(entry);
-  const bool rounded = e.roundedPoints && !e.masked && !e.residual;
-  if (rounded) return readRoundedCompact(e, maxShare, out);
+  if (e.roundedPoints && !e.masked && !e.residual) return readRoundedCompact(e, maxShare, out);
   if (!e.coded || !e.integerCoded || e.masked || e.residual ||
       (e.kind != BlockKind::Spline && e.kind != BlockKind::Samples) ||
       header_.mode == EncodingMode::Downsampled) {
@@ -753,8 +754,7 @@ CompactForm AfamFile::readRoundedCompact(const ModelEntry& e, double maxShare,
     // Into scratch, so that `out` is allocated once, at the size of the form it keeps.
     float* points = threadScratch<float>(ScratchSlot::Points, count);
     int64_t* codes = threadScratch<int64_t>(ScratchSlot::PointCodes, count);
-    decodeInterpolant(e, stored, points, codes, where);
-    const double q = roundedPointStep(stored, e.storedSize, where.c_str());
+    const double q = decodeInterpolant(e, stored, points, codes, where);
     form = packCompact(
         codes, count, maxShare, [q](int64_t k) { return pointValue(k, q); }, out);
     if (form.width == 0) out.assign(points, points + count);

@@ -278,8 +278,6 @@ inline double roundHalfEven(double x) {
 }
 }  // namespace
 
-int64_t pointCode(float c, double q) { return int64_t(roundHalfEven(double(c) * (1.0 / q))); }
-
 namespace {
 /// roundPoints without a branch a point (so that the loop vectorizes): a point out of range is
 /// coded as 0 and reported by the result.
@@ -302,6 +300,12 @@ bool roundEvery(float* points, size_t count, double q, int64_t* k) {
 
 bool roundPoints(float* points, size_t count, double q, int64_t* k) {
   return k ? roundEvery<true>(points, count, q, k) : roundEvery<false>(points, count, q, nullptr);
+}
+
+int64_t pointCode(float c, double q) {
+  int64_t k = 0;
+  roundEvery<true>(&c, 1, q, &k);
+  return k;
 }
 
 }  // namespace afam

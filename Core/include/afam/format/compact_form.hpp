@@ -7,7 +7,12 @@
 #include <cstring>
 #include <vector>
 
+#include "afam/base/host_device.hpp"
+
 namespace afam {
+
+/// Most distinct codes a compact form holds (2-byte codes).
+constexpr uint64_t kMaxCompactSpan = 65536;
 
 /// A model kept compact: the values of an integer-coded payload are (base + k) * step for k in
 /// [lo, hi] (a rounded interpolant's points k * q, rounded_points.hpp), so when hi - lo < 65,536
@@ -19,6 +24,12 @@ struct CompactForm {
   int width = 0;
   uint32_t table = 0;
 };
+
+/// Floats a compact form of `count` values takes: its table of `table` floats, then `width`-byte
+/// codes, the last float padded (host and device).
+AFAM_HD uint64_t compactFloats(uint64_t table, uint64_t width, uint64_t count) {
+  return table + (count * width + 3) / 4;
+}
 
 namespace detail {
 template <typename Code>
@@ -62,8 +73,8 @@ CompactForm packCompact(const Code* k, uint64_t count, double maxShare, ValueOf 
   }
   const uint64_t span = uint64_t(int64_t(hi) - int64_t(lo)) + 1;
   CompactForm form;
-  form.width = span <= 256 ? 1 : span <= 65536 ? 2 : 0;
-  const uint64_t floats = span + (count * uint64_t(form.width) + 3) / 4;
+  form.width = span <= 256 ? 1 : span <= kMaxCompactSpan ? 2 : 0;
+  const uint64_t floats = compactFloats(span, uint64_t(form.width), count);
   if (form.width == 0 || double(floats) > maxShare * double(count)) return CompactForm{};
   form.table = uint32_t(span);
   const int64_t first = int64_t(lo);

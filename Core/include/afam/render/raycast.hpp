@@ -103,6 +103,7 @@
 
 #include "afam/base/host_device.hpp"
 #include "afam/format/block_mask.hpp"
+#include "afam/format/compact_form.hpp"
 #include "afam/scene/ray_camera.hpp"
 #include "afam/spline/basis.hpp"
 #include "afam/spline/evaluate.hpp"
@@ -145,7 +146,7 @@ struct FrameSlot {
 AFAM_HD uint64_t slotFloatCount(const FrameSlot& s) {
   if (s.kind == kSlotEmpty) return 0;
   uint64_t control = uint64_t(s.knots[0].ncp) * s.knots[1].ncp * s.knots[2].ncp;
-  if (s.codeWidth > 0) control = s.codeTable + (control * uint64_t(s.codeWidth) + 3) / 4;
+  if (s.codeWidth > 0) control = compactFloats(s.codeTable, uint64_t(s.codeWidth), control);
   if (s.maskSamples[0] <= 0) return control;
   return control +
          uint64_t(maskWordCount(int64_t(s.maskSamples[0]) * s.maskSamples[1] * s.maskSamples[2]));

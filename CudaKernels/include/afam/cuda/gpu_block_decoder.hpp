@@ -52,12 +52,6 @@ struct GpuDecodeJob {
 GpuDecodeJob gpuCompactJob(CompactForm form, Int3 ncp, uint64_t payloadOffset,
                            uint64_t outputOffset);
 
-/// Bytes of a model's compact form (`count` points): its table and its codes, the last float
-/// padded.
-inline uint64_t compactFormBytes(CompactForm form, uint64_t count) {
-  return 4 * (uint64_t(form.table) + (count * uint64_t(form.width) + 3) / 4);
-}
-
 /// A job's status word after decoding: 0 when it decoded, else what is wrong with its payload.
 enum class GpuDecodeStatus : uint32_t {
   Ok = 0,

@@ -115,7 +115,9 @@ int runReplay(int argc, char** argv) {
         "                         "
         "bytes_read,visible_blocks,frustum_culled,tf_culled,prefetched_blocks,\n"
         "                         cache_bytes,cache_peak_bytes (resident in the cache at the end\n"
-        "                         of the frame / at most during it; never above --cache-bytes)\n"
+        "                         of the frame / at most during it; never above --cache-bytes),\n"
+        "                         gpu_uploads (models the GPU pool took in), on_gpu (0: the\n"
+        "                         frame was cast on the CPU)\n"
         "  --frames N             replay only the first N points of view\n"
         "  --still-out IMG.png    after the path, render its last view once more waiting for\n"
         "                         every block (the still frame; also printed with\n"
@@ -163,7 +165,8 @@ int runReplay(int argc, char** argv) {
     csv.open(args.str("csv"));
     if (!csv) throw IoError("replay: cannot write " + args.str("csv"));
     csv << "pov,caching_ms,render_ms,latency_ms,hits,misses,bytes_read,visible_blocks,"
-           "frustum_culled,tf_culled,prefetched_blocks,cache_bytes,cache_peak_bytes\n";
+           "frustum_culled,tf_culled,prefetched_blocks,cache_bytes,cache_peak_bytes,gpu_uploads,"
+           "on_gpu\n";
   }
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend;
@@ -191,7 +194,8 @@ int runReplay(int argc, char** argv) {
       csv << i << ',' << st.cachingMs << ',' << st.renderMs << ',' << st.latencyMs << ',' << st.hits
           << ',' << st.misses << ',' << st.bytesRead << ',' << st.slots << ','
           << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks
-          << ',' << st.cacheBytes << ',' << st.cachePeakBytes << '\n';
+          << ',' << st.cacheBytes << ',' << st.cachePeakBytes << ',' << st.cast.modelsUploaded
+          << ',' << int(st.cast.onGpu) << '\n';
     if (!quiet)
       std::printf(
           "pov=%zu step=%lld caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu "

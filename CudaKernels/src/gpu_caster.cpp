@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/cuda/gpu_caster.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <deque>
@@ -24,8 +26,9 @@ std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
   // One GPU per MPI rank on a node with several (device_selection.hpp).
   const int device = selectGpuDevice(gpuDeviceCount());
   std::unique_ptr<GpuRenderer> gpu;
-  const size_t minBudget = size_t(16) << 20;
-  for (size_t budget = budgetBytes; !gpu && budget >= minBudget; budget /= 2) {
+  // What was asked for, halved while the device has no room for it, down to 16 MiB.
+  const size_t minBudget = std::min(budgetBytes, size_t(16) << 20);
+  for (size_t budget = budgetBytes; !gpu && budget >= minBudget && budget > 0; budget /= 2) {
     try {
       gpu = std::make_unique<GpuRenderer>(budget, device);
     } catch (const GpuOutOfMemory& e) {
@@ -53,6 +56,15 @@ GpuCaster::GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads)
     : gpu_(std::move(gpu)), threads_(threads), description_(gpuDescription(gpu_->pool().device())) {
   const char* decode = std::getenv("AFAM_GPU_DECODE");
   decodeOnGpu_ = !(decode && std::strcmp(decode, "0") == 0);
+  // Benchmarks: how the pool holds compact models (GpuPoolModels; default auto).
+  if (const char* how = std::getenv("AFAM_GPU_POOL_MODELS")) {
+    if (std::strcmp(how, "floats") == 0) gpu_->setPoolModels(GpuPoolModels::Floats);
+    if (std::strcmp(how, "compact") == 0) gpu_->setPoolModels(GpuPoolModels::Compact);
+    if (std::strcmp(how, "floats") != 0 && std::strcmp(how, "compact") != 0 &&
+        std::strcmp(how, "auto") != 0)
+      std::fprintf(stderr,
+                   "afam: AFAM_GPU_POOL_MODELS is '%s', not auto, floats or compact: auto\n", how);
+  }
 }
 
 StoredForm GpuCaster::storedForm() const {

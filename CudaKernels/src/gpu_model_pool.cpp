@@ -141,6 +141,10 @@ GpuModelPool::GpuModelPool(size_t budgetBytes, int device)
 GpuModelPool::~GpuModelPool() { impl_->release(); }
 
 void GpuModelPool::beginFrame() {
+  // A frame that stopped short (a model that did not fit) left copies and decoding queued for
+  // models it had placed: they are sent now, before this frame may evict those models and give
+  // their room to others.
+  if (!impl_->jobs.empty()) flush();
   if (!impl_->pending.empty()) impl_->issue();
   AFAM_CUDA_CHECK(cudaEventSynchronize(impl_->copiesDone));
   impl_->stagingUsed = 0;

@@ -228,11 +228,62 @@ struct GpuRenderer::Impl {
     return deviceHandles;
   }
 
-  /// Makes every slot's model resident, uploads the frame tables and returns the device view.
-  /// All copies are queued on `stream`; kernels queued after it see the data.
-  FrameView upload(const FrameView& v, const uint64_t* keys, uint64_t* modelsUploaded,
-                   uint64_t* bytesUploaded, const float* const* slotHost = nullptr,
-                   const GpuStoredSlot* stored = nullptr) {
+  /// Whether the frame's models as float32 would take more than three quarters of the pool: the
+  /// pool is under pressure (GpuPoolModels::Auto then keeps compact models compact). Below that,
+  /// evicting older frames' models costs fewer uploads than the kernels reading codes cost time.
+  bool underPressure(const FrameView& v) const {
+    size_t floatBytes = 0;
+    for (int32_t s = 0; s < v.slotCount; ++s) {
+      FrameSlot slot = v.slots[s];
+      slot.codeWidth = 0;
+      slot.codeTable = 0;
+      floatBytes += align256(size_t(slotFloats(slot)) * sizeof(float));
+    }
+    return floatBytes > pool.ledger().stats().capacityBytes / 4 * 3;
+  }
+
+  /// Makes `slot`'s model resident (uploaded, or its stored payload queued for decoding, where it
+  /// is not) and sets its offset. A compact model is expanded into float32 points unless the pool
+  /// holds it compact already or `how` asks for compact models (Compact: even one resident as
+  /// floats; Auto under pressure: one not resident yet); both forms give the kernels the same
+  /// floats. Returns whether the slot now reads codes.
+  bool place(FrameSlot& slot, uint64_t key, const float* host, const GpuStoredSlot* stored,
+             GpuPoolModels how) {
+    const CompactForm form{slot.codeWidth, slot.codeTable};
+    slot.codeWidth = 0;
+    slot.codeTable = 0;
+    const size_t floatBytes = size_t(slotFloats(slot)) * sizeof(float);
+    size_t byteOffset = 0;
+    if (stored) {
+      byteOffset =
+          pool.acquireStored(key, stored->bytes, stored->storedBytes, floatBytes, stored->job);
+    } else if (form.width == 0) {
+      byteOffset = pool.acquire(key, host, floatBytes);
+    } else {
+      FrameSlot coded = slot;
+      coded.codeWidth = form.width;
+      coded.codeTable = form.table;
+      const size_t codedBytes = size_t(slotFloats(coded)) * sizeof(float);
+      const size_t resident = pool.ledger().residentBytes(key);
+      if (resident == codedBytes || how == GpuPoolModels::Compact ||
+          (how == GpuPoolModels::Auto && resident != floatBytes)) {
+        slot = coded;
+        byteOffset = pool.acquire(key, host, codedBytes);
+      } else {
+        byteOffset = pool.acquireCompact(
+            key, host, form, {slot.knots[0].ncp, slot.knots[1].ncp, slot.knots[2].ncp}, floatBytes);
+      }
+    }
+    slot.offset = byteOffset / sizeof(float);
+    return slot.codeWidth > 0;
+  }
+
+  /// Makes every slot's model resident, uploads the frame tables and returns the device view
+  /// (*compactSlots: how many of its slots read codes). All copies are queued on `stream`;
+  /// kernels queued after it see the data.
+  FrameView upload(const FrameView& v, const uint64_t* keys, GpuPoolModels how,
+                   int64_t* compactSlots, uint64_t* modelsUploaded, uint64_t* bytesUploaded,
+                   const float* const* slotHost = nullptr, const GpuStoredSlot* stored = nullptr) {
     if (v.camera.width < 1 || v.camera.height < 1)
       throw InvalidArgument("GpuRenderer: image size " + std::to_string(v.camera.width) + " x " +
                             std::to_string(v.camera.height) + " is empty");
@@ -268,30 +319,21 @@ struct GpuRenderer::Impl {
       std::memcpy(hostTables + tfOffset, v.tf, sizeof(float) * 4 * size_t(v.tfSize));
     if (v.maxDistance) std::memcpy(hostTables + depthOffset, v.maxDistance, sizeof(float) * pixels);
     auto* slots = reinterpret_cast<FrameSlot*>(hostTables + slotOffset);
+    if (how == GpuPoolModels::Auto && !underPressure(v)) how = GpuPoolModels::Floats;
+    int64_t coded = 0;
     for (int32_t s = 0; s < v.slotCount; ++s) {
       FrameSlot slot = v.slots[s];
-      const uint64_t floats = slotFloats(slot);
-      if (floats == 0) {  // an empty block: nothing to hold
+      if (slotFloats(slot) == 0) {  // an empty block: nothing to hold
         slots[s] = slot;
         continue;
       }
       const uint64_t key = keys ? keys[s] : defaultSlotKey(slot);
       const bool decode = stored && stored[s].bytes;
       const float* host = decode ? nullptr : slotHost ? slotHost[s] : v.pool + slot.offset;
-      const CompactForm form{slot.codeWidth, slot.codeTable};
-      slot.codeWidth = 0;  // the pool holds float32 points: the kernels read those only
-      slot.codeTable = 0;
-      const size_t bytes = size_t(slotFloats(slot)) * sizeof(float);
-      const size_t byteOffset =
-          decode           ? pool.acquireStored(key, stored[s].bytes, stored[s].storedBytes, bytes,
-                                                stored[s].job)
-          : form.width > 0 ? pool.acquireCompact(
-                                 key, host, form,
-                                 {slot.knots[0].ncp, slot.knots[1].ncp, slot.knots[2].ncp}, bytes)
-                           : pool.acquire(key, host, bytes);
-      slot.offset = byteOffset / sizeof(float);
+      coded += place(slot, key, host, decode ? &stored[s] : nullptr, how);
       slots[s] = slot;
     }
+    if (compactSlots) *compactSlots = coded;
     pool.flush();
     AFAM_CUDA_CHECK(
         cudaMemcpyAsync(deviceTables, hostTables, size, cudaMemcpyHostToDevice, stream));
@@ -316,36 +358,36 @@ struct GpuRenderer::Impl {
 namespace {
 
 std::string launchFull(GpuFloatMode m, bool shaded, int p, const FrameView& d, float* image,
-                       cudaStream_t s, bool describe, int minBlocks) {
+                       cudaStream_t s, bool describe, int minBlocks, bool codes) {
   switch (m) {
     case GpuFloatMode::Fma:
-      return kernels_fma::launchFull(shaded, p, d, image, s, describe, minBlocks);
+      return kernels_fma::launchFull(shaded, p, d, image, s, describe, minBlocks, codes);
     case GpuFloatMode::Fast:
-      return kernels_fast::launchFull(shaded, p, d, image, s, describe, minBlocks);
+      return kernels_fast::launchFull(shaded, p, d, image, s, describe, minBlocks, codes);
     default:
-      return kernels_exact::launchFull(shaded, p, d, image, s, describe, minBlocks);
+      return kernels_exact::launchFull(shaded, p, d, image, s, describe, minBlocks, codes);
   }
 }
 void launchCount(GpuFloatMode m, bool shaded, int p, const FrameView& d, unsigned long long* total,
-                 cudaStream_t s) {
+                 cudaStream_t s, bool codes) {
   switch (m) {
     case GpuFloatMode::Fma:
-      return kernels_fma::launchCount(shaded, p, d, total, s);
+      return kernels_fma::launchCount(shaded, p, d, total, s, codes);
     case GpuFloatMode::Fast:
-      return kernels_fast::launchCount(shaded, p, d, total, s);
+      return kernels_fast::launchCount(shaded, p, d, total, s, codes);
     default:
-      return kernels_exact::launchCount(shaded, p, d, total, s);
+      return kernels_exact::launchCount(shaded, p, d, total, s, codes);
   }
 }
 std::string launchBare(GpuFloatMode m, int p, const FrameView& d, float* sink,
-                       unsigned long long* total, cudaStream_t s, bool describe) {
+                       unsigned long long* total, cudaStream_t s, bool describe, bool codes) {
   switch (m) {
     case GpuFloatMode::Fma:
-      return kernels_fma::launchBare(p, d, sink, total, s, describe);
+      return kernels_fma::launchBare(p, d, sink, total, s, describe, codes);
     case GpuFloatMode::Fast:
-      return kernels_fast::launchBare(p, d, sink, total, s, describe);
+      return kernels_fast::launchBare(p, d, sink, total, s, describe, codes);
     default:
-      return kernels_exact::launchBare(p, d, sink, total, s, describe);
+      return kernels_exact::launchBare(p, d, sink, total, s, describe, codes);
   }
 }
 
@@ -410,12 +452,27 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
                    __FILE__, __LINE__, "cudaErrorContextIsDestroyed", 709);
   Impl& m = *impl_;
   lastTimes_ = GpuFrameTimes{};
+  lastCompactSlots_ = 0;
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);
   if (pixels > 0 && !deviceTarget) m.reserveImage(pixels);
   float* target = deviceTarget ? deviceTarget : reinterpret_cast<float*>(m.deviceImage);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[0], m.stream));
   GpuFrameTimes t;
-  FrameView d = m.upload(view, slotKeys, &t.modelsUploaded, &t.bytesUploaded, slotHost, stored);
+  int64_t compactSlots = 0;
+  const PoolStats before = m.pool.stats();
+  FrameView d;
+  try {
+    d = m.upload(view, slotKeys, poolModels_, &compactSlots, &t.modelsUploaded, &t.bytesUploaded,
+                 slotHost, stored);
+  } catch (const GpuOutOfMemory&) {
+    // Its models did not fit together: once more with every compact model compact, those
+    // resident as floats too, before the caller gives the frame to the CPU.
+    if (poolModels_ != GpuPoolModels::Auto) throw;
+    d = m.upload(view, slotKeys, GpuPoolModels::Compact, &compactSlots, nullptr, nullptr, slotHost,
+                 stored);
+    t.modelsUploaded = m.pool.stats().uploads - before.uploads;
+    t.bytesUploaded = m.pool.stats().bytesUploaded - before.bytesUploaded;
+  }
   if (depth) {  // the limits come from the device depth, not from view.maxDistance
     checkDepthSize(*depth, view.camera.width, view.camera.height);
     m.depthLimits(*depth, pixels);
@@ -428,7 +485,8 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
     kernelInfo_ = kernels_texture::launchDsTexture(
         view.shading != 0, d, m.textureHandles(view, slotKeys), target, nullptr, m.stream, true);
   else
-    kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, target, m.stream, true, minBlocks_);
+    kernelInfo_ = launchFull(mode_, view.shading != 0, p, d, target, m.stream, true, minBlocks_,
+                             compactSlots > 0);
   AFAM_CUDA_CHECK(cudaEventRecord(m.events[2], m.stream));
   if (hostRgba)  // else the image stays where the caller's device pointer says
     AFAM_CUDA_CHECK(cudaMemcpyAsync(m.hostImage, m.deviceImage, pixels * sizeof(float4),
@@ -442,6 +500,7 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
   t.downloadMs = hostRgba ? elapsed(m.events[2], m.events[3]) : 0.0;
   t.totalMs = elapsed(m.events[0], m.events[3]);
   lastTimes_ = t;
+  lastCompactSlots_ = compactSlots;
   if (times) *times = t;
 }
 
@@ -450,7 +509,9 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
   Impl& m = *impl_;
   const size_t pixels = size_t(view.camera.width) * size_t(view.camera.height);
   m.reserveImage(pixels);
-  const FrameView d = m.upload(view, slotKeys, nullptr, nullptr);
+  int64_t compactSlots = 0;
+  const FrameView d = m.upload(view, slotKeys, poolModels_, &compactSlots, nullptr, nullptr);
+  const bool codes = compactSlots > 0;
   const int p = specialise_ ? uniformDegree(view) : -1;
   const bool shaded = view.shading != 0;
   auto* sink = reinterpret_cast<float*>(m.deviceImage);
@@ -463,9 +524,9 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
     (void)kernels_texture::launchDsTexture(shaded, d, handles, sink, m.deviceCounter, m.stream,
                                            false);
   else if (kind == GpuKernelKind::Full)
-    launchCount(mode_, shaded, p, d, m.deviceCounter, m.stream);
+    launchCount(mode_, shaded, p, d, m.deviceCounter, m.stream, codes);
   else
-    (void)launchBare(mode_, p, d, sink, m.deviceCounter, m.stream, false);
+    (void)launchBare(mode_, p, d, sink, m.deviceCounter, m.stream, false, codes);
   unsigned long long count = 0;
   AFAM_CUDA_CHECK(cudaMemcpyAsync(&count, m.deviceCounter, 8, cudaMemcpyDeviceToHost, m.stream));
   AFAM_CUDA_CHECK(cudaStreamSynchronize(m.stream));
@@ -476,8 +537,8 @@ GpuKernelTiming GpuRenderer::timeKernel(const FrameView& view, const uint64_t* s
         handles
             ? kernels_texture::launchDsTexture(shaded, d, handles, sink, nullptr, m.stream, r == -1)
         : kind == GpuKernelKind::Full
-            ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_)
-            : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1);
+            ? launchFull(mode_, shaded, p, d, sink, m.stream, r == -1, minBlocks_, codes)
+            : launchBare(mode_, p, d, sink, nullptr, m.stream, r == -1, codes);
     if (r == -1) kernelInfo_ = info;
     AFAM_CUDA_CHECK(cudaEventRecord(m.events[1], m.stream));
     AFAM_CUDA_CHECK(cudaEventSynchronize(m.events[1]));

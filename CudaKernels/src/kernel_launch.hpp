@@ -17,15 +17,17 @@
   namespace afam::NS {                                                                         \
   /* Full ray caster (castRayWith<Shaded>), specialised on degree p in 1..5 (else generic).    \
      Returns the kernel's register / local-memory use when describe is set. minBlocks = 8      \
-     picks the variant limited to 64 registers (degree 2 only), anything else the default. */  \
+     picks the variant limited to 64 registers (degree 2 only), anything else the default.     \
+     codes: some slot holds its model as codes (FrameSlot::codeWidth): the kernels that read   \
+     them (degree 2 or generic); otherwise those reading float32 points only. */               \
   std::string launchFull(bool shaded, int p, const FrameView& d, float* image, cudaStream_t s, \
-                         bool describe, int minBlocks);                                        \
+                         bool describe, int minBlocks, bool codes);                            \
   /* Untimed launch that counts evaluated samples into *total. */                              \
   void launchCount(bool shaded, int p, const FrameView& d, unsigned long long* total,          \
-                   cudaStream_t s);                                                            \
+                   cudaStream_t s, bool codes);                                                \
   /* Bare value+gradient baseline along the same rays; counts samples when total != null. */   \
   std::string launchBare(int p, const FrameView& d, float* sink, unsigned long long* total,    \
-                         cudaStream_t s, bool describe);                                       \
+                         cudaStream_t s, bool describe, bool codes);                           \
   }
 
 AFAM_DECLARE_KERNEL_SET(kernels_exact)

@@ -6,13 +6,16 @@
 # noise above the bound (so that most finest blocks are interpolants), encoded at 1e-2 relative
 # with the defaults, replayed on a camera path with a cold page cache, screen-space LOD and a
 # host cache smaller than the decoded finest level, `--models float` then `--models compact`, twice
-# each, printed as a markdown table (medians of the per-run medians).
+# each, printed as a markdown table (medians of the per-run medians). On the GPU, VARIANTS also
+# compares how the GPU pool holds compact models (GpuPoolModels, AFAM_GPU_POOL_MODELS) with a pool
+# of GPU_MB MiB, e.g. VARIANTS="compact:floats compact:auto" GPU_MB=96.
 #
 # usage: Testing/Benchmarks/compact_models.sh [AFAM_EXE] [TRAJECTORY.dat]
 #   AFAM_EXE default build/Apps/afam; TRAJECTORY default a generated exploration walk
 # Env: DEVICE (cpu|gpu, default cpu), DIMS (default 384,496,336), NOISE (default 6), SIZE (image
 #      side, default 512), FRAMES (default 60), CACHE_MB (default 256), WORK (default a temporary
-#      folder, removed afterwards).
+#      folder, removed afterwards), GPU_MB (GPU pool, default 2048), VARIANTS (default
+#      "float compact": MODELS[:POOL] with POOL auto|floats|compact, default auto).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 AFAM="${1:-$here/build/Apps/afam}"
@@ -23,6 +26,8 @@ NOISE="${NOISE:-6}"
 SIZE="${SIZE:-512}"
 FRAMES="${FRAMES:-60}"
 CACHE_MB="${CACHE_MB:-256}"
+GPU_MB="${GPU_MB:-2048}"
+VARIANTS="${VARIANTS:-float compact}"
 [[ -x $AFAM ]] || { echo "compact_models.sh: no afam executable at $AFAM" >&2; exit 1; }
 work="${WORK:-$(mktemp -d)}"
 mkdir -p "$work"
@@ -42,18 +47,26 @@ value() { grep -o "$1=[0-9.e+-]*" <<<"$2" | tail -1 | cut -d= -f2; }
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 echo "scan: head MRI made large to $DIMS, noise $NOISE, $(stat -c %s "$file") bytes at 1e-2 relative (encoded in $(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }') s)"
 "$AFAM" info "$file" | grep -E "^level|kinds" | tail -2
-echo "command: afam replay FILE --trajectory $(basename "$TRAJ") --size $SIZE,$SIZE --device $DEVICE --lod screen --cold --cache-bytes $((CACHE_MB * 1000000)) --cache-blocks 0 --frames $FRAMES --models float|compact"
+echo "command: AFAM_GPU_POOL_MODELS=POOL afam replay FILE --trajectory $(basename "$TRAJ") --size $SIZE,$SIZE --device $DEVICE --gpu-budget-mb $GPU_MB --lod screen --cold --cache-bytes $((CACHE_MB * 1000000)) --cache-blocks 0 --frames $FRAMES --models MODELS"
 echo
-echo "| models | run | median frame ms | p95 ms | median caching ms | misses / frame | cache peak MB |"
-echo "|---|---|---|---|---|---|---|"
+echo "| models | GPU pool | run | median frame ms | p95 ms | median caching ms | misses / frame | cache peak MB | GPU uploads / frame | frames on the CPU |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
+column() {  # mean of a CSV column
+  awk -F, -v name="$1" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) c = i; next }
+    c { m += $c; n++ } END { printf "%.1f", n ? m / n : 0 }' "$2"
+}
 for run in 1 2; do
-  for models in float compact; do
-    csv="$work/replay_${models}_$run.csv"
-    out=$("$AFAM" replay "$file" --trajectory "$TRAJ" --size "$SIZE,$SIZE" --device "$DEVICE" \
-      --lod screen --cold --cache-bytes "$((CACHE_MB * 1000000))" --cache-blocks 0 \
-      --frames "$FRAMES" --models "$models" --quiet --csv "$csv" 2>&1)
-    misses=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) c[$i] = i; next }
-      { m += $c["misses"]; n++ } END { printf "%.1f", n ? m / n : 0 }' "$csv")
-    echo "| $models | $run | $(value median_latency_ms "$out") | $(value p95_latency_ms "$out") | $(value median_caching_ms "$out") | $misses | $(awk -v b="$(value cache_peak_bytes "$out")" 'BEGIN { printf "%.1f", b / 1e6 }') |"
+  for variant in $VARIANTS; do
+    models="${variant%%:*}"
+    pool=auto
+    [[ $variant == *:* ]] && pool="${variant#*:}"
+    csv="$work/replay_${models}_${pool}_$run.csv"
+    out=$(AFAM_GPU_POOL_MODELS="$pool" "$AFAM" replay "$file" --trajectory "$TRAJ" \
+      --size "$SIZE,$SIZE" --device "$DEVICE" --gpu-budget-mb "$GPU_MB" --lod screen --cold \
+      --cache-bytes "$((CACHE_MB * 1000000))" --cache-blocks 0 --frames "$FRAMES" \
+      --models "$models" --quiet --csv "$csv" 2>&1)
+    on_cpu=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == "on_gpu") c = i; next }
+      c && $c == 0 { n++ } END { print n + 0 }' "$csv")
+    echo "| $models | $pool | $run | $(value median_latency_ms "$out") | $(value p95_latency_ms "$out") | $(value median_caching_ms "$out") | $(column misses "$csv") | $(awk -v b="$(value cache_peak_bytes "$out")" 'BEGIN { printf "%.1f", b / 1e6 }') | $(column gpu_uploads "$csv") | $on_cpu |"
   done
 done

@@ -33,6 +33,18 @@ TEST(PoolLedger, EvictsLeastRecentlyUsedOfEarlierFrames) {
   EXPECT_EQ(ledger.stats().hits, 2u);
 }
 
+TEST(PoolLedger, TellsTheBytesAModelWasAcquiredWith) {
+  PoolLedger ledger(4 * 1024, 256);
+  ledger.beginFrame();
+  ledger.acquire(1, 1000);  // the requested bytes, not the aligned allocation
+  EXPECT_EQ(ledger.residentBytes(1), 1000u);
+  EXPECT_EQ(ledger.residentBytes(2), 0u);
+  EXPECT_TRUE(ledger.acquire(1, 300).uploadNeeded);  // another size: placed again
+  EXPECT_EQ(ledger.residentBytes(1), 300u);
+  ledger.forget(1);
+  EXPECT_EQ(ledger.residentBytes(1), 0u);
+}
+
 TEST(PoolLedger, FrameLargerThanBudgetIsRecoverable) {
   PoolLedger ledger(3 * 1024, 256);
   ledger.beginFrame();

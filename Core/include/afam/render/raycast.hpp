@@ -282,8 +282,9 @@ AFAM_HD int32_t lookupSlot(const FrameView& f, const float* x) {
 // Model evaluation
 // ---------------------------------------------------------------------------------------------
 
-/// Spline slot: value (and gradient in voxel units, d/dx) at voxel coordinate x.
-template <bool WithGradient>
+/// Spline slot: value (and gradient in voxel units, d/dx) at voxel coordinate x. ReadsCodes false:
+/// the slot holds float32 points (evaluateModel's promise).
+template <bool WithGradient, bool ReadsCodes = true>
 AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* data, const float* x,
                                float* gVoxel) {
   ModelView m;
@@ -299,7 +300,8 @@ AFAM_HD float sampleSplineSlot(const FrameSlot& s, const float* data, const floa
   const float v = (x[1] - s.lo[1]) * s.invExtent[1];
   const float w = (x[2] - s.lo[2]) * s.invExtent[2];
   float g[3];
-  const float value = evaluateModel<WithGradient>(m, u, v, w, WithGradient ? g : nullptr);
+  const float value =
+      evaluateModel<WithGradient, ReadsCodes>(m, u, v, w, WithGradient ? g : nullptr);
   if (WithGradient) {
     gVoxel[0] = g[0] * s.invExtent[0];
     gVoxel[1] = g[1] * s.invExtent[1];
@@ -397,7 +399,7 @@ AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* data, const float*
 
 /// Value (and gradient in voxel units) of slot s at voxel coordinate x, missingValue() (gradient
 /// 0) where the slot's sample there is missing: every model sampler's evaluation.
-template <bool WithGradient, int FixedDegree = -1>
+template <bool WithGradient, int FixedDegree = -1, bool ReadsCodes = true>
 AFAM_HD float sampleSlot(const FrameSlot& stored, const float* data, const float* x,
                          float* gVoxel) {
   if (!slotSampleValid(stored, data, x)) {
@@ -410,9 +412,9 @@ AFAM_HD float sampleSlot(const FrameSlot& stored, const float* data, const float
     s.knots[0].degree = FixedDegree;
     s.knots[1].degree = FixedDegree;
     s.knots[2].degree = FixedDegree;
-    return sampleSplineSlot<WithGradient>(s, data, x, gVoxel);
+    return sampleSplineSlot<WithGradient, ReadsCodes>(s, data, x, gVoxel);
   }
-  return sampleSplineSlot<WithGradient>(stored, data, x, gVoxel);
+  return sampleSplineSlot<WithGradient, ReadsCodes>(stored, data, x, gVoxel);
 }
 
 /// The first float of slot s's model.
@@ -443,8 +445,9 @@ AFAM_HD void voxelToNormalisedGradient(const FrameView& f, const float* gVoxel, 
 /// that every spline slot of the frame has that degree on all axes: the slot's knots are copied
 /// with the degree as a compile-time constant, so the compiler unrolls the basis and tensor loops
 /// of evaluateModel and keeps their arrays in registers (the CUDA kernels specialise this way; the
-/// values are those of the generic path, same functions, same operations).
-template <int FixedDegree = -1>
+/// values are those of the generic path, same functions, same operations). ReadsCodes false
+/// promises that no slot holds its model as codes (FrameSlot::codeWidth 0).
+template <int FixedDegree = -1, bool ReadsCodes = true>
 struct ModelSamplerT {
   template <bool WithGradient>
   AFAM_HD bool sample(const FrameView& f, const float* p, float& value, float* gradient) const {
@@ -452,7 +455,8 @@ struct ModelSamplerT {
     const int32_t slot = locateSample(f, p, x);
     if (slot < 0) return false;
     float gv[3] = {0.f, 0.f, 0.f};
-    value = sampleSlot<WithGradient, FixedDegree>(f.slots[slot], slotModel(f, slot), x, gv);
+    value =
+        sampleSlot<WithGradient, FixedDegree, ReadsCodes>(f.slots[slot], slotModel(f, slot), x, gv);
     if (WithGradient) voxelToNormalisedGradient(f, gv, gradient);
     return true;
   }

@@ -148,19 +148,17 @@ AFAM_HD_FORCEINLINE float evaluateModelWith(const ModelView& m, const Points& po
 /// the derivatives with respect to (u, v, w); the caller scales them to world units.
 /// On the host, models of one degree 1..3 on all axes take a degree-specialised copy (about 3x
 /// faster); device code specialises at the kernel level instead (CudaKernels/src/kernels.cuh).
-template <bool WithGradient>
+/// ReadsCodes false promises float32 points (m.codeWidth 0): the code readers are not compiled in.
+/// The CUDA kernels are built both ways: reading codes costs them registers (8% of a frame, H100),
+/// so only frames whose GPU pool holds compact models launch the copy that reads them.
+template <bool WithGradient, bool ReadsCodes = true>
 AFAM_HD float evaluateModel(const ModelView& m, float u, float v, float w, float* gradient) {
   using detail::evaluateModelWith;
-#if defined(__CUDA_ARCH__)
-  // A GPU pool holds float32 points (the caster expands a compact model as it uploads it): one
-  // evaluation in the kernels, whose registers the code readers would cost (8% a frame, H100).
-  return evaluateModelWith<WithGradient>(m, detail::FloatPoints{m.control}, u, v, w, gradient);
-#endif
-  if (m.codeWidth == 1)
+  if (ReadsCodes && m.codeWidth == 1)
     return evaluateModelWith<WithGradient>(
         m, detail::CodedPoints<uint8_t>{m.control, static_cast<const unsigned char*>(m.codes)}, u,
         v, w, gradient);
-  if (m.codeWidth == 2)
+  if (ReadsCodes && m.codeWidth == 2)
     return evaluateModelWith<WithGradient>(
         m, detail::CodedPoints<uint16_t>{m.control, static_cast<const unsigned char*>(m.codes)}, u,
         v, w, gradient);

@@ -40,7 +40,8 @@ class GpuCaster : public FrameCaster {
   /// "NVIDIA H200 (sm_90, ...)".
   std::string description() const override { return description_; }
   /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident,
-  /// expanding a compact one to the float32 points the kernels read as it copies it.
+  /// a compact one expanded to float32 points or kept compact (GpuRenderer::setPoolModels; the
+  /// environment's AFAM_GPU_POOL_MODELS=auto|floats|compact for benchmarks).
   bool readsHostPool() const override { return false; }
   /// The models the GPU decodes (gpuDecodesEntry), while it works: the cache keeps them as their
   /// stored payloads, and a miss costs the copy of its compressed bytes and a decoding kernel.

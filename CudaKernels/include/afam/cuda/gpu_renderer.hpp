@@ -43,6 +43,18 @@ enum class GpuFloatMode {
   Fast    ///< -use_fast_math: FMA, approximate division, sqrt and powf
 };
 
+/// How the pool holds a model the frame gives in its compact form (FrameSlot::codeWidth: a table
+/// and a 1- or 2-byte code a point), which the kernels read as the same floats either way.
+enum class GpuPoolModels {
+  /// Expanded to float32 while the frame's models as float32 take at most three quarters of the
+  /// pool; compact beyond (the pool under pressure holds 2-4x more models, and frames with a
+  /// compact model launch the kernels that read codes, 8% slower); a frame whose models do not
+  /// fit together is placed again with every compact model compact. Default.
+  Auto,
+  Floats,  ///< always expanded (the faster kernels; a pool holding fewer models)
+  Compact  ///< always compact
+};
+
 /// Result of timeKernel(): per-launch milliseconds and the number of model evaluations per launch.
 struct GpuKernelTiming {
   std::vector<double> ms;
@@ -108,6 +120,11 @@ class GpuRenderer {
   /// filtering instead of castRay's software trilinear (Full kernels only; throws
   /// InvalidArgument on spline slots).
   void setDsTextures(bool on) { dsTextures_ = on; }
+  /// How the pool holds compact models from the next frame on (models resident stay as they are).
+  void setPoolModels(GpuPoolModels how) { poolModels_ = how; }
+  GpuPoolModels poolModels() const { return poolModels_; }
+  /// Models the last frame read as codes (0: it launched the kernels reading float32 only).
+  int64_t lastCompactSlots() const { return lastCompactSlots_; }
   /// Benchmark knob: 8 asks for the degree-2 kernels limited to 64 registers (8 blocks per SM).
   void setMinBlocksPerSm(int blocks) { minBlocks_ = blocks; }
   /// "full<shaded,p=2>: 40 registers, 0 bytes local" for the kernel the last frame used.
@@ -137,6 +154,8 @@ class GpuRenderer {
   bool specialise_ = true;
   GpuFloatMode mode_ = GpuFloatMode::Exact;
   int minBlocks_ = 1;
+  GpuPoolModels poolModels_ = GpuPoolModels::Auto;
+  int64_t lastCompactSlots_ = 0;
   bool dsTextures_ = false;
   std::string kernelInfo_;
   GpuFrameTimes lastTimes_;

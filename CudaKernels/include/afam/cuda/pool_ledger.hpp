@@ -48,6 +48,11 @@ class PoolLedger {
   void forget(uint64_t key);
 
   bool resident(uint64_t key) const { return entries_.count(key) != 0; }
+  /// The bytes model `key` was acquired with, 0 when it is not resident.
+  size_t residentBytes(uint64_t key) const {
+    const auto it = entries_.find(key);
+    return it == entries_.end() ? 0 : it->second.rawBytes;
+  }
   const PoolStats& stats() const { return stats_; }
   /// Keys evicted since the last beginFrame(), oldest first (for tests and logging).
   const std::vector<uint64_t>& evictedThisFrame() const { return evictedThisFrame_; }

@@ -3,6 +3,7 @@
 // volumes, degrees 1..3, shaded and unshaded; the GPU image is poisoned with NaN first so an
 // unwritten pixel fails. Pool behaviour on the GPU over a replay. Skipped, with the reason, where
 // no GPU is usable (CI).
+#include <cuda_runtime_api.h>
 #include <gtest/gtest.h>
 
 #include <array>
@@ -11,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <tuple>
+#include <vector>
 
 #include "afam/cuda/gpu_renderer.hpp"
 #include "afam/render/cpu_raycaster.hpp"
@@ -366,6 +368,35 @@ TEST(GpuModelPool, OutOfBudgetIsRecoverable) {
   EXPECT_NO_THROW(gpu.render(small.view, small.keys.data(), image.data()));
   // A device allocation far beyond the card is an error, not a crash.
   EXPECT_THROW(GpuRenderer(size_t(1) << 50), GpuOutOfMemory);
+}
+
+TEST(GpuModelPool, AFrameThatStoppedShortDecodesItsModelsBeforeTheirRoomIsReused) {
+  AFAM_SKIP_WITHOUT_GPU();
+  const size_t capacity = 64 * 1024;
+  GpuModelPool pool(capacity);
+  // A frame places a model the GPU decodes (a constant, queued), then one that cannot fit.
+  const float seven = 7.f;
+  GpuDecodeJob job;
+  job.kind = GpuDecodeKind::Constant;
+  job.ncp[0] = job.ncp[1] = job.ncp[2] = 16;  // 16 KiB of floats
+  pool.beginFrame();
+  pool.acquireStored(1, reinterpret_cast<const uint8_t*>(&seven), sizeof seven, 16 * 1024, job);
+  const std::vector<float> threes(capacity / sizeof(float), 3.f);
+  EXPECT_THROW(pool.acquire(2, threes.data(), capacity), GpuOutOfMemory);
+  // The next frame's model takes the whole pool, the room of the first one too: its bytes must
+  // not be overwritten by the first one's decoding, left over from the frame that stopped.
+  pool.beginFrame();
+  const size_t offset = pool.acquire(3, threes.data(), capacity);
+  pool.flush();
+  ASSERT_EQ(cudaStreamSynchronize(static_cast<cudaStream_t>(pool.stream())), cudaSuccess);
+  std::vector<float> back(threes.size(), 0.f);
+  ASSERT_EQ(cudaMemcpy(back.data(), static_cast<const char*>(pool.arena()) + offset, capacity,
+                       cudaMemcpyDeviceToHost),
+            cudaSuccess);
+  size_t wrong = 0;
+  for (float v : back) wrong += v != 3.f;
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_TRUE(pool.takeDecodeFailures().empty());
 }
 
 }  // namespace

@@ -36,6 +36,13 @@ int uniformDegree(const FrameView& v) {
 
 size_t align256(size_t n) { return (n + 255) & ~size_t(255); }
 
+/// Whether some slot's model comes in its compact form (not as a stored payload to decode).
+bool hasCompactModels(const FrameView& v, const GpuStoredSlot* stored) {
+  for (int32_t s = 0; s < v.slotCount; ++s)
+    if (v.slots[s].codeWidth > 0 && !(stored && stored[s].bytes)) return true;
+  return false;
+}
+
 }  // namespace
 
 double GpuKernelTiming::median() const {
@@ -466,8 +473,9 @@ void GpuRenderer::cast(const FrameView& view, const uint64_t* slotKeys, float* d
                  slotHost, stored);
   } catch (const GpuOutOfMemory&) {
     // Its models did not fit together: once more with every compact model compact, those
-    // resident as floats too, before the caller gives the frame to the CPU.
-    if (poolModels_ != GpuPoolModels::Auto) throw;
+    // resident as floats too, before the caller gives the frame to the CPU (a frame with none,
+    // e.g. of models the GPU decodes, goes there at once).
+    if (poolModels_ != GpuPoolModels::Auto || !hasCompactModels(view, stored)) throw;
     d = m.upload(view, slotKeys, GpuPoolModels::Compact, &compactSlots, nullptr, nullptr, slotHost,
                  stored);
     t.modelsUploaded = m.pool.stats().uploads - before.uploads;

@@ -57,13 +57,15 @@ GpuCaster::GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads)
   const char* decode = std::getenv("AFAM_GPU_DECODE");
   decodeOnGpu_ = !(decode && std::strcmp(decode, "0") == 0);
   // Benchmarks: how the pool holds compact models (GpuPoolModels; default auto).
-  if (const char* how = std::getenv("AFAM_GPU_POOL_MODELS")) {
-    if (std::strcmp(how, "floats") == 0) gpu_->setPoolModels(GpuPoolModels::Floats);
-    if (std::strcmp(how, "compact") == 0) gpu_->setPoolModels(GpuPoolModels::Compact);
-    if (std::strcmp(how, "floats") != 0 && std::strcmp(how, "compact") != 0 &&
-        std::strcmp(how, "auto") != 0)
+  if (const char* env = std::getenv("AFAM_GPU_POOL_MODELS")) {
+    const std::string how = env;
+    if (how == "floats")
+      gpu_->setPoolModels(GpuPoolModels::Floats);
+    else if (how == "compact")
+      gpu_->setPoolModels(GpuPoolModels::Compact);
+    else if (how != "auto")
       std::fprintf(stderr,
-                   "afam: AFAM_GPU_POOL_MODELS is '%s', not auto, floats or compact: auto\n", how);
+                   "afam: AFAM_GPU_POOL_MODELS is '%s', not auto, floats or compact: auto\n", env);
   }
 }
 

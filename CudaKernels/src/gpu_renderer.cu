@@ -36,6 +36,13 @@ int uniformDegree(const FrameView& v) {
 
 size_t align256(size_t n) { return (n + 255) & ~size_t(255); }
 
+/// Floats of slot s's model expanded to float32 points (its compact form set aside).
+uint64_t expandedFloats(FrameSlot slot) {
+  slot.codeWidth = 0;
+  slot.codeTable = 0;
+  return slotFloatCount(slot);
+}
+
 /// Whether some slot's model comes in its compact form (not as a stored payload to decode).
 bool hasCompactModels(const FrameView& v, const GpuStoredSlot* stored) {
   for (int32_t s = 0; s < v.slotCount; ++s)
@@ -240,12 +247,8 @@ struct GpuRenderer::Impl {
   /// evicting older frames' models costs fewer uploads than the kernels reading codes cost time.
   bool underPressure(const FrameView& v) const {
     size_t floatBytes = 0;
-    for (int32_t s = 0; s < v.slotCount; ++s) {
-      FrameSlot slot = v.slots[s];
-      slot.codeWidth = 0;
-      slot.codeTable = 0;
-      floatBytes += align256(size_t(slotFloats(slot)) * sizeof(float));
-    }
+    for (int32_t s = 0; s < v.slotCount; ++s)
+      floatBytes += align256(size_t(expandedFloats(v.slots[s])) * sizeof(float));
     return floatBytes > pool.ledger().stats().capacityBytes / 4 * 3;
   }
 
@@ -257,32 +260,27 @@ struct GpuRenderer::Impl {
   bool place(FrameSlot& slot, uint64_t key, const float* host, const GpuStoredSlot* stored,
              GpuPoolModels how) {
     const CompactForm form{slot.codeWidth, slot.codeTable};
-    slot.codeWidth = 0;
-    slot.codeTable = 0;
-    const size_t floatBytes = size_t(slotFloats(slot)) * sizeof(float);
+    const size_t floatBytes = size_t(expandedFloats(slot)) * sizeof(float);
+    const size_t codedBytes = size_t(slotFloats(slot)) * sizeof(float);  // floatBytes if width 0
+    const size_t resident = pool.ledger().residentBytes(key);
+    const bool keepCodes = !stored && form.width > 0 &&
+                           (resident == codedBytes || how == GpuPoolModels::Compact ||
+                            (how == GpuPoolModels::Auto && resident != floatBytes));
+    if (!keepCodes) {
+      slot.codeWidth = 0;
+      slot.codeTable = 0;
+    }
     size_t byteOffset = 0;
-    if (stored) {
+    if (stored)
       byteOffset =
           pool.acquireStored(key, stored->bytes, stored->storedBytes, floatBytes, stored->job);
-    } else if (form.width == 0) {
-      byteOffset = pool.acquire(key, host, floatBytes);
-    } else {
-      FrameSlot coded = slot;
-      coded.codeWidth = form.width;
-      coded.codeTable = form.table;
-      const size_t codedBytes = size_t(slotFloats(coded)) * sizeof(float);
-      const size_t resident = pool.ledger().residentBytes(key);
-      if (resident == codedBytes || how == GpuPoolModels::Compact ||
-          (how == GpuPoolModels::Auto && resident != floatBytes)) {
-        slot = coded;
-        byteOffset = pool.acquire(key, host, codedBytes);
-      } else {
-        byteOffset = pool.acquireCompact(
-            key, host, form, {slot.knots[0].ncp, slot.knots[1].ncp, slot.knots[2].ncp}, floatBytes);
-      }
-    }
+    else if (keepCodes || form.width == 0)  // the host's floats or codes as they are
+      byteOffset = pool.acquire(key, host, codedBytes);
+    else
+      byteOffset = pool.acquireCompact(
+          key, host, form, {slot.knots[0].ncp, slot.knots[1].ncp, slot.knots[2].ncp}, floatBytes);
     slot.offset = byteOffset / sizeof(float);
-    return slot.codeWidth > 0;
+    return keepCodes;
   }
 
   /// Makes every slot's model resident, uploads the frame tables and returns the device view

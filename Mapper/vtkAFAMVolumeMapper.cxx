@@ -6,12 +6,12 @@
 #include "vtkAFAMCudaGLBuffer.h"
 #include "vtkAFAMImageDraw.h"
 #include "vtkAFAMModelTree.h"
+#include "vtkAFAMTransferFunctionTable.h"
 
 #include "afam/format/file_identity.hpp"
 #include "afam/scene/view_mapping.hpp"
 
 #include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
 #include "vtkInformation.h"
 #include "vtkLogger.h"
 #include "vtkMath.h"
@@ -21,7 +21,6 @@
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkOpenGLState.h"
-#include "vtkPiecewiseFunction.h"
 #include "vtkProp.h"
 #include "vtkPropCollection.h"
 #include "vtkRenderer.h"
@@ -408,34 +407,18 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   // keeps the last usable settings, with a warning (RecordStatistics).
   settings.hasTransferFunction = true;
   afam::TransferFunction& tf = settings.transferFunction;
-  if (vtkColorTransferFunction* ctf = property->GetRGBTransferFunction(0))
-  {
-    double node[6];
-    for (int i = 0; i < ctf->GetSize(); ++i)
-    {
-      ctf->GetNodeValue(i, node);
-      tf.colors.push_back({ node[0], node[1], node[2], node[3] });
-    }
-    if (this->DrawMissingValues)
-    {
-      ctf->GetNanColor(tf.nanColor.data());
-      tf.nanOpacity = ctf->GetNanOpacity();
-    }
-  }
-  if (vtkPiecewiseFunction* pwf = property->GetScalarOpacity(0))
-  {
-    double node[4];
-    for (int i = 0; i < pwf->GetSize(); ++i)
-    {
-      pwf->GetNodeValue(i, node);
-      tf.opacities.push_back({ node[0], node[1] });
-    }
-  }
+  int64_t dims[3];
+  double origin[3], spacing[3], range[2];
+  this->Core->Volume(dims, origin, spacing, range);
+  vtkAFAMSampleTransferFunctions(property, range[0], range[1], this->DrawMissingValues, tf);
+  settings.tfTableSize = vtkAFAMTransferFunctionTableSize;
   const double lengthUnit = request.Camera.lengthUnit;
   const double unitDistance = property->GetScalarOpacityUnitDistance(0);
   tf.referenceDistance = unitDistance / lengthUnit;
   settings.shading = property->GetShade(0) != 0;
-  const double sampleWorld = this->SampleDistance > 0 ? this->SampleDistance : 0.5 * unitDistance;
+  settings.jitter = this->UseJittering;
+  const double sampleWorld =
+    this->SampleDistance > 0 ? this->SampleDistance : this->DefaultSampleDistance(spacing);
   settings.sampleDistance = static_cast<float>(sampleWorld / lengthUnit);
   settings.lod.policy =
     this->LodPolicy == LOD_SCREEN_SPACE ? afam::LodPolicy::Screen : afam::LodPolicy::Distance;
@@ -456,6 +439,19 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   request.Prefetcher = this->Prefetcher;
   request.Device = this->RenderDevice;
   request.Threads = this->NumberOfThreads;
+}
+
+double vtkAFAMVolumeMapper::DefaultSampleDistance(const double spacing[3])
+{
+  double finest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+  {
+    if (spacing[a] > 0)
+    {
+      finest = std::min(finest, std::abs(spacing[a]));
+    }
+  }
+  return std::isfinite(finest) ? 0.5 * finest : 1.0;
 }
 
 namespace
@@ -656,6 +652,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "RenderDevice: " << this->RenderDevice << "\n";
   os << indent << "DepthCompositing: " << this->DepthCompositing << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
+  os << indent << "UseJittering: " << this->UseJittering << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "AutoAdjustImageScale: " << this->AutoAdjustImageScale << "\n";
   os << indent << "MinimumImageScale: " << this->MinimumImageScale << "\n";

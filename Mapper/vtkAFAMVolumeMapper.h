@@ -189,10 +189,20 @@ public:
   ///@}
 
   ///@{
-  /// Sample distance along rays in world units; <= 0 (default) uses the volume property's
-  /// scalar opacity unit distance / 2.
+  /// Sample distance along rays in world units; <= 0 (default): half the sample spacing of the
+  /// file's finest level (its smallest axis), so that the default image is close to a finely
+  /// sampled one; opacities are corrected for the step either way.
   vtkSetMacro(SampleDistance, double);
   vtkGetMacro(SampleDistance, double);
+  ///@}
+
+  ///@{
+  /// Shift each pixel's samples along its ray by a fraction of a step that depends on the pixel
+  /// only (stable between frames), as VTK's UseJittering does: the banding a regular lattice
+  /// draws through a volume becomes fine noise. Default on.
+  vtkSetMacro(UseJittering, bool);
+  vtkGetMacro(UseJittering, bool);
+  vtkBooleanMacro(UseJittering, bool);
   ///@}
 
   ///@{
@@ -323,6 +333,9 @@ protected:
   bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
+  /// The sample distance SampleDistance <= 0 stands for: half the finest level's smallest
+  /// sample spacing (`spacing`, the file's), in world units.
+  static double DefaultSampleDistance(const double spacing[3]);
   /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);
   /// false when it was not read (depth compositing off, or nothing but volumes to draw depth).
   bool ReadDepthLimits(vtkRenderer* ren, Frame& frame);
@@ -351,6 +364,7 @@ protected:
   std::string ReportedInteropProblem; // the interop problem last said (once per problem)
   bool WarnedBlendMode = false;
   double SampleDistance = 0;
+  bool UseJittering = true;
   int NumberOfThreads = 0;
   bool AutoAdjustImageScale = true;
   double MinimumImageScale = 0.25;

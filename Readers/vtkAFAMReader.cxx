@@ -23,7 +23,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -75,19 +74,11 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   {
     return 1;
   }
-  // An .afam name that cannot be read at all (missing, no permission) is claimed for the same
-  // reason; any other file is not ours.
+  // Any other file named .afam (not one, unreadable, missing) is claimed for the same reason:
+  // RequestData says "not an .afam file" or why it cannot be read; any other name is not ours.
   const std::string name(filename);
   const std::string ext = ".afam";
-  const bool afamName =
-    name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
-  FILE* f = afamName ? std::fopen(filename, "rb") : nullptr;
-  if (f)
-  {
-    std::fclose(f);
-    return 0; // readable, but not an .afam file
-  }
-  return afamName ? 1 : 0;
+  return name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
 }
 
 namespace
@@ -235,6 +226,9 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
           values->GetPointer(0),
           [this, treeShare](double f) { this->UpdateProgress(treeShare + (1 - treeShare) * f); },
           &damaged);
+        // The values the source had: a spline's overshoot would stretch a shared colour map.
+        afam::clampToSourceRange(
+          *file, values->GetPointer(0), static_cast<size_t>(values->GetNumberOfTuples()));
         image->GetPointData()->SetScalars(values);
         this->ReportDamagedBlocks(damaged, file->path());
       }

@@ -22,6 +22,7 @@ set(_afam_private
   Readers/vtkAFAMModelTree
   Mapper/vtkAFAMCoreRenderer
   Mapper/vtkAFAMImageDraw
+  Mapper/vtkAFAMTransferFunctionTable
   Mapper/vtkAFAMCudaGLBuffer
   Filters/vtkAFAMDistributedEncode
   Filters/vtkAFAMControllerTeam

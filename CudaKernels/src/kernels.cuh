@@ -72,7 +72,7 @@ __global__ void __launch_bounds__(kTileX* kTileY)
   RaySamples r;
   if (raySamples(f, px, py, r)) {
     for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
-      const float t = float(k) * r.dt;
+      const float t = sampleAt(r, k);
       const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
       float value = 0.f, g[3] = {0.f, 0.f, 0.f};
       if (!sampler.template sample<true>(f, p, value, g)) continue;

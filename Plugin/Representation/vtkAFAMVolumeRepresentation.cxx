@@ -54,7 +54,8 @@ int vtkAFAMVolumeRepresentation::RequestData(vtkInformation* request,
     auto* tree = vtkMultiBlockDataSet::GetData(inputVector[0], 0);
     this->FileName = vtkAFAMModelTree::FileName(tree);
     step = vtkAFAMModelTree::Step(tree); // the step of a run the view's time chose
-    if (this->FileName.empty())
+    // An empty tree is a reader's or encoder's failed output: it has said what went wrong.
+    if (this->FileName.empty() && tree && tree->GetNumberOfBlocks() > 0)
     {
       vtkErrorMacro(<< "The input is not an Adaptive-FAM model set (no "
                     << vtkAFAMModelTree::FileNameArray << " field data).");

@@ -102,7 +102,7 @@ bool onlyMissingOnRay(const FrameView& f, int px, int py) {
   if (!raySamples(f, px, py, r) || r.kEnd < r.kBegin) return false;
   const VolumeMask& mask = volume().mask;
   for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
-    const float t = float(k) * r.dt;
+    const float t = sampleAt(r, k);
     int64_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
       const float v = (r.o[a] + t * r.d[a] - f.boxLo[a]) * f.voxelPerUnit[a];

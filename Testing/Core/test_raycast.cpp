@@ -204,14 +204,14 @@ TEST(Raycast, MaxDistanceStopsTheRayAtOpaqueGeometry) {
 }
 
 TEST(Raycast, OpacityOfTheRaysLengthWhereverTheBoxCutsTheLattice) {
-  // The box's faces cross the sample lattice (t = k dt from the eye) as the eye moves by parts of
-  // a step: a ray through the faint constant field gathers the opacity of its length in the box
-  // (2.00, 200 steps) at every offset, not 200 or 201 whole samples by turns (a grid pattern on
-  // the volume's faces, in images).
+  // The eye moves by parts of a step, with and without jitter: a ray through the faint constant
+  // field gathers the opacity of its length in the box (2.00, 200 steps) at every offset, not 200
+  // or 201 whole samples by turns (a grid pattern on the volume's faces, in images).
   const float tf[8] = {0, 0, 0, 0.01f, 1, 1, 1, 0.01f};
   const float want = 1.f - std::pow(0.99f, 200.f);
   for (int i = 0; i < 10; ++i) {
     FrameView f = constantFieldView(tf, 5.f + 0.001f * float(i));
+    f.jitter = i % 2;
     CountingSampler s;
     EXPECT_NEAR(castRayWith<false>(f, s, 0, 0).a, want, 2e-5) << "eye offset " << i << "/10 step";
   }

@@ -51,6 +51,21 @@ std::string nanColorProblem(const TransferFunction& tf) {
          ") is not a finite colour with an opacity in [0, 1]";
 }
 
+/// The sampled table's problem (an entry that is not finite), or empty.
+std::string sampledTableProblem(const TransferFunction& tf) {
+  if (tf.sampled.size() % 4 != 0)
+    return "the sampled transfer-function table has " + std::to_string(tf.sampled.size()) +
+           " floats, not RGBA entries";
+  for (size_t i = 0; i < tf.sampled.size(); ++i)
+    if (!std::isfinite(tf.sampled[i]))
+      return "entry " + std::to_string(i / 4) +
+             " of the sampled transfer-function table is not finite";
+  if (!std::isfinite(tf.sampledLo) || !(tf.sampledHi >= tf.sampledLo))
+    return "the sampled transfer-function table's range " + number(tf.sampledLo) + " .. " +
+           number(tf.sampledHi) + " is not a finite range";
+  return {};
+}
+
 }  // namespace
 
 std::string transferFunctionProblem(const TransferFunction& tf) {
@@ -71,6 +86,8 @@ std::string transferFunctionProblem(const TransferFunction& tf) {
   }
   const std::string nan = nanColorProblem(tf);
   if (!nan.empty()) return nan;
+  const std::string table = sampledTableProblem(tf);
+  if (!table.empty()) return table;
   if (!(tf.referenceDistance > 0) || !std::isfinite(tf.referenceDistance))
     return "the opacity unit distance " + number(tf.referenceDistance) +
            " is not a finite number > 0";

@@ -135,4 +135,11 @@ void decodeLevelBox(const AfamFile& f, int level, const Index3& lo, const Index3
         if (progress) progress(++done / total);
       }
 }
+
+void clampToSourceRange(const AfamFile& file, float* values, size_t count) {
+  const float lo = float(file.header().valueMin), hi = float(file.header().valueMax);
+  if (!(lo <= hi)) return;
+  for (size_t i = 0; i < count; ++i) values[i] = rc::clampf(values[i], lo, hi);  // NaN stays
+}
+
 }  // namespace afam

@@ -193,6 +193,7 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   v.tfReferenceDistance = settings_.sampleDistance;
   v.sampleDistance = settings_.sampleDistance;
   v.shading = settings_.shading ? 1 : 0;
+  v.jitter = settings_.jitter ? 1 : 0;
   // Splines: one value+gradient evaluation per shaded sample is cheaper (H200, ae8b2c9). Raw DS
   // blocks: a gradient is six more trilinear fetches, so only visible samples pay for it.
   v.gradientWithValue = file_->header().mode == EncodingMode::Downsampled ? 0 : 1;
@@ -290,6 +291,11 @@ FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset
     s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
   }
   s.offset = offset;
+  // The values the source had there: its samples' range within the file's (raycast.hpp clamps).
+  const VolumeHeader& h = file.header();
+  s.valueMin = float(std::max(double(e.minValue), h.valueMin));
+  s.valueMax = float(std::min(double(e.maxValue), h.valueMax));
+  if (!(s.valueMin <= s.valueMax)) s.valueMin = s.valueMax = float(h.valueMin);
   if (e.kind == BlockKind::Empty) s.kind = kSlotEmpty;
   if (e.masked) {
     for (int a = 0; a < 3; ++a) s.maskSamples[a] = e.samples[a];

@@ -41,11 +41,35 @@ void TransferFunction::color(double v, double rgb[3]) const {
   rgb[2] = interp(colors, v, [](const ColorPoint& p) { return p.b; });
 }
 
+namespace {
+
+/// Entry i of `out` (n entries over [lo, hi]) from the sampled table of `tf` (linear between its
+/// entries, its end entries outside its range).
+void resampleEntry(const TransferFunction& tf, double v, float* out) {
+  const size_t m = tf.sampled.size() / 4;
+  const double span = tf.sampledHi - tf.sampledLo;
+  double x = span > 0 ? (v - tf.sampledLo) / span * double(m - 1) : 0.0;
+  x = std::clamp(x, 0.0, double(m - 1));
+  const size_t i = std::min(size_t(x), m > 1 ? m - 2 : 0);
+  const double w = m > 1 ? x - double(i) : 0.0;
+  const float* e0 = tf.sampled.data() + 4 * i;
+  const float* e1 = m > 1 ? e0 + 4 : e0;
+  for (int c = 0; c < 4; ++c) out[c] = float(double(e0[c]) + w * double(e1[c] - e0[c]));
+  out[3] = std::clamp(out[3], 0.f, 1.f);
+}
+
+}  // namespace
+
 std::vector<float> TransferFunction::table(int n, double lo, double hi) const {
   if (n < 2) throw InvalidArgument("transfer function: table size must be >= 2");
   std::vector<float> t(size_t(4) * size_t(n));
+  const bool fromSampled = sampled.size() >= 4;
   for (int i = 0; i < n; ++i) {
     const double v = lo + (hi - lo) * double(i) / double(n - 1);
+    if (fromSampled) {
+      resampleEntry(*this, v, &t[4 * size_t(i)]);
+      continue;
+    }
     double rgb[3];
     color(v, rgb);
     t[4 * i + 0] = float(rgb[0]);

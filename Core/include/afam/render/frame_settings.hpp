@@ -18,6 +18,8 @@ namespace afam {
 struct FrameSettings {
   float sampleDistance = 0.005f;  ///< normalised units ([-1, 1]^3 volume), > 0
   bool shading = true;
+  /// Each pixel's samples shifted by a stable fraction of a step (FrameView::jitter): no banding.
+  bool jitter = true;
   LodOptions lod;
   int tfTableSize = 1024;
   /// false: TransferFunction::preset over the file's range, with transferFunction's NaN colour and

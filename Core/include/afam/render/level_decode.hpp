@@ -27,4 +27,9 @@ void decodeLevelBox(const AfamFile& file, int level, const Index3& lo, const Ind
                     const std::function<void(double)>& progress = {},
                     std::vector<std::string>* damaged = nullptr);
 
+/// Clamps `count` decoded values to the value range the source had (the file header's
+/// valueMin..valueMax; NaN stays NaN): a spline's overshoot at a sharp edge then never shows as a
+/// value the data never had (a front end's decoded level, whose range sets a colour map's).
+void clampToSourceRange(const AfamFile& file, float* values, size_t count);
+
 }  // namespace afam

@@ -73,11 +73,14 @@
 //  Rays start at max(box entry, nearDistance): a camera inside the volume starts at its near plane.
 //  They end at min(box exit, maxDistance[pixel]) when the frame carries the per-pixel distances of
 //  opaque geometry (depth compositing with a scene; no sample lies behind an opaque surface).
-//  Samples are taken at t = k * sampleDistance (k integer, t measured from the eye), so samples do
-//  not shimmer when the box entry moves and all samplers see the same positions. In compositing,
-//  sample k stands for [k dt, (k + 1) dt], the first one from the ray's start and the last one up
-//  to its end (endWeight), so the opacity varies continuously where the box faces or opaque
-//  geometry cut the lattice (no grid on the faces).
+//  Samples are taken at t = tEnter + (k + j) * dt (k integer, tEnter where the ray enters the
+//  volume's box, j in [0, 1) the pixel's jitter when FrameView::jitter is on, else 0): the
+//  lattice starts on the box, like VTK's, so its samples do not lie on spheres around the eye
+//  (which cut a volume's iso-surfaces into rings), and the jitter turns the remaining banding into
+//  fine noise that is the same in every frame. All samplers see the same positions. In
+//  compositing, sample k stands for [t_k, t_k + dt], the first one from the ray's start and the
+//  last one up to its end (endWeight), so the opacity varies continuously where the near plane or
+//  opaque geometry cut the lattice (no grid on the faces).
 //
 // ---------------------------------------------------------------------------------------------
 // Classification, shading, compositing
@@ -140,6 +143,11 @@ struct FrameSlot {
   /// them (packed, the last float padded).
   int32_t codeWidth = 0;
   uint32_t codeTable = 0;
+  /// The values the source had over this block (its samples' min and max, within the file's
+  /// range): every value sampled from the slot is clamped to [valueMin, valueMax], so a spline's
+  /// overshoot at a sharp edge is never classified as a value the data never had. The defaults
+  /// clamp nothing.
+  float valueMin = -3.0e38f, valueMax = 3.0e38f;
 };
 
 /// Floats of a slot's model in the pool: control points (or raw samples) and mask words.
@@ -207,6 +215,10 @@ struct FrameView {
   // units, camera.width * camera.height floats, row 0 = top) at which samples are still taken;
   // a ray stops where an opaque surface is. nullptr (default): no limit, no cost.
   const float* maxDistance = nullptr;
+  /// 1: each pixel's samples are shifted along its ray by a fraction of a step that depends on
+  /// the pixel only (rayJitter; VTK's UseJittering), which turns the banding of a regular lattice
+  /// into fine noise and is stable from frame to frame; 0: none.
+  int32_t jitter = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -398,7 +410,8 @@ AFAM_HD bool slotSampleValid(const FrameSlot& s, const float* data, const float*
 }
 
 /// Value (and gradient in voxel units) of slot s at voxel coordinate x, missingValue() (gradient
-/// 0) where the slot's sample there is missing: every model sampler's evaluation.
+/// 0) where the slot's sample there is missing, clamped to the slot's value range: every model
+/// sampler's evaluation.
 template <bool WithGradient, int FixedDegree = -1, bool ReadsCodes = true>
 AFAM_HD float sampleSlot(const FrameSlot& stored, const float* data, const float* x,
                          float* gVoxel) {
@@ -406,15 +419,19 @@ AFAM_HD float sampleSlot(const FrameSlot& stored, const float* data, const float
     if (WithGradient) gVoxel[0] = gVoxel[1] = gVoxel[2] = 0.f;
     return missingValue();
   }
-  if (stored.kind == kSlotRaw) return sampleRawSlot<WithGradient>(stored, data, x, gVoxel);
-  if (FixedDegree > 0) {
+  float value;
+  if (stored.kind == kSlotRaw) {
+    value = sampleRawSlot<WithGradient>(stored, data, x, gVoxel);
+  } else if (FixedDegree > 0) {
     FrameSlot s = stored;
     s.knots[0].degree = FixedDegree;
     s.knots[1].degree = FixedDegree;
     s.knots[2].degree = FixedDegree;
-    return sampleSplineSlot<WithGradient, ReadsCodes>(s, data, x, gVoxel);
+    value = sampleSplineSlot<WithGradient, ReadsCodes>(s, data, x, gVoxel);
+  } else {
+    value = sampleSplineSlot<WithGradient, ReadsCodes>(stored, data, x, gVoxel);
   }
-  return sampleSplineSlot<WithGradient, ReadsCodes>(stored, data, x, gVoxel);
+  return rc::clampf(value, stored.valueMin, stored.valueMax);  // NaN stays NaN
 }
 
 /// The first float of slot s's model.
@@ -563,12 +580,29 @@ AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
 // The ray
 // ---------------------------------------------------------------------------------------------
 
-/// The samples of pixel (px, py): origin o, unit direction d, step dt and the lattice indices
-/// [kBegin, kEnd] (samples at t = k dt, a global lattice). False when the ray takes none: it
-/// misses the box, opaque geometry or the near plane cuts it off, or sampleDistance <= 0.
+/// The fraction of a step, in [0, 1), by which pixel (px, py)'s samples are shifted along its ray
+/// when FrameView::jitter is on: an integer hash of the pixel (the same every frame, uncorrelated
+/// between neighbours).
+AFAM_HD float rayJitter(int px, int py) {
+  uint32_t h = uint32_t(px) * 0x8da6b343u ^ uint32_t(py) * 0xd8163841u;
+  h ^= h >> 16;
+  h *= 0x7feb352du;
+  h ^= h >> 15;
+  h *= 0x846ca68bu;
+  h ^= h >> 16;
+  return float(h >> 8) * (1.f / 16777216.f);
+}
+
+/// The samples of pixel (px, py): origin o, unit direction d, step dt and the indices
+/// [kBegin, kEnd] of the samples t = tBase + k dt (sampleAt). The lattice starts where the ray
+/// enters the volume's box (plus the pixel's jitter), so the samples lie on the box's faces and
+/// not on spheres around the eye (which draw rings through a volume); N ranks that draw parts of
+/// one box see the same lattice. False when the ray takes none: it misses the box, opaque
+/// geometry or the near plane cuts it off, or sampleDistance <= 0.
 struct RaySamples {
   float o[3], d[3];
   float dt;
+  float tBase;  ///< t of sample 0
   int64_t kBegin, kEnd;
   float tStart, tExit;  ///< the part of the ray sampled (box, near plane, opaque geometry)
 };
@@ -581,22 +615,26 @@ AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
   if (tExit < tStart || !(f.sampleDistance > 0.f)) return false;
   // The opacity correction refers to sampleDistance: rayStep keeps the world length of a step.
   r.dt = rayStep(f.camera, r.d, f.sampleDistance);
-  r.kBegin = int64_t(ceilf(tStart / r.dt));
-  r.kEnd = int64_t(floorf(tExit / r.dt));
+  r.tBase = tEnter + (f.jitter ? rayJitter(px, py) : 0.f) * r.dt;
+  r.kBegin = int64_t(ceilf((tStart - r.tBase) / r.dt));
+  r.kEnd = int64_t(floorf((tExit - r.tBase) / r.dt));
   r.tStart = tStart;
   r.tExit = tExit;
   return true;
 }
 
-/// The length of ray sample k stands for, in steps: sample k stands for [k dt, (k + 1) dt], the
+/// Ray distance t of sample k.
+AFAM_HD float sampleAt(const RaySamples& r, int64_t k) { return r.tBase + float(k) * r.dt; }
+
+/// The length of ray sample k stands for, in steps: sample k stands for [t_k, t_k + dt], the
 /// first from the ray's start (1 to 2 steps), the last up to its end (0 to 1 step), a lone one for
 /// the whole ray. The opacity a ray gathers then changes continuously as the box entry, the exit
 /// or opaque geometry crosses the lattice (whole samples switching on and off there draw a grid
 /// on the volume's faces), and a ray cut short by geometry gathers no more than the whole ray.
 AFAM_HD float endWeight(const RaySamples& r, int64_t k) {
   if (k != r.kBegin && k != r.kEnd) return 1.f;
-  const float lo = k == r.kBegin ? r.tStart : float(k) * r.dt;
-  const float hi = k == r.kEnd ? r.tExit : float(k + 1) * r.dt;
+  const float lo = k == r.kBegin ? r.tStart : sampleAt(r, k);
+  const float hi = k == r.kEnd ? r.tExit : sampleAt(r, k) + r.dt;
   return rc::maxf(0.f, hi - lo) / r.dt;
 }
 
@@ -610,7 +648,7 @@ AFAM_HD RGBA castRayWith(const FrameView& f, const Sampler& sampler, int px, int
   const float ratio =
       f.sampleDistance / (f.tfReferenceDistance > 0.f ? f.tfReferenceDistance : f.sampleDistance);
   for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
-    const float t = float(k) * r.dt;
+    const float t = sampleAt(r, k);
     const float weight = endWeight(r, k);
     const float p[3] = {r.o[0] + t * d[0], r.o[1] + t * d[1], r.o[2] + t * d[2]};
     float value = 0.f;
@@ -674,7 +712,7 @@ AFAM_HD RGBA castProjectionRayWith(const FrameView& f, const Sampler& sampler, i
   int64_t n = 0;
   bool missed = false;  // the ray met a missing sample
   for (int64_t k = r.kBegin; k <= r.kEnd; ++k) {
-    const float t = float(k) * r.dt;
+    const float t = sampleAt(r, k);
     const float p[3] = {r.o[0] + t * r.d[0], r.o[1] + t * r.d[1], r.o[2] + t * r.d[2]};
     float value = 0.f, g[3] = {0.f, 0.f, 0.f};
     if (!sampler.template sample<false>(f, p, value, g)) continue;

@@ -27,6 +27,13 @@ class TransferFunction {
   /// (VTK's vtkColorTransferFunction NanColor / NanOpacity; its default colour.)
   std::array<double, 3> nanColor{{0.5, 0.0, 0.0}};
   double nanOpacity = 0.0;
+  /// A table the front end sampled from its own functions (VTK's colour transfer function in any
+  /// colour space, with its above / below range colours; its opacity function): RGBA entries
+  /// (interleaved, alpha per referenceDistance) spanning [sampledLo, sampledHi]. When set, table()
+  /// interpolates it and the points above only name what was sampled (frame_settings.hpp checks
+  /// them); empty: the points, interpolated in RGB.
+  std::vector<float> sampled;
+  double sampledLo = 0.0, sampledHi = 0.0;
 
   double opacity(double value) const;
   void color(double value, double rgb[3]) const;

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/eval/image_metrics.hpp"
 #include "afam/eval/png_io.hpp"
 #include "afam/render/renderer.hpp"
 #include "afam/scene/camera.hpp"
@@ -87,12 +88,35 @@ class StepPlayback {
   std::shared_ptr<const AfamFile> next_;
 };
 
+/// `--ssim`: each frame's image against the exact frame of the same view, drawn by a second
+/// renderer of the same file that waits for every block (unlimited cache, no prefetching).
+class ExactReference {
+ public:
+  ExactReference(const std::shared_ptr<const AfamFile>& file, const RenderOptions& opts) {
+    RenderOptions exact = opts;
+    exact.cache = CacheBudget{};
+    exact.cold = false;
+    exact.storageMBps = 0;
+    exact.prefetch = "none";
+    exact.missBudgetMs = -1;
+    renderer_ = std::make_unique<Renderer>(file, exact);
+  }
+  double ssimOf(const ImageRGBA& image, const Camera& camera) {
+    FrameStats st;
+    FrameSettings s = renderer_->settings();
+    return compare(toRGB8(image), toRGB8(renderer_->renderFrame(camera, s, st))).ssim;
+  }
+
+ private:
+  std::unique_ptr<Renderer> renderer_;
+};
+
 }  // namespace
 
 int runReplay(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
   values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out", "steps", "view"});
-  Args args(argc, argv, values, {"cold", "no-culling", "quiet"});
+  Args args(argc, argv, values, {"cold", "no-culling", "quiet", "ssim"});
   const char* usage =
       "afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B] "
       "[--prefetch none|linear|appa|forecache|lstm] [--cold] [--storage-mbps R] [--csv OUT.csv]";
@@ -130,6 +154,12 @@ int runReplay(int argc, char** argv) {
         "  --view K               every frame from the trajectory's point of view K (playback\n"
         "                         with a still camera); --frames sets how many (default: as many\n"
         "                         as the trajectory has)\n"
+        "  --ssim                 each frame's SSIM against the exact frame of its view (a\n"
+        "                         second renderer waiting for every block; not timed)\n"
+        "                         CSV columns after on_gpu: stand_ins, blocks_behind,\n"
+        "                         bytes_behind (blocks of the selection drawn from a coarser\n"
+        "                         level or not at all: the miss budget ran out), ssim (-1\n"
+        "                         without --ssim)\n"
         "  --quiet                no per-view lines on stdout\n%s%s",
         usage, renderOptionsHelp(), deviceOptionHelp());
     return 0;
@@ -166,16 +196,23 @@ int runReplay(int argc, char** argv) {
     if (!csv) throw IoError("replay: cannot write " + args.str("csv"));
     csv << "pov,caching_ms,render_ms,latency_ms,hits,misses,bytes_read,visible_blocks,"
            "frustum_culled,tf_culled,prefetched_blocks,cache_bytes,cache_peak_bytes,gpu_uploads,"
-           "on_gpu\n";
+           "on_gpu,stand_ins,blocks_behind,bytes_behind,ssim\n";
   }
   const bool quiet = args.has("quiet");
-  std::vector<double> lat, cach, rend;
+  std::vector<double> lat, cach, rend, ssims;
+  std::unique_ptr<ExactReference> reference;
+  if (args.has("ssim")) reference = std::make_unique<ExactReference>(file, opts);
+  int64_t behind = 0;
   uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0, poolPeak = 0;
   int64_t standIns = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameStats st;
     const double openMs = playback.active() ? playback.moveTo(renderer, i) : 0.0;
-    renderer.renderFrame(Camera::fromPose(poses[i], size.first, size.second), st);
+    const Camera camera = Camera::fromPose(poses[i], size.first, size.second);
+    const ImageRGBA image = renderer.renderFrame(camera, st);
+    const double ssim = reference ? reference->ssimOf(image, camera) : -1.0;
+    if (reference) ssims.push_back(ssim);
+    behind += st.blocksBehind;
     st.cachingMs += openMs;
     st.latencyMs += openMs;
     printDeviceMessages(st);
@@ -195,7 +232,8 @@ int runReplay(int argc, char** argv) {
           << ',' << st.misses << ',' << st.bytesRead << ',' << st.slots << ','
           << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks
           << ',' << st.cacheBytes << ',' << st.cachePeakBytes << ',' << st.cast.modelsUploaded
-          << ',' << int(st.cast.onGpu) << '\n';
+          << ',' << int(st.cast.onGpu) << ',' << st.standInBlocks << ',' << st.blocksBehind << ','
+          << st.bytesBehind << ',' << ssim << '\n';
     if (!quiet)
       std::printf(
           "pov=%zu step=%lld caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu "
@@ -237,6 +275,17 @@ int runReplay(int argc, char** argv) {
       "p95_latency_ms=%.3f stand_in_blocks=%lld\n",
       median(lat), median(cach), median(rend), missRate, percentile(lat, 0.95),
       (long long)standIns);
+  // The budget's figures: the first image, the worst caching after it, the motion frames' SSIM.
+  const double worstCaching = cach.size() > 1 ? *std::max_element(cach.begin() + 1, cach.end()) : 0;
+  double meanSsim = 0;
+  for (const double v : ssims) meanSsim += v / double(ssims.size());
+  std::printf(
+      "first_frame_ms=%.3f max_caching_after_first_ms=%.3f p95_over_median=%.3f "
+      "blocks_behind=%lld mean_ssim=%.4f min_ssim=%.4f\n",
+      lat.empty() ? 0.0 : lat[0], worstCaching,
+      median(lat) > 0 ? percentile(lat, 0.95) / median(lat) : 0.0, (long long)behind,
+      ssims.empty() ? -1.0 : meanSsim,
+      ssims.empty() ? -1.0 : *std::min_element(ssims.begin(), ssims.end()));
   rusage self{};
   ::getrusage(RUSAGE_SELF, &self);
   std::printf("cache_peak_bytes=%llu frame_pool_peak_bytes=%llu peak_rss_kb=%ld\n",

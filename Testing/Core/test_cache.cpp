@@ -105,7 +105,8 @@ TEST(Cache, PrefetchNeverEvictsPinnedBlocks) {
   cache.get(0);
   cache.get(1);
   cache.setPinned({0, 1});
-  EXPECT_TRUE(cache.prefetch(5));  // read, but dropped: only pinned blocks to evict
+  EXPECT_FALSE(cache.prefetch(5));  // not read: only pinned blocks to evict
+  EXPECT_EQ(cache.stats().blocksRead, 2u);
   EXPECT_TRUE(cache.contains(0));
   EXPECT_TRUE(cache.contains(1));
   EXPECT_FALSE(cache.contains(5));

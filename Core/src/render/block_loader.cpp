@@ -26,24 +26,38 @@ BlockLoader::~BlockLoader() {
   for (std::thread& t : workers_) t.join();
 }
 
+void BlockLoader::enqueue(const std::vector<int64_t>& entries, bool frame) {
+  for (const int64_t e : entries) {
+    if (loading_.count(e) || cache_.contains(e)) continue;
+    if (queued_.count(e)) {
+      if (!frame) continue;
+      auto it = std::find(prefetchQueue_.begin(), prefetchQueue_.end(), e);
+      if (it == prefetchQueue_.end()) continue;  // already a frame request
+      prefetchQueue_.erase(it);
+    } else {
+      queued_.insert(e);
+    }
+    (frame ? frameQueue_ : prefetchQueue_).push_back(e);
+  }
+}
+
 void BlockLoader::request(const std::vector<int64_t>& entries, LruCache::Purpose purpose) {
-  const bool frame = purpose == LruCache::Purpose::Frame;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    for (const int64_t e : entries) {
-      if (loading_.count(e) || cache_.contains(e)) continue;
-      if (queued_.count(e)) {
-        if (!frame) continue;
-        auto it = std::find(prefetchQueue_.begin(), prefetchQueue_.end(), e);
-        if (it == prefetchQueue_.end()) continue;  // already a frame request
-        prefetchQueue_.erase(it);
-      } else {
-        queued_.insert(e);
-      }
-      (frame ? frameQueue_ : prefetchQueue_).push_back(e);
-    }
+    enqueue(entries, purpose == LruCache::Purpose::Frame);
   }
   work_.notify_all();
+}
+
+void BlockLoader::requestFrame(const std::vector<int64_t>& entries) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const int64_t e : frameQueue_) queued_.erase(e);
+    frameQueue_.clear();
+    enqueue(entries, true);
+  }
+  work_.notify_all();
+  done_.notify_all();  // waiters on a dropped request
 }
 
 size_t BlockLoader::pendingOf(const std::vector<int64_t>& entries) const {

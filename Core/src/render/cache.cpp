@@ -106,6 +106,12 @@ Payload LruCache::load(const AfamFile& f, int64_t entry) {
   const bool compact = compactForm && !stored && !e.residual;
   auto data = std::make_shared<CachedModel>(stored || compact ? 0 : e.size / sizeof(float));
   if (e.kind == BlockKind::Empty) return data;  // no valid sample: no payload, nothing to read
+  std::function<void(const AfamFile&, int64_t)> hook;
+  {
+    std::lock_guard<std::mutex> g(mutex_);
+    hook = loadHook_;
+  }
+  if (hook) hook(f, entry);
   const auto t0 = Clock::now();
   // A residual whose model at the step before is resident costs one payload, not its chain.
   Payload before = stored || compact ? nullptr : residentModelBefore(f, entry);
@@ -144,7 +150,7 @@ bool LruCache::makeRoom(uint64_t bytes, bool mayEvictPinned) {
     while (!fits() && it != lru_.begin()) {
       --it;
       const uint64_t key = *it;
-      if (pass == 0 && pinned_.count(key)) continue;
+      if (kept_.count(key) || (pass == 0 && pinned_.count(key))) continue;
       auto node = map_.find(key);
       resident_ -= node->second.bytes;
       map_.erase(node);
@@ -185,7 +191,13 @@ Payload LruCache::getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool
   loading_.insert(key);
   // Room for the model before it is decoded (its floats: the stored form is smaller).
   const uint64_t reserve = f->entries()[size_t(entry)].size;
-  makeRoom(reserve, purpose == Purpose::Frame);
+  const bool mayEvictPinned = purpose == Purpose::Frame && frameEvictsPinned_;
+  if (!makeRoom(reserve, mayEvictPinned) && !mayEvictPinned) {  // not read: no room
+    (purpose == Purpose::Frame ? stats_.frameDropped : stats_.prefetchDropped)++;
+    loading_.erase(key);
+    loaded_.notify_all();
+    return nullptr;
+  }
   reserved_ += reserve;
   lock.unlock();
   Payload data;
@@ -206,7 +218,7 @@ Payload LruCache::getFrom(const FilePtr& f, int64_t entry, Purpose purpose, bool
     stats_.prefetchLoads++;
     stats_.prefetchBytes += bytes;
   }
-  if (makeRoom(bytes, purpose == Purpose::Frame)) {
+  if (makeRoom(bytes, mayEvictPinned)) {
     lru_.push_front(key);
     map_[key] = Node{data, bytes, lru_.begin(), entry};
     resident_ += bytes;
@@ -254,6 +266,15 @@ Payload LruCache::takeLoaded(int64_t entry) {
   return it->second.data;
 }
 
+Payload LruCache::residentHit(int64_t entry) {
+  std::lock_guard<std::mutex> g(mutex_);
+  auto it = map_.find(modelKey(file_->entries().at(size_t(entry))));
+  if (it == map_.end()) return nullptr;
+  stats_.hits++;
+  lru_.splice(lru_.begin(), lru_, it->second.pos);
+  return it->second.data;
+}
+
 bool LruCache::contains(int64_t entry) const {
   std::lock_guard<std::mutex> g(mutex_);  // the step's key and the lookup under one lock
   return map_.count(modelKey(file_->entries().at(size_t(entry)))) != 0;
@@ -265,6 +286,22 @@ void LruCache::setPinned(const std::vector<int64_t>& entries) {
   std::lock_guard<std::mutex> g(mutex_);
   pinned_.clear();
   for (const int64_t e : entries) pinned_.insert(modelKey(file_->entries().at(size_t(e))));
+}
+
+void LruCache::setKept(const std::vector<int64_t>& entries) {
+  std::lock_guard<std::mutex> g(mutex_);
+  kept_.clear();
+  for (const int64_t e : entries) kept_.insert(modelKey(file_->entries().at(size_t(e))));
+}
+
+void LruCache::setFrameEvictsPinned(bool on) {
+  std::lock_guard<std::mutex> g(mutex_);
+  frameEvictsPinned_ = on;
+}
+
+void LruCache::setLoadHook(std::function<void(const AfamFile&, int64_t)> hook) {
+  std::lock_guard<std::mutex> g(mutex_);
+  loadHook_ = std::move(hook);
 }
 
 void LruCache::clearPinned() {

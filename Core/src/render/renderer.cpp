@@ -204,73 +204,6 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   fr.bind();
 }
 
-std::vector<Placement> Renderer::loadModels(const Selection& sel, FrameStats& st,
-                                            Clock::time_point deadline) {
-  std::vector<int64_t> pins, missing;
-  pins.reserve(sel.visible.size());
-  for (const BlockRef& b : sel.visible) {
-    if (isEmptyBlock(b)) continue;  // nothing to read (drawn as missing)
-    pins.push_back(b.entry);
-    if (!cache_->contains(b.entry) && !cache_->isDamaged(b.entry)) missing.push_back(b.entry);
-  }
-  cache_->setPinned(pins);
-  // Every miss is read and decoded by the load threads at once; the frame waits until they are
-  // all resident or its budget has run out.
-  loader_->request(missing, LruCache::Purpose::Frame);
-  loader_->waitFor(missing, deadline);
-  const IntactLoader load = [this](int64_t entry) {
-    return cache_->getIntact(entry, LruCache::Purpose::Frame);
-  };
-  std::vector<Placement> placed;
-  placed.reserve(sel.visible.size());
-  const std::unordered_set<int64_t> missed(missing.begin(), missing.end());
-  static const Payload noFloats = std::make_shared<const CachedModel>();
-  for (const BlockRef& b : sel.visible) {
-    if (isEmptyBlock(b)) {
-      placed.push_back(Placement{b, b, noFloats});
-      continue;
-    }
-    if (loader_->pending(b.entry)) {
-      if (placeStandIn(b, placed)) {
-        st.standInBlocks++;
-        continue;
-      }
-      loader_->waitFor({b.entry}, Clock::time_point::max());  // nothing coarser to draw
-    }
-    // A miss loaded for this frame was counted as one; the frame takes it without a lookup.
-    Payload data = missed.count(b.entry) ? cache_->takeLoaded(b.entry) : nullptr;
-    if (!data) data = load(b.entry);
-    if (data) {
-      placed.push_back(Placement{b, b, std::move(data)});
-      continue;
-    }
-    st.damagedBlocks++;
-    if (replaceDamaged(*file_, b, load, placed) == 0) st.emptyDamagedBlocks++;
-  }
-  releaseThreadScratch();  // of a model this thread decoded itself
-  return placed;
-}
-
-bool Renderer::isEmptyBlock(const BlockRef& block) const {
-  return file_->entries()[size_t(block.entry)].kind == BlockKind::Empty;
-}
-
-bool Renderer::placeStandIn(const BlockRef& block, std::vector<Placement>& placed) {
-  const Partition& p = file_->partition();
-  BlockRef up = block;
-  while (up.level > 0) {
-    up.ijk = p.parent(up.level, up.ijk);
-    up.level--;
-    up.entry = file_->entryIndex(up.level, up.ijk);
-    if (!cache_->contains(up.entry) || cache_->isDamaged(up.entry)) continue;
-    if (auto data = cache_->getIntact(up.entry, LruCache::Purpose::Frame)) {
-      placed.push_back(Placement{up, block, std::move(data)});
-      return true;
-    }
-  }
-  return false;
-}
-
 FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset) {
   const Partition& p = file.partition();
   const bool raw = file.header().mode == EncodingMode::Downsampled;
@@ -343,7 +276,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
       settings_.missBudgetMs < 0
           ? Clock::time_point::max()
           : t0 + std::chrono::microseconds(int64_t(std::min(settings_.missBudgetMs, 1e9) * 1e3));
-  const std::vector<Placement> placed = loadModels(sel, st, deadline);
+  const std::vector<Placement> placed = loadModels(sel, camera, st, deadline);
   // One slot per model: a coarser model standing in for several damaged blocks is stored once
   // (the GPU pool keys its models by entry) and covers each of their regions.
   std::unordered_map<int64_t, int32_t> slotOf;
@@ -385,6 +318,7 @@ void Renderer::setStep(std::shared_ptr<const AfamFile> step) {
   if (step == file_) return;
   cache_->setFile(step);  // checks that it is a step of the same run
   file_ = std::move(step);
+  residentReady_ = false;  // the new step's resident levels, loaded by its first budgeted frame
 }
 
 void Renderer::setNextStep(std::shared_ptr<const AfamFile> next) {

@@ -43,6 +43,10 @@ class BlockLoader {
 
   /// Queues the entries not already resident, queued or loading.
   void request(const std::vector<int64_t>& entries, LruCache::Purpose purpose);
+  /// A new frame's misses, most important first: frame requests of earlier frames not started
+  /// yet are dropped (a view that moved on no longer needs them; the frames that still do ask
+  /// again), then `entries` are queued as request() does.
+  void requestFrame(const std::vector<int64_t>& entries);
   /// Waits until none of `entries` is queued or loading, or until `deadline`. Returns how many
   /// still are.
   size_t waitFor(const std::vector<int64_t>& entries, Clock::time_point deadline);
@@ -64,8 +68,9 @@ class BlockLoader {
 
  private:
   void run();
-  void loadOtherStep(std::unique_lock<std::mutex>& lock);       // one of stepQueue_, lock held
-  size_t pendingOf(const std::vector<int64_t>& entries) const;  // under the lock
+  void enqueue(const std::vector<int64_t>& entries, bool frame);  // under the lock
+  void loadOtherStep(std::unique_lock<std::mutex>& lock);         // one of stepQueue_, lock held
+  size_t pendingOf(const std::vector<int64_t>& entries) const;    // under the lock
 
   LruCache& cache_;
   mutable std::mutex mutex_;

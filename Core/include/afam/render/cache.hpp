@@ -15,6 +15,13 @@
 // as a last resort (the frame's earlier blocks are already copied out), so a frame needing more
 // than the budget still renders and the budget still holds.
 //
+// Kept blocks: the resident levels of a frame under a budget (frame_budget.hpp; setKept) are
+// never evicted, by frames or prefetching; they count against the budgets like any other block.
+// With setFrameEvictsPinned(false) (a frame under a miss budget), frame loads do not evict pinned
+// blocks either: a load that finds no room is not read (FrameStats shows the block drawn from a
+// coarser level), and the cache does not thrash: it never evicts what the frame draws. A prefetch
+// load that finds no room is not read either.
+//
 // Cold storage (benchmarks): dropOsCache() calls posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED) so
 // the next reads come from the device, not the OS page cache; no root needed. The paper disables
 // the OS cache; this is the per-point-of-view equivalent.
@@ -55,6 +62,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -78,6 +86,9 @@ struct CacheStats {
   uint64_t bytesRead = 0, blocksRead = 0;  ///< all reads, frame and prefetch
   uint64_t prefetchLoads = 0, prefetchBytes = 0, prefetchDropped = 0;
   uint64_t evictions = 0, bypasses = 0;
+  /// Frame loads not read: no room without evicting a pinned or kept block (a frame under a
+  /// miss budget, setFrameEvictsPinned(false)).
+  uint64_t frameDropped = 0;
   /// Residual models decoded from the resident model of the step before (one payload read and
   /// decoded instead of the chain back to the independent payload).
   uint64_t residualsOnResident = 0;
@@ -95,7 +106,8 @@ class LruCache {
            std::shared_ptr<DamageLog> damage = nullptr);
 
   /// Returns the payload of an entry, loading it on a miss. Frame lookups count hits and misses
-  /// and mark the block most recently used. Throws what AfamFile::readPayload throws.
+  /// and mark the block most recently used. Throws what AfamFile::readPayload throws. Null for a
+  /// load that finds no room and may not evict (setFrameEvictsPinned(false); prefetching).
   Payload get(int64_t entry, Purpose purpose = Purpose::Frame, bool* wasHit = nullptr);
   /// Like get(), but null for a damaged entry: one found damaged now (recorded in damage()) or
   /// before (not read again). Other errors (I/O) are thrown.
@@ -114,6 +126,9 @@ class LruCache {
   /// A resident entry's payload, marked most recently used, without counting a lookup (the frame
   /// takes a miss it had loaded for it, which the load counted); null when it is not resident.
   Payload takeLoaded(int64_t entry);
+  /// A resident entry's payload, counted as a frame hit and marked most recently used; null
+  /// (nothing counted, nothing read) when it is not resident.
+  Payload residentHit(int64_t entry);
 
   /// Entries `form` accepts are loaded in the stored form from now on (null: every load decodes).
   /// Resident models keep the form they were loaded in.
@@ -126,6 +141,14 @@ class LruCache {
 
   void setPinned(const std::vector<int64_t>& entries);
   void clearPinned();
+  /// Blocks never evicted from now on (replacing an earlier set; the current step's entries).
+  void setKept(const std::vector<int64_t>& entries);
+  /// Whether frame loads may evict pinned blocks as a last resort (true, the default: the exact
+  /// frame); false: such a load is not read and get() returns null.
+  void setFrameEvictsPinned(bool on);
+  /// Called before every read, outside the lock, with the file and the entry (null: none). For
+  /// tests: a slow or blocked storage.
+  void setLoadHook(std::function<void(const AfamFile&, int64_t)> hook);
 
   void dropOsCache() const;                     ///< posix_fadvise DONTNEED on the whole file
   void setBandwidthCap(double bytesPerSecond);  ///< 0 = no cap
@@ -168,7 +191,9 @@ class LruCache {
   std::condition_variable loaded_;
   std::list<uint64_t> lru_;  // model keys, front = most recent
   std::unordered_map<uint64_t, Node> map_;
-  std::unordered_set<uint64_t> loading_, pinned_;
+  std::unordered_set<uint64_t> loading_, pinned_, kept_;
+  bool frameEvictsPinned_ = true;
+  std::function<void(const AfamFile&, int64_t)> loadHook_;
   uint64_t resident_ = 0;
   uint64_t reserved_ = 0;      // by loads under way, for the models they decode
   uint64_t peakResident_ = 0;  // for takePeakResidentBytes

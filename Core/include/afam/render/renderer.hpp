@@ -32,6 +32,7 @@
 #include "afam/render/block_loader.hpp"
 #include "afam/render/cache.hpp"
 #include "afam/render/damage.hpp"
+#include "afam/render/frame_budget.hpp"
 #include "afam/render/frame_caster.hpp"
 #include "afam/render/frame_settings.hpp"
 #include "afam/render/image.hpp"
@@ -71,6 +72,15 @@ struct FrameStats {
   /// (FrameSettings::missBudgetMs), drawn from a resident coarser level; they are refined in the
   /// next frames. 0: the frame is exact.
   int64_t standInBlocks = 0;
+  /// Blocks of the selection not drawn at their own level because the budget ran out: the
+  /// stand-ins, and blocks with no resident intact ancestor (drawn as nothing; none once the
+  /// resident levels are in); and their models' decoded bytes (float32). 0: the frame is exact.
+  int64_t blocksBehind = 0;
+  uint64_t bytesBehind = 0;
+  /// Coarsest levels kept resident for frames under a budget (frame_budget.hpp; 0: none yet),
+  /// and the milliseconds this frame waited for them to load (the first such frame only).
+  int residentLevels = 0;
+  double residentLoadMs = 0;
   /// Loads of the load threads that failed for another reason than damage (I/O, a file changed
   /// on disk), one message each, handed out once; such a block is read again by the frame that
   /// needs it, which then fails with the same error.
@@ -211,8 +221,15 @@ class Renderer {
   const FrameCaster& caster() const { return *caster_; }
 
  private:
-  std::vector<Placement> loadModels(const Selection& sel, FrameStats& stats,
+  // frame_loads.cpp: what a frame draws, exact or under its miss budget
+  std::vector<Placement> loadModels(const Selection& sel, const Camera& camera, FrameStats& stats,
                                     std::chrono::steady_clock::time_point deadline);
+  std::vector<Placement> placeModels(const Selection& sel, const std::vector<int64_t>& missing,
+                                     bool budgeted, FrameStats& stats);
+  void placeOne(const BlockRef& b, Payload data, std::vector<Placement>& placed, FrameStats& stats);
+  /// Loads the resident levels once (and after setStep); returns the milliseconds waited.
+  double keepResidentLevels(FrameStats& stats);
+  int standInLevel(const BlockRef& block) const;  ///< nearest resident intact ancestor; -1: none
   bool placeStandIn(const BlockRef& block, std::vector<Placement>& placed);
   bool isEmptyBlock(const BlockRef& block) const;  ///< no valid sample: no payload to load
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
@@ -231,6 +248,8 @@ class Renderer {
   double tfLo_ = 0, tfHi_ = 1;
   std::array<std::vector<float>, 3> bounds_;
   std::unique_ptr<FrameCaster> caster_;
+  bool residentReady_ = false;  ///< the resident levels of file_ loaded and kept
+  int residentLevels_ = 0;
 };
 
 }  // namespace afam

@@ -451,7 +451,7 @@ double vtkAFAMVolumeMapper::DefaultSampleDistance(const double spacing[3])
       finest = std::min(finest, std::abs(spacing[a]));
     }
   }
-  return std::isfinite(finest) ? 0.5 * finest : 1.0;
+  return std::isfinite(finest) ? finest : 1.0;
 }
 
 namespace

@@ -189,7 +189,7 @@ public:
   ///@}
 
   ///@{
-  /// Sample distance along rays in world units; <= 0 (default): half the sample spacing of the
+  /// Sample distance along rays in world units; <= 0 (default): the sample spacing of the
   /// file's finest level (its smallest axis), so that the default image is close to a finely
   /// sampled one; opacities are corrected for the step either way.
   vtkSetMacro(SampleDistance, double);
@@ -333,7 +333,7 @@ protected:
   bool PlanImage(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   bool MapCamera(vtkRenderer* ren, vtkVolume* vol, Frame& frame);
   void ReadFrameSettings(vtkVolumeProperty* property, Frame& frame);
-  /// The sample distance SampleDistance <= 0 stands for: half the finest level's smallest
+  /// The sample distance SampleDistance <= 0 stands for: the finest level's smallest
   /// sample spacing (`spacing`, the file's), in world units.
   static double DefaultSampleDistance(const double spacing[3]);
   /// Per-pixel ray length limits from the viewport's z-buffer (the opaque geometry drawn so far);

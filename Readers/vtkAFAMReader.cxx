@@ -21,6 +21,8 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <set>
 #include <array>
 #include <cmath>
 #include <string>
@@ -74,11 +76,27 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   {
     return 1;
   }
-  // Any other file named .afam (not one, unreadable, missing) is claimed for the same reason:
-  // RequestData says "not an .afam file" or why it cannot be read; any other name is not ours.
+  // An .afam name that cannot be read at all (missing, no permission) is claimed for the same
+  // reason; any other file is not ours.
   const std::string name(filename);
   const std::string ext = ".afam";
-  return name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
+  const bool afamName =
+    name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
+  FILE* f = afamName ? std::fopen(filename, "rb") : nullptr;
+  if (!f)
+  {
+    return afamName ? 1 : 0;
+  }
+  std::fclose(f);
+  // Readable, named .afam, but not one: refused (OpenDataFile raises), with one error that says
+  // so, once per file however often ParaView asks.
+  static std::set<std::string> named;
+  if (named.insert(name).second)
+  {
+    vtkErrorWithObjectMacro(
+      nullptr, << name << ": not an .afam file (it does not start with the Adaptive-FAM magic)");
+  }
+  return 0;
 }
 
 namespace

@@ -185,6 +185,9 @@ def apply_tf(display, array, lo, hi, unit_distance):
     rgb, pts, _ = preset_tf(lo, hi)
     lut = GetColorTransferFunction(array)
     lut.AutomaticRescaleRangeMode = "Never"
+    # Core's preset is defined by RGB interpolation (what `afam render` and the ground truth draw,
+    # the plugin's images are compared with them); the plugin honours whatever colour space the
+    # map has (TestAFAMMatchesVolume checks every one against ParaView's own mapping).
     lut.ColorSpace = "RGB"
     lut.RGBPoints = rgb
     pwf = GetOpacityTransferFunction(array)

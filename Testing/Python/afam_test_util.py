@@ -235,12 +235,12 @@ def setup_view(view, size=(301, 300)):
 
 
 def apply_transfer_function(display, array="RTData", lo=37.35, hi=276.8):
-    """Colour and opacity maps set explicitly, so baselines do not depend on presets."""
+    """Colour and opacity maps set explicitly, so baselines do not depend on presets (the colour
+    map in ParaView's default colour space, Diverging, as a user has it)."""
     from paraview.simple import ColorBy, GetColorTransferFunction, GetOpacityTransferFunction
     ColorBy(display, ("POINTS", array))
     lut = GetColorTransferFunction(array)
     lut.RGBPoints = [lo, 0.23, 0.30, 0.75, 0.5 * (lo + hi), 0.87, 0.87, 0.87, hi, 0.71, 0.02, 0.15]
-    lut.ColorSpace = "RGB"
     pwf = GetOpacityTransferFunction(array)
     pwf.Points = [lo, 0.0, 0.5, 0.0, 0.5 * (lo + hi), 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
     display.ScalarOpacityUnitDistance = 2.0

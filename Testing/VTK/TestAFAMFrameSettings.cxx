@@ -97,7 +97,7 @@ int main(int, char*[])
         std::to_string(mapper->GetNumberOfRendererBuilds()) + " renderer builds");
   }
   Check(warnings.empty(), "no warning for usable edits (" + std::to_string(warnings.size()) + ")");
-  mapper->SetSampleDistance(0); // from here on, half the opacity unit distance
+  mapper->SetSampleDistance(0); // from here on, the finest sample spacing
   window->Render();
   const std::vector<unsigned char> good = afam_vtk_test::ReadPixels(window);
   const long goodForeground = Foreground(good);
@@ -124,11 +124,11 @@ int main(int, char*[])
     { "unit distance 0",
       [&] { property->SetScalarOpacityUnitDistance(0.0); },
       [&] { property->SetScalarOpacityUnitDistance(0.07); },
-      { "sample distance 0 is not", "opacity unit distance 0 is not", "keeping 0.0" } },
+      { "opacity unit distance 0 is not", "keeping the last transfer function" } },
     { "unit distance -1",
       [&] { property->SetScalarOpacityUnitDistance(-1.0); },
       [&] { property->SetScalarOpacityUnitDistance(0.07); },
-      { "sample distance -", "opacity unit distance -", "keeping" } },
+      { "opacity unit distance -", "keeping the last transfer function" } },
   };
   for (const Bad& b : bad)
   {

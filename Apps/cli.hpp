@@ -106,7 +106,9 @@ class Args {
       if ((a < 2) != (comma != std::string::npos))
         throw InvalidArgument("--dims: '" + s + "' is not X,Y,Z");
       d[a] = parseInt(t.substr(start, a < 2 ? comma - start : std::string::npos), "--dims");
-      if (d[a] < 1) throw InvalidArgument("--dims: every dimension must be >= 1");
+      if (d[a] < 1)
+        throw InvalidArgument(std::string("--dims: axis ") + "xyz"[a] + " has " +
+                              std::to_string(d[a]) + " samples; every axis needs at least 1");
       start = comma + 1;
     }
     return d;

@@ -16,13 +16,14 @@
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
 #include "moving_blob.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
 namespace {
 
 std::string scratch(const std::string& name) {
-  return ::testing::TempDir() + "afam_encode_run_" + std::to_string(::getpid()) + "_" + name;
+  return afam_test::scratchPath("afam_encode_run_" + name);  // removed with its folder at exit
 }
 
 const Index3 kDims{40, 36, 30};

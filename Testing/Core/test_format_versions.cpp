@@ -19,6 +19,7 @@
 #include "afam/render/level_decode.hpp"
 
 #include "file_bytes.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 using afam_test::readAll;
@@ -29,7 +30,7 @@ namespace {
 const std::string kFormat = std::string(AFAM_TEST_DATA_DIR) + "/format/";
 
 std::string scratch(const std::string& name) {
-  return ::testing::TempDir() + "afam_format_" + std::to_string(::getpid()) + "_" + name;
+  return afam_test::scratchPath("afam_format_" + name);  // removed with its folder at exit
 }
 
 /// A small volume mixing every block kind: a constant half, a smooth quarter and a noisy quarter.

@@ -21,6 +21,7 @@
 #include "afam/spline/fit.hpp"
 
 #include "file_bytes.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 using afam_test::readAll;
@@ -29,7 +30,7 @@ using afam_test::writeAll;
 namespace {
 
 std::string scratch(const std::string& name) {
-  return ::testing::TempDir() + "afam_run_" + std::to_string(::getpid()) + "_" + name;
+  return afam_test::scratchPath("afam_run_" + name);  // removed with its folder at exit
 }
 
 VolumeHeader gridHeader() {

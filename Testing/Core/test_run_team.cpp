@@ -17,6 +17,7 @@
 #include "afam/base/errors.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "moving_blob.hpp"
+#include "scratch_dir.hpp"
 #include "thread_team.hpp"
 
 using namespace afam;
@@ -25,9 +26,8 @@ namespace {
 
 const Index3 kDims{36, 32, 28};
 
-std::string scratchDir() {
-  const std::string dir =
-      ::testing::TempDir() + "afam_run_team_" + std::to_string(::getpid()) + "/";
+std::string scratchDir() {  // inside the process's scratch folder, removed at exit
+  const std::string dir = afam_test::scratchPath("afam_run_team/");
   std::filesystem::create_directories(dir);
   return dir;
 }

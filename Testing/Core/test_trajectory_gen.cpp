@@ -12,6 +12,7 @@
 #include "afam/base/errors.hpp"
 #include "afam/scene/camera.hpp"
 #include "afam/scene/trajectory_gen.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -135,7 +136,7 @@ TEST(TrajectoryGen, GeneratedPathsRoundTripThroughTheFileFormat) {
   o.views = 50;
   o.seed = 5;
   const auto poses = generateTrajectory(o);
-  const std::string path = "/tmp/afam_traj_gen_" + std::to_string(::getpid()) + ".dat";
+  const std::string path = afam_test::scratchPath("traj_gen.dat");
   writeTrajectory(path, poses);
   const auto back = loadTrajectory(path);
   std::remove(path.c_str());

@@ -19,6 +19,7 @@
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/volume/volume_formats.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -28,14 +29,7 @@ const std::string kVolumes = std::string(AFAM_TEST_DATA_DIR) + "/volumes/";
 const std::string kHead = "headsq_quarter_64x64x93_int16.raw";  // multi-byte, anisotropic
 const std::string kBucky = "bucky_32x32x32_uint8.raw";
 
-std::string work(const std::string& name) {
-  static const std::string dir = [] {
-    const std::string d = "/tmp/afam_formats_" + std::to_string(::getpid());
-    ::mkdir(d.c_str(), 0755);
-    return d;
-  }();
-  return dir + "/" + name;
-}
+std::string work(const std::string& name) { return afam_test::scratchPath(name); }
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -58,10 +58,21 @@ got = dsa.WrapDataObject(servermanager.Fetch(reader, idx=1)).PointData["RTData"]
 if got is None or len(got) != len(truth):
     u.fail("decoded level has no RTData array of the right size")
 value_range = float(np.max(truth) - np.min(truth))
-rmse = float(np.sqrt(np.mean((np.asarray(got) - np.asarray(truth)) ** 2)))
-print("finest level: RMSE %.4f (bound 0.005 x range %.1f = %.3f)" % (rmse, value_range, 0.005 * value_range))
-if not (rmse <= 0.005 * value_range * 1.05):
-    u.fail("decoded RMSE %.4f above the bound" % rmse)
+bound = 0.005 * value_range
+err = (np.asarray(got, dtype=np.float64) - np.asarray(truth, dtype=np.float64)).reshape(41, 41, 41)
+rmse = float(np.sqrt(np.mean(err ** 2)))
+# The promise is per block: each of the 4^3 finest blocks (11 samples a side, neighbours sharing a
+# face) within the bound on the 11^3 samples it stands for. The decoded level takes a shared
+# sample from one block, so each block's squared error over the samples it gives the level is at
+# most bound^2 x 11^3 (a level RMSE may exceed the bound by the overlap, (44/41)^1.5, and the
+# check must not allow that).
+owned = [(0, 10), (10, 20), (20, 30), (30, 41)]
+worst = max(float(np.sum(err[z0:z1, y0:y1, x0:x1] ** 2)) / (bound ** 2 * 11 ** 3)
+            for z0, z1 in owned for y0, y1 in owned for x0, x1 in owned)
+print("finest level: RMSE %.4f, bound 0.005 x range %.1f = %.3f, worst block's share of its "
+      "budget %.3f" % (rmse, value_range, bound, worst))
+if not worst <= 1.0:
+    u.fail("a decoded block's squared error is %.3f of what the bound allows it" % worst)
 if rmse == 0.0:
     u.fail("decoded values are the input itself (nothing was decoded)")
 

@@ -508,6 +508,55 @@ struct MaskScope {
 
 }  // namespace
 
+namespace {
+
+/// The stored block as a reader decodes it: its final payload, with its flags and mask section,
+/// through decodeStoredPayload (what AfamFile's readers call), measured on the block's valid
+/// samples. A reference has no payload (its model is the step before's as a reader decodes it,
+/// measured when it was chosen) and a residual was measured on its decoding when coded.
+ErrorStats errorAsRead(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
+                       const BlockTask& t) {
+  ModelEntry m = t.entry;
+  m.size = decodedBytes(m);
+  thread_local FitResult model;
+  model.ncp = m.ncp;
+  model.degree = m.degree;
+  model.control.resize(m.size / sizeof(float));
+  decodeStoredPayload(m, t.stored.data(), model.control.data(),
+                      c.sourceName + ": " + Partition::blockName(c.level, t.ijk));
+  model.control.resize(size_t(controlCount(m)));  // a masked model's mask words follow
+  return fitter.error(t.samples.data(), e.samples, model);
+}
+
+/// Checks the stored block through the reader's decoding (errorAsRead) and keeps that error in
+/// the index; a block that does not decode or that the reader would see over the bound is stored
+/// as its float samples (the exact model), and if even that fails the encode stops naming it.
+void checkAsRead(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  if (!bounded(c.opt.mode) || t.entry.reference || t.entry.residual ||
+      t.entry.kind == BlockKind::Empty)
+    return;
+  ErrorStats es;
+  bool decodes = true;
+  try {
+    es = errorAsRead(c, e, fitter, t);
+  } catch (const FormatError&) {
+    decodes = false;  // the exact form below, or the encode stops
+  }
+  if ((!decodes || !keeps(c.opt.boundKind, es, c.bound)) && t.entry.kind != BlockKind::Samples) {
+    FitResult fr;
+    exactModel(e, t, fr);
+    t.exact = t.complex = true;
+    const bool masked = t.entry.masked;
+    t.entry.masked = false;
+    storeFloat(fr, true, t);
+    if (masked) prependMask(e, t);
+    es = errorAsRead(c, e, fitter, t);
+  }
+  setError(t, es);
+}
+
+}  // namespace
+
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
     const bool hasMissing =
@@ -546,9 +595,14 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
       fitBlock(c, e, fitter, c.bound, t, fr);
       storeFloat(fr, t.exact, t);
     }
+    if (!t.mask.empty()) prependMask(e, t);
+    checkAsRead(c, e, fitter, t);
   } catch (const NumericError& ex) {
     throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName +
                        ": " + ex.what());
+  } catch (const FormatError& ex) {
+    throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName +
+                       " does not decode as written: " + ex.what());
   }
   if (bounded(c.opt.mode) &&
       !keeps(c.opt.boundKind, ErrorStats{t.rmse, t.maxError, 0, 0}, c.bound)) {
@@ -556,10 +610,9 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     std::ostringstream msg;
     msg << "encode: " << Partition::blockName(c.level, t.ijk) << " of " << c.sourceName << " has "
         << (pointwise ? "a sample off by " : "RMSE ") << (pointwise ? t.maxError : t.rmse)
-        << ", over the bound " << c.bound << ", even stored exactly";
+        << ", over the bound " << c.bound << " as a reader decodes it, even stored exactly";
     throw NumericError(msg.str());
   }
-  if (!t.mask.empty()) prependMask(e, t);
   for (int a = 0; a < 3; ++a)
     if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
   std::vector<float>().swap(t.samples);

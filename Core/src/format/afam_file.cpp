@@ -483,6 +483,10 @@ double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out,
 void decodeStoredPayload(const ModelEntry& e, const uint8_t* stored, float* out,
                          const std::string& where) {
   if (e.kind == BlockKind::Empty) return;
+  if (storedAsDecoded(e)) {  // the decision readVerifiedPayload makes before reading in place
+    std::memcpy(out, stored, e.size);
+    return;
+  }
   if (e.masked) {  // the mask section, then the model as an unmasked entry stores it
     const size_t section =
         readMaskSection(stored, e.storedSize, e.samples, out + controlCount(e), where.c_str());
@@ -779,8 +783,8 @@ void AfamFile::readVerifiedPayload(int64_t entry, const float* previous, void* o
     decodeChain(fd_, path_, e, chain(entry), previous, static_cast<float*>(out));
     return;
   }
-  if (e.kind == BlockKind::Empty) return;     // no payload
-  if (e.storedSize == e.size && !e.masked) {  // uncoded floats: read in place
+  if (e.kind == BlockKind::Empty) return;  // no payload
+  if (storedAsDecoded(e)) {                // uncoded floats: read in place
     readChecked(e, out, e.size);
     return;
   }

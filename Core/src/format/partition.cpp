@@ -13,8 +13,8 @@ Partition::Partition(Index3 dims, int levels, int finestBlocksPerAxis)
     : dims_(dims), levels_(levels), requestedBlocks_(finestBlocksPerAxis) {
   for (int a = 0; a < 3; ++a) {
     if (dims[a] < 1)
-      throw InvalidArgument("partition: dimension " + std::to_string(a) + " is " +
-                            std::to_string(dims[a]) + ", must be >= 1");
+      throw InvalidArgument(std::string("partition: axis ") + "xyz"[a] + " has " +
+                            std::to_string(dims[a]) + " samples; every axis needs at least 1");
   }
   if (levels < 1 || levels > 16)
     throw InvalidArgument("partition: levels is " + std::to_string(levels) +

@@ -26,7 +26,9 @@ ArraySource::ArraySource(const void* data, SampleType type, Index3 dims, std::st
       spacing_(spacing) {
   if (!data) throw InvalidArgument("ArraySource: null data");
   for (int a = 0; a < 3; ++a)
-    if (dims[a] < 1) throw InvalidArgument("ArraySource: dimensions must be >= 1");
+    if (dims[a] < 1)
+      throw InvalidArgument(std::string("ArraySource: axis ") + "xyz"[a] + " has " +
+                            std::to_string(dims[a]) + " samples; every axis needs at least 1");
 }
 
 void VolumeSource::readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) {
@@ -84,7 +86,9 @@ RawFileSource::RawFileSource(const std::string& path, Index3 dims, SampleType ty
                              std::array<double, 3> origin, std::array<double, 3> spacing)
     : path_(path), dims_(dims), type_(type), origin_(origin), spacing_(spacing) {
   for (int a = 0; a < 3; ++a)
-    if (dims[a] < 1) throw InvalidArgument(path + ": dimensions must be >= 1");
+    if (dims[a] < 1)
+      throw InvalidArgument(path + ": axis " + "xyz"[a] + " has " + std::to_string(dims[a]) +
+                            " samples; every axis needs at least 1");
   fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd_ < 0) throw IoError(path + ": cannot open: " + std::strerror(errno));
   struct stat st {};

@@ -153,6 +153,12 @@ inline int64_t controlCount(const ModelEntry& e) {
 /// appends either), so caches keyed by it serve every step of a run.
 inline uint64_t modelKey(const ModelEntry& e) { return e.offset; }
 
+/// Whether an entry's stored bytes are its decoded model (uncoded float32, no mask section): the
+/// flags decide, never the sizes alone (a coded payload may be as long as its floats).
+inline bool storedAsDecoded(const ModelEntry& e) {
+  return !e.coded && !e.masked && e.kind != BlockKind::Empty && e.storedSize == e.size;
+}
+
 /// The decoded control points of a stored payload (entry.storedSize bytes) into out
 /// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
 void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out,

@@ -157,6 +157,23 @@ Bytes encodedRounded(const std::string& scratch) {
   return readThenRemove(scratch);
 }
 
+// A 2x2x2 volume whose one block is an interpolant with rounded points coded into exactly the
+// bytes of its float samples (a reader once took such a payload for floats). Throws if it is not.
+Bytes encodedAsLongAsItsFloats(const std::string& scratch) {
+  std::vector<float> v{0.34558418f, 0.82161814f, 0.33043706f, -1.3031572f,
+                       0.9053559f,  0.44637457f, -0.5369532f, 0.5811181f};
+  afam::ArraySource source(v.data(), {2, 2, 2});
+  afam::EncoderOptions o;
+  o.errorBound = 1e-3;
+  o.relativeBound = true;
+  o.threads = 1;
+  afam::encodeVolume(source, o, scratch);
+  const afam::ModelEntry e = afam::AfamFile::open(scratch)->entries()[0];
+  if (!e.roundedPoints || e.storedSize != e.size)
+    throw std::runtime_error("the 2x2x2 seed's payload is no longer as long as its floats");
+  return readThenRemove(scratch);
+}
+
 void afamSeeds(const std::string& out) {
   const std::string dir = out + "/afam_file", scratch = out + "/scratch.afam";
   using M = afam::EncodingMode;
@@ -192,6 +209,9 @@ void afamSeeds(const std::string& out) {
   const Bytes rounded = encodedRounded(scratch);  // interpolants with rounded points
   writeSeed(dir, "rounded-fixall", 7, rounded);
   writeSeed(dir, "rounded-asis", 0, rounded);
+  const Bytes tiny = encodedAsLongAsItsFloats(scratch);  // coded bytes the size of its floats
+  writeSeed(dir, "tiny-rounded-fixall", 7, tiny);
+  writeSeed(dir, "tiny-rounded-asis", 0, tiny);
 }
 
 Bytes floatBytes(const std::vector<float>& f) {

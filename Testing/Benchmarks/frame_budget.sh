@@ -37,12 +37,16 @@ file="$work/head_${DIMS//,/x}_n${NOISE}.afam"
   "$raw" --dims "$DIMS" --noise "$NOISE" >/dev/null
 [[ -f $file ]] || "$NEW" encode "$raw" "$file" --error-bound 1e-2 --relative --quiet >/dev/null
 value() { { grep -o "$1=[0-9.e+-]*" <<<"$2" || true; } | tail -1 | cut -d= -f2; }
-# Figures of a replay's CSV: first latency, median, p95, worst caching after the first frame.
+# Figures of a replay's CSV: first latency, median, p95, p95/median, worst caching after the first.
 figures() {
-  awk -F, 'NR > 1 { lat[NR - 1] = $4; if (NR > 2 && $2 > worst) worst = $2; if (NR == 2) first = $4 }
-    END { n = asort(lat); med = n % 2 ? lat[(n + 1) / 2] : (lat[n / 2] + lat[n / 2 + 1]) / 2
+  local lat first worst
+  lat="$(awk -F, 'NR > 1 { print $4 }' "$1" | sort -g)"
+  first="$(awk -F, 'NR == 2 { print $4 }' "$1")"
+  worst="$(awk -F, 'NR > 2 && $2 > w { w = $2 } END { print w + 0 }' "$1")"
+  awk -v first="$first" -v worst="$worst" '{ v[NR] = $1 }
+    END { n = NR; med = n % 2 ? v[(n + 1) / 2] : (v[n / 2] + v[n / 2 + 1]) / 2
           r = int(0.95 * n + 0.999999); if (r < 1) r = 1
-          printf "%.1f | %.1f | %.1f | %.2f | %.1f", first, med, lat[r], lat[r] / med, worst }' "$1"
+          printf "%.1f | %.1f | %.1f | %.2f | %.1f", first, med, v[r], v[r] / med, worst }' <<<"$lat"
 }
 common=(--size "$SIZE,$SIZE" --device "$DEVICE" --cold --lod screen --miss-budget-ms "$BUDGET"
   --cache-blocks 0 --quiet --frames "$FRAMES" --sample-distance "$SAMPLE_DISTANCE")

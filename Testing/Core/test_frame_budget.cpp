@@ -83,7 +83,7 @@ std::vector<BlockRef> drawn(Renderer& r, const Camera& c) {
 }  // namespace
 
 TEST(ResidentLevels, AsManyCoarseLevelsAsFitAShareOfTheBudgets) {
-  const auto file = mlFile();  // levels of 2^3, 4^3 and 8^3 blocks
+  const auto file = mlFile();                                 // levels of 2^3, 4^3 and 8^3 blocks
   EXPECT_EQ(residentLevels(*file, CacheBudget{}).levels, 1);  // 72 of 584 blocks > 1/16
   EXPECT_EQ(residentLevels(*file, CacheBudget{0, 200}).levels, 1);
   uint64_t coarseBytes = 0, coarseBlocks = 0;  // of levels 0 and 1
@@ -93,8 +93,7 @@ TEST(ResidentLevels, AsManyCoarseLevelsAsFitAShareOfTheBudgets) {
       coarseBlocks++;
     }
   EXPECT_EQ(residentLevels(*file, CacheBudget{coarseBytes * 16, coarseBlocks * 16}).levels, 2);
-  EXPECT_EQ(residentLevels(*file, CacheBudget{coarseBytes * 16 - 16, coarseBlocks * 16}).levels,
-            1);
+  EXPECT_EQ(residentLevels(*file, CacheBudget{coarseBytes * 16 - 16, coarseBlocks * 16}).levels, 1);
   EXPECT_EQ(residentLevels(*file, CacheBudget{0, 16}).levels, 1);  // level 0 fits half
   EXPECT_EQ(residentLevels(*file, CacheBudget{0, 15}).levels, 0);
   const ResidentLevels one = residentLevels(*file, CacheBudget{});
@@ -209,10 +208,10 @@ TEST(FrameBudget, ADamagedStandInIsReplacedByTheNextIntactAncestorReportedOnce) 
   const Int3 b0 = file->entries()[size_t(bad)].block;
   const int stride = file->partition().stride(0);
   for (const BlockRef& b : blocks)
-    under += (b.ijk[0] / stride == b0[0] && b.ijk[1] / stride == b0[1] &&
-              b.ijk[2] / stride == b0[2])
-                 ? 1
-                 : 0;
+    under +=
+        (b.ijk[0] / stride == b0[0] && b.ijk[1] / stride == b0[1] && b.ijk[2] / stride == b0[2])
+            ? 1
+            : 0;
   FrameStats st;
   r.renderFrame(c, finest(r, 20), st);
   EXPECT_EQ(st.damageReports.size(), 1u);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "afam/format/block_codec.hpp"
+#include "afam/format/block_decode.hpp"
 #include "afam/format/block_mask.hpp"
 #include "afam/format/rounded_points.hpp"
 #include "hole_fill.hpp"
@@ -395,6 +396,16 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
 
 }  // namespace
 
+ErrorStats errorAsDecoded(const ModelEntry& m, const float* points, const BlockTask& t) {
+  thread_local std::vector<float> values;
+  decodeBlockSamples(m, points, EncodingMode::Adaptive, values);
+  if (values.size() != t.samples.size())
+    throw FormatError("a decoded block has " + std::to_string(values.size()) + " samples, not " +
+                      std::to_string(t.samples.size()));
+  return errorOnValid(values.data(), t.samples.data(), values.size(),
+                      t.mask.empty() ? nullptr : t.mask.data());
+}
+
 void setError(BlockTask& t, const ErrorStats& es) {
   ModelEntry& m = t.entry;
   t.rmse = es.rmse;
@@ -511,34 +522,38 @@ struct MaskScope {
 namespace {
 
 /// The stored block as a reader decodes it: its final payload, with its flags and mask section,
-/// through decodeStoredPayload (what AfamFile's readers call), measured on the block's valid
-/// samples. A reference has no payload (its model is the step before's as a reader decodes it,
-/// measured when it was chosen) and a residual was measured on its decoding when coded.
-ErrorStats errorAsRead(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
-                       const BlockTask& t) {
+/// through decodeStoredPayload (what AfamFile's readers call), measured by errorAsDecoded. A
+/// reference has no payload and a residual is measured on its decoding when chosen.
+ErrorStats errorAsRead(const FitContext& c, const BlockTask& t) {
   ModelEntry m = t.entry;
   m.size = decodedBytes(m);
-  thread_local FitResult model;
-  model.ncp = m.ncp;
-  model.degree = m.degree;
-  model.control.resize(m.size / sizeof(float));
-  decodeStoredPayload(m, t.stored.data(), model.control.data(),
+  thread_local std::vector<float> points;
+  points.resize(m.size / sizeof(float));
+  decodeStoredPayload(m, t.stored.data(), points.data(),
                       c.sourceName + ": " + Partition::blockName(c.level, t.ijk));
-  model.control.resize(size_t(controlCount(m)));  // a masked model's mask words follow
-  return fitter.error(t.samples.data(), e.samples, model);
+  return errorAsDecoded(m, points.data(), t);
+}
+
+/// The step before's model (`previous`, its decoded points `model`) measured on this step's samples
+/// as a reader decodes it: the error of the block if it refers to that model.
+ErrorStats movedError(const ModelEntry& previous, const FitResult& model, const BlockExtent& e,
+                      const BlockTask& t) {
+  ModelEntry m = previous;
+  m.samples = e.samples;
+  return errorAsDecoded(m, model.control.data(), t);
 }
 
 /// Checks the stored block through the reader's decoding (errorAsRead) and keeps that error in
 /// the index; a block that does not decode or that the reader would see over the bound is stored
 /// as its float samples (the exact model), and if even that fails the encode stops naming it.
-void checkAsRead(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+void checkAsRead(const FitContext& c, const BlockExtent& e, BlockTask& t) {
   if (!bounded(c.opt.mode) || t.entry.reference || t.entry.residual ||
       t.entry.kind == BlockKind::Empty)
     return;
   ErrorStats es;
   bool decodes = true;
   try {
-    es = errorAsRead(c, e, fitter, t);
+    es = errorAsRead(c, t);
   } catch (const FormatError&) {
     decodes = false;  // the exact form below, or the encode stops
   }
@@ -550,7 +565,7 @@ void checkAsRead(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     t.entry.masked = false;
     storeFloat(fr, true, t);
     if (masked) prependMask(e, t);
-    es = errorAsRead(c, e, fitter, t);
+    es = errorAsRead(c, t);
   }
   setError(t, es);
 }
@@ -574,8 +589,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     const bool before = c.opt.previous && bounded(c.opt.mode) && t.mask.empty() &&
                         c.opt.previous->model(c.level, t.ijk, previous, model, mayRefer);
     const bool inTime = before && mayRefer;
-    const ErrorStats moved =
-        inTime ? fitter.error(t.samples.data(), e.samples, model) : ErrorStats{};
+    const ErrorStats moved = inTime ? movedError(previous, model, e, t) : ErrorStats{};
     // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
     // block moved little since the step before, and at a key step (the model the next steps
     // refer to); at the first step, where the caller found that it pays (firstStepHeadroom).
@@ -596,7 +610,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
       storeFloat(fr, t.exact, t);
     }
     if (!t.mask.empty()) prependMask(e, t);
-    checkAsRead(c, e, fitter, t);
+    checkAsRead(c, e, t);
   } catch (const NumericError& ex) {
     throw NumericError("encode: " + Partition::blockName(c.level, t.ijk) + " of " + c.sourceName +
                        ": " + ex.what());

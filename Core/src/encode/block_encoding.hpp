@@ -89,6 +89,11 @@ int largestPassingStep(Passes&& passes) {
   return pass < n ? pass : -1;
 }
 
+/// The error of a model on t's valid samples as a reader sees it: decodeBlockSamples (what
+/// `afam verify` and the level decoder evaluate, in float32) of its decoded points (entry m, whose
+/// samples are t's), against t.samples. FormatError when the shapes differ.
+ErrorStats errorAsDecoded(const ModelEntry& m, const float* points, const BlockTask& t);
+
 /// The entry's error and value range from the stored model's error on the block's samples.
 void setError(BlockTask& t, const ErrorStats& es);
 

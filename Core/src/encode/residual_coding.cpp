@@ -100,7 +100,9 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
     return false;
   const FitResult decoded = applyResidual(
       before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));
-  const ErrorStats es = fitter.error(s.data(), n, decoded);
+  ModelEntry decodedEntry = before;
+  decodedEntry.samples = n;
+  const ErrorStats es = errorAsDecoded(decodedEntry, decoded.control.data(), t);
   if (!keeps(kind, es, c.bound)) return false;
   ModelEntry& m = t.entry;
   m.kind = before.kind;

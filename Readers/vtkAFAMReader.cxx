@@ -21,8 +21,6 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 
 #include <algorithm>
-#include <cstdio>
-#include <set>
 #include <array>
 #include <cmath>
 #include <string>
@@ -70,33 +68,30 @@ int vtkAFAMReader::CanReadFile(const char* filename)
   {
     return 0;
   }
-  // Claimed without parsing the rest: a damaged, truncated or newer file is the reader's to
-  // explain (RequestData names what is wrong), not ParaView's "No reader found".
+  // Claimed without parsing the rest: a damaged, truncated, newer or foreign file that starts
+  // with the magic or is named .afam is the reader's to explain (one error that says what is
+  // wrong with it), not ParaView's "No reader found" or its reader-choice dialog.
   if (afam::startsWithAfamMagic(filename))
   {
     return 1;
   }
-  // An .afam name that cannot be read at all (missing, no permission) is claimed for the same
-  // reason; any other file is not ours.
   const std::string name(filename);
   const std::string ext = ".afam";
-  const bool afamName =
-    name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0;
-  FILE* f = afamName ? std::fopen(filename, "rb") : nullptr;
-  if (!f)
+  return name.size() >= ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0
+    ? 1
+    : 0;
+}
+
+void vtkAFAMReader::ReportOnce(const std::string& message)
+{
+  // RequestInformation and RequestData of every update meet the same bad file: the user is told
+  // once, and the pipeline gets an empty output rather than a failure (which VTK's executive
+  // would report again, in words about requests).
+  if (message != this->LastError)
   {
-    return afamName ? 1 : 0;
+    this->LastError = message;
+    vtkErrorMacro(<< message);
   }
-  std::fclose(f);
-  // Readable, named .afam, but not one: refused (OpenDataFile raises), with one error that says
-  // so, once per file however often ParaView asks.
-  static std::set<std::string> named;
-  if (named.insert(name).second)
-  {
-    vtkErrorWithObjectMacro(
-      nullptr, << name << ": not an .afam file (it does not start with the Adaptive-FAM magic)");
-  }
-  return 0;
 }
 
 namespace
@@ -133,10 +128,11 @@ int vtkAFAMReader::RequestInformation(vtkInformation*,
     const std::vector<double> times = afam::AfamFile::open(this->FileName)->stepTimes();
     SetTimeSteps(outV->GetInformationObject(0), times);
     SetTimeSteps(outV->GetInformationObject(1), times);
+    this->LastError.clear();
   }
-  catch (const std::exception&)
+  catch (const std::exception& e)
   {
-    // Reported by RequestData.
+    this->ReportOnce(e.what()); // at open time: File > Open, OpenDataFile
   }
   // Port 1: the decoded level's grid, or an empty extent when no level is asked for.
   vtkInformation* imageInfo = outV->GetInformationObject(1);
@@ -259,9 +255,10 @@ int vtkAFAMReader::RequestData(vtkInformation*, vtkInformationVector**, vtkInfor
     {
       image->Initialize();
     }
-    vtkErrorMacro(<< e.what());
-    return 0;
+    this->ReportOnce(e.what());
+    return 1; // an empty output: the error above says why
   }
+  this->LastError.clear();
   return 1;
 }
 

@@ -26,7 +26,8 @@
  * its contiguous range of coarsest blocks (z-major slabs, spatially coherent); its level leaves
  * span only those blocks.
  *
- * Anything that is not a valid .afam file is reported with vtkErrorMacro and a failed request.
+ * Anything that is not a valid .afam file is reported once with vtkErrorMacro (what is wrong with
+ * it, naming the path) and gives empty outputs, with no second error from the pipeline.
  */
 #ifndef vtkAFAMReader_h
 #define vtkAFAMReader_h
@@ -57,9 +58,9 @@ public:
   vtkGetMacro(DecodeLevel, int);
   ///@}
 
-  /// 1 when `filename` starts with the .afam magic (whether or not the rest is valid: the reader
-  /// then reports what is wrong: truncated, checksum, version), or is an .afam name that cannot be
-  /// read (missing, no permission); 0 otherwise. Never throws.
+  /// 1 when `filename` starts with the .afam magic or is named .afam, whether or not the rest is
+  /// valid: the reader then says what is wrong with it (truncated, checksum, version, not an .afam
+  /// file, unreadable), once; 0 otherwise. Never throws.
   static int CanReadFile(const char* filename);
 
 protected:
@@ -71,9 +72,13 @@ protected:
   int FillOutputPortInformation(int port, vtkInformation* info) override;
   /// One warning for the damaged blocks of a decode (none when `damaged` is empty).
   void ReportDamagedBlocks(const std::vector<std::string>& damaged, const std::string& path);
+  /// One error for a file that cannot be read, however many updates meet it (see LastError).
+  void ReportOnce(const std::string& message);
 
   char* FileName = nullptr;
   int DecodeLevel = -1;
+  /// The error last reported; cleared when the file opens again.
+  std::string LastError;
 
 private:
   vtkAFAMReader(const vtkAFAMReader&) = delete;

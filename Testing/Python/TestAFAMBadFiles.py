@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: BSD-3-Clause
-"""pvpython: a file that starts with the .afam magic is claimed by the reader, which says what is
-wrong with it (truncated with the bytes expected and found, a damaged header, an unreadable file),
-naming the path, instead of ParaView's "No reader found"."""
+"""pvpython: a file that starts with the .afam magic or is named .afam is claimed by the reader,
+which says what is wrong with it (truncated with the bytes expected and found, a damaged header, a
+newer version, not an .afam file at all) in one error naming the path, and nothing after it: not
+when the file is shown, rendered, updated again or asked for a decoded level; never ParaView's
+"No reader found"."""
 import os
 import shutil
 import sys
@@ -9,7 +11,7 @@ import sys
 sys.path.insert(0, os.environ.get("AFAM_TEST_SCRIPTS", ""))
 import afam_test_util as u  # noqa: E402
 
-from paraview.simple import OpenDataFile  # noqa: E402
+from paraview.simple import CreateRenderView, OpenDataFile, Render, Show  # noqa: E402
 from vtkmodules.vtkCommonCore import vtkOutputWindow, vtkStringOutputWindow  # noqa: E402
 
 u.load_plugin(globals())
@@ -17,6 +19,7 @@ out = u.out_dir()
 good = os.path.join(out, "wavelet.afam")
 u.encode_wavelet(globals(), [-10, 10, -10, 10, -10, 10], 3, 4, 0.01, good)
 data = open(good, "rb").read()
+view = CreateRenderView()
 
 def open_and_report(path):
     """The errors ParaView's output window shows for opening `path` and updating the reader.
@@ -30,6 +33,11 @@ def open_and_report(path):
         if reader is not None:
             reader.UpdatePipeline()
             produced = reader.GetDataInformation().GetNumberOfDataSets()
+            Show(reader, view)  # what File > Open and Apply do next: nothing more may be said
+            Render(view)
+            reader.DecodeLevel = 1
+            reader.UpdatePipeline()
+            produced += reader.GetDataInformation().GetNumberOfDataSets()
         text = messages.GetOutput() if reader is not None else "no reader found " + messages.GetOutput()
     except RuntimeError as e:
         text = "OpenDataFile refused it: %s %s" % (e, messages.GetOutput())
@@ -48,6 +56,9 @@ def expect(path, *words):
             u.fail("the message for %s lacks '%s': %s" % (path, w, text))
     if "No reader found" in text or "no reader found" in text:
         u.fail("ParaView's generic message for %s" % path)
+    errors = text.count("ERROR:") + text.count("OpenDataFile refused it")
+    if errors != 1:
+        u.fail("%d errors for %s, not one: %s" % (errors, path, text))
 
 
 # The first 60% of a valid file.
@@ -67,6 +78,18 @@ text = open_and_report(header)
 print("header.afam -> %s" % " ".join(text.split())[:400])
 if header not in text or not ("checksum" in text or "absurd" in text or "unsupported" in text):
     u.fail("the damaged header is not named: %s" % text)
+if text.count("ERROR:") != 1:
+    u.fail("not one error for the damaged header: %s" % text)
+
+# A file named .afam that is not one (readable, any other content): claimed and named, not left to
+# ParaView's reader-choice dialog or "No reader found".
+foreign = os.path.join(out, "foreign.afam")
+with open(foreign, "wb") as f:
+    f.write(b"P6\n4 4\n255\n" + bytes(range(48)) * 40)
+expect(foreign, "not an .afam file")
+
+# The same file again, after a good one: the error is said again for the new reader.
+expect(truncated, "truncated")
 
 # A newer format version (docs/FORMAT.md: the version is the uint32 at byte 8).
 newer = os.path.join(out, "newer.afam")

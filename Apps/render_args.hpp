@@ -34,6 +34,8 @@ inline const char* renderOptionsHelp() {
          "  --threads N            ray-casting threads (default: all cores)\n"
          "  --load-threads N       threads reading and decoding a frame's misses (default: all "
          "cores)\n"
+         "  --load-nice N          nice steps the load and prefetch threads run below the frame\n"
+         "                         (0..19, default 10; 0: the same priority)\n"
          "  --miss-budget-ms M     wait at most M ms for misses; blocks still loading are drawn\n"
          "                         from a resident coarser level (default: wait for all)\n"
          "  --nan-color R,G,B,A    draw missing samples in this colour with opacity A (each in\n"
@@ -46,7 +48,7 @@ inline const std::set<std::string>& renderValueOptions() {
                                           "shading",        "lod",          "pixel-budget",
                                           "threads",        "trajectory",   "load-threads",
                                           "miss-budget-ms", "step",         "nan-color",
-                                          "models"};
+                                          "models",         "load-nice"};
   return s;
 }
 
@@ -82,6 +84,8 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   if (o.threads < 0) throw InvalidArgument("--threads must be >= 0");
   o.loadThreads = int(a.integer("load-threads", 0));
   if (o.loadThreads < 0) throw InvalidArgument("--load-threads must be >= 0");
+  o.loadNice = int(a.integer("load-nice", o.loadNice));
+  if (o.loadNice < 0 || o.loadNice > 19) throw InvalidArgument("--load-nice must be in 0..19");
   o.missBudgetMs = a.real("miss-budget-ms", -1);
   if (a.has("miss-budget-ms") && !(o.missBudgetMs >= 0))
     throw InvalidArgument("--miss-budget-ms must be a number >= 0");

@@ -4,14 +4,15 @@
 #include <algorithm>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_priority.hpp"
 #include "afam/base/thread_scratch.hpp"
 
 namespace afam {
 
-BlockLoader::BlockLoader(LruCache& cache, int threads) : cache_(cache) {
+BlockLoader::BlockLoader(LruCache& cache, int threads, int nice) : cache_(cache) {
   if (threads < 1) threads = int(std::max(1u, std::thread::hardware_concurrency()));
   workers_.reserve(size_t(threads));
-  for (int t = 0; t < threads; ++t) workers_.emplace_back([this] { run(); });
+  for (int t = 0; t < threads; ++t) workers_.emplace_back([this, nice] { run(nice); });
 }
 
 BlockLoader::~BlockLoader() {
@@ -133,7 +134,8 @@ void BlockLoader::loadOtherStep(std::unique_lock<std::mutex>& lock) {
   done_.notify_all();
 }
 
-void BlockLoader::run() {
+void BlockLoader::run(int nice) {
+  lowerThisThreadPriority(nice);  // where it cannot, loads run at the frame's priority
   std::unique_lock<std::mutex> lock(mutex_);
   const auto hasWork = [this] {
     return quit_ || !frameQueue_.empty() || !prefetchQueue_.empty() || !stepQueue_.empty();

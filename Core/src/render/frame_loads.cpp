@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What a frame draws (Renderer::loadModels): the exact frame waits for every selected block; a
 // frame under a miss budget never waits past its deadline, and never reads on its own thread.
+#include <algorithm>
 #include <chrono>
 #include <unordered_set>
 
@@ -102,6 +103,7 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, const Camera& 
     loader_->request(missing, LruCache::Purpose::Frame);
   }
   loader_->waitFor(missing, deadline);
+  waitEnd_ = std::min(Clock::now(), deadline);  // the frame's tail starts here
   std::vector<Placement> placed = placeModels(sel, missing, budgeted, st);
   releaseThreadScratch();  // of a model this thread decoded itself
   return placed;

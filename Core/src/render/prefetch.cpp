@@ -2,11 +2,12 @@
 #include "afam/render/prefetch.hpp"
 
 #include "afam/base/errors.hpp"
+#include "afam/base/thread_priority.hpp"
 #include "afam/base/thread_scratch.hpp"
 
 namespace afam {
 
-Prefetcher::Prefetcher() : thread_([this] { run(); }) {}
+Prefetcher::Prefetcher(int nice) : thread_([this, nice] { run(nice); }) {}
 
 Prefetcher::~Prefetcher() {
   {
@@ -49,7 +50,8 @@ PrefetchStats Prefetcher::stats() const {
   return stats_;
 }
 
-void Prefetcher::run() {
+void Prefetcher::run(int nice) {
+  lowerThisThreadPriority(nice);
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     cv_.wait(lock, [this] { return quit_ || hasJob_; });

@@ -93,15 +93,17 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
     : file_(std::move(file)), resources_(std::move(resources)) {
   if (!file_) throw InvalidArgument("renderer: no file");
   if (resources_.threads < 0) throw InvalidArgument("renderer: threads must be >= 0");
+  if (resources_.loadNice < 0 || resources_.loadNice > 19)
+    throw InvalidArgument("renderer: the load threads' nice step must be 0..19");
   const VolumeHeader& h = file_->header();
   tfLo_ = h.valueMin;
   tfHi_ = h.valueMax > h.valueMin ? h.valueMax : h.valueMin + 1.0;
   setFrameSettings(settings);
   caster_ = std::make_unique<CpuCaster>(resources_.threads);
   cache_ = std::make_unique<LruCache>(file_, resources_.cache, std::move(damage));
-  loader_ = std::make_unique<BlockLoader>(*cache_, resources_.loadThreads);
+  loader_ = std::make_unique<BlockLoader>(*cache_, resources_.loadThreads, resources_.loadNice);
   if (resources_.storageMBps > 0) cache_->setBandwidthCap(resources_.storageMBps * 1e6);
-  prefetcher_ = std::make_unique<Prefetcher>();
+  prefetcher_ = std::make_unique<Prefetcher>(resources_.loadNice);
   // appa and forecache keep the transfer function and LOD settings they were built with (APPA's
   // table and ForeCache's visibility are computed for them): later edits change what is drawn,
   // not what they predict.
@@ -273,9 +275,9 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
   const Clock::time_point deadline =
-      settings_.missBudgetMs < 0
-          ? Clock::time_point::max()
-          : t0 + std::chrono::microseconds(int64_t(std::min(settings_.missBudgetMs, 1e9) * 1e3));
+      settings_.missBudgetMs < 0 ? Clock::time_point::max()
+                                 : t0 + std::chrono::microseconds(int64_t(
+                                            tailReserve_.waitMs(settings_.missBudgetMs) * 1e3));
   const std::vector<Placement> placed = loadModels(sel, camera, st, deadline);
   // One slot per model: a coarser model standing in for several damaged blocks is stored once
   // (the GPU pool keys its models by entry) and covers each of their regions.
@@ -311,6 +313,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   st.loadErrors = loader_->takeErrors();
   st.knownDamagedBlocks = int64_t(cache_->damage().count());
   st.cachingMs = msSince(t0);
+  if (settings_.missBudgetMs >= 0) tailReserve_.observe(msSince(waitEnd_));
 }
 
 void Renderer::setStep(std::shared_ptr<const AfamFile> step) {

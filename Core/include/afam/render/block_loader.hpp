@@ -10,6 +10,9 @@
 // a damaged payload is recorded in the cache's DamageLog, not thrown; prefetch for prefetching,
 // which never evicts pinned blocks). Any other error of a load (I/O, a file changed on disk) is
 // kept and handed out once by takeErrors(); its entry counts as done, not resident.
+//
+// The load threads run `nice` steps below the thread that made the loader (thread_priority.hpp):
+// a frame's thread waking at its deadline takes a core from them at once.
 #pragma once
 
 #include <chrono>
@@ -35,8 +38,9 @@ struct BlockLoaderStats {
 class BlockLoader {
  public:
   using Clock = std::chrono::steady_clock;
-  /// threads < 1: one per core. The cache must outlive the loader.
-  BlockLoader(LruCache& cache, int threads);
+  /// threads < 1: one per core; nice: how much lower their priority is (0: the same). The cache
+  /// must outlive the loader.
+  BlockLoader(LruCache& cache, int threads, int nice = 0);
   ~BlockLoader();  ///< drops what is queued, waits for the loads under way
   BlockLoader(const BlockLoader&) = delete;
   BlockLoader& operator=(const BlockLoader&) = delete;
@@ -67,7 +71,7 @@ class BlockLoader {
   int threads() const { return int(workers_.size()); }
 
  private:
-  void run();
+  void run(int nice);
   void enqueue(const std::vector<int64_t>& entries, bool frame);  // under the lock
   void loadOtherStep(std::unique_lock<std::mutex>& lock);         // one of stepQueue_, lock held
   size_t pendingOf(const std::vector<int64_t>& entries) const;    // under the lock

@@ -34,7 +34,8 @@ class Prefetcher {
   /// A job gets the stop flag and must check it between block loads.
   using Job = std::function<void(const std::atomic<bool>& stop, uint64_t& loaded)>;
 
-  Prefetcher();
+  /// nice: how much lower the thread's priority is than its maker's (thread_priority.hpp).
+  explicit Prefetcher(int nice = 0);
   ~Prefetcher();  ///< stops and joins the thread
   Prefetcher(const Prefetcher&) = delete;
   Prefetcher& operator=(const Prefetcher&) = delete;
@@ -50,7 +51,7 @@ class Prefetcher {
   static Job loadJob(LruCache& cache, std::vector<int64_t> entries);
 
  private:
-  void run();
+  void run(int nice);
   mutable std::mutex mutex_;
   std::condition_variable cv_;
   Job job_;

@@ -38,6 +38,7 @@
 #include "afam/render/image.hpp"
 #include "afam/render/prefetch.hpp"
 #include "afam/render/raycast.hpp"
+#include "afam/render/tail_reserve.hpp"
 #include "afam/scene/camera.hpp"
 #include "afam/scene/lod.hpp"
 #include "afam/scene/transfer_function.hpp"
@@ -48,8 +49,12 @@ namespace afam {
 /// prefetch thread and its predictor) and the way the file is read. Changing any of these needs a
 /// new Renderer.
 struct RendererResources {
-  int threads = 0;                ///< ray-casting threads (0 = all cores)
-  int loadThreads = 0;            ///< threads that read and decode a frame's misses (0 = all cores)
+  int threads = 0;      ///< ray-casting threads (0 = all cores)
+  int loadThreads = 0;  ///< threads that read and decode a frame's misses (0 = all cores)
+  /// How much lower the load and prefetch threads' priority is than the frame's (nice steps,
+  /// 0..19; 0: the same): a frame under a miss budget gets a core at its deadline even while
+  /// they decode on every core.
+  int loadNice = 10;
   CacheBudget cache{0, 200};      ///< the paper's 200 micro-models by default
   bool cold = false;              ///< drop the file from the OS page cache before each frame
   double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none
@@ -250,6 +255,8 @@ class Renderer {
   std::unique_ptr<FrameCaster> caster_;
   bool residentReady_ = false;  ///< the resident levels of file_ loaded and kept
   int residentLevels_ = 0;
+  TailReserve tailReserve_;  ///< how much sooner than its budget a frame stops waiting
+  std::chrono::steady_clock::time_point waitEnd_;  ///< the end of this frame's wait for loads
 };
 
 }  // namespace afam

@@ -243,3 +243,30 @@ TEST(BlockCodec, FreeValuesKeepTheValidOnesAndStayWithinTheirSlackOfTheFilling) 
       }
     }
 }
+
+TEST(BlockCodec, RecodingAFrameGivesThePayloadCodedAtTheOtherLevel) {
+  // An encoder compares candidates coded at a fast zstd level and codes the kept one again at
+  // the file's: the same bytes as coding it at the file's level directly, the same values, the
+  // rounded-points byte after the frame kept.
+  const Int3 n{33, 20, 9};
+  const std::vector<float> v = field(n, 5u);
+  for (const Predictor p : {Predictor::Lorenzo, Predictor::IntegerInterpolation})
+    for (const EntropyStage stage : {EntropyStage::Auto, EntropyStage::Zstd}) {
+      SCOPED_TRACE(std::to_string(int(p)) + " stage " + entropyStageName(stage));
+      std::vector<uint8_t> fast, slow;
+      std::vector<float> recon;
+      ASSERT_TRUE(encodeValues(v.data(), n, 0.01, p, EntropyCoding{1, stage}, fast, recon));
+      ASSERT_TRUE(encodeValues(v.data(), n, 0.01, p, EntropyCoding{15, stage}, slow, recon));
+      const size_t head = codedHeaderBytes(fast.data(), fast.size());
+      fast.push_back(7);  // a trailing byte, as a rounded interpolant's shift
+      recodeFrame(fast, head, 1, v.size(), EntropyCoding{15, stage});
+      ASSERT_EQ(fast.back(), 7);
+      fast.pop_back();
+      EXPECT_EQ(fast, slow);
+      std::vector<float> decoded(v.size());
+      decodeValues(fast.data(), fast.size(), n, decoded.data(), "recoded");
+      EXPECT_EQ(decoded, recon);
+    }
+  std::vector<uint8_t> header(kCodedHeaderBytes, 0);
+  EXPECT_THROW(recodeFrame(header, kCodedHeaderBytes, 0, 8, EntropyCoding{}), FormatError);
+}

@@ -152,7 +152,7 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
 /// the largest of the ladder that keeps the model within the bound.
 bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
                       BoundKind kind, EntropyCoding coding, Predictor form, BlockFitter& fitter,
-                      Candidate& out) {
+                      Candidate& out, int& rung) {
   // What quantization may spend: the rest of an RMSE in quadrature; of a pointwise bound, what
   // the fit's worst sample leaves (the model moves by at most step / 2 anywhere).
   const double budget =
@@ -179,7 +179,8 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
     passed = q;
     return true;
   };
-  const int best = largestPassingStep(passes);
+  const int best = largestPassingStepFrom(rung, passes);
+  rung = best;
   if (best < 0 || !lattice) return false;
   const double step = ladderStep(kind, budget, kStepFactors[best]);
   std::vector<uint8_t> bytes;
@@ -213,10 +214,11 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
                 BoundKind kind, EntropyCoding coding, BlockFitter& fitter, Candidate& out) {
   Candidate integer, dbl;
-  const bool hasInteger =
-      codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::IntegerLorenzo, fitter, integer);
+  int rung = -1;  // the integer form's rung: the likely one of the double form
+  const bool hasInteger = codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::IntegerLorenzo,
+                                           fitter, integer, rung);
   const bool hasDouble =
-      codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::Lorenzo, fitter, dbl);
+      codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::Lorenzo, fitter, dbl, rung);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
@@ -269,9 +271,10 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
 /// measured on the samples.
 bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64_t holeSlack,
                        Int3 n, int degree, double bound, BoundKind kind, EntropyCoding coding,
-                       double beat, Predictor form, BlockFitter& fitter, Candidate& out) {
+                       double beat, Predictor form, BlockFitter& fitter, Candidate& out,
+                       int& rung) {
   const FreeValues free{valid, holeSlack};
-  std::vector<float> recon;
+  thread_local std::vector<float> recon;  // kept between calls: no allocation a block
   bool lattice = true;
   auto passes = [&](double k) {
     if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, recon, free)) {
@@ -280,7 +283,8 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
     }
     return keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound);
   };
-  const int best = largestPassingStep(passes);
+  const int best = largestPassingStepFrom(rung, passes);
+  rung = best;
   if (best < 0 || !lattice) return false;
   const double step = ladderStep(kind, bound, kStepFactors[best]);
   if (estimateCodedBytes(s.data(), n, step, form, free) > beat)
@@ -332,10 +336,12 @@ bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int
   for (const int64_t slack : kHoleSlacks) {
     if (slack > 0 && !valid) break;
     Candidate integer, dbl, best;
-    const bool hasInteger = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
-                                              Predictor::IntegerInterpolation, fitter, integer);
+    int rung = -1;  // the integer form's rung: the likely one of the double form
+    const bool hasInteger =
+        codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
+                          Predictor::IntegerInterpolation, fitter, integer, rung);
     const bool hasDouble = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
-                                             Predictor::Interpolation, fitter, dbl);
+                                             Predictor::Interpolation, fitter, dbl, rung);
     if (!keepSmallerForm(hasInteger, integer, hasDouble, dbl, best)) continue;
     if (!found || best.bytes.size() < out.bytes.size()) out = std::move(best);
     found = true;
@@ -357,6 +363,16 @@ void storeCandidate(Candidate& c, BlockTask& t) {
   m.storedSize = t.stored.size();
 }
 
+/// The kept candidate's entropy frame coded at the file's level (it was compared at the trial
+/// level): the same values, so the same error.
+void finalFrame(const FitContext& c, Candidate& best) {
+  if (best.kind == BlockKind::Constant || c.opt.entropy == EntropyStage::Lanes) return;
+  const size_t head = codedHeaderBytes(best.bytes.data(), best.bytes.size());
+  const size_t values = size_t(best.ncp[0]) * size_t(best.ncp[1]) * size_t(best.ncp[2]);
+  recodeFrame(best.bytes, head, best.roundedPoints ? kRoundedPointsBytes : 0, values,
+              entropyCoding(c.opt));
+}
+
 /// Compact storage: a constant where one meets the bound; else the smaller of the coded spline
 /// (fitted to kFitShare of the bound) and the coded samples; the float samples where neither does.
 void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
@@ -372,15 +388,15 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline =
       !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
-      codeSpline(fr, t.samples, e.samples, c.bound, kind, entropyCoding(c.opt), fitter, best);
+      codeSpline(fr, t.samples, e.samples, c.bound, kind, trialCoding(c.opt), fitter, best);
   // Samples pay when the spline is missing or spends more than a bit per sample (masked blocks,
   // whose fitted splines also follow the filled holes, always try them); they are coded only when
   // their estimated size (order-0 entropy of the codes, which zstd roughly reaches) could beat it.
   const double beat =
       haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
   if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count || !t.mask.empty()) &&
-      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind,
-                  entropyCoding(c.opt), beat, fitter, other) &&
+      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
+                  beat, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;
@@ -391,6 +407,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
     storeFloat(fr, true, t);
     return;
   }
+  finalFrame(c, best);
   storeCandidate(best, t);
 }
 

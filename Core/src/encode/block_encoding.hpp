@@ -62,6 +62,13 @@ constexpr int kZstdLevel = 15;
 inline EntropyCoding entropyCoding(const EncoderOptions& opt) {
   return EntropyCoding{kZstdLevel, opt.entropy};
 }
+/// Candidates are compared coded at this zstd level, 40 times faster than kZstdLevel and within
+/// about 2% of its bytes (lanes frames as they will be); the one kept is coded again at
+/// kZstdLevel (recodeFrame).
+constexpr int kTrialZstdLevel = 1;
+inline EntropyCoding trialCoding(const EncoderOptions& opt) {
+  return EntropyCoding{kTrialZstdLevel, opt.entropy};
+}
 
 /// The quantization step of ladder factor k for an error budget: factors of the step whose
 /// rounding alone would spend the budget, 2 sqrt(3) x budget for an RMSE (uniform rounding's RMSE
@@ -87,6 +94,24 @@ int largestPassingStep(Passes&& passes) {
       fail = mid;
   }
   return pass < n ? pass : -1;
+}
+
+/// largestPassingStep when a likely answer is known (the rung another form of the same values
+/// chose: their errors are those of a uniform rounding at the same step): that rung and its
+/// neighbours towards the answer, usually two evaluations; the same answer as the bisection for
+/// a monotone test. hint < 0: the bisection.
+template <typename Passes>
+int largestPassingStepFrom(int hint, Passes&& passes) {
+  const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
+  if (hint < 0 || hint >= n) return largestPassingStep(passes);
+  if (passes(kStepFactors[hint])) {
+    int j = hint - 1;
+    while (j >= 0 && passes(kStepFactors[j])) --j;
+    return j + 1;
+  }
+  int j = hint + 1;
+  while (j < n && !passes(kStepFactors[j])) ++j;
+  return j < n ? j : -1;
 }
 
 /// The error of a model on t's valid samples as a reader sees it: decodeBlockSamples (what

@@ -82,11 +82,13 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
                      std::vector<int64_t>& codes, std::vector<float>& reconstructed,
                      FreeValues free) {
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  std::vector<double> r(count, 0.0);
+  // The thread's buffer, not cleared: every value a prediction reads is written first (as in
+  // decodeValues).
+  double* r = threadScratch<double>(ScratchSlot::Doubles, count);
   codes.clear();
   codes.reserve(count);
   bool ok = true;
-  visit(predictor, Lattice{n}, r.data(), [&](int64_t i, double pred) {
+  visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
     double q = std::nearbyint((double(values[i]) - pred) / step);
     if (free.isFree(i) && std::fabs(q) <= double(free.slack)) q = 0.0;
     if (!(std::fabs(q) <= kMaxCode)) {
@@ -123,19 +125,19 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
   if (!(step > 0) || !std::isfinite(step)) return false;
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   if (free.valid) {  // free values may be their predictions: the predictor's order decides
-    std::vector<int64_t> codes;
+    thread_local std::vector<int64_t> codes;
     int64_t base = 0;
     return residualCodes(values, n, step, predictor, codes, reconstructed, base, free);
   }
   if (isIntegerForm(predictor)) {  // the reconstruction does not depend on the predictor
     int64_t base;
-    std::vector<int32_t> k;
+    thread_local std::vector<int32_t> k;
     if (!codec::integerQuantize(values, count, step, base, k)) return false;
     reconstructed.resize(count);
     for (size_t i = 0; i < count; ++i) reconstructed[i] = codec::integerValue(base, k[i], step);
     return true;
   }
-  std::vector<int64_t> codes;
+  thread_local std::vector<int64_t> codes;
   return predictQuantize(values, n, step, predictor, codes, reconstructed, FreeValues{});
 }
 
@@ -150,7 +152,7 @@ bool residualCodes(const float* values, Int3 n, double step, Predictor predictor
   if (!isIntegerForm(predictor))
     return predictQuantize(values, n, step, predictor, codes, reconstructed, free);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  std::vector<int32_t> k, r;
+  thread_local std::vector<int32_t> k, r;
   if (!codec::integerQuantize(values, count, step, base, k)) return false;
   codec::integerResiduals(predictor, n, k, r,
                           predictor == Predictor::IntegerInterpolation ? free : FreeValues{});
@@ -162,22 +164,42 @@ bool residualCodes(const float* values, Int3 n, double step, Predictor predictor
 
 }  // namespace
 
-double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
-                          FreeValues free) {
-  std::vector<int64_t> codes;
-  std::vector<float> recon;
-  int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, recon, base, free))
-    return std::numeric_limits<double>::infinity();
-  std::sort(codes.begin(), codes.end());
+namespace {
+/// Order-0 entropy of the codes, in bits: a histogram where they span few values, else sorted.
+double orderZeroBits(std::vector<int64_t>& codes) {
+  if (codes.empty()) return 0;
+  const auto [lo, hi] = std::minmax_element(codes.begin(), codes.end());
+  const double total = double(codes.size());
   double bits = 0;
+  auto add = [&](double count) {
+    if (count > 0) bits -= count * std::log2(count / total);
+  };
+  if (uint64_t(*hi - *lo) < (uint64_t(1) << 16)) {
+    thread_local std::vector<uint32_t> histogram;
+    histogram.assign(size_t(*hi - *lo) + 1, 0);
+    for (const int64_t c : codes) ++histogram[size_t(c - *lo)];
+    for (const uint32_t h : histogram) add(double(h));
+    return bits;
+  }
+  std::sort(codes.begin(), codes.end());
   for (size_t i = 0; i < codes.size();) {
     size_t j = i;
     while (j < codes.size() && codes[j] == codes[i]) ++j;
-    const double p = double(j - i) / double(codes.size());
-    bits -= double(j - i) * std::log2(p);
+    add(double(j - i));
     i = j;
   }
+  return bits;
+}
+}  // namespace
+
+double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
+                          FreeValues free) {
+  thread_local std::vector<int64_t> codes;
+  thread_local std::vector<float> recon;
+  int64_t base = 0;
+  if (!residualCodes(values, n, step, predictor, codes, recon, base, free))
+    return std::numeric_limits<double>::infinity();
+  const double bits = orderZeroBits(codes);
   return double(isIntegerForm(predictor) ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + bits / 8;
 }
 
@@ -185,10 +207,11 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
                   EntropyCoding coding, std::vector<uint8_t>& out,
                   std::vector<float>& reconstructed, FreeValues free) {
   out.clear();
-  std::vector<int64_t> codes;
+  thread_local std::vector<int64_t> codes;
   int64_t base = 0;
   if (!residualCodes(values, n, step, predictor, codes, reconstructed, base, free)) return false;
-  std::vector<uint8_t> varints;
+  thread_local std::vector<uint8_t> varints;
+  varints.clear();
   varints.reserve(codes.size() + codes.size() / 4);
   for (const int64_t c : codes) codec::putVarint(codec::zigzag(c), varints);
   out.resize(kCodedHeaderBytes);
@@ -200,6 +223,20 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
   }
   codec::appendEntropyFrame(varints, coding, out);
   return true;
+}
+
+void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t values,
+                 EntropyCoding coding) {
+  if (payload.size() <= head + tail) throw codec::badPayload("recode", "has no frame");
+  size_t got = 0;
+  const size_t frameBytes = payload.size() - head - tail;
+  const uint8_t* symbols =
+      codec::unpackFrame(payload.data() + head, frameBytes, values * 10, 0, "recode", got);
+  const std::vector<uint8_t> varints(symbols, symbols + got);
+  std::vector<uint8_t> out(payload.begin(), payload.begin() + std::ptrdiff_t(head));
+  codec::appendEntropyFrame(varints, coding, out);
+  out.insert(out.end(), payload.end() - std::ptrdiff_t(tail), payload.end());
+  payload = std::move(out);
 }
 
 namespace {

@@ -267,12 +267,17 @@ bool integerQuantize(const float* values, size_t count, double step, int64_t& ba
   if (!(std::fabs(middle) < 4503599627370496.0)) return false;  // 2^52
   base = int64_t(middle);
   k.resize(count);
+  // nearbyint (ties to even) as the sum below rounds it, for |x| < 2^51; a branch-free loop that
+  // vectorizes. A value out of that range, or a code out of kLimit, fails the whole block.
+  constexpr double kShift = 6755399441055744.0, kExact = 2251799813685248.0;  // 1.5 2^52, 2^51
+  bool ok = true;
   for (size_t i = 0; i < count; ++i) {
-    const double q = std::nearbyint(double(values[i]) / step) - middle;
-    if (!(std::fabs(q) < kLimit)) return false;
-    k[i] = int32_t(q);
+    const double x = double(values[i]) / step;
+    const double q = ((x + kShift) - kShift) - middle;
+    ok &= (std::fabs(x) < kExact) & (std::fabs(q) < kLimit);
+    k[i] = ok ? int32_t(q) : 0;
   }
-  return true;
+  return ok;
 }
 
 void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,

@@ -115,6 +115,13 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
                   EntropyCoding coding, std::vector<uint8_t>& out,
                   std::vector<float>& reconstructed, FreeValues free = {});
 
+/// Codes the entropy frame of a coded payload of `values` values again with `coding` (the header's
+/// `head` bytes and the last `tail` bytes kept as they are): an encoder compares its candidates
+/// coded at a fast zstd level and gives only the one it keeps the slow level's frame. The payload
+/// decodes to the same values. Throws FormatError when the frame does not decode.
+void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t values,
+                 EntropyCoding coding);
+
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
 /// step).
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,

@@ -269,6 +269,8 @@ void vtkAFAMCoreRenderer::Render(const vtkAFAMFrameRequest& request,
   stats.DamagedBlocks = frame.damagedBlocks;
   stats.KnownDamagedBlocks = frame.knownDamagedBlocks;
   stats.StandInBlocks = frame.standInBlocks;
+  stats.BlocksBehind = frame.blocksBehind;
+  stats.BytesBehind = frame.bytesBehind;
   stats.DamageReports = std::move(frame.damageReports);
   m.GiveUpFailedGpu();
   const afam::CastResult& cast = frame.cast;

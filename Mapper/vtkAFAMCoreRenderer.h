@@ -71,6 +71,10 @@ struct vtkAFAMFrameStats
   int64_t DamagedBlocks = 0, KnownDamagedBlocks = 0;
   /// Blocks drawn from a coarser level because they were still loading (the miss budget).
   int64_t StandInBlocks = 0;
+  /// Blocks not drawn at their own level because the budget ran out (the stand-ins, and blocks
+  /// with no resident ancestor), and their models' decoded bytes: what the frame left behind.
+  int64_t BlocksBehind = 0;
+  uint64_t BytesBehind = 0;
   std::vector<std::string> DamageReports;
   /// One sentence per unusable setting of the request: what was asked and what was kept.
   std::vector<std::string> SettingWarnings;

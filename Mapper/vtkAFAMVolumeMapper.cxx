@@ -586,6 +586,8 @@ void vtkAFAMVolumeMapper::RecordStatistics(const Frame& frame, const vtkAFAMFram
   this->LastDamagedBlocks = stats.DamagedBlocks;
   this->KnownDamagedBlocks = stats.KnownDamagedBlocks;
   this->LastStandInBlocks = stats.StandInBlocks;
+  this->LastBlocksBehind = stats.BlocksBehind;
+  this->LastBytesBehind = static_cast<vtkTypeInt64>(stats.BytesBehind);
   // Blocks first found damaged in this frame: one warning (Core reads and reports each block only
   // once per file), the first few in full so that a truncated file does not flood the window.
   if (!stats.DamageReports.empty())
@@ -678,6 +680,8 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastDamagedBlocks: " << this->LastDamagedBlocks << "\n";
   os << indent << "KnownDamagedBlocks: " << this->KnownDamagedBlocks << "\n";
   os << indent << "LastStandInBlocks: " << this->LastStandInBlocks << "\n";
+  os << indent << "LastBlocksBehind: " << this->LastBlocksBehind << "\n";
+  os << indent << "LastBytesBehind: " << this->LastBytesBehind << "\n";
   os << indent << "LastUsedGpu: " << this->LastUsedGpu << "\n";
   os << indent << "LastUsedBlendMode: " << this->LastUsedBlendMode << "\n";
   os << indent << "LastGpuModelsUploaded: " << this->LastGpuModelsUploaded << "\n";

@@ -297,6 +297,11 @@ public:
   /// Blocks of the last frame drawn from a coarser level because they were still loading when
   /// its miss budget ran out (InteractiveMissBudget); 0: the frame is exact.
   vtkGetMacro(LastStandInBlocks, vtkTypeInt64);
+  /// Blocks of the last frame not drawn at their own level because its miss budget ran out (the
+  /// stand-ins, and blocks with no resident coarser level), and their models' decoded bytes; they
+  /// load for the next frames. 0: the frame is exact.
+  vtkGetMacro(LastBlocksBehind, vtkTypeInt64);
+  vtkGetMacro(LastBytesBehind, vtkTypeInt64);
   /// Pixels of the last frame whose rays were cut short by opaque geometry.
   vtkGetMacro(LastDepthLimitedPixels, vtkTypeInt64);
   /// Image scale of the last frame (1 = full size; below 1 for interactive frames).
@@ -378,6 +383,7 @@ protected:
   vtkTypeInt64 LastCacheHits = 0, LastCacheMisses = 0, LastCulledBlocks = 0;
   vtkTypeInt64 LastVisibleBlocks = 0, LastBytesRead = 0, NumberOfFrames = 0, LastCacheBytes = 0;
   vtkTypeInt64 LastDamagedBlocks = 0, KnownDamagedBlocks = 0, LastStandInBlocks = 0;
+  vtkTypeInt64 LastBlocksBehind = 0, LastBytesBehind = 0;
   bool LastUsedGpu = false;
   int LastUsedBlendMode = COMPOSITE_BLEND;
   vtkTypeInt64 LastGpuModelsUploaded = -1, NumberOfRendererBuilds = 0;

@@ -46,11 +46,15 @@ void vtkAFAMFrameStatistics::Gather()
     scale = sums[1] > 0 ? volume->GetLastImageScale() : 1.0;
   }
   vtkTypeInt64 drawing = sums[1] > 0 ? 1 : 0;
-  vtkTypeInt64 onGpu = 0, interop = 0; // this rank's last frame: cast on the GPU, through interop
+  vtkTypeInt64 onGpu = 0, interop = 0;  // this rank's last frame: cast on the GPU, through interop
+  vtkTypeInt64 behind[3] = { 0, 0, 0 }; // stand-ins, blocks behind, bytes behind
   if (auto* volume = findVolumeRepresentation(this->Representation))
   {
     onGpu = volume->GetLastUsedGpu() ? 1 : 0;
     interop = volume->GetLastImageOnDevice() ? 1 : 0;
+    behind[0] = volume->GetLastStandInBlocks();
+    behind[1] = volume->GetLastBlocksBehind();
+    behind[2] = volume->GetLastBytesBehind();
   }
   auto* controller = vtkMultiProcessController::GetGlobalController();
   if (controller && controller->GetNumberOfProcesses() > 1)
@@ -58,6 +62,8 @@ void vtkAFAMFrameStatistics::Gather()
     const vtkTypeInt64 local[6] = { sums[0], sums[1], sums[2], drawing, onGpu, interop };
     vtkTypeInt64 total[6];
     controller->AllReduce(local, total, 6, vtkCommunicator::SUM_OP);
+    const vtkTypeInt64 localBehind[3] = { behind[0], behind[1], behind[2] };
+    controller->AllReduce(localBehind, behind, 3, vtkCommunicator::SUM_OP);
     const double localMax[2] = { maxima[0], maxima[1] };
     controller->AllReduce(localMax, maxima, 2, vtkCommunicator::MAX_OP);
     const double localScale = scale;
@@ -78,6 +84,9 @@ void vtkAFAMFrameStatistics::Gather()
   this->MinImageScale = scale;
   this->RanksOnGpu = static_cast<int>(onGpu);
   this->RanksThroughInterop = static_cast<int>(interop);
+  this->TotalStandInBlocks = behind[0];
+  this->TotalBlocksBehind = behind[1];
+  this->TotalBytesBehind = behind[2];
 }
 
 void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
@@ -93,4 +102,7 @@ void vtkAFAMFrameStatistics::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MinImageScale: " << this->MinImageScale << "\n";
   os << indent << "RanksOnGpu: " << this->RanksOnGpu << "\n";
   os << indent << "RanksThroughInterop: " << this->RanksThroughInterop << "\n";
+  os << indent << "TotalStandInBlocks: " << this->TotalStandInBlocks << "\n";
+  os << indent << "TotalBlocksBehind: " << this->TotalBlocksBehind << "\n";
+  os << indent << "TotalBytesBehind: " << this->TotalBytesBehind << "\n";
 }

@@ -49,6 +49,11 @@ public:
   /// GPU to the window without the host (CUDA-OpenGL interop).
   vtkGetMacro(RanksOnGpu, int);
   vtkGetMacro(RanksThroughInterop, int);
+  /// What the last frame left behind under its miss budget, summed over the ranks: blocks drawn
+  /// from a coarser resident level, blocks not drawn at their own level, and their bytes.
+  vtkGetMacro(TotalStandInBlocks, vtkTypeInt64);
+  vtkGetMacro(TotalBlocksBehind, vtkTypeInt64);
+  vtkGetMacro(TotalBytesBehind, vtkTypeInt64);
   ///@}
 
 protected:
@@ -65,6 +70,9 @@ protected:
   double MinImageScale = 1;
   int RanksOnGpu = 0;
   int RanksThroughInterop = 0;
+  vtkTypeInt64 TotalStandInBlocks = 0;
+  vtkTypeInt64 TotalBlocksBehind = 0;
+  vtkTypeInt64 TotalBytesBehind = 0;
 
 private:
   vtkAFAMFrameStatistics(const vtkAFAMFrameStatistics&) = delete;

@@ -316,6 +316,18 @@ vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastGpuModelsUploaded()
 {
   return this->Mapper->GetLastGpuModelsUploaded();
 }
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastStandInBlocks()
+{
+  return this->Mapper->GetLastStandInBlocks();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBlocksBehind()
+{
+  return this->Mapper->GetLastBlocksBehind();
+}
+vtkTypeInt64 vtkAFAMVolumeRepresentation::GetLastBytesBehind()
+{
+  return this->Mapper->GetLastBytesBehind();
+}
 vtkTypeInt64 vtkAFAMVolumeRepresentation::GetNumberOfRendererBuilds()
 {
   return this->Mapper->GetNumberOfRendererBuilds();

@@ -93,6 +93,11 @@ public:
   vtkTypeInt64 GetLastGpuModelsUploaded();
   vtkTypeInt64 GetNumberOfRendererBuilds();
   const char* GetLastSettingWarning();
+  /// What the last frame left behind under its miss budget (vtkAFAMVolumeMapper): blocks drawn
+  /// from a coarser resident level, blocks not drawn at their own level, and their bytes.
+  vtkTypeInt64 GetLastStandInBlocks();
+  vtkTypeInt64 GetLastBlocksBehind();
+  vtkTypeInt64 GetLastBytesBehind();
   ///@}
 
   vtkAFAMVolumeMapper* GetVolumeMapper()

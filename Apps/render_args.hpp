@@ -35,9 +35,11 @@ inline const char* renderOptionsHelp() {
          "  --load-threads N       threads reading and decoding a frame's misses (default: all "
          "cores)\n"
          "  --load-nice N          nice steps the load and prefetch threads run below the frame\n"
-         "                         (0..19, default 10; 0: the same priority)\n"
+         "                         (0..19, default 3; 0: the same priority)\n"
          "  --miss-budget-ms M     wait at most M ms for misses; blocks still loading are drawn\n"
-         "                         from a resident coarser level (default: wait for all)\n"
+         "                         from a resident coarser level (default: wait for all, as\n"
+         "                         the representation's still frames do; its interactive\n"
+         "                         frames, a camera in motion, use 20)\n"
          "  --nan-color R,G,B,A    draw missing samples in this colour with opacity A (each in\n"
          "                         [0, 1]; default: missing samples are not drawn)\n";
 }

@@ -42,6 +42,9 @@ if (NOT out MATCHES "still_frame caching_ms=[0-9.]+ latency_ms=[0-9.]+ stand_ins
   message(FATAL_ERROR "replay with a miss budget: ${out}")
 endif ()
 run_ok(out ${AFAM} render levels.afam --trajectory dolly.dat --view 11 ${view} --out fresh.png)
+# The load threads' priority (nice steps below the frame's thread): 0..19, anything else refused.
+run_fails("--load-nice must be in 0..19" ${AFAM} replay levels.afam --trajectory dolly.dat
+          --frames 1 ${view} --load-nice 20)
 run_ok(out ${AFAM} compare still.png fresh.png)
 if (NOT out MATCHES "psnr=99")
   message(FATAL_ERROR "the still frame differs from a fresh render of the same view: ${out}")

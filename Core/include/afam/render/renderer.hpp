@@ -54,7 +54,7 @@ struct RendererResources {
   /// How much lower the load and prefetch threads' priority is than the frame's (nice steps,
   /// 0..19; 0: the same): a frame under a miss budget gets a core at its deadline even while
   /// they decode on every core.
-  int loadNice = 10;
+  int loadNice = 3;
   CacheBudget cache{0, 200};      ///< the paper's 200 micro-models by default
   bool cold = false;              ///< drop the file from the OS page cache before each frame
   double storageMBps = 0;         ///< emulated storage bandwidth cap in MB/s (1e6 B/s); 0 = none

@@ -15,7 +15,8 @@
 # Env: DIMS (default 402,494,422), NOISE (default 6), SIZE (image side, default 128), BUDGET
 #      (ms, default 20), DEVICE (cpu|gpu, default cpu), FRAMES (views of each path, default 400),
 #      SAMPLE_DISTANCE (default 0.005; larger casts faster on a small CPU), WORK (default a
-#      temporary folder).
+#      temporary folder), SSIM (1 default; 0 leaves out --ssim, whose exact reference frames are
+#      drawn on the CPU: too slow at 1024^2 for a GPU run).
 set -euo pipefail
 here="$(cd "$(dirname "$0")/../.." && pwd)"
 NEW="$1"
@@ -28,6 +29,7 @@ BUDGET="${BUDGET:-20}"
 DEVICE="${DEVICE:-cpu}"
 FRAMES="${FRAMES:-400}"
 SAMPLE_DISTANCE="${SAMPLE_DISTANCE:-0.005}"
+SSIM="${SSIM:-1}"
 work="${WORK:-$(mktemp -d)}"
 mkdir -p "$work"
 [[ -n ${WORK:-} ]] || trap 'rm -rf "$work"' EXIT
@@ -66,7 +68,8 @@ for traj in "$@"; do
     for build in base new; do
       exe="$BASE"
       extra=()
-      [[ $build == new ]] && exe="$NEW" && extra=(--ssim)
+      [[ $build == new ]] && exe="$NEW"
+      [[ $build == new && $SSIM == 1 ]] && extra=(--ssim)
       csv="$work/${name}_${cache}_${build}.csv"
       out="$("$exe" replay "$file" --trajectory "$traj" "${common[@]}" --cache-bytes "$cache" \
         "${extra[@]}" --csv "$csv")"

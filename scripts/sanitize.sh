@@ -27,7 +27,7 @@ configure_and_build() {  # dir, sanitizer flags
     -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="$flags" \
     -DAFAM_ENABLE_PARAVIEW=OFF -DAFAM_ENABLE_CUDA=OFF >"$base/$(basename "$dir").configure.log" 2>&1 ||
     { tail -30 "$base/$(basename "$dir").configure.log"; return 1; }
-  cmake --build "$dir" -j "$jobs" --target afam afam_core_tests
+  cmake --build "$dir" -j "$jobs" --target afam afam_core_tests afam_pool_ledger_tests
 }
 
 run_asan() {

@@ -50,7 +50,20 @@ protected:
   vtkSMAFAMRepresentationProxy() = default;
   ~vtkSMAFAMRepresentationProxy() override = default;
 
+  /// ParaView's definition, then ShowVolumeSettingsForAFAM.
+  int ReadXMLAttributes(vtkSMSessionProxyManager* pm, vtkPVXMLElement* element) override;
+
 private:
+  /**
+   * The panel: ParaView's "Volume Rendering" property group (the one holding Shade) is shown only
+   * for the types "Volume" and "NVIDIA IndeX" (a decorator in its XML hints, which plugin XML
+   * cannot change). On this proxy's own copy of those hints, the group is also shown for
+   * "Adaptive-FAM Volume"; the group's settings the Adaptive-FAM mapper does not read get a
+   * decorator that hides them for "Adaptive-FAM Volume", and the ones it reads that ParaView shows
+   * for "Volume" without the advanced toggle are shown so for both.
+   */
+  void ShowVolumeSettingsForAFAM();
+
   /// Colours by the first point array of the ColorArrayName domain; false when there is none.
   bool ColorByFirstPointArray();
 

@@ -17,9 +17,11 @@
 namespace afam::cli {
 
 int runEnlarge(int argc, char** argv) {
-  Args args(argc, argv, {"dims", "noise", "seed", "threads"}, {"progress"});
+  Args args(argc, argv, {"dims", "noise", "detail", "detail-beta", "seed", "threads"},
+            {"progress"});
   const char* usage =
-      "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--seed N] [--threads T]";
+      "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--detail D [--detail-beta B]] "
+      "[--seed N] [--threads T]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -37,7 +39,15 @@ int runEnlarge(int argc, char** argv) {
         "  --noise auto|S  noise standard deviation in IN's units; auto (default): IN's own, from "
         "its\n"
         "                  finest differences along x (median absolute difference / 0.954)\n"
-        "  --seed N        noise seed (default 1)\n"
+        "  --detail D      add detail at every scale, standard deviation D in IN's units "
+        "(default 0:\n"
+        "                  none): octaves of value noise, lattice spacings 2, 4, ... voxels up to "
+        "a\n"
+        "                  quarter of the largest axis (at most 128), so that coarse levels and "
+        "camera\n"
+        "                  paths cost what a real scan's do, not only the finest level\n"
+        "  --detail-beta B octave amplitudes ~ spacing^B, 0..3 (default 0.5)\n"
+        "  --seed N        noise and detail seed (default 1)\n"
         "  --threads T     threads (default: all cores)\n"
         "IN is a raw file named name_XxYxZ_type.raw, or a NRRD or MetaImage file.\n",
         usage);
@@ -60,6 +70,9 @@ int runEnlarge(int argc, char** argv) {
   double lo, hi;
   sampleTypeRange(type, lo, hi);
   const uint64_t seed = uint64_t(args.integer("seed", 1));
+  const double detail = args.real("detail", 0), beta = args.real("detail-beta", 0.5);
+  EnlargedScanSource(std::vector<float>(1, 0.f), {1, 1, 1}, target, 0, seed, lo, hi)
+      .setDetail(detail, beta);  // bad values refused before OUT.tmp is created
   const int threads = int(args.integer("threads", 0)) > 0
                           ? int(args.integer("threads", 0))
                           : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -69,8 +82,10 @@ int runEnlarge(int argc, char** argv) {
   {
     // Each thread owns a source (its own cache of resampled planes) and one slab of a round.
     std::vector<EnlargedScanSource> sources;
-    for (int t = 0; t < threads; ++t)
+    for (int t = 0; t < threads; ++t) {
       sources.emplace_back(samples, dims, target, sigma, seed, lo, hi);
+      sources.back().setDetail(detail, beta);
+    }
     const size_t slabBytes = size_t(plane * chunk) * size_t(sampleTypeSize(type));
     std::vector<std::vector<float>> values(static_cast<size_t>(threads));
     std::vector<std::vector<unsigned char>> bytes(static_cast<size_t>(threads),
@@ -97,10 +112,12 @@ int runEnlarge(int argc, char** argv) {
     }
   }
   file.commit();
-  std::printf("wrote %s: %lldx%lldx%lld %s from %s (%lldx%lldx%lld), noise sigma %.4g\n",
-              out.c_str(), (long long)target[0], (long long)target[1], (long long)target[2],
+  std::printf("wrote %s: %lldx%lldx%lld %s from %s (%lldx%lldx%lld), noise sigma %.4g", out.c_str(),
+              (long long)target[0], (long long)target[1], (long long)target[2],
               sampleTypeName(type), in.c_str(), (long long)dims[0], (long long)dims[1],
               (long long)dims[2], sigma);
+  if (detail > 0) std::printf(", detail sd %.4g beta %.4g", detail, beta);
+  std::printf("\n");
   return 0;
 }
 

@@ -2,8 +2,10 @@
 // EnlargedScanSource: a small volume resampled to any size with noise at the new resolution.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "afam/base/errors.hpp"
@@ -19,6 +21,27 @@ std::vector<float> readAll(EnlargedScanSource& s) {
   std::vector<float> out(size_t(d[0] * d[1] * d[2]));
   s.readSlab(0, d[2], out.data());
   return out;
+}
+
+/// A 6x5x4 source of random values in 0..199.
+std::vector<float> randomSource(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<float> src(6 * 5 * 4);
+  for (float& f : src) f = float(rng() % 200);
+  return src;
+}
+
+/// Reads `s` in slabs of `planes` planes, the last slab first, and expects the values of `all`.
+void expectTheSameInSlabs(EnlargedScanSource& s, const std::vector<float>& all, int64_t planes) {
+  const Index3 d = s.dims();
+  const size_t plane = size_t(d[0] * d[1]);
+  std::vector<float> slab(plane * size_t(planes));
+  for (int64_t z0 = (d[2] - 1) / planes * planes; z0 >= 0; z0 -= planes) {
+    const int64_t nz = std::min(planes, d[2] - z0);
+    s.readSlab(z0, nz, slab.data());
+    for (size_t i = 0; i < plane * size_t(nz); ++i)
+      ASSERT_EQ(slab[i], all[size_t(z0) * plane + i]) << z0;
+  }
 }
 
 }  // namespace
@@ -46,19 +69,12 @@ TEST(EnlargedScan, ReproducesALinearFieldWithoutNoise) {
 }
 
 TEST(EnlargedScan, SlabsAreTheSameHoweverTheVolumeIsCut) {
-  std::mt19937 rng(3);
-  std::vector<float> src(6 * 5 * 4);
-  for (float& f : src) f = float(rng() % 200);
+  const std::vector<float> src = randomSource(3);
   const Index3 big{13, 11, 9};
   EnlargedScanSource whole(src, {6, 5, 4}, big, 4.0, 42, 0, 255);
   const std::vector<float> all = readAll(whole);
   EnlargedScanSource cut(src, {6, 5, 4}, big, 4.0, 42, 0, 255);
-  std::vector<float> plane(size_t(big[0] * big[1]));
-  for (int64_t z = 0; z < big[2]; ++z) {
-    cut.readSlab(z, 1, plane.data());
-    for (size_t i = 0; i < plane.size(); ++i)
-      ASSERT_EQ(plane[i], all[size_t(z) * plane.size() + i]) << z;
-  }
+  expectTheSameInSlabs(cut, all, 1);
   EnlargedScanSource otherSeed(src, {6, 5, 4}, big, 4.0, 43, 0, 255);
   EXPECT_NE(readAll(otherSeed), all) << "the seed changes the noise";
 }
@@ -77,6 +93,76 @@ TEST(EnlargedScan, NoiseHasTheAskedDeviationAndStaysInRange) {
   EXPECT_NEAR(sd, 5.0, 0.1);
   EnlargedScanSource clamped(flat, {4, 4, 4}, {32, 32, 32}, 80.0, 7, 90, 110);
   for (float f : readAll(clamped)) ASSERT_TRUE(f >= 90.f && f <= 110.f) << f;
+}
+
+namespace {
+
+/// Variance of `v` (n^3, x fastest) and of its means over blocks of b^3 voxels.
+std::pair<double, double> varianceAndBlockVariance(const std::vector<float>& v, int64_t n,
+                                                   int64_t b) {
+  double sum = 0, sq = 0;
+  for (float f : v) {
+    sum += f;
+    sq += double(f) * f;
+  }
+  const double mean = sum / double(v.size());
+  std::vector<double> blocks(size_t((n / b) * (n / b) * (n / b)), 0.0);
+  for (int64_t z = 0; z < n; ++z)
+    for (int64_t y = 0; y < n; ++y)
+      for (int64_t x = 0; x < n; ++x)
+        blocks[size_t(((z / b) * (n / b) + y / b) * (n / b) + x / b)] +=
+            v[size_t((z * n + y) * n + x)] / double(b * b * b);
+  double bsq = 0;
+  for (double m : blocks) bsq += (m - mean) * (m - mean);
+  return {sq / double(v.size()) - mean * mean, bsq / double(blocks.size())};
+}
+
+}  // namespace
+
+TEST(EnlargedScan, DetailHasTheAskedDeviationAndEnergyAtCoarseScales) {
+  const std::vector<float> flat(4 * 4 * 4, 100.f);
+  const int64_t n = 128;
+  EnlargedScanSource s(flat, {4, 4, 4}, {n, n, n}, 0.0, 5, -1e9, 1e9);
+  s.setDetail(6.0);
+  const auto [var, blockVar] = varianceAndBlockVariance(readAll(s), n, 16);
+  EXPECT_NEAR(std::sqrt(var), 6.0, 0.6) << "the detail's standard deviation is --detail";
+  EXPECT_GT(blockVar / var, 0.1) << "16^3 block means keep a tenth of the detail's variance";
+  EnlargedScanSource white(flat, {4, 4, 4}, {n, n, n}, 6.0, 5, -1e9, 1e9);
+  const auto [wvar, wblockVar] = varianceAndBlockVariance(readAll(white), n, 16);
+  EXPECT_LT(wblockVar / wvar, 0.002) << "white noise averages away: the test tells them apart";
+}
+
+TEST(EnlargedScan, DetailIsTheSameHoweverTheVolumeIsCut) {
+  const std::vector<float> src = randomSource(5);
+  const Index3 big{37, 29, 41};
+  EnlargedScanSource whole(src, {6, 5, 4}, big, 2.0, 9, 0, 255);
+  whole.setDetail(8.0, 1.0);
+  const std::vector<float> all = readAll(whole);
+  EnlargedScanSource cut(src, {6, 5, 4}, big, 2.0, 9, 0, 255);
+  cut.setDetail(8.0, 1.0);
+  expectTheSameInSlabs(cut, all, 3);
+  EnlargedScanSource plain(src, {6, 5, 4}, big, 2.0, 9, 0, 255), zero = plain;
+  zero.setDetail(0.0);
+  EXPECT_EQ(readAll(zero), readAll(plain)) << "--detail 0 leaves the bytes as they were";
+  EXPECT_NE(readAll(plain), all);
+  EnlargedScanSource otherSeed(src, {6, 5, 4}, big, 2.0, 10, 0, 255);
+  otherSeed.setDetail(8.0, 1.0);
+  EXPECT_NE(readAll(otherSeed), all) << "the seed changes the detail";
+}
+
+TEST(EnlargedScan, RefusesBadDetail) {
+  EnlargedScanSource s(std::vector<float>(8, 1.f), {2, 2, 2}, {8, 8, 8}, 0, 1, 0, 1);
+  for (double bad : {-1.0, std::nan(""), double(INFINITY)}) {
+    try {
+      s.setDetail(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_STREQ(e.what(), "the detail must be finite and >= 0");
+    }
+  }
+  EXPECT_THROW(s.setDetail(1.0, -0.5), InvalidArgument);
+  EXPECT_THROW(s.setDetail(1.0, 4.0), InvalidArgument);
+  EXPECT_THROW(s.setDetail(1.0, std::nan("")), InvalidArgument);
 }
 
 TEST(EnlargedScan, EstimatesTheNoiseOfAScan) {

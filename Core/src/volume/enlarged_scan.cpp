@@ -28,6 +28,31 @@ float gaussianAt(uint64_t index, uint64_t seed) {
   return (sum * kScale - 2.0f) * kInvStd;
 }
 
+float fade(float t) { return t * t * t * (t * (t * 6 - 15) + 10); }  // C2 from 0 to 1
+
+/// Variance of a value-noise octave of spacing L along one axis (unit-variance lattice values),
+/// averaged over the L positions of a cell: (1 - s)^2 + s^2.
+double cellVariance(int64_t L) {
+  double sum = 0;
+  for (int64_t i = 0; i < L; ++i) {
+    const double s = fade(float(i) / float(L));
+    sum += (1 - s) * (1 - s) + s * s;
+  }
+  return sum / double(L);
+}
+
+float latticeValue(int64_t x, int64_t y, int64_t z, uint64_t key) {
+  return gaussianAt(mix(mix(uint64_t(x) ^ key) ^ uint64_t(y)) ^ uint64_t(z), key);
+}
+
+/// The lattice of one octave interpolated between lattice planes iz and iz + 1 (fade sz).
+void latticePlane(int64_t lx, int64_t ly, int64_t iz, float sz, uint64_t key, float* out) {
+  for (int64_t j = 0; j < ly; ++j)
+    for (int64_t i = 0; i < lx; ++i)
+      out[size_t(j * lx + i)] =
+          (1 - sz) * latticeValue(i, j, iz, key) + sz * latticeValue(i, j, iz + 1, key);
+}
+
 }  // namespace
 
 double estimateScanNoise(const std::vector<float>& samples, const Index3& dims) {
@@ -100,6 +125,51 @@ std::vector<EnlargedScanSource::Taps> EnlargedScanSource::taps(int64_t from, int
   return out;
 }
 
+void EnlargedScanSource::setDetail(double sd, double beta) {
+  if (!(sd >= 0) || !std::isfinite(sd)) throw InvalidArgument("the detail must be finite and >= 0");
+  if (!(beta >= 0 && beta <= 3)) throw InvalidArgument("the detail's beta must be in [0, 3]");
+  octaves_.clear();
+  if (sd == 0) return;
+  const int64_t largest = std::max({target_[0], target_[1], target_[2]});
+  const int64_t top = std::min<int64_t>(128, std::max<int64_t>(2, largest / 4));
+  double variance = 0;
+  for (int64_t L = 2; L <= top; L *= 2) {
+    const double a = std::pow(double(L), beta);
+    octaves_.push_back({L, float(a)});
+    variance += a * a * std::pow(cellVariance(L), 3);
+  }
+  const double scale = sd / std::sqrt(variance);
+  for (Octave& o : octaves_) o.amplitude = float(double(o.amplitude) * scale);
+}
+
+void EnlargedScanSource::addDetail(int64_t z, float* dst) const {
+  for (size_t k = 0; k < octaves_.size(); ++k)
+    addOctave(octaves_[k], mix(mix(seed_ ^ 0xD37A11ED5EEDull) + k), z, dst);
+}
+
+void EnlargedScanSource::addOctave(const Octave& o, uint64_t key, int64_t z, float* dst) const {
+  const int64_t L = o.spacing, nx = target_[0], ny = target_[1];
+  const int64_t lx = (nx - 1) / L + 2, ly = (ny - 1) / L + 2, iz = z / L;
+  std::vector<float> fades(static_cast<size_t>(L)), lattice(static_cast<size_t>(lx * ly)),
+      row(static_cast<size_t>(lx));
+  for (int64_t i = 0; i < L; ++i) fades[size_t(i)] = fade(float(i) / float(L));
+  int shift = 0;
+  while ((int64_t(1) << shift) < L) ++shift;
+  latticePlane(lx, ly, iz, fades[size_t(z % L)], key, lattice.data());
+  for (int64_t y = 0; y < ny; ++y) {
+    const float sy = fades[size_t(y % L)];
+    const float* a = lattice.data() + size_t((y / L) * lx);
+    for (int64_t i = 0; i < lx; ++i)
+      row[size_t(i)] = o.amplitude * ((1 - sy) * a[i] + sy * a[i + lx]);
+    float* line = dst + size_t(y * nx);
+    for (int64_t x = 0; x < nx; ++x) {  // L is a power of 2
+      const float s = fades[size_t(x & (L - 1))];
+      const size_t i = size_t(x >> shift);
+      line[x] += (1 - s) * row[i] + s * row[i + 1];
+    }
+  }
+}
+
 const std::vector<float>& EnlargedScanSource::plane(int64_t z) {
   for (auto& p : planes_)
     if (p.first == z) return p.second;
@@ -138,6 +208,7 @@ void EnlargedScanSource::readSlab(int64_t z0, int64_t zCount, float* out) {
       const std::vector<float>& p = plane(t.first[j]);
       for (int64_t i = 0; i < nxy; ++i) dst[i] += t.weight[j] * p[size_t(i)];
     }
+    if (!octaves_.empty()) addDetail(z, dst);
     const uint64_t base = uint64_t(z * nxy);
     for (int64_t i = 0; i < nxy; ++i) {
       const float v = sigma > 0 ? dst[i] + sigma * gaussianAt(base + uint64_t(i), seed_) : dst[i];

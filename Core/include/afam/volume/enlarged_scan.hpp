@@ -8,6 +8,14 @@
 // from a counter-based generator keyed by the voxel's index and the seed: any slab is generated
 // on its own, the same bytes however the volume is cut into slabs. estimateScanNoise() gives the
 // source's own noise level, the default.
+//
+// Optional detail at every scale (setDetail): a sum of octaves of value noise, lattice spacings
+// 2, 4, 8, ... voxels up to a quarter of the largest axis (at most 128), each lattice value a
+// hash of its integer coordinates, octave and seed, interpolated with a quintic fade; octave
+// amplitudes in proportion to spacing^beta (amplitude ~ 1/f^beta), scaled so that the field's
+// standard deviation is `sd`. A real scan has structure at every scale (tissue texture, vessels,
+// folds); white noise on a smooth interpolation has none between the source's samples and the
+// voxel, so that its coarse levels and its recorded paths' working sets are far smaller.
 #pragma once
 
 #include <cstdint>
@@ -31,8 +39,20 @@ class EnlargedScanSource : public VolumeSource {
                      uint64_t seed, double clampLo, double clampHi);
   Index3 dims() const override { return target_; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  /// Adds detail of standard deviation `sd` (the source's units; 0: none, the bytes of a source
+  /// without it) with octave amplitudes ~ spacing^beta. Throws InvalidArgument for a negative or
+  /// non-finite sd, or beta outside [0, 3].
+  void setDetail(double sd, double beta = 0.5);
 
  private:
+  struct Octave {
+    int64_t spacing;
+    float amplitude;
+  };
+  /// Adds every detail octave's value at target plane z to `dst` (target_[0] * target_[1]).
+  void addDetail(int64_t z, float* dst) const;
+  void addOctave(const Octave& o, uint64_t key, int64_t z, float* dst) const;
+
   struct Taps {  // Catmull-Rom weights of 4 source samples starting at `first` (clamped)
     int64_t first[4];
     float weight[4];
@@ -48,6 +68,7 @@ class EnlargedScanSource : public VolumeSource {
   double lo_, hi_;
   std::vector<Taps> tx_, ty_, tz_;
   std::vector<std::pair<int64_t, std::vector<float>>> planes_;  // a few resampled source planes
+  std::vector<Octave> octaves_;                                 // empty: no detail
 };
 
 }  // namespace afam

@@ -204,3 +204,28 @@ TEST(BoundPromiseSlow, EveryCombination) {
               if (HasFatalFailure()) return;
             }
 }
+
+TEST(BoundPromise, ShapesTheFormatCannotHoldAreRefusedByAxis) {
+  std::vector<float> v(4 * 5 * 6, 1.0f);
+  ArraySource src(v.data(), {4, 5, 6}, "v");
+  EncoderOptions opt;
+  opt.errorBound = 1e-3;
+  opt.blocksPerAxis = 8;  // no axis holds 8 blocks: at most 5, along z
+  const std::string path = afam_test::scratchPath("refused.afam");
+  try {
+    encodeVolume(src, opt, path);
+    ADD_FAILURE() << "8 blocks per axis of a 4x5x6 volume were encoded";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("axis, z, has 6 samples"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  opt.blocksPerAxis = 5;  // the most z holds; x and y take fewer
+  EXPECT_NO_THROW(encodeVolume(src, opt, path));
+  std::filesystem::remove(path);
+  try {
+    ArraySource empty(v.data(), {4, 0, 6}, "v");
+    ADD_FAILURE() << "a volume with an axis of 0 samples was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("axis y has 0 samples"), std::string::npos) << e.what();
+  }
+}

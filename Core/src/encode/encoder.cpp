@@ -511,6 +511,23 @@ void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* mi
   if (missing) *missing = found;
 }
 
+namespace {
+/// Blocks per axis are one number for the three axes, each axis taking as many as its samples
+/// hold (n - 1, at least 1: an anisotropic volume keeps fewer along its short axis); a request
+/// that no axis can hold is a mistake, refused before any fitting, naming the longest axis.
+void refuseBlocksNoAxisHolds(const Index3& dims, int blocksPerAxis) {
+  int longest = 0;
+  for (int a = 1; a < 3; ++a)
+    if (dims[a] > dims[longest]) longest = a;
+  const int64_t most = std::max<int64_t>(1, dims[longest] - 1);
+  if (blocksPerAxis > most)
+    throw InvalidArgument("encode: " + std::to_string(blocksPerAxis) +
+                          " blocks per axis: the longest axis, " + "xyz"[longest] + ", has " +
+                          std::to_string(dims[longest]) + " samples, which hold at most " +
+                          std::to_string(most) + " blocks");
+}
+}  // namespace
+
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
   SoloTeam solo;
   return encodeVolume(source, opt, sink, solo);
@@ -524,6 +541,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   const Index3 dims = source.dims();
   if (opt.levels < 0 || opt.blocksPerAxis < 0)
     throw InvalidArgument("encode: levels and blocks per axis must be >= 1 (or 0 for the default)");
+  refuseBlocksNoAxisHolds(dims, opt.blocksPerAxis);
   const PartitionShape shape = defaultPartition(dims);
   EncoderOptions resolved = opt;
   if (resolved.levels == 0) resolved.levels = shape.levels;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -499,4 +500,32 @@ TEST(Encoder, DecodeLevelBoxJoinsBlocksAndReadsSubBoxes) {
   }
   EXPECT_THROW(decodeLevelBox(*file, 3, {0, 0, 0}, {0, 0, 0}, nullptr), InvalidArgument);
   EXPECT_THROW(decodeLevelBox(*file, 0, {0, 0, 0}, {n, 0, 0}, nullptr), InvalidArgument);
+}
+
+TEST(Encoder, NoiseAboveTheBoundIsCodedAsSamplesAfterOneFit) {
+  // White noise of deviation 1 under an RMSE bound of 0.2: no spline of fewer points than samples
+  // meets it, and one fit at 90% of each axis's samples tells; a smooth block of the same size
+  // is searched as before (several fits) and stays a spline.
+  const Index3 dims{40, 40, 40};
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal(0, 1);
+  std::vector<float> noise(size_t(dims[0] * dims[1] * dims[2])), smooth(noise.size());
+  for (size_t i = 0; i < noise.size(); ++i) {
+    noise[i] = float(normal(rng));
+    smooth[i] = float(4 * std::sin(0.25 * double(i % 40)) * std::cos(0.2 * double(i / 40 % 40)));
+  }
+  EncoderOptions opt;
+  opt.errorBound = 0.2;
+  opt.levels = 1;
+  opt.blocksPerAxis = 1;
+  opt.threads = 1;
+  ArraySource noiseSource(noise.data(), dims), smoothSource(smooth.data(), dims);
+  InMemoryModels n, s;
+  const EncodeStats noiseStats = encodeVolume(noiseSource, opt, n);
+  EXPECT_EQ(noiseStats.levels[0].fits, 1);
+  EXPECT_EQ(n.entries[0].kind, BlockKind::Interpolant);
+  EXPECT_LE(noiseStats.maxRmse, 0.2);
+  const EncodeStats smoothStats = encodeVolume(smoothSource, opt, s);
+  EXPECT_GE(smoothStats.levels[0].fits, 2);
+  EXPECT_EQ(s.entries[0].kind, BlockKind::Spline);
 }

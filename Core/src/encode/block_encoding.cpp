@@ -7,6 +7,7 @@
 #include <limits>
 #include <sstream>
 
+#include "afam/encode/ncp_search.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/block_mask.hpp"
@@ -373,6 +374,41 @@ void finalFrame(const FitContext& c, Candidate& best) {
               entropyCoding(c.opt));
 }
 
+/// A block whose spline needs more than kNoiseShare of its samples per axis to meet the bound
+/// (noise above the bound: a real scan's detail) ends as its coded samples, whose bytes a spline
+/// of nearly as many points, quantized within what its fit leaves of the bound, does not beat.
+/// One fit at that NCP on every axis tells, instead of the search's ten and the spline's coding.
+constexpr double kNoiseShare = 0.9;
+constexpr int kNoiseMinSamples = 16;  ///< smaller blocks: the search is cheap, and decides
+
+/// Whether the block is noise-dominated in that sense (a searched block of at least
+/// kNoiseMinSamples along some axis whose fit at kNoiseShare of its samples misses the fit's
+/// share of the bound); then t's search statistics say so.
+bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
+  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return false;
+  // The probe only where the samples' second differences say noise of half the bound or more
+  // (white noise of deviation s has a mean squared second difference of 6 s^2 along every axis):
+  // elsewhere it would be one fit more.
+  const std::array<double, 3> rough = axisRoughness(t.samples.data(), e.samples);
+  double smoothest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+    if (e.samples[a] >= 3) smoothest = std::min(smoothest, rough[size_t(a)]);
+  if (!(smoothest / 6 >= 0.25 * c.bound * c.bound)) return false;
+  Int3 ncp{};  // kNoiseShare of each axis's samples
+  for (int a = 0; a < 3; ++a)
+    ncp[a] = std::max(effectiveDegree(c.opt.degree, e.samples[a]) + 1,
+                      std::min(e.samples[a], int(std::ceil(kNoiseShare * e.samples[a]))));
+  thread_local FitResult probe;
+  ++t.fits;
+  if (fitter.fitWithin(t.samples.data(), e.samples, ncp, c.opt.degree, kFitShare * c.bound,
+                       sumOfSquares(t.samples.data(), e.samples), probe))
+    return false;
+  t.ncpStar = nmax;
+  t.complex = true;
+  return true;
+}
+
 /// Compact storage: a constant where one meets the bound; else the smaller of the coded spline
 /// (fitted to kFitShare of the bound) and the coded samples; the float samples where neither does.
 void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
@@ -380,6 +416,13 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   const BoundKind kind = c.opt.boundKind;
   if (constantFits(e, t.samples, validOf(t), c.opt.degree, c.bound, kind, best)) {
     t.complex = false;
+    storeCandidate(best, t);
+    return;
+  }
+  if (noiseDominated(c, e, fitter, t) &&
+      codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
+                  std::numeric_limits<double>::infinity(), fitter, best)) {
+    finalFrame(c, best);
     storeCandidate(best, t);
     return;
   }

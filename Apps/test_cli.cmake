@@ -122,7 +122,10 @@ run_ok(out ${AFAM} replay ml.afam --trajectory "${TRAJ}" --frames 12 --size 16,1
 if (NOT out MATCHES "cache_peak_bytes=([0-9]+) frame_pool_peak_bytes=([0-9]+)")
   message(FATAL_ERROR "replay output lacks cache_peak_bytes=: ${out}")
 endif ()
-if (CMAKE_MATCH_1 GREATER 20000 OR CMAKE_MATCH_1 LESS 10000)
+# The peak must show that the budget binds, at least a quarter of it: under a budget this small the
+# two load threads race for room, and a load that finds none is drawn coarser rather than evicting
+# the frame's own blocks (issue 44), so the peak varies between runs (8.8 to 14.1 kB measured).
+if (CMAKE_MATCH_1 GREATER 20000 OR CMAKE_MATCH_1 LESS 5000)
   message(FATAL_ERROR "replay with --cache-bytes 20000: cache peak ${CMAKE_MATCH_1} bytes")
 endif ()
 

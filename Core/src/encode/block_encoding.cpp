@@ -390,11 +390,17 @@ bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitt
   // The probe only where the samples' second differences say noise of half the bound or more
   // (white noise of deviation s has a mean squared second difference of 6 s^2 along every axis):
   // elsewhere it would be one fit more.
+  // And only where every axis is about as rough as the roughest (refineNcpPerAxis would give none
+  // fewer points): a block smooth along some axis may be a spline of few points there.
   const std::array<double, 3> rough = axisRoughness(t.samples.data(), e.samples);
-  double smoothest = std::numeric_limits<double>::infinity();
+  double smoothest = std::numeric_limits<double>::infinity(), roughest = 0;
   for (int a = 0; a < 3; ++a)
-    if (e.samples[a] >= 3) smoothest = std::min(smoothest, rough[size_t(a)]);
-  if (!(smoothest / 6 >= 0.25 * c.bound * c.bound)) return false;
+    if (e.samples[a] >= 3) {
+      smoothest = std::min(smoothest, rough[size_t(a)]);
+      roughest = std::max(roughest, rough[size_t(a)]);
+    }
+  if (!(smoothest / 6 >= 0.25 * c.bound * c.bound) || !(smoothest * kAnisotropy > roughest))
+    return false;
   Int3 ncp{};  // kNoiseShare of each axis's samples
   for (int a = 0; a < 3; ++a)
     ncp[a] = std::max(effectiveDegree(c.opt.degree, e.samples[a]) + 1,

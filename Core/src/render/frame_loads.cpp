@@ -42,25 +42,25 @@ double Renderer::keepResidentLevels(FrameStats& st) {
   return 0;
 }
 
+BlockRef Renderer::parentOf(const BlockRef& block) const {
+  BlockRef up;
+  up.level = block.level - 1;
+  up.ijk = file_->partition().parent(block.level, block.ijk);
+  up.entry = file_->entryIndex(up.level, up.ijk);
+  return up;
+}
+
 int Renderer::standInLevel(const BlockRef& block) const {
-  const Partition& p = file_->partition();
-  BlockRef up = block;
-  while (up.level > 0) {
-    up.ijk = p.parent(up.level, up.ijk);
-    up.level--;
-    up.entry = file_->entryIndex(up.level, up.ijk);
+  for (BlockRef up = block; up.level > 0;) {
+    up = parentOf(up);
     if (cache_->contains(up.entry) && !cache_->isDamaged(up.entry)) return up.level;
   }
   return -1;
 }
 
 bool Renderer::placeStandIn(const BlockRef& block, std::vector<Placement>& placed) {
-  const Partition& p = file_->partition();
-  BlockRef up = block;
-  while (up.level > 0) {
-    up.ijk = p.parent(up.level, up.ijk);
-    up.level--;
-    up.entry = file_->entryIndex(up.level, up.ijk);
+  for (BlockRef up = block; up.level > 0;) {
+    up = parentOf(up);
     if (cache_->isDamaged(up.entry)) continue;  // the next intact ancestor
     if (auto data = cache_->residentHit(up.entry)) {
       placed.push_back(Placement{up, block, std::move(data)});

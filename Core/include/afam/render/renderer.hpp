@@ -234,7 +234,8 @@ class Renderer {
   void placeOne(const BlockRef& b, Payload data, std::vector<Placement>& placed, FrameStats& stats);
   /// Loads the resident levels once (and after setStep); returns the milliseconds waited.
   double keepResidentLevels(FrameStats& stats);
-  int standInLevel(const BlockRef& block) const;  ///< nearest resident intact ancestor; -1: none
+  BlockRef parentOf(const BlockRef& block) const;  ///< the block of the level above holding it
+  int standInLevel(const BlockRef& block) const;   ///< nearest resident intact ancestor; -1: none
   bool placeStandIn(const BlockRef& block, std::vector<Placement>& placed);
   bool isEmptyBlock(const BlockRef& block) const;  ///< no valid sample: no payload to load
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;

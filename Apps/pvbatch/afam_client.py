@@ -57,7 +57,8 @@ def connect(host, port, plugin=None, server_plugin=None, ns=None, timeout=30):
 
 
 STATISTICS = ("NumberOfRanks", "RanksDrawingBlocks", "TotalBytesRead", "MaxBytesRead",
-              "TotalVisibleBlocks", "MaxTotalTime", "MinImageScale", "RanksOnGpu", "RanksThroughInterop")
+              "TotalVisibleBlocks", "MaxTotalTime", "MinImageScale", "RanksOnGpu", "RanksThroughInterop",
+              "TotalStandInBlocks", "TotalBlocksBehind", "TotalBytesBehind")
 
 
 def frame_statistics(display):

@@ -282,7 +282,7 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
       lattice = false;
       return false;
     }
-    return keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound);
+    return keeps(kind, compare([](size_t i) { return recon[i]; }, s, valid), bound);
   };
   const int best = largestPassingStepFrom(rung, passes);
   rung = best;

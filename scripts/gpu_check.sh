@@ -40,12 +40,13 @@ fi
 # --- GPU tests.
 "$tests" --gtest_color=no >"$logs/tests.log" 2>&1
 test_rc=$?
-grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage|gpu-missing|gpu-decode)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
+grep -E "^\[(gpu-vs-cpu|generic-vs-p2|pool|ds|gpu-edits|gpu-damage|gpu-missing|gpu-decode|gpu-promise)\]|reference LRU|Failure|FAILED|SKIPPED|PASSED" "$logs/tests.log"
 status "GPU tests" "$(grep -E '^\[  PASSED  \]' "$logs/tests.log" | head -1) $(grep -E '^\[  FAILED  \] [0-9]' "$logs/tests.log" | head -1) $(grep -E '^\[  SKIPPED \] [0-9]' "$logs/tests.log" | head -1)"
 worst=$(grep -E '^\[gpu-vs-cpu\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
 status "GPU vs CPU worst diff" "${worst:-?}/255 over $(grep -c '^\[gpu-vs-cpu\]' "$logs/tests.log") images (bar <= 2/255, exact kernels)"
 worst=$(grep -E '^\[gpu-missing\]' "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
 status "missing samples vs CPU" "${worst:-?}/255 over $(grep -c '^\[gpu-missing\]' "$logs/tests.log") images (bar <= 2/255, exact and fast kernels)"
+status "bound promise on GPU" "$(grep -E '^\[gpu-promise\]' "$logs/tests.log" | grep -oE 'files [0-9]+|mismatches [0-9]+|failed [0-9]+' | paste -sd' ')"
 for m in fma fast; do
   w=$(grep -E "^\[gpu-vs-cpu:$m\]" "$logs/tests.log" | grep -oE "max \|diff\| [0-9]+/255" | grep -oE "[0-9]+/" | tr -d / | sort -n | tail -1)
   status "  same, $m kernels" "${w:-?}/255 (reported, not a bar)"

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "afam/cuda/gpu_block_decoder.hpp"
+#include "afam/ranks/device_selection.hpp"
 #include "afam/render/cpu_raycaster.hpp"
-#include "afam/render/device_selection.hpp"
-#include "afam/render/renderer.hpp"
+#include "afam/render/prepared_frame.hpp"
 
 namespace afam {
 

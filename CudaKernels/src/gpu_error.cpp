@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/cuda/gpu_error.hpp"
 
-#include "afam/render/device_selection.hpp"
+#include "afam/ranks/device_selection.hpp"
 
 #include <cuda_runtime_api.h>
 

@@ -5,7 +5,7 @@
 #include <map>
 #include <string>
 
-#include "afam/render/device_selection.hpp"
+#include "afam/ranks/device_selection.hpp"
 
 using namespace afam;
 

@@ -2,7 +2,7 @@
 #include "afam/render/frame_caster.hpp"
 
 #include "afam/render/cpu_raycaster.hpp"
-#include "afam/render/renderer.hpp"
+#include "afam/render/prepared_frame.hpp"
 
 namespace afam {
 

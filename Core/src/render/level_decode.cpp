@@ -8,8 +8,8 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/render/damage.hpp"
+#include "afam/render/prepared_frame.hpp"
 #include "afam/render/raycast.hpp"
-#include "afam/render/renderer.hpp"
 #include "afam/spline/fit.hpp"
 
 namespace afam {

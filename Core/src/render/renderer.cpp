@@ -3,13 +3,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstring>
-#include <limits>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "afam/base/errors.hpp"
-#include "afam/base/thread_scratch.hpp"
 #include "afam/predict/predictor_factory.hpp"
 
 namespace afam {
@@ -20,16 +17,6 @@ static double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-void PreparedFrame::bind() {
-  view.slots = slots.data();
-  view.slotCount = int32_t(slots.size());
-  view.pool = pool.empty() ? nullptr : pool.data();
-  view.cellSlot = cellSlot.data();
-  for (int a = 0; a < 3; ++a) view.cellBounds[a] = cellBounds[a].data();
-  view.tf = tf.data();
-  view.tfSize = int32_t(tf.size() / 4);
-}
-
 namespace {
 
 /// Floats of a placed model: its control points (a model in the stored form has none yet).
@@ -38,55 +25,7 @@ uint64_t modelFloats(const AfamFile& file, const Placement& m) {
                             : m.data->size();
 }
 
-/// Writes a model's floats at `out`: copied, or decoded from its stored form (NaN, drawn as
-/// nothing, where its payload does not decode: returns why, else an empty string).
-std::string writeModel(const ModelEntry& e, const CachedModel& m, float* out, uint64_t floats) {
-  if (!m.isStored()) {
-    if (!m.empty()) std::memcpy(out, m.data(), m.size() * sizeof(float));
-    return {};
-  }
-  try {
-    decodeStoredPayload(e, m.stored.data(), out, Partition::blockName(e.level, e.block));
-  } catch (const FormatError& error) {
-    std::fill(out, out + floats, std::numeric_limits<float>::quiet_NaN());
-    return error.what();
-  }
-  return {};
-}
-
 }  // namespace
-
-uint64_t PreparedFrame::slotFloats(size_t s) const {
-  return models[s]->isStored() ? slotFloatCount(slots[s]) : models[s]->size();
-}
-
-std::string PreparedFrame::writeSlot(size_t s, float* out) const {
-  return writeModel(*slotEntries[s], *models[s], out, slotFloats(s));
-}
-
-const float* PreparedFrame::hostPool(std::vector<float>& storage) const {
-  if (view.pool || slots.empty()) return view.pool;
-  uint64_t floats = 0;
-  for (size_t s = 0; s < slots.size(); ++s)
-    floats = std::max(floats, slots[s].offset + slotFloats(s));
-  storage.resize(floats);
-  // A stored model that does not decode is NaN (drawn as nothing); the caster that asked for the
-  // stored form reports it.
-  for (size_t s = 0; s < slots.size(); ++s) writeSlot(s, storage.data() + slots[s].offset);
-  releaseThreadScratch();  // of the stored models decoded here
-  return storage.data();
-}
-
-FrameView PreparedFrame::hostView(std::vector<float>& storage) const {
-  FrameView v = view;
-  const bool floats =
-      std::none_of(models.begin(), models.end(), [](const Payload& m) { return m->isStored(); });
-  if (!v.pool && floats && slotHost.size() == slots.size())
-    v.slotData = slotHost.data();
-  else
-    v.pool = hostPool(storage);
-  return v;
-}
 
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
                    FrameSettings settings, std::shared_ptr<DamageLog> damage)
@@ -204,44 +143,6 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   v.specular = settings_.specular;
   v.specularPower = settings_.specularPower;
   fr.bind();
-}
-
-FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset) {
-  const Partition& p = file.partition();
-  const bool raw = file.header().mode == EncodingMode::Downsampled;
-  const ModelEntry& e = file.entries()[size_t(model.entry)];
-  FrameSlot s;
-  s.kind = raw ? kSlotRaw : kSlotSpline;
-  s.level = model.level;
-  const BlockExtent ext = p.extent(model.level, model.ijk);
-  for (int a = 0; a < 3; ++a) {
-    if (raw) {
-      s.knots[a] = Knots{};
-      s.knots[a].ncp = e.ncp[a];
-      s.knots[a].degree = 1;
-    } else {
-      s.knots[a] = Knots::make(e.ncp[a], e.degree[a]);
-    }
-    s.lo[a] = float(ext.lo[a]);
-    s.invExtent[a] = ext.hi[a] > ext.lo[a] ? float(1.0 / double(ext.hi[a] - ext.lo[a])) : 0.f;
-  }
-  s.offset = offset;
-  // The values the source had there: its samples' range within the file's (raycast.hpp clamps).
-  const VolumeHeader& h = file.header();
-  s.valueMin = float(std::max(double(e.minValue), h.valueMin));
-  s.valueMax = float(std::min(double(e.maxValue), h.valueMax));
-  if (!(s.valueMin <= s.valueMax)) s.valueMin = s.valueMax = float(h.valueMin);
-  if (e.kind == BlockKind::Empty) s.kind = kSlotEmpty;
-  if (e.masked) {
-    for (int a = 0; a < 3; ++a) s.maskSamples[a] = e.samples[a];
-    s.maskOffset = uint32_t(controlCount(e));
-  }
-  return s;
-}
-
-void setCompactForm(const CompactForm& form, FrameSlot& slot) {
-  slot.codeWidth = form.width;
-  slot.codeTable = form.width ? form.table : 0;
 }
 
 int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t offset) const {

@@ -16,9 +16,7 @@
 //                          frame's targets while the load threads fetch the predicted next
 //                          view's blocks                                            ("rendering")
 //             latency = caching + rendering.
-// A PreparedFrame holds the cached models it draws (no copy) and owns the other arrays its
-// FrameView points to (host memory); the CPU caster packs the models into one pool, a GPU caster
-// uploads those its pool does not hold.
+// What prepare() hands a caster (PreparedFrame) is the frame contract of prepared_frame.hpp.
 // The method follows the file: Adaptive-FAM / FAM files give spline slots, DS files raw slots.
 #pragma once
 
@@ -37,6 +35,7 @@
 #include "afam/render/frame_settings.hpp"
 #include "afam/render/image.hpp"
 #include "afam/render/prefetch.hpp"
+#include "afam/render/prepared_frame.hpp"
 #include "afam/render/raycast.hpp"
 #include "afam/render/tail_reserve.hpp"
 #include "afam/scene/camera.hpp"
@@ -107,49 +106,6 @@ struct FrameStats {
   /// models uploaded, the GPU's own times, and its messages (frame_caster.hpp).
   CastResult cast;
 };
-
-/// Everything a FrameView points to, owned. Do not copy it after bind(); move is fine only if
-/// bind() is called again.
-struct PreparedFrame {
-  FrameView view;
-  std::vector<FrameSlot> slots;
-  /// The slots' floats side by side at their offsets; empty when the caster reads the cached
-  /// models themselves (FrameCaster::readsHostPool false: no per-frame copy of every model).
-  std::vector<float> pool;
-  std::vector<int32_t> cellSlot;
-  std::array<std::vector<float>, 3> cellBounds;
-  std::vector<float> tf;
-  std::vector<int64_t> entries;  ///< file entries of the slots, slot order
-  /// modelKey of the slots' models, slot order: a GPU caster's pool keeps models by them, so that
-  /// the steps of a run share what they share.
-  std::vector<uint64_t> keys;
-  /// The cached models of the slots, slot order (kept alive for the frame), and their floats
-  /// (null for a model in the stored form: CachedModel::stored holds its payload).
-  std::vector<Payload> models;
-  std::vector<const float*> slotHost;
-  /// The slots' index entries (the file's, valid while the renderer is): what decodes a model
-  /// held in the stored form.
-  std::vector<const ModelEntry*> slotEntries;
-  void bind();  ///< points view at the vectors above (view.pool null while pool is empty)
-  /// view.pool, or, when the pool was left empty, the slots' floats copied into `storage` (models
-  /// in the stored form decoded there; one that does not decode is NaN: drawn as nothing).
-  const float* hostPool(std::vector<float>& storage) const;
-  /// The view a host caster casts: reading each slot's cached model where the pool was left
-  /// empty and every model has its floats (slotData = slotHost), else hostPool's floats.
-  FrameView hostView(std::vector<float>& storage) const;
-  /// Floats of slot s's model (its control points, and a masked model's mask words).
-  uint64_t slotFloats(size_t s) const;
-  /// Writes slot s's slotFloats(s) floats at out: copied, or decoded from the stored form (NaN
-  /// where its payload does not decode). Returns why it did not decode; empty when it did.
-  std::string writeSlot(size_t s, float* out) const;
-};
-
-/// The FrameSlot of one model of `file` (a spline, or a DS file's raw block; extent in voxel
-/// coordinates), its floats at `offset` of the pool.
-FrameSlot modelSlot(const AfamFile& file, const BlockRef& model, uint64_t offset);
-/// A slot of a model cached in the compact form `form` (width 0: floats): its code width and
-/// table.
-void setCompactForm(const CompactForm& form, FrameSlot& slot);
 
 class Renderer {
  public:

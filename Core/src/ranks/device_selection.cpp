@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/render/device_selection.hpp"
+#include "afam/ranks/device_selection.hpp"
 
 #include <cstdlib>
 #include <string>

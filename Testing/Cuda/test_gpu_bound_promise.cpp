@@ -2,13 +2,15 @@
 // The bound-promise sweep through the GPU decoder: every file of the default suite's selection of
 // the sweep (Testing/Core/bound_promise_cases.hpp: every small shape, scales 1e-30 to 1e30, both
 // bound kinds, missing samples, runs of two steps) and the 2x2x2 volume that once decoded to 1e24,
-// each encoded with the default entropy stage and with a lanes frame for every coded payload.
+// each encoded with the default entropy stage and with a lanes frame for every coded payload, and
+// the sweep's thin slabs at every scale with lanes frames and with float32 control points.
 // Every payload the GPU decodes (constants, float32 points, lanes-coded splines) and every block's
 // compact form (what the pool expands) decode on the GPU to the floats the CPU reader gives, bit
 // for bit, and the CPU reader's floats are within the bound on every block (decoded_bound.hpp):
 // so the GPU's are.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -80,11 +82,13 @@ void decodeOnGpuAsTheCpu(const AfamFile& f, const std::string& name, Tally& t) {
 
 /// Encodes the case with `entropy`, checks every block within its bound as the CPU reads it and
 /// every decodable payload on the GPU against the CPU.
-void checkOnGpu(const PromiseCase& c, uint32_t seed, EntropyStage entropy, Tally& t) {
+void checkOnGpu(const PromiseCase& c, uint32_t seed, EntropyStage entropy, Tally& t,
+                bool compact = true) {
   SCOPED_TRACE(c.name());
   const std::string path = afam_test::scratchPath("gpu_promise.afam");
   EncoderOptions opt = afam_test::optionsOf(c);
   opt.entropy = entropy;
+  opt.compact = compact;
   const afam_test::EncodedCase e = afam_test::encodeCase(c, seed, opt, path);
   if (e.refused) {
     ++t.refused;
@@ -117,8 +121,36 @@ TEST(GpuBoundPromise, TheSweepDecodesOnTheGpuAsOnTheCpu) {
     report(entropy == EntropyStage::Auto ? "default entropy" : "lanes frames", t);
     EXPECT_EQ(t.failed + t.mismatches, 0u);
     EXPECT_GT(t.files, 300u);
-    // Every kind of job met: the sweep reached the GPU's every path.
-    for (int kind = 0; kind < 4; ++kind) EXPECT_GT(t.kinds[kind], 0u) << "no job of kind " << kind;
+    // Small blocks end as constants and interpolants: on the GPU, constants and compact forms.
+    EXPECT_GT(t.kinds[int(GpuDecodeKind::Constant)], 0u);
+    EXPECT_GT(t.kinds[int(GpuDecodeKind::Compact)], 0u);
+  }
+}
+
+TEST(GpuBoundPromise, ThinSlabsAtEveryScaleDecodeOnTheGpuAsOnTheCpu) {
+  // The sweep's slabs (1-2 samples beside 64), smooth and noisy, at every scale and both bound
+  // kinds: their splines reach the GPU's lanes-coded path (steps and bases from 1e-30 to 1e30)
+  // and, with float32 control points, its copy path.
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  for (const bool compact : {true, false}) {
+    Tally t;
+    uint32_t seed = 3000;
+    for (afam::Index3 d : afam_test::smallShapes()) {
+      if (std::max({d[0], d[1], d[2]}) < 64) continue;
+      for (const double scale : afam_test::kScales)
+        for (const afam_test::Content content :
+             {afam_test::Content::Smooth, afam_test::Content::Noise})
+          for (const BoundKind kind : afam_test::kKinds)
+            for (const double bound : {1e-2, 1e-4}) {
+              const PromiseCase c{d, scale, content, kind, bound, false, false};
+              checkOnGpu(c, seed++, EntropyStage::Lanes, t, compact);
+            }
+    }
+    report(compact ? "thin slabs, lanes frames" : "thin slabs, float32 points", t);
+    EXPECT_EQ(t.failed + t.mismatches, 0u);
+    EXPECT_GT(t.files, 200u);
+    EXPECT_GT(t.kinds[int(compact ? GpuDecodeKind::IntegerLorenzo : GpuDecodeKind::Floats)], 20u);
   }
 }
 

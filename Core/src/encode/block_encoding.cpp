@@ -502,7 +502,6 @@ void storeDownsampled(const BlockExtent& e, BlockTask& t) {
   m.kind = BlockKind::Spline;
   t.stored = bytesOf(t.samples);
   m.storedSize = t.stored.size();
-  std::vector<float>().swap(t.samples);
 }
 
 namespace {
@@ -642,10 +641,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
   try {
     const bool hasMissing =
         std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); });
-    if (hasMissing && !prepareMissing(c, e, t)) {
-      std::vector<float>().swap(t.samples);
-      return;
-    }
+    if (hasMissing && !prepareMissing(c, e, t)) return;
     const MaskScope scope(fitter, t);
     // A run's step: the block's model at the step before, and how far the block moved from it.
     // Masked blocks are coded on their own (their models are never shared in time).
@@ -695,7 +691,6 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
   }
   for (int a = 0; a < 3; ++a)
     if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
-  std::vector<float>().swap(t.samples);
 }
 
 }  // namespace afam

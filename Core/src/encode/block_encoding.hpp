@@ -122,7 +122,8 @@ ErrorStats errorAsDecoded(const ModelEntry& m, const float* points, const BlockT
 /// The entry's error and value range from the stored model's error on the block's samples.
 void setError(BlockTask& t, const ErrorStats& es);
 
-/// DS: the samples with their ghost layer are the payload (float32, uncoded).
+/// DS: the samples with their ghost layer are the payload (float32, uncoded); t.samples are left
+/// for the caller to reuse.
 void storeDownsampled(const BlockExtent& e, BlockTask& t);
 
 /// A run's block coded as a residual on the step before's model (`before`, `model`: its entry and
@@ -131,7 +132,8 @@ void storeDownsampled(const BlockExtent& e, BlockTask& t);
 bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
                            const ModelEntry& before, const FitResult& model, BlockTask& t);
 
-/// Fits and stores one block of a spline mode (entry, stored bytes, statistics of the task).
+/// Fits and stores one block of a spline mode (entry, stored bytes, statistics of the task);
+/// t.samples are left (holes filled) for the caller to reuse or free.
 /// Throws NumericError naming the block when its samples cannot be fitted.
 void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t);
 

@@ -272,6 +272,29 @@ void addLevel(const LevelStats& ls, EncodeStats& stats) {
   stats.maxError = std::max(stats.maxError, ls.maxError);
 }
 
+/// Sample buffers of fitted blocks, handed to the blocks sampled next: their pages are already
+/// faulted in and nothing is freed or allocated a block (the batches' blocks are of a few sizes).
+/// Shared by the fitting threads (give) and the sampling thread (take).
+class SampleBuffers {
+ public:
+  std::vector<float> take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (free_.empty()) return {};
+    std::vector<float> v = std::move(free_.back());
+    free_.pop_back();
+    return v;
+  }
+  void give(std::vector<float>&& v) {
+    v.clear();
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(v));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::vector<float>> free_;
+};
+
 /// Encodes the levels coarse to fine; one instance per encodeVolume call. In a team of several
 /// processes each fits its workShare of every level, and finishLevel hands the level's models to
 /// the first process, which alone calls the sink.
@@ -411,18 +434,23 @@ class LevelEncoder {
     return complexPrev_[size_t(part_.linearIndex(l - 1, part_.parent(l, ijk)))] != 0;
   }
 
-  /// Lines of blocks of level l from `line` on (before endLine), until the batch holds ~24 M
-  /// samples (in a team of several processes 256 K samples, 1 MB), at least one line. One process
+  /// Lines of blocks of level l from `line` on (before endLine), until the batch holds ~4 M
+  /// samples a fitting thread, at most ~24 M (in a team of several processes 256 K samples, 1 MB),
+  /// at least one line. One process
   /// samples a z-row (or the part of one in the range) at a time; a member of a team one line at a
   /// time. Runs beside the fitting pool: it touches only planes_, samplePool_ and its own batch (no
   /// progress callback, which the calling thread owns).
   Batch gatherLines(int l, int64_t line, int64_t endLine) {
     const auto t0 = Clock::now();
-    // One process samples ahead in batches of ~24 M samples; a member of a team holds its piece
-    // and ~1 MB of samples at a time, plus the rows of the planes one line is filtered from (at
-    // most a quarter of the line's samples: ChunkBudget): less than one z-row of blocks.
+    // One process samples ahead in batches of ~4 M samples a fitting thread, at most ~24 M: few
+    // enough that the next batch mostly reuses the buffers of the batch before (SampleBuffers:
+    // page faults cost ~9 us each on a VM, 0.7 s of a 5 s encode at one thread), enough that the
+    // threads rarely wait at a batch's end. A member of a team holds its piece and ~1 MB of
+    // samples at a time, plus the rows of the planes one line is filtered from (at most a quarter
+    // of the line's samples: ChunkBudget): less than one z-row of blocks.
     const bool member = team_.size() > 1;
-    const size_t budgetFloats = member ? size_t(1) << 18 : size_t(24) << 20;
+    const size_t budgetFloats =
+        member ? size_t(1) << 18 : std::min(size_t(24) << 20, (size_t(4) << 20) * fitters_.size());
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
     std::vector<BlockTask>& tasks = batch.tasks;
@@ -438,6 +466,7 @@ class LevelEncoder {
       std::vector<std::vector<float>*> outs(row.size());
       for (size_t r = 0; r < row.size(); ++r) {
         tasks[first + r].ijk = row[r];
+        tasks[first + r].samples = buffers_.take();
         outs[r] = &tasks[first + r].samples;
       }
       sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_,
@@ -468,6 +497,7 @@ class LevelEncoder {
             storeDownsampled(e, t);
           else
             encodeBlock(ctx, e, fitters_[size_t(w)], t);
+          buffers_.give(std::move(t.samples));
           std::lock_guard<std::mutex> lock(doneMutex);
           batchDone += double(e.samples[0]) * e.samples[1] * e.samples[2];
         },
@@ -496,6 +526,7 @@ class LevelEncoder {
   WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
   BlockLoop sampleLoop_;
   PlaneReader planes_;
+  SampleBuffers buffers_;
   std::vector<uint8_t> complexPrev_, complexCur_;
 };
 

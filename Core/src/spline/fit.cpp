@@ -12,7 +12,15 @@
 #include <string>
 #include <type_traits>
 
+#include "afam/base/cpu_features.hpp"
 #include "afam/spline/basis.hpp"
+
+// The passes over a block's values (solve, energy, changeEnergy, evaluate) are compiled twice: for
+// the build's baseline and, where the CPU has it, for AVX2 (twice the doubles a vector), chosen at
+// run time. The same operations in the same order, and no FMA, so the same doubles either way.
+// Their bodies and row kernels are inlined into both (a target's function inlines only what it
+// is told to).
+#define AFAM_FIT_INLINE __attribute__((always_inline)) inline
 
 namespace afam {
 
@@ -142,8 +150,8 @@ void factorNormal(AxisSystem& s) {
 
 /// out rows [0, m) = A^T * in rows [0, n): out_j = sum_i A[i][j] in_i.
 template <typename In>
-void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, double* out,
-                        size_t outStride, size_t len) {
+AFAM_FIT_INLINE void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride,
+                                        double* out, size_t outStride, size_t len) {
   // Column by column, in blocks of kBlock values summed in registers over the column's samples
   // (in sample order, from 0): each output is written once.
   constexpr size_t kBlock = 8;
@@ -170,7 +178,7 @@ void applyTransposeRows(const AxisSystem& s, const In* in, size_t inStride, doub
 }
 
 /// In place: rows [0, m) <- (L L^T)^{-1} rows.
-void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+AFAM_FIT_INLINE void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
   const int m = s.ncp, p = s.p;
   for (int j = 0; j < m; ++j) {
     double* __restrict xj = x + size_t(j) * stride;
@@ -195,7 +203,8 @@ void solveRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
 }
 
 /// In place: rows [0, m) <- L^T rows, so that the squared norm of the result is x^T (A^T A) x.
-void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride, size_t len) {
+AFAM_FIT_INLINE void multiplyFactorTransposeRows(const AxisSystem& s, double* x, size_t stride,
+                                                 size_t len) {
   const int m = s.ncp, p = s.p;
   for (int j = 0; j < m; ++j) {
     double* __restrict xj = x + size_t(j) * stride;
@@ -216,7 +225,7 @@ void grow(std::vector<double>& v, size_t n) {
 
 /// Sum of squares of n values, in four lanes (vectorised).
 template <typename T>
-double sumSquares(const T* v, size_t n) {
+AFAM_FIT_INLINE double sumSquares(const T* v, size_t n) {
   double lane[4] = {0, 0, 0, 0};
   size_t i = 0;
   for (; i + 4 <= n; i += 4)
@@ -228,8 +237,8 @@ double sumSquares(const T* v, size_t n) {
 
 /// out rows [0, n) = A * in rows [0, m): the model on the sample parameters of this axis.
 template <typename In, typename Out>
-void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, size_t outStride,
-                  size_t len, double* scratch) {
+AFAM_FIT_INLINE void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out,
+                                  size_t outStride, size_t len, double* scratch) {
   const int w = s.p + 1;
   for (int i = 0; i < s.n; ++i) {
     const double* wi = &s.weight[size_t(i) * size_t(w)];
@@ -257,7 +266,8 @@ void evaluateRows(const AxisSystem& s, const In* in, size_t inStride, Out* out, 
 /// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along
 /// x become the vectors of the row kernels.
 template <typename In, typename Out>
-void transpose(const In* __restrict src, size_t rows, size_t cols, Out* __restrict dst) {
+AFAM_FIT_INLINE void transpose(const In* __restrict src, size_t rows, size_t cols,
+                               Out* __restrict dst) {
   constexpr size_t kTile = 16;
   for (size_t r0 = 0; r0 < rows; r0 += kTile)
     for (size_t c0 = 0; c0 < cols; c0 += kTile) {
@@ -360,17 +370,62 @@ struct BlockFitter::Impl {
 
   /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
   /// (x fastest) and its float32 control points in `out`; returns max |control point|.
-  double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out);
+  double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out) {
+    float largest;
+    if (cpuHasAvx2())
+      largest = solvePassesAvx2(a, samples, n, out);
+    else
+      largest = solvePasses(a, samples, n, out);
+    if (!(largest <= FLT_MAX)) throwControlOverflow(n);
+    out.error = ErrorStats{};
+    out.errorMeasured = false;
+    return double(largest);
+  }
+  AFAM_FIT_INLINE float solvePasses(const Axes& a, const float* samples,
+                                    const std::array<int, 3>& n, FitResult& out);
+  AFAM_TARGET_AVX2 float solvePassesAvx2(const Axes& a, const float* samples,
+                                         const std::array<int, 3>& n, FitResult& out) {
+    return solvePasses(a, samples, n, out);
+  }
 
   /// c^T b = c^T (A^T A) c of the last solve().
-  double energy(const std::array<int, 3>& ncp) const;
+  double energy(const std::array<int, 3>& ncp) const {
+    return cpuHasAvx2() ? energyPassAvx2(ncp) : energyPass(ncp);
+  }
+  AFAM_FIT_INLINE double energyPass(const std::array<int, 3>& ncp) const;
+  AFAM_TARGET_AVX2 double energyPassAvx2(const std::array<int, 3>& ncp) const {
+    return energyPass(ncp);
+  }
 
   /// e^T (A^T A) e for e = the difference of two models' control points (same shape).
-  double changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b);
+  double changeEnergy(const std::array<int, 3>& n, const FitResult& a, const FitResult& b) {
+    trimCache();
+    const Axes axes{&axis(n[0], a.ncp[0], a.degree[0], true),
+                    &axis(n[1], a.ncp[1], a.degree[1], true),
+                    &axis(n[2], a.ncp[2], a.degree[2], true)};
+    return cpuHasAvx2() ? changeEnergyPassesAvx2(axes, a, b) : changeEnergyPasses(axes, a, b);
+  }
+  AFAM_FIT_INLINE double changeEnergyPasses(const Axes& axes, const FitResult& a,
+                                            const FitResult& b);
+  AFAM_TARGET_AVX2 double changeEnergyPassesAvx2(const Axes& axes, const FitResult& a,
+                                                 const FitResult& b) {
+    return changeEnergyPasses(axes, a, b);
+  }
 
   /// Separable evaluation. Either writes the grid (gridOut) or reduces it against samples (stats).
   void evaluate(const FitResult& model, const std::array<int, 3>& n, const float* samples,
                 ErrorStats* stats, float* gridOut);
+  AFAM_FIT_INLINE void evaluatePasses(const Axes& axes, const FitResult& model,
+                                      const std::array<int, 3>& n, const float* samples,
+                                      ErrorStats* stats, float* gridOut);
+  AFAM_TARGET_AVX2 void evaluatePassesAvx2(const Axes& axes, const FitResult& model,
+                                           const std::array<int, 3>& n, const float* samples,
+                                           ErrorStats* stats, float* gridOut) {
+    evaluatePasses(axes, model, n, samples, stats, gridOut);
+  }
+
+  [[noreturn]] __attribute__((noinline)) static void throwControlOverflow(
+      const std::array<int, 3>& n);
 };
 
 BlockFitter::BlockFitter() : impl_(std::make_unique<Impl>()) {}
@@ -408,8 +463,15 @@ BlockFitter::Impl::Axes BlockFitter::Impl::prepareFit(const float* samples,
   return axes;
 }
 
-double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::array<int, 3>& n,
-                                FitResult& out) {
+void BlockFitter::Impl::throwControlOverflow(const std::array<int, 3>& n) {
+  std::ostringstream msg;
+  msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
+      << " block overflows float32 (samples too close to FLT_MAX)";
+  throw NumericError(msg.str());
+}
+
+float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
+                                     const std::array<int, 3>& n, FitResult& out) {
   const AxisSystem &ax = *a.x, &ay = *a.y, &az = *a.z;
   const size_t nx = size_t(n[0]), ny = size_t(n[1]);
   const size_t mx = size_t(ax.ncp), my = size_t(ay.ncp), mz = size_t(az.ncp);
@@ -453,18 +515,10 @@ double BlockFitter::Impl::solve(const Axes& a, const float* samples, const std::
     control[i] = float(bufC[i]);
     largest = std::max(largest, std::fabs(control[i]));
   }
-  if (!(largest <= FLT_MAX)) {
-    std::ostringstream msg;
-    msg << "afam fit: a control point of the " << n[0] << " x " << n[1] << " x " << n[2]
-        << " block overflows float32 (samples too close to FLT_MAX)";
-    throw NumericError(msg.str());
-  }
-  out.error = ErrorStats{};
-  out.errorMeasured = false;
-  return double(largest);
+  return largest;
 }
 
-double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
+double BlockFitter::Impl::energyPass(const std::array<int, 3>& ncp) const {
   const size_t mx = size_t(ncp[0]), lines = size_t(ncp[1]) * size_t(ncp[2]);
   double lane[4] = {0, 0, 0, 0};
   for (size_t j = 0; j < mx; ++j) {
@@ -474,12 +528,9 @@ double BlockFitter::Impl::energy(const std::array<int, 3>& ncp) const {
   return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
 
-double BlockFitter::Impl::changeEnergy(const std::array<int, 3>& n, const FitResult& a,
-                                       const FitResult& b) {
-  trimCache();
-  const AxisSystem& ax = axis(n[0], a.ncp[0], a.degree[0], true);
-  const AxisSystem& ay = axis(n[1], a.ncp[1], a.degree[1], true);
-  const AxisSystem& az = axis(n[2], a.ncp[2], a.degree[2], true);
+double BlockFitter::Impl::changeEnergyPasses(const Axes& axes, const FitResult& a,
+                                             const FitResult& b) {
+  const AxisSystem &ax = *axes.x, &ay = *axes.y, &az = *axes.z;
   const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
   const size_t slab = mx * my, lines = my * mz;
   grow(bufC, mx * lines);
@@ -558,7 +609,6 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
     }
   }
   validate(n, model.ncp, model.degree);
-  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
   const size_t mx = size_t(model.ncp[0]), my = size_t(model.ncp[1]), mz = size_t(model.ncp[2]);
   if (model.control.size() != mx * my * mz) {
     std::ostringstream msg;
@@ -567,9 +617,21 @@ void BlockFitter::Impl::evaluate(const FitResult& model, const std::array<int, 3
     throw InvalidArgument(msg.str());
   }
   trimCache();
-  const AxisSystem& ax = axis(n[0], model.ncp[0], model.degree[0], false);
-  const AxisSystem& ay = axis(n[1], model.ncp[1], model.degree[1], false);
-  const AxisSystem& az = axis(n[2], model.ncp[2], model.degree[2], false);
+  const Axes axes{&axis(n[0], model.ncp[0], model.degree[0], false),
+                  &axis(n[1], model.ncp[1], model.degree[1], false),
+                  &axis(n[2], model.ncp[2], model.degree[2], false)};
+  if (cpuHasAvx2())
+    evaluatePassesAvx2(axes, model, n, samples, stats, gridOut);
+  else
+    evaluatePasses(axes, model, n, samples, stats, gridOut);
+}
+
+void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
+                                       const std::array<int, 3>& n, const float* samples,
+                                       ErrorStats* stats, float* gridOut) {
+  const AxisSystem &ax = *axes.x, &ay = *axes.y, &az = *axes.z;
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
+  const size_t mx = size_t(model.ncp[0]), my = size_t(model.ncp[1]), mz = size_t(model.ncp[2]);
   const size_t planeSize = nx * ny;
 
   // x: control lines -> sample lines, transposed (line index fastest) so that lines are the

@@ -81,6 +81,10 @@
 //  compositing, sample k stands for [t_k, t_k + dt], the first one from the ray's start and the
 //  last one up to its end (endWeight), so the opacity varies continuously where the near plane or
 //  opaque geometry cut the lattice (no grid on the faces).
+//  A frame that draws one rank's box (FrameView::clipped) marches the same rays on the same
+//  lattice with the same end weights, but only near its box, and its cells outside the box are
+//  culled: each sample is drawn by exactly one box, so the boxes' images composited in
+//  visibility order are the whole frame's image.
 //
 // ---------------------------------------------------------------------------------------------
 // Classification, shading, compositing
@@ -219,6 +223,13 @@ struct FrameView {
   /// the pixel only (rayJitter; VTK's UseJittering), which turns the banding of a regular lattice
   /// into fine noise and is stable from frame to frame; 0: none.
   int32_t jitter = 0;
+  /// 1: the frame draws one rank's box of the volume (sort-last rendering; ranks/box_frame.hpp):
+  /// each ray takes only the samples of the volume's ray (the same lattice, the same end weights)
+  /// near [clipLo, clipHi] (normalised frame), and the cells outside the box hold -1, so a sample
+  /// is drawn by the one box whose finest cell holds it. 0: the whole volume.
+  int32_t clipped = 0;
+  float clipLo[3] = {-1.f, -1.f, -1.f};
+  float clipHi[3] = {1.f, 1.f, 1.f};
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -567,6 +578,16 @@ AFAM_HD RGBA missingColour(const FrameView& f) {
   return c;
 }
 
+/// `behind` (premultiplied) composited under `acc` (premultiplied): front-to-back "over", how the
+/// images of boxes in visibility order become one (ranks/rank_images.hpp).
+AFAM_HD void compositeUnder(RGBA& acc, const RGBA& behind) {
+  const float w = 1.f - acc.a;
+  acc.r += w * behind.r;
+  acc.g += w * behind.g;
+  acc.b += w * behind.b;
+  acc.a += w * behind.a;
+}
+
 /// Front-to-back compositing of one classified (non-premultiplied) sample into `acc`.
 AFAM_HD void compositeFrontToBack(RGBA& acc, const RGBA& s) {
   const float w = (1.f - acc.a) * s.a;
@@ -594,18 +615,32 @@ AFAM_HD float rayJitter(int px, int py) {
 }
 
 /// The samples of pixel (px, py): origin o, unit direction d, step dt and the indices
-/// [kBegin, kEnd] of the samples t = tBase + k dt (sampleAt). The lattice starts where the ray
-/// enters the volume's box (plus the pixel's jitter), so the samples lie on the box's faces and
-/// not on spheres around the eye (which draw rings through a volume); N ranks that draw parts of
-/// one box see the same lattice. False when the ray takes none: it misses the box, opaque
-/// geometry or the near plane cuts it off, or sampleDistance <= 0.
+/// [kBegin, kEnd] of the samples t = tBase + k dt (sampleAt) this frame takes. The lattice starts
+/// where the ray enters the volume's box (plus the pixel's jitter), so the samples lie on the box's
+/// faces and not on spheres around the eye (which draw rings through a volume); N ranks that draw
+/// parts of one box see the same lattice: a clipped frame (FrameView::clipped) takes the samples of
+/// [kFirst, kLast] within a step of its box. False when the ray takes none: it misses the box (or
+/// the clip box), opaque geometry or the near plane cuts it off, or sampleDistance <= 0.
 struct RaySamples {
   float o[3], d[3];
   float dt;
   float tBase;  ///< t of sample 0
   int64_t kBegin, kEnd;
-  float tStart, tExit;  ///< the part of the ray sampled (box, near plane, opaque geometry)
+  int64_t kFirst, kLast;  ///< the first and last samples of the volume's whole ray
+  float tStart, tExit;    ///< the part of the ray sampled (box, near plane, opaque geometry)
 };
+/// A clipped frame's samples: those of the whole ray within one step of the clip box (which
+/// sample a box draws is decided by the cell holding it, not by this test). False: none.
+AFAM_HD bool clipRaySamples(const FrameView& f, RaySamples& r) {
+  float c0, c1;
+  if (!intersectBox(r.o, r.d, f.clipLo, f.clipHi, c0, c1)) return false;
+  const int64_t first = int64_t(ceilf((c0 - r.tBase) / r.dt)) - 1;
+  const int64_t last = int64_t(floorf((c1 - r.tBase) / r.dt)) + 1;
+  r.kBegin = first > r.kFirst ? first : r.kFirst;
+  r.kEnd = last < r.kLast ? last : r.kLast;
+  return r.kBegin <= r.kEnd;
+}
+
 AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
   pixelRay(f.camera, px, py, r.o, r.d);
   float tEnter, tExit;
@@ -616,11 +651,11 @@ AFAM_HD bool raySamples(const FrameView& f, int px, int py, RaySamples& r) {
   // The opacity correction refers to sampleDistance: rayStep keeps the world length of a step.
   r.dt = rayStep(f.camera, r.d, f.sampleDistance);
   r.tBase = tEnter + (f.jitter ? rayJitter(px, py) : 0.f) * r.dt;
-  r.kBegin = int64_t(ceilf((tStart - r.tBase) / r.dt));
-  r.kEnd = int64_t(floorf((tExit - r.tBase) / r.dt));
+  r.kBegin = r.kFirst = int64_t(ceilf((tStart - r.tBase) / r.dt));
+  r.kEnd = r.kLast = int64_t(floorf((tExit - r.tBase) / r.dt));
   r.tStart = tStart;
   r.tExit = tExit;
-  return true;
+  return !f.clipped || clipRaySamples(f, r);
 }
 
 /// Ray distance t of sample k.
@@ -632,9 +667,9 @@ AFAM_HD float sampleAt(const RaySamples& r, int64_t k) { return r.tBase + float(
 /// or opaque geometry crosses the lattice (whole samples switching on and off there draw a grid
 /// on the volume's faces), and a ray cut short by geometry gathers no more than the whole ray.
 AFAM_HD float endWeight(const RaySamples& r, int64_t k) {
-  if (k != r.kBegin && k != r.kEnd) return 1.f;
-  const float lo = k == r.kBegin ? r.tStart : sampleAt(r, k);
-  const float hi = k == r.kEnd ? r.tExit : sampleAt(r, k) + r.dt;
+  if (k != r.kFirst && k != r.kLast) return 1.f;
+  const float lo = k == r.kFirst ? r.tStart : sampleAt(r, k);
+  const float hi = k == r.kLast ? r.tExit : sampleAt(r, k) + r.dt;
   return rc::maxf(0.f, hi - lo) / r.dt;
 }
 

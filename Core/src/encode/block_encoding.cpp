@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -115,6 +116,8 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
 struct Candidate {
   BlockKind kind = BlockKind::Spline;
   Int3 ncp{}, degree{};
+  /// On the samples; of a coded spline the ladder passed, maybe only a bound on its RMSE (the kept
+  /// candidate's is measured as read: checkAsRead).
   ErrorStats error;
   std::vector<uint8_t> bytes;
   bool roundedPoints = false;  ///< an interpolant whose bytes end with its points' shift
@@ -186,12 +189,14 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   const double step = ladderStep(kind, budget, kStepFactors[best]);
   std::vector<uint8_t> bytes;
   if (!encodeValues(fr.control.data(), fr.ncp, step, form, coding, bytes, q.control)) return false;
-  // The coder reconstructs what the ladder decided on; the stored error is measured on the samples.
-  if (q.control == passed.control)
+  // The coder reconstructs what the ladder decided on: its verdict stands (the error the entry
+  // stores is measured as a reader decodes the kept candidate: checkAsRead); else it is measured.
+  if (q.control == passed.control) {
     q = std::move(passed);
-  else
+  } else {
     q.errorMeasured = false;
-  fitter.measure(s.data(), n, q);
+    fitter.measure(s.data(), n, q);
+  }
   out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
   return keeps(kind, out.error, bound);
 }
@@ -268,12 +273,11 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
 }
 
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
-/// step is chosen on the quantized samples, then the decoded model (the interpolating spline) is
-/// measured on the samples.
+/// step is chosen on the quantized samples. The decoded model is not yet measured
+/// (checkInterpolant).
 bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64_t holeSlack,
                        Int3 n, int degree, double bound, BoundKind kind, EntropyCoding coding,
-                       double beat, Predictor form, BlockFitter& fitter, Candidate& out,
-                       int& rung) {
+                       double beat, Predictor form, Candidate& out, int& rung) {
   const FreeValues free{valid, holeSlack};
   thread_local std::vector<float> recon;  // kept between calls: no allocation a block
   bool lattice = true;
@@ -295,10 +299,19 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
   if (!encodeValues(s.data(), n, step, form, coding, c.bytes, recon, free)) return false;
+  out = std::move(c);
+  return true;
+}
+
+/// Whether a coded interpolant (codeSamplesInForm) keeps the bound as decoded, measured on the
+/// samples (float rounding of the interpolant may break it); its error then in c, and its points
+/// rounded where that pays (roundInterpolantPoints).
+bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n, double bound,
+                      BoundKind kind, BlockFitter& fitter, Candidate& c) {
   ModelEntry probe;
   probe.kind = c.kind;
   probe.coded = true;
-  probe.integerCoded = isIntegerForm(form);
+  probe.integerCoded = payloadIsIntegerCoded(c.bytes.data(), c.bytes.size());
   probe.lanesCoded = payloadIsLanesCoded(c.bytes.data(), c.bytes.size());
   probe.ncp = c.ncp;
   probe.degree = c.degree;
@@ -313,7 +326,6 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
   if (!valid) roundInterpolantPoints(s, n, bound, kind, fitter, model, c);
-  out = std::move(c);
   return true;
 }
 
@@ -328,9 +340,11 @@ constexpr int64_t kHoleSlacks[] = {0, kNearFillSteps, FreeValues::kAnySlack};
 
 /// The samples as an Interpolant in whichever form stores them smaller (keepSmallerForm); with
 /// missing samples, with each way of coding the holes (kHoleSlacks), whichever is smallest (the
-/// quantization step the ladder reaches differs between them).
+/// quantization step the ladder reaches differs between them). `loses`: a payload of that many
+/// bytes or more loses to the other candidate; where both forms' coded bytes do, neither is
+/// decoded and measured, as whichever the check left would lose (rounded points only add a byte).
 bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int degree,
-                 double bound, BoundKind kind, EntropyCoding coding, double beat,
+                 double bound, BoundKind kind, EntropyCoding coding, double beat, size_t loses,
                  BlockFitter& fitter, Candidate& out) {
   if (!(bound > 0)) return false;
   bool found = false;
@@ -338,11 +352,17 @@ bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int
     if (slack > 0 && !valid) break;
     Candidate integer, dbl, best;
     int rung = -1;  // the integer form's rung: the likely one of the double form
-    const bool hasInteger =
+    const bool codedInteger =
         codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
-                          Predictor::IntegerInterpolation, fitter, integer, rung);
-    const bool hasDouble = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
-                                             Predictor::Interpolation, fitter, dbl, rung);
+                          Predictor::IntegerInterpolation, integer, rung);
+    const bool codedDouble = codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding,
+                                               beat, Predictor::Interpolation, dbl, rung);
+    if (!(codedInteger && integer.bytes.size() < loses) &&
+        !(codedDouble && dbl.bytes.size() < loses))
+      continue;
+    const bool hasInteger =
+        codedInteger && checkInterpolant(s, valid, n, bound, kind, fitter, integer);
+    const bool hasDouble = codedDouble && checkInterpolant(s, valid, n, bound, kind, fitter, dbl);
     if (!keepSmallerForm(hasInteger, integer, hasDouble, dbl, best)) continue;
     if (!found || best.bytes.size() < out.bytes.size()) out = std::move(best);
     found = true;
@@ -427,7 +447,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   }
   if (noiseDominated(c, e, fitter, t) &&
       codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
-                  std::numeric_limits<double>::infinity(), fitter, best)) {
+                  std::numeric_limits<double>::infinity(), SIZE_MAX, fitter, best)) {
     finalFrame(c, best);
     storeCandidate(best, t);
     return;
@@ -445,7 +465,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
       haveSpline ? 1.2 * double(best.bytes.size()) : std::numeric_limits<double>::infinity();
   if ((!haveSpline || int64_t(best.bytes.size()) * 8 > count || !t.mask.empty()) &&
       codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
-                  beat, fitter, other) &&
+                  beat, haveSpline ? best.bytes.size() : SIZE_MAX, fitter, other) &&
       (!haveSpline || other.bytes.size() < best.bytes.size())) {
     best = std::move(other);
     t.complex = true;

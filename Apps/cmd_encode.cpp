@@ -7,15 +7,16 @@
 #include "afam/volume/missing_value_source.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "encode_device.hpp"
 #include "source_args.hpp"
 
 namespace afam::cli {
 
 int runEncode(int argc, char** argv) {
-  Args args(argc, argv,
-            {"dims", "type", "error-bound", "levels", "blocks", "degree", "mode", "ncp", "threads",
-             "search", "spacing", "window", "times", "key-interval", "append", "coded-share",
-             "max-error", "missing-value", "entropy"},
+  Args args(argc, argv, {"dims",        "type",      "error-bound",   "levels",       "blocks",
+                         "degree",      "mode",      "ncp",           "threads",      "search",
+                         "spacing",     "window",    "times",         "key-interval", "append",
+                         "coded-share", "max-error", "missing-value", "entropy",      "device"},
             {"relative", "float-payloads", "isotropic-ncp", "progress", "quiet"});
   const char* usage =
       "afam encode IN.raw|IN.nrrd|IN.nhdr|IN.mha|IN.mhd [IN1 ...] OUT.afam [--dims X,Y,Z]\n"
@@ -25,7 +26,7 @@ int runEncode(int argc, char** argv) {
       "       [--mode adaptive|inlevel|fixed|ds] [--ncp K] [--threads T] [--search "
       "fast|exhaustive]\n"
       "       [--missing-value V] [--times T0,T1,...] [--key-interval K] [--coded-share S]\n"
-      "       [--entropy auto|zstd|lanes]\n"
+      "       [--entropy auto|zstd|lanes] [--device auto|gpu|cpu]\n"
       "       afam encode --append STEP RUN.afam [--times T] [--threads T]";
   if (args.help()) {
     std::printf(
@@ -85,12 +86,13 @@ int runEncode(int argc, char** argv) {
         "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"
         "  --ncp K           NCP per axis for --mode fixed (default n)\n"
         "  --threads T       worker threads (default: all cores)\n"
+        "%s"
         "  --search S        fast (default) or exhaustive (the paper's loop over every NCP)\n"
         "  --spacing SX,SY,SZ  voxel spacing stored in the header (default 1,1,1, or the input "
         "header's)\n"
         "  --progress        draw the progress bar even when stderr is not a terminal\n"
         "  --quiet           print nothing on success\n",
-        usage, EncoderOptions{}.runCodedShare);
+        usage, EncoderOptions{}.runCodedShare, encodeDeviceHelp());
     return 0;
   }
   if (args.has("append")) args.expectPositional(1, usage);
@@ -140,6 +142,7 @@ int runEncode(int argc, char** argv) {
                                                   parseSampleType(input.typeName));
     source = filled.get();
   }
+  const std::string device = useEncodeDevice(opt, args.str("device", "auto"));
   ProgressBar bar("encode", args.has("progress"));
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
@@ -169,9 +172,9 @@ int runEncode(int argc, char** argv) {
           : (opt.relativeBound ? " (relative)" : ""));
   std::printf(
       "seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
-      "fits=%lld blocks=%lld\n",
+      "fits=%lld blocks=%lld asked_ahead=%lld device=\"%s\"\n",
       s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
-      (long long)s.fits, (long long)s.blocks);
+      (long long)s.fits, (long long)s.blocks, (long long)s.askedAhead, device.c_str());
   std::printf(
       "bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
       (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,
@@ -184,11 +187,12 @@ int runEncode(int argc, char** argv) {
     std::printf(
         "level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld "
         "bytes=%llu "
-        "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f ncp:",
+        "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f "
+        "ahead_seconds=%.3f ncp:",
         l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex,
         (long long)ls.refits, (long long)ls.exact, (long long)ls.fits,
         (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound, ls.seconds,
-        ls.sampleSeconds);
+        ls.sampleSeconds, ls.aheadSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

@@ -9,7 +9,7 @@ if (NOT AFAM_SOURCE_DIR)
   message(FATAL_ERROR "pass -DAFAM_SOURCE_DIR=<source root>")
 endif ()
 # Bottom to top: a room may include the rooms before it in this list.
-set(_rooms base entropy spline format volume encode scene predict render ranks eval)
+set(_rooms base entropy spline format volume search encode scene predict render ranks eval)
 set(AFAM_ROOM_MAX_FILES 15)
 set(_offenders "")
 foreach (_top IN ITEMS include/afam src)

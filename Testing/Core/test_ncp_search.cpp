@@ -11,7 +11,7 @@
 
 #include "afam/encode/encoder.hpp"
 #include "afam/encode/model_sink.hpp"
-#include "afam/encode/ncp_search.hpp"
+#include "afam/search/ncp_search.hpp"
 #include "afam/spline/fit.hpp"
 
 using namespace afam;

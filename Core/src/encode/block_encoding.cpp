@@ -8,11 +8,11 @@
 #include <limits>
 #include <sstream>
 
-#include "afam/encode/ncp_search.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/block_mask.hpp"
 #include "afam/format/rounded_points.hpp"
+#include "afam/search/ncp_search.hpp"
 #include "hole_fill.hpp"
 
 namespace afam {
@@ -69,10 +69,11 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   const BoundKind kind = c.opt.boundKind;
   auto search = [&]() {
     t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search,
-                          c.opt.fastWindow, fr, t.fits, kind);
+                          c.opt.fastWindow, fr, t.fits, kind, &t.verdicts);
     t.complex = t.ncpStar > lo;
     if (c.opt.perAxisNcp && t.complex && keeps(kind, fr.error, bound))
-      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits, kind);
+      refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits, kind,
+                       &t.verdicts);
   };
   if (t.search) {
     search();
@@ -401,12 +402,11 @@ void finalFrame(const FitContext& c, Candidate& best) {
 constexpr double kNoiseShare = 0.9;
 constexpr int kNoiseMinSamples = 16;  ///< smaller blocks: the search is cheap, and decides
 
-/// Whether the block is noise-dominated in that sense (a searched block of at least
-/// kNoiseMinSamples along some axis whose fit at kNoiseShare of its samples misses the fit's
-/// share of the bound); then t's search statistics say so.
-bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+}  // namespace
+
+std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t) {
   const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
-  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return false;
+  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return std::nullopt;
   // The probe only where the samples' second differences say noise of half the bound or more
   // (white noise of deviation s has a mean squared second difference of 6 s^2 along every axis):
   // elsewhere it would be one fit more.
@@ -420,17 +420,31 @@ bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitt
       roughest = std::max(roughest, rough[size_t(a)]);
     }
   if (!(smoothest / 6 >= 0.25 * c.bound * c.bound) || !(smoothest * kAnisotropy > roughest))
-    return false;
+    return std::nullopt;
   Int3 ncp{};  // kNoiseShare of each axis's samples
   for (int a = 0; a < 3; ++a)
     ncp[a] = std::max(effectiveDegree(c.opt.degree, e.samples[a]) + 1,
                       std::min(e.samples[a], int(std::ceil(kNoiseShare * e.samples[a]))));
+  return ncp;
+}
+
+namespace {
+
+/// Whether the block is noise-dominated in that sense (noiseProbeNcp's probe misses the fit's
+/// share of the bound: its verdict given ahead, else a fit); then t's search statistics say so.
+bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  const std::optional<Int3> ncp = noiseProbeNcp(c, e, t);
+  if (!ncp) return false;
+  const double bound = searchBound(c.opt, c.bound);
+  const Verdict v = t.verdicts.bound == bound ? t.verdicts.of(*ncp) : Verdict::Unknown;
   thread_local FitResult probe;
-  ++t.fits;
-  if (fitter.fitWithin(t.samples.data(), e.samples, ncp, c.opt.degree, kFitShare * c.bound,
-                       sumOfSquares(t.samples.data(), e.samples), probe))
+  if (v == Verdict::Unknown) ++t.fits;
+  if (v == Verdict::Unknown
+          ? fitter.fitWithin(t.samples.data(), e.samples, *ncp, c.opt.degree, bound,
+                             sumOfSquares(t.samples.data(), e.samples), probe)
+          : v == Verdict::Passes)
     return false;
-  t.ncpStar = nmax;
+  t.ncpStar = std::max({e.samples[0], e.samples[1], e.samples[2]});
   t.complex = true;
   return true;
 }
@@ -453,7 +467,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
     return;
   }
   FitResult fr;
-  fitBlock(c, e, fitter, kFitShare * c.bound, t, fr);
+  fitBlock(c, e, fitter, searchBound(c.opt, c.bound), t, fr);
   const int64_t count = int64_t(t.samples.size());
   const bool haveSpline =
       !t.exact && int64_t(fr.ncp[0]) * fr.ncp[1] * fr.ncp[2] < count &&
@@ -481,6 +495,10 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
 }
 
 }  // namespace
+
+double searchBound(const EncoderOptions& opt, double bound) {
+  return opt.compact && bounded(opt.mode) ? kFitShare * bound : bound;
+}
 
 ErrorStats errorAsDecoded(const ModelEntry& m, const float* points, const BlockTask& t) {
   thread_local std::vector<float> values;
@@ -688,7 +706,7 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
       if (inTime) codeResidualIfSmaller(coded, e, fitter, previous, model, t);
     } else {
       FitResult fr;
-      fitBlock(c, e, fitter, c.bound, t, fr);
+      fitBlock(c, e, fitter, searchBound(c.opt, c.bound), t, fr);
       storeFloat(fr, t.exact, t);
     }
     if (!t.mask.empty()) prependMask(e, t);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -34,9 +35,16 @@ struct BlockTask {
   bool refit = false;  ///< skipped the search by cross-level reuse, missed the bound, searched
   bool exact = false;  ///< stored as its samples (no NCP met the bound)
   bool reducedDegree = false;  ///< an axis has fewer samples than the degree needs
+  /// Answers to its search's questions given ahead (EncoderOptions::leastSquares), at the bound
+  /// searchBound gives; none: every question is a fit.
+  NcpVerdicts verdicts;
   double rmse = 0,
          maxError = 0;  ///< of the stored model on the block's samples (the entry keeps floats)
 };
+
+/// The RMSE bound a searched block's fits must keep: kFitShare of the bound where the points are
+/// then quantized (compact), the bound itself where they are stored as float32.
+double searchBound(const EncoderOptions& opt, double bound);
 
 struct FitContext {
   const EncoderOptions& opt;
@@ -44,6 +52,11 @@ struct FitContext {
   int level;
   std::string sourceName;
 };
+
+/// Compact storage: the NCP at which one fit tells whether a searched block is noise-dominated
+/// (its spline would need nearly as many points as samples), where the block's content says the
+/// probe could pay; none elsewhere.
+std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t);
 
 /// Whether a model whose error on the block's samples is `es` keeps the bound: their RMSE, or
 /// every sample's error (a pointwise bound).

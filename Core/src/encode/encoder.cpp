@@ -14,7 +14,8 @@
 #include <thread>
 
 #include "afam/base/worker_pool.hpp"
-#include "afam/encode/ncp_search.hpp"
+#include "afam/search/ncp_search.hpp"
+#include "afam/search/ncp_verdicts.hpp"
 #include "afam/spline/fit.hpp"
 #include "block_encoding.hpp"
 #include "fitted_blocks.hpp"
@@ -265,6 +266,7 @@ void countBlock(const BlockTask& t, bool ds, LevelStats& ls) {
 
 void addLevel(const LevelStats& ls, EncodeStats& stats) {
   stats.fits += ls.fits;
+  stats.askedAhead += ls.askedAhead;
   stats.blocks += ls.blocks;
   stats.payloadBytes += ls.payloadBytes;
   stats.paperBytes += ls.paperBytes;
@@ -390,6 +392,7 @@ class LevelEncoder {
         });
       }
       try {
+        askAheadOf(l, cur.tasks, ls);
         fitBatch(l, cur.tasks, levelDone);
       } catch (...) {
         settle(next);
@@ -479,9 +482,37 @@ class LevelEncoder {
     return batch;
   }
 
+  /// With EncoderOptions::leastSquares: the searches of the batch's searched blocks (finite
+  /// samples) asked ahead, their verdicts in the tasks. A run's steps search at bounds that depend
+  /// on the step before: not asked.
+  void askAheadOf(int l, std::vector<BlockTask>& tasks, LevelStats& ls) {
+    for (BlockTask& t : tasks) t.search = searches(l, t.ijk);
+    if (!opt_.leastSquares || !bounded(opt_.mode) || opt_.boundKind != BoundKind::Rmse ||
+        opt_.runStep)
+      return;
+    const auto t0 = Clock::now();
+    const FitContext ctx{opt_, bound_, l, source_.name()};
+    std::vector<AheadBlock> blocks;
+    for (BlockTask& t : tasks) {
+      t.verdicts = NcpVerdicts{};
+      if (!t.search ||
+          std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); }))
+        continue;
+      const BlockExtent e = part_.extent(l, t.ijk);
+      blocks.push_back({t.samples.data(), e.samples, &t.verdicts,
+                        opt_.compact ? noiseProbeNcp(ctx, e, t) : std::nullopt});
+    }
+    if (blocks.empty()) return;
+    const SearchSettings settings{opt_.degree, searchBound(opt_, bound_), opt_.search,
+                                  opt_.fastWindow, opt_.perAxisNcp};
+    const AheadStats a = askAhead(*opt_.leastSquares, blocks, settings);
+    ls.askedAhead += a.requests;
+    ls.aheadRounds += a.rounds;
+    ls.aheadSeconds += secondsSince(t0);
+  }
+
   void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
     const FitContext ctx{opt_, bound_, l, source_.name()};
-    for (BlockTask& t : tasks) t.search = searches(l, t.ijk);
     std::mutex doneMutex;
     bool cancelRequested = false;
     double batchDone = 0;

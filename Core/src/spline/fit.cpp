@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "afam/base/cpu_features.hpp"
+#include "afam/base/huge_pages.hpp"
 #include "afam/spline/basis.hpp"
 
 // The passes over a block's values (solve, energy, changeEnergy, evaluate) are compiled twice: for
@@ -218,9 +219,13 @@ AFAM_FIT_INLINE void multiplyFactorTransposeRows(const AxisSystem& s, double* x,
   }
 }
 
-/// Makes v hold at least n values, growing only: a buffer reused across shapes is not filled again.
-void grow(std::vector<double>& v, size_t n) {
-  if (v.size() < n) v.resize(n);
+/// Makes v hold at least n values, growing only (by half at least, so that a search's growing
+/// shapes map few new buffers): a buffer reused across shapes is not filled or copied again.
+void grow(HugePageVector<double>& v, size_t n) {
+  if (v.size() >= n) return;
+  const size_t size = std::max(n, v.size() + v.size() / 2);
+  v.clear();  // nothing to copy
+  v.resize(size);
 }
 
 /// Sum of squares of n values, in four lanes (vectorised).
@@ -333,7 +338,7 @@ constexpr RmseRange kUndecided{0.0, std::numeric_limits<double>::infinity()};
 
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  std::vector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
+  HugePageVector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
   const std::vector<uint32_t>* valid = nullptr;  ///< setMask
   std::vector<float> grid;                       ///< the model on the grid, for masked errors
 
@@ -743,22 +748,30 @@ void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<fl
   fitter.evaluateOnGrid(model, n, out);
 }
 
-AxisConditioning axisConditioning(int n, int ncp, int degree) {
-  if (n < 1) throw InvalidArgument("afam conditioning: n must be >= 1");
+std::vector<double> collocationMatrix(int n, int ncp, int degree) {
+  if (n < 1) throw InvalidArgument("afam collocation: n must be >= 1");
   if (degree < 1 || degree > kMaxDegree)
-    throw InvalidArgument("afam conditioning: degree must be in [1, 5]");
+    throw InvalidArgument("afam collocation: degree must be in [1, 5]");
   const int p = effectiveDegree(degree, n);
   if (ncp < p + 1 || ncp > n) {
     std::ostringstream msg;
-    msg << "afam conditioning: NCP " << ncp << " outside [" << p + 1 << ", " << n << "]";
+    msg << "afam collocation: NCP " << ncp << " outside [" << p + 1 << ", " << n << "]";
     throw InvalidArgument(msg.str());
   }
   AxisSystem s;
   buildCollocation(s, n, ncp, p);
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, ncp);
+  std::vector<double> a(size_t(n) * size_t(ncp), 0.0);
   for (int i = 0; i < n; ++i)
     for (int r = 0; r <= p; ++r)
-      a(i, s.first[size_t(i)] + r) = s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
+      a[size_t(i) * size_t(ncp) + size_t(s.first[size_t(i)] + r)] =
+          s.weight[size_t(i) * size_t(p + 1) + size_t(r)];
+  return a;
+}
+
+AxisConditioning axisConditioning(int n, int ncp, int degree) {
+  const std::vector<double> values = collocationMatrix(n, ncp, degree);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> a(
+      values.data(), n, ncp);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(a);  // singular values only
   const auto& sv = svd.singularValues();
   AxisConditioning out;

@@ -38,8 +38,9 @@
 #include "afam/base/errors.hpp"
 #include "afam/encode/block_sampling.hpp"
 #include "afam/encode/encode_team.hpp"
+#include "afam/search/least_squares_batch.hpp"
 #include "afam/encode/model_sink.hpp"
-#include "afam/encode/ncp_search.hpp"
+#include "afam/search/ncp_search.hpp"
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
@@ -113,6 +114,11 @@ struct EncoderOptions {
   /// are always missing: the bound holds on the others, and a reader gives NaN back.
   bool hasMissingValue = false;
   double missingValue = 0;
+  /// Bounded modes with an RMSE bound: least-squares residuals that answer the NCP searches'
+  /// questions ahead, a batch of blocks at a time (ncp_verdicts.hpp): the GPU's
+  /// (afam/cuda/make_gpu_least_squares.hpp) or the CPU reference. The searches then fit about once
+  /// a block and find the same NCPs. Null: every question is a fit.
+  std::shared_ptr<LeastSquaresBatch> leastSquares;
 };
 
 /// The value range of a volume's valid samples (one pass unless the source knows it); NumericError
@@ -137,11 +143,16 @@ struct LevelStats {
   double sampleSeconds =
       0;  ///< time spent sampling the volume (overlaps fitting after the first batch)
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
+  /// EncoderOptions::leastSquares: residuals asked ahead of the searches, in how many rounds, and
+  /// the seconds the batches waited for them.
+  int64_t askedAhead = 0, aheadRounds = 0;
+  double aheadSeconds = 0;
 };
 
 struct EncodeStats {
   std::vector<LevelStats> levels;
   int64_t fits = 0;
+  int64_t askedAhead = 0;  ///< least-squares residuals asked ahead (EncoderOptions::leastSquares)
   int64_t blocks = 0;
   int64_t inputVoxels = 0;
   uint64_t bytesIn = 0;   ///< raw volume size as float32 (dims product * 4)

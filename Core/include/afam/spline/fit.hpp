@@ -180,6 +180,11 @@ double sumOfSquares(const float* samples, std::array<int, 3> n);
 /// Convenience wrapper over a thread-local BlockFitter.
 void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
+/// The n x ncp collocation matrix of one axis (row-major: entry (i, j) is control point j's basis
+/// function at sample i's parameter i/(n-1)), the degree reduced by effectiveDegree. Throws
+/// InvalidArgument for n < 1, a degree outside 1..5 or an NCP outside [p+1, n].
+std::vector<double> collocationMatrix(int n, int ncp, int degree);
+
 /// 2-norm condition number of the n x ncp collocation matrix on one axis (Eigen JacobiSVD), and of
 /// the normal matrix A^T A (the square of the former, from the same singular values). The degree
 /// is reduced by effectiveDegree; infinity when the matrix is rank deficient.

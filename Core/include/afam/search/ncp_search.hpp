@@ -6,6 +6,9 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
+#include <utility>
+#include <vector>
 
 #include "afam/format/afam_file.hpp"
 
@@ -16,6 +19,26 @@ struct FitResult;
 
 enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 
+/// What is known of a fit before it is made.
+enum class Verdict : int8_t { Unknown = -1, Fails = 0, Passes = 1 };
+
+/// Verdicts on some of one block's NCPs at one RMSE bound, given ahead of its search (from a batch
+/// of least-squares residuals, ncp_verdicts.hpp): searchNcp and refineNcpPerAxis fit only the NCPs
+/// they have no verdict for, and the one they end at; should that fit contradict a verdict, they
+/// search again by fitting. So verdicts change how many fits a search makes, never what it may
+/// return: a fit that keeps the bound.
+struct NcpVerdicts {
+  double bound = -1;  ///< the RMSE bound they answer for (the searches use them at it only)
+  std::vector<std::pair<std::array<int, 3>, Verdict>> known;
+  Verdict of(std::array<int, 3> ncp) const;
+  void set(std::array<int, 3> ncp, Verdict verdict);
+};
+
+/// The scalar search's questions alone (see encoder.hpp for how Fast asks them): the smallest NCP
+/// in [lo, hi] it finds that `pass` accepts, hi + 1 when none. `pass` is asked once per NCP.
+int smallestPassingNcp(int lo, int hi, SearchMethod method, int window,
+                       const std::function<bool(int)>& pass);
+
 /// In-level search on one block's samples: NCP* = the smallest scalar NCP in [p+1, n] (n the
 /// block's largest sample count, clamped per axis by clampNcp) whose RMSE is <= bound; n if none
 /// is. Returns NCP* and the fit at NCP* in `result` (its error measured on the samples); `fits`
@@ -25,7 +48,7 @@ enum class SearchMethod : uint8_t { Fast = 0, Exhaustive = 1 };
 /// sample within `bound` (measured; fitWithin's RMSE above the bound rejects it without).
 int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
               double bound, SearchMethod method, int window, FitResult& result, int64_t& fits,
-              BoundKind kind = BoundKind::Rmse);
+              BoundKind kind = BoundKind::Rmse, const NcpVerdicts* verdicts = nullptr);
 
 /// Per-axis refinement of a passing fit: for each axis whose samples are much smoother than the
 /// roughest axis (mean squared second difference at most kAnisotropy times smaller), the smallest
@@ -35,7 +58,14 @@ int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, i
 /// was reduced.
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
                       double bound, FitResult& result, int64_t& fits,
-                      BoundKind kind = BoundKind::Rmse);
+                      BoundKind kind = BoundKind::Rmse, const NcpVerdicts* verdicts = nullptr);
+
+/// The refinement's questions alone: from `start` (passing), for each axis at most 1/kAnisotropy
+/// as rough as the roughest (`rough`, axisRoughness), smoothest first, the smallest NCP on that
+/// axis that `pass` accepts, the others fixed (bisection between p+1 and the current NCP).
+std::array<int, 3> fewerPointsPerAxis(const std::array<double, 3>& rough, std::array<int, 3> start,
+                                      std::array<int, 3> n, int degree,
+                                      const std::function<bool(std::array<int, 3>)>& pass);
 
 /// Roughness ratio between the roughest and an axis at which refineNcpPerAxis tries that axis.
 constexpr double kAnisotropy = 8.0;

@@ -1,0 +1,218 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/search/ncp_search.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <vector>
+
+#include "afam/spline/fit.hpp"
+
+namespace afam {
+
+namespace {
+
+/// Whether the fit at `ncp` keeps the bound: fitWithin's answer for an RMSE; for a pointwise
+/// bound, an RMSE above it already fails (no sample can be within it then), else every sample's
+/// error is measured.
+bool fitKeeps(BlockFitter& fitter, const float* samples, Int3 n, Int3 ncp, int degree, double bound,
+              BoundKind kind, double squares, FitResult& out) {
+  if (!fitter.fitWithin(samples, n, ncp, degree, bound, squares, out)) return false;
+  if (kind == BoundKind::Rmse) return true;
+  fitter.measure(samples, n, out);
+  return out.error.maxError <= bound;
+}
+
+/// The verdicts to use for a search at `bound`: none unless they were given for it.
+const NcpVerdicts* verdictsAt(const NcpVerdicts* verdicts, double bound, BoundKind kind) {
+  return verdicts && kind == BoundKind::Rmse && verdicts->bound == bound ? verdicts : nullptr;
+}
+
+Int3 degreesOf(int degree, Int3 n) {
+  Int3 degs{};
+  for (int a = 0; a < 3; ++a) degs[a] = effectiveDegree(degree, n[a]);
+  return degs;
+}
+
+}  // namespace
+
+Verdict NcpVerdicts::of(Int3 ncp) const {
+  for (const auto& [at, verdict] : known)
+    if (at == ncp) return verdict;
+  return Verdict::Unknown;
+}
+
+void NcpVerdicts::set(Int3 ncp, Verdict verdict) {
+  for (auto& [at, v] : known)
+    if (at == ncp) {
+      v = verdict;
+      return;
+    }
+  known.emplace_back(ncp, verdict);
+}
+
+int smallestPassingNcp(int lo, int hi, SearchMethod method, int window,
+                       const std::function<bool(int)>& pass) {
+  std::vector<signed char> state(size_t(hi) + 1, -1);  // -1 unknown, 0 fails, 1 passes
+  int best = hi + 1;
+  auto ask = [&](int k) {
+    if (state[size_t(k)] < 0) state[size_t(k)] = pass(k) ? 1 : 0;
+    if (state[size_t(k)] == 1) best = std::min(best, k);
+    return state[size_t(k)] == 1;
+  };
+  if (method == SearchMethod::Exhaustive || hi - lo < 2) {
+    for (int k = lo; k <= hi; ++k) ask(k);
+    return best;
+  }
+  if (ask(lo)) return best;
+  if (!ask(hi)) {
+    for (int k = lo + 1; k < hi; ++k)
+      if (ask(k)) break;
+    return best;
+  }
+  int a = lo, b = hi;  // a fails, b passes
+  while (b - a > 1) {
+    const int m = a + (b - a) / 2;
+    if (ask(m))
+      b = m;
+    else
+      a = m;
+  }
+  // Local check below the boundary: a non-monotone error curve may pass again just below it.
+  int stop = std::max(lo + 1, b - 1 - window);
+  for (int j = b - 2; j >= stop; --j)
+    if (ask(j)) stop = std::max(lo + 1, j - 1 - window);
+  return best;
+}
+
+int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
+              SearchMethod method, int window, FitResult& result, int64_t& fits, BoundKind kind,
+              const NcpVerdicts* given) {
+  const NcpVerdicts* verdicts = verdictsAt(given, bound, kind);
+  const Int3 degs = degreesOf(degree, n);
+  const int nmax = std::max({1, n[0], n[1], n[2]});
+  const int lo = std::min(degree + 1, nmax), hi = nmax;
+  const double squares = sumOfSquares(samples, n);
+  FitResult tmp, best, top;  // top: the fit at n when it fails
+  int fitted = -1;           // the NCP `best` holds: the smallest passing one fitted
+  bool haveTop = false;
+  auto fitAt = [&](int k) {
+    ++fits;
+    return fitKeeps(fitter, samples, n, clampNcp(k, n, degs), degree, bound, kind, squares, tmp);
+  };
+  auto pass = [&](int k) {
+    const Verdict v = verdicts ? verdicts->of(clampNcp(k, n, degs)) : Verdict::Unknown;
+    if (v != Verdict::Unknown) return v == Verdict::Passes;
+    const bool ok = fitAt(k);
+    if (ok && (fitted < 0 || k < fitted)) {
+      std::swap(best, tmp);
+      fitted = k;
+    } else if (!ok && k == hi) {
+      std::swap(top, tmp);
+      haveTop = true;
+    }
+    return ok;
+  };
+  const int found = smallestPassingNcp(lo, hi, method, window, pass);
+  if (found <= hi && fitted == found) {
+    result = std::move(best);
+  } else if (found > hi && haveTop) {
+    result = std::move(top);
+  } else {  // a verdict's NCP, or n: fit it
+    const bool ok = fitAt(std::min(found, hi));
+    if (!ok && found <= hi)  // a verdict said it passes, the fit says not: search by fitting
+      return searchNcp(fitter, samples, n, degree, bound, method, window, result, fits, kind);
+    result = std::move(tmp);
+  }
+  fitter.measure(samples, n, result);
+  return std::min(found, hi);
+}
+
+std::array<double, 3> axisRoughness(const float* samples, Int3 n) {
+  std::array<double, 3> r{0, 0, 0};
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
+  const size_t stride[3] = {1, nx, nx * ny};
+  std::vector<double> column(
+      nx);  // a sum per x: the inner loop is independent across x (vectorised)
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 3) continue;
+    std::fill(column.begin(), column.end(), 0.0);
+    const size_t s = stride[a], x0 = a == 0 ? 1 : 0, x1 = a == 0 ? nx - 1 : nx;
+    for (size_t z = a == 2 ? 1 : 0; z < (a == 2 ? nz - 1 : nz); ++z)
+      for (size_t y = a == 1 ? 1 : 0; y < (a == 1 ? ny - 1 : ny); ++y) {
+        const float* row = samples + z * stride[2] + y * nx;
+        const float *prev = row - s, *next = row + s;
+        for (size_t x = x0; x < x1; ++x) {
+          const double d = double(prev[x]) - 2.0 * double(row[x]) + double(next[x]);
+          column[x] += d * d;
+        }
+      }
+    double sum = 0;
+    for (double v : column) sum += v;
+    Int3 interior = n;
+    interior[size_t(a)] -= 2;
+    r[size_t(a)] = sum / (double(interior[0]) * double(interior[1]) * double(interior[2]));
+  }
+  return r;
+}
+
+Int3 fewerPointsPerAxis(const std::array<double, 3>& rough, Int3 start, Int3 n, int degree,
+                        const std::function<bool(Int3)>& pass) {
+  const double roughest = *std::max_element(rough.begin(), rough.end());
+  if (!(roughest > 0)) return start;
+  std::array<int, 3> order{0, 1, 2};
+  std::sort(order.begin(), order.end(),
+            [&](int a, int b) { return rough[size_t(a)] < rough[size_t(b)]; });
+  Int3 ncp = start;
+  for (int a : order) {
+    if (rough[size_t(a)] * kAnisotropy > roughest) continue;
+    const int lo = effectiveDegree(degree, n[size_t(a)]) + 1;
+    int fail = lo - 1, passing = ncp[size_t(a)];  // NCP `passing` meets the bound on this axis
+    while (passing - fail > 1) {
+      const int mid =
+          fail == lo - 1 ? lo : fail + (passing - fail) / 2;  // try p+1 first: layers need no more
+      Int3 trial = ncp;
+      trial[size_t(a)] = mid;
+      if (pass(trial)) {
+        passing = mid;
+        ncp = trial;
+      } else {
+        fail = mid;
+      }
+    }
+  }
+  return ncp;
+}
+
+bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
+                      FitResult& result, int64_t& fits, BoundKind kind, const NcpVerdicts* given) {
+  const NcpVerdicts* verdicts = verdictsAt(given, bound, kind);
+  const std::array<double, 3> rough = axisRoughness(samples, n);
+  const Int3 start = result.ncp;
+  FitResult trial, entry;
+  if (verdicts) entry = result;  // to refine again by fitting should a verdict be wrong
+  double squares = -1;           // computed for the first fit
+  auto fitAt = [&](Int3 ncp) {
+    if (squares < 0) squares = sumOfSquares(samples, n);
+    ++fits;
+    return fitKeeps(fitter, samples, n, ncp, degree, bound, kind, squares, trial);
+  };
+  auto pass = [&](Int3 ncp) {
+    const Verdict v = verdicts ? verdicts->of(ncp) : Verdict::Unknown;
+    if (v != Verdict::Unknown) return v == Verdict::Passes;
+    const bool ok = fitAt(ncp);
+    if (ok) std::swap(result, trial);
+    return ok;
+  };
+  const Int3 ncp = fewerPointsPerAxis(rough, start, n, degree, pass);
+  if (result.ncp != ncp) {  // a verdict's NCP: fit it
+    if (!fitAt(ncp)) {
+      result = std::move(entry);
+      return refineNcpPerAxis(fitter, samples, n, degree, bound, result, fits, kind);
+    }
+    std::swap(result, trial);
+  }
+  fitter.measure(samples, n, result);
+  return ncp != start;
+}
+
+}  // namespace afam

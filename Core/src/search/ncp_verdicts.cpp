@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "afam/search/ncp_verdicts.hpp"
+
+#include <algorithm>
+#include <optional>
+
+#include "afam/spline/fit.hpp"
+
+namespace afam {
+
+namespace {
+
+/// One block's replay: its search on its verdicts alone. `ask` gets the first NCP without one;
+/// `unsure` is set at an NCP whose residual could not tell.
+struct Replay {
+  const AheadBlock& block;
+  const SearchSettings& s;
+  std::optional<std::array<double, 3>>& rough;
+  std::optional<Int3> ask;
+  bool unsure = false;
+
+  bool pass(Int3 ncp) {
+    if (ask || unsure) return false;  // the rest of this replay is not asked yet
+    for (const auto& [at, v] : block.out->known)
+      if (at == ncp) {
+        unsure = v == Verdict::Unknown;
+        return v == Verdict::Passes;
+      }
+    ask = ncp;
+    return false;
+  }
+
+  void run() {
+    const Int3 n = block.n;
+    Int3 degs{};
+    for (int a = 0; a < 3; ++a) degs[a] = effectiveDegree(s.degree, n[a]);
+    if (block.probe && !pass(*block.probe)) return;  // noise (or asked, or unsure)
+    const int hi = std::max({1, n[0], n[1], n[2]}), lo = std::min(s.degree + 1, hi);
+    const int k = smallestPassingNcp(lo, hi, s.method, s.window,
+                                     [&](int c) { return pass(clampNcp(c, n, degs)); });
+    if (ask || unsure || !s.perAxis || k > hi || k == lo) return;  // refines complex passing fits
+    if (!rough) rough = axisRoughness(block.samples, n);
+    fewerPointsPerAxis(*rough, clampNcp(k, n, degs), n, s.degree, [&](Int3 c) { return pass(c); });
+  }
+};
+
+}  // namespace
+
+Verdict lsqVerdict(const LsqResidual& r, int64_t count, double bound) {
+  const double target = bound * bound * double(count);
+  const double roundingOfSums = 1e-11 * r.squares, roundingOfPoints = 1e-7 * target;
+  if (r.residual > target + roundingOfSums) return Verdict::Fails;
+  if (r.residual < target - roundingOfSums - roundingOfPoints) return Verdict::Passes;
+  return Verdict::Unknown;
+}
+
+AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blocks,
+                    const SearchSettings& settings) {
+  AheadStats stats;
+  std::vector<const float*> samples;
+  std::vector<Int3> shapes;
+  for (const AheadBlock& b : blocks) {
+    samples.push_back(b.samples);
+    shapes.push_back(b.n);
+    b.out->bound = settings.bound;
+    b.out->known.clear();
+  }
+  batch.setBlocks(samples, shapes, settings.degree);
+  std::vector<std::optional<std::array<double, 3>>> rough(blocks.size());
+  std::vector<uint8_t> open(blocks.size(), 1);
+  std::vector<LsqRequest> requests;
+  std::vector<LsqResidual> answers;
+  for (;;) {
+    requests.clear();
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      if (!open[b]) continue;
+      Replay replay{blocks[b], settings, rough[b], std::nullopt};
+      replay.run();
+      stats.unsure += replay.unsure;
+      if (replay.ask)
+        requests.push_back({int32_t(b), *replay.ask});
+      else
+        open[b] = 0;
+    }
+    if (requests.empty()) return stats;
+    batch.residuals(requests, answers);
+    ++stats.rounds;
+    stats.requests += int64_t(requests.size());
+    for (size_t r = 0; r < requests.size(); ++r) {
+      const AheadBlock& b = blocks[size_t(requests[r].block)];
+      const int64_t count = int64_t(b.n[0]) * b.n[1] * b.n[2];
+      b.out->set(requests[r].ncp, lsqVerdict(answers[r], count, settings.bound));
+    }
+  }
+}
+
+}  // namespace afam

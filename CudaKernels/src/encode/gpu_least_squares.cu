@@ -1,0 +1,253 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Batched least-squares residuals on the GPU (least_squares_batch.hpp): one thread block of
+// kLsqLanes threads a request. The block's mean and squares, then plane by plane along z the
+// centred samples, their x contraction and their y contraction (in shared memory, the rows of the
+// axes' Q^T beside them), the slices after y in global scratch, and the z contraction's energy
+// column by column; every sum in the order of least_squares_order.hpp (compiled with -fmad=false),
+// so the doubles are the CPU reference's.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "../cuda_check.hpp"
+#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/search/least_squares_order.hpp"
+
+namespace afam {
+
+namespace {
+
+/// One request on the device: offsets into the batch's buffers.
+struct LsqJob {
+  uint64_t samples = 0;       ///< floats, of the block's first sample
+  uint64_t scratch = 0;       ///< doubles, of its slices after y
+  uint64_t q[3] = {0, 0, 0};  ///< doubles, of the rows of Q^T per axis
+  int n[3] = {0, 0, 0}, k[3] = {0, 0, 0};
+};
+
+/// Shared doubles a request needs: the plane (rows padded by one), after x, and Q^T per axis (y's
+/// rows padded by one), as laid out by the kernel.
+uint64_t sharedDoubles(Int3 n, Int3 k) {
+  return uint64_t(n[1]) * (n[0] + 1) + uint64_t(k[0]) * n[1] + uint64_t(k[0]) * n[0] +
+         uint64_t(k[1]) * (n[1] + 1) + uint64_t(k[2]) * n[2];
+}
+
+__device__ double treeSumShared(double* lanes, double mine) {
+  lanes[threadIdx.x] = mine;
+  __syncthreads();
+  for (int s = kLsqLanes / 2; s > 0; s >>= 1) {
+    if (int(threadIdx.x) < s) lanes[threadIdx.x] += lanes[threadIdx.x + s];
+    __syncthreads();
+  }
+  const double sum = lanes[0];
+  __syncthreads();
+  return sum;
+}
+
+__device__ void copyRows(const double* from, int rows, int cols, double* to, int stride) {
+  for (int e = threadIdx.x; e < rows * cols; e += kLsqLanes)
+    to[(e / cols) * stride + e % cols] = from[e];
+}
+
+__global__ void __launch_bounds__(kLsqLanes)
+    residualKernel(const LsqJob* jobs, const float* samples, const double* q, double* scratch,
+                   double2* out) {
+  extern __shared__ double shared[];
+  __shared__ double lanes[kLsqLanes];
+  const LsqJob job = jobs[blockIdx.x];
+  const Int3 n{job.n[0], job.n[1], job.n[2]}, k{job.k[0], job.k[1], job.k[2]};
+  const LsqShape shape = lsqShape(n, k);
+  const float* s = samples + job.samples;
+  double* afterY = scratch + job.scratch;
+  const int planeStride = n[0] + 1, qyStride = n[1] + 1;
+  double* plane = shared;
+  double* afterX = plane + int64_t(n[1]) * planeStride;
+  double* qx = afterX + shape.afterX;
+  double* qy = qx + int64_t(k[0]) * n[0];
+  double* qz = qy + int64_t(k[1]) * qyStride;
+  copyRows(q + job.q[0], k[0], n[0], qx, n[0]);
+  copyRows(q + job.q[1], k[1], n[1], qy, qyStride);
+  copyRows(q + job.q[2], k[2], n[2], qz, n[2]);
+  double part = 0;
+  for (int z = 0; z < n[2]; ++z)
+    for (int64_t e = threadIdx.x; e < shape.plane; e += kLsqLanes)
+      part += double(s[z * shape.plane + e]);
+  const double mean = treeSumShared(lanes, part) / double(shape.plane * n[2]);
+  part = 0;
+  for (int z = 0; z < n[2]; ++z) {
+    for (int64_t e = threadIdx.x; e < shape.plane; e += kLsqLanes) {
+      const double d = double(s[z * shape.plane + e]) - mean;
+      plane[(e / n[0]) * planeStride + e % n[0]] = d;
+      part += d * d;
+    }
+    __syncthreads();
+    for (int64_t o = threadIdx.x; o < shape.afterX; o += kLsqLanes)
+      afterX[o] = lsqAlongX(qx, plane, planeStride, n, o);
+    __syncthreads();
+    for (int64_t o = threadIdx.x; o < shape.slice; o += kLsqLanes)
+      afterY[z * shape.slice + o] = lsqAlongY(qy, qyStride, afterX, n, k, o);
+    __syncthreads();
+  }
+  const double squares = treeSumShared(lanes, part);
+  __threadfence_block();
+  part = 0;
+  for (int64_t j = threadIdx.x; j < shape.slice; j += kLsqLanes)
+    part += lsqAlongZSquared(qz, afterY, n, k, j);
+  const double energy = treeSumShared(lanes, part);
+  if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);
+}
+
+/// Device memory that grows to the largest request seen and frees itself.
+struct DeviceArray {
+  void* data = nullptr;
+  size_t bytes = 0;
+  ~DeviceArray() { (void)cudaFree(data); }
+  void reserve(size_t want) {
+    if (want <= bytes) return;
+    (void)cudaFree(data);
+    data = nullptr;
+    bytes = 0;
+    AFAM_CUDA_CHECK(cudaMalloc(&data, std::max<size_t>(want, 1)));
+    bytes = want;
+  }
+  template <typename T>
+  T* as() const {
+    return static_cast<T*>(data);
+  }
+};
+
+class GpuLeastSquaresBatch final : public LeastSquaresBatch {
+ public:
+  explicit GpuLeastSquaresBatch(int device) : device_(device) {
+    AFAM_CUDA_CHECK(cudaSetDevice(device));
+    cudaDeviceProp prop{};
+    AFAM_CUDA_CHECK(cudaGetDeviceProperties(&prop, device));
+    name_ = prop.name;
+    sharedLimit_ = uint64_t(prop.sharedMemPerBlockOptin) - kLsqLanes * sizeof(double) - 1024;
+    AFAM_CUDA_CHECK(cudaFuncSetAttribute(
+        residualKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(sharedLimit_)));
+    AFAM_CUDA_CHECK(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking));
+  }
+  ~GpuLeastSquaresBatch() override { (void)cudaStreamDestroy(stream_); }
+
+  void setBlocks(const std::vector<const float*>& samples, const std::vector<Int3>& n,
+                 int degree) override {
+    AFAM_CUDA_CHECK(cudaSetDevice(device_));
+    degree_ = degree;
+    n_ = n;
+    cpu_.setBlocks(samples, n, degree);
+    offsets_.assign(samples.size() + 1, 0);
+    for (size_t b = 0; b < samples.size(); ++b)
+      offsets_[b + 1] = offsets_[b] + uint64_t(n[b][0]) * n[b][1] * n[b][2];
+    samples_.reserve(offsets_.back() * sizeof(float));
+    for (size_t b = 0; b < samples.size(); ++b)
+      AFAM_CUDA_CHECK(cudaMemcpyAsync(samples_.as<float>() + offsets_[b], samples[b],
+                                      (offsets_[b + 1] - offsets_[b]) * sizeof(float),
+                                      cudaMemcpyHostToDevice, stream_));
+  }
+
+  void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override;
+  std::string description() const override { return name_; }
+
+ private:
+  /// Jobs of the requests the GPU takes (their index in `requests` in `taken`), the others'
+  /// indices in `onCpu`; the matrices they need uploaded; returns the shared bytes of the largest.
+  uint64_t prepare(const std::vector<LsqRequest>& requests, std::vector<LsqJob>& jobs,
+                   std::vector<size_t>& taken, std::vector<size_t>& onCpu);
+
+  int device_ = 0, degree_ = 2;
+  std::string name_;
+  uint64_t sharedLimit_ = 0;
+  cudaStream_t stream_ = nullptr;
+  CpuLeastSquaresBatch cpu_;
+  std::vector<Int3> n_;
+  std::vector<uint64_t> offsets_;
+  AxisProjections projections_;
+  size_t uploadedProjections_ = 0;
+  DeviceArray samples_, matrices_, scratch_, jobs_, results_;
+};
+
+uint64_t GpuLeastSquaresBatch::prepare(const std::vector<LsqRequest>& requests,
+                                       std::vector<LsqJob>& jobs, std::vector<size_t>& taken,
+                                       std::vector<size_t>& onCpu) {
+  uint64_t largest = 0, scratch = 0;
+  for (size_t r = 0; r < requests.size(); ++r) {
+    const Int3 n = n_.at(size_t(requests[r].block)), k = requests[r].ncp;
+    const uint64_t bytes = sharedDoubles(n, k) * sizeof(double);
+    if (bytes > sharedLimit_) {
+      onCpu.push_back(r);
+      continue;
+    }
+    LsqJob j;
+    j.samples = offsets_[size_t(requests[r].block)];
+    j.scratch = scratch;
+    for (int a = 0; a < 3; ++a) {
+      j.q[a] = projections_.offsetOf(n[a], k[a], degree_);
+      j.n[a] = n[a];
+      j.k[a] = k[a];
+    }
+    scratch += uint64_t(lsqShape(n, k).afterY);
+    largest = std::max(largest, bytes);
+    jobs.push_back(j);
+    taken.push_back(r);
+  }
+  const std::vector<double>& q = projections_.values();
+  if (q.size() > uploadedProjections_) {  // new matrices: upload them all again (a few MB)
+    matrices_.reserve(q.size() * sizeof(double));
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(matrices_.data, q.data(), q.size() * sizeof(double),
+                                    cudaMemcpyHostToDevice, stream_));
+    uploadedProjections_ = q.size();
+  }
+  scratch_.reserve(scratch * sizeof(double));
+  return largest;
+}
+
+void GpuLeastSquaresBatch::residuals(const std::vector<LsqRequest>& requests,
+                                     std::vector<LsqResidual>& out) {
+  AFAM_CUDA_CHECK(cudaSetDevice(device_));
+  out.assign(requests.size(), LsqResidual{});
+  std::vector<LsqJob> jobs;
+  std::vector<size_t> taken, onCpu;
+  const uint64_t shared = prepare(requests, jobs, taken, onCpu);
+  std::vector<double2> results(jobs.size());
+  if (!jobs.empty()) {
+    jobs_.reserve(jobs.size() * sizeof(LsqJob));
+    results_.reserve(jobs.size() * sizeof(double2));
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(jobs_.data, jobs.data(), jobs.size() * sizeof(LsqJob),
+                                    cudaMemcpyHostToDevice, stream_));
+    residualKernel<<<unsigned(jobs.size()), kLsqLanes, shared, stream_>>>(
+        jobs_.as<LsqJob>(), samples_.as<float>(), matrices_.as<double>(), scratch_.as<double>(),
+        results_.as<double2>());
+    AFAM_CUDA_CHECK(cudaGetLastError());
+    AFAM_CUDA_CHECK(cudaMemcpyAsync(results.data(), results_.data, jobs.size() * sizeof(double2),
+                                    cudaMemcpyDeviceToHost, stream_));
+  }
+  std::vector<LsqRequest> cpuRequests;
+  for (size_t r : onCpu) cpuRequests.push_back(requests[r]);
+  std::vector<LsqResidual> cpuResults;
+  cpu_.residuals(cpuRequests, cpuResults);  // while the GPU works
+  AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));
+  for (size_t i = 0; i < taken.size(); ++i) out[taken[i]] = {results[i].x, results[i].y};
+  for (size_t i = 0; i < onCpu.size(); ++i) out[onCpu[i]] = cpuResults[i];
+}
+
+}  // namespace
+
+std::shared_ptr<LeastSquaresBatch> makeGpuLeastSquares(
+    const std::function<void(const std::string&)>& report, int device) {
+  std::string why;
+  if (!gpuAvailable(&why)) {
+    report(why);
+    return nullptr;
+  }
+  try {
+    return std::make_shared<GpuLeastSquaresBatch>(device);
+  } catch (const GpuError& e) {
+    report(e.what());
+    return nullptr;
+  }
+}
+
+}  // namespace afam

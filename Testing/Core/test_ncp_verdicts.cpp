@@ -1,0 +1,140 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The NCP searches asked ahead (ncp_verdicts.hpp) of batched least-squares residuals
+// (least_squares_batch.hpp): the CPU reference's residuals are the fitter's, on every shape; an
+// encode whose searches are asked ahead writes the same file bit for bit with a fraction of the
+// fits; a batch whose verdicts are wrong (every NCP passes) still gives the same file, its searches
+// done again by fitting; and a residual too close to the bound to tell leaves the fit to decide.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "afam/encode/encoder.hpp"
+#include "afam/search/least_squares_batch.hpp"
+#include "afam/search/ncp_verdicts.hpp"
+#include "afam/spline/fit.hpp"
+#include "afam/volume/marschner_lobb.hpp"
+#include "file_bytes.hpp"
+#include "head_mri.hpp"
+#include "noisy_block.hpp"
+#include "scratch_dir.hpp"
+
+using namespace afam;
+using afam_test::smoothPlusNoise;
+
+namespace {
+
+/// Every NCP passes: a batch whose verdicts are wrong.
+class EverythingPasses final : public LeastSquaresBatch {
+ public:
+  void setBlocks(const std::vector<const float*>&, const std::vector<Int3>&, int) override {}
+  void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override {
+    out.assign(requests.size(), LsqResidual{1.0, 0.0});
+  }
+  std::string description() const override { return "liar"; }
+};
+
+struct Encoded {
+  std::vector<char> bytes;
+  EncodeStats stats;
+};
+
+Encoded encodeWith(const std::vector<float>& v, Int3 n, double bound,
+                   std::shared_ptr<LeastSquaresBatch> batch) {
+  ArraySource src(v.data(), {n[0], n[1], n[2]}, "v");
+  EncoderOptions opt;
+  opt.errorBound = bound;
+  opt.relativeBound = true;
+  opt.threads = 2;
+  opt.levels = 2;
+  opt.blocksPerAxis = 4;  // blocks of 10-18 samples: many searches
+  opt.leastSquares = std::move(batch);
+  const std::string path = afam_test::scratchPath("ahead.afam");
+  Encoded e;
+  e.stats = encodeVolume(src, opt, path);
+  e.bytes = afam_test::readAll(path);
+  std::remove(path.c_str());
+  return e;
+}
+
+}  // namespace
+
+TEST(LeastSquaresBatch, TheReferenceGivesTheFittersResiduals) {
+  CpuLeastSquaresBatch batch;
+  BlockFitter fitter;
+  const std::vector<Int3> shapes{{8, 9, 10}, {33, 20, 17}, {1, 12, 9}, {2, 7, 30}, {64, 64, 5}};
+  for (int degree : {1, 2, 3}) {
+    std::vector<std::vector<float>> blocks;
+    std::vector<const float*> pointers;
+    for (size_t b = 0; b < shapes.size(); ++b) {
+      blocks.push_back(smoothPlusNoise(shapes[b], 0.5, uint32_t(b)));
+      pointers.push_back(blocks.back().data());
+    }
+    batch.setBlocks(pointers, shapes, degree);
+    std::vector<LsqRequest> requests;
+    for (size_t b = 0; b < shapes.size(); ++b) {
+      Int3 degs{};
+      for (int a = 0; a < 3; ++a) degs[a] = effectiveDegree(degree, shapes[b][a]);
+      for (int k : {2, 4, 7, 64}) requests.push_back({int32_t(b), clampNcp(k, shapes[b], degs)});
+    }
+    std::vector<LsqResidual> got;
+    batch.residuals(requests, got);
+    ASSERT_EQ(got.size(), requests.size());
+    for (size_t r = 0; r < requests.size(); ++r) {
+      const Int3 n = shapes[size_t(requests[r].block)];
+      const FitResult fit =
+          fitter.fit(blocks[size_t(requests[r].block)].data(), n, requests[r].ncp, degree);
+      const double count = double(n[0]) * n[1] * n[2];
+      const double fitted = fit.error.rmse * fit.error.rmse * count;  // float32 points: a bit more
+      SCOPED_TRACE(testing::Message() << "degree " << degree << " shape " << n[0] << "x" << n[1]
+                                      << "x" << n[2] << " ncp " << requests[r].ncp[0] << ","
+                                      << requests[r].ncp[1] << "," << requests[r].ncp[2]);
+      EXPECT_GE(got[r].residual, -1e-9 * got[r].squares);
+      EXPECT_NEAR(got[r].residual, fitted, 1e-6 * fitted + 1e-9 * got[r].squares);
+      EXPECT_LE(got[r].residual, fitted * (1 + 1e-12) + 1e-9 * got[r].squares)
+          << "least squares is the least";
+    }
+  }
+}
+
+TEST(LeastSquaresBatch, VerdictsAreCertainOnlyBeyondRounding) {
+  const LsqResidual below{1e6, 0.999 * 100}, above{1e6, 1.001 * 100}, at{1e6, 100};
+  EXPECT_EQ(lsqVerdict(below, 100, 1.0), Verdict::Passes);
+  EXPECT_EQ(lsqVerdict(above, 100, 1.0), Verdict::Fails);
+  EXPECT_EQ(lsqVerdict(at, 100, 1.0), Verdict::Unknown);
+}
+
+TEST(NcpVerdicts, AskedAheadTheEncoderWritesTheSameFileWithAFractionOfTheFits) {
+  struct Volume {
+    const char* name;
+    std::vector<float> values;
+    Int3 n;
+    double bound;
+  };
+  std::vector<Volume> volumes;
+  volumes.push_back({"head MRI", afam_test::headMri(), {48, 62, 42}, 1e-2});
+  volumes.push_back(
+      {"smooth plus noise", smoothPlusNoise({70, 60, 50}, 2.0, 7), {70, 60, 50}, 1e-2});
+  std::vector<float> ml(size_t(41) * 41 * 41);
+  marschnerLobbSlab(MarschnerLobb{}, {41, 41, 41}, 0, 41, ml.data());
+  volumes.push_back({"Marschner-Lobb", ml, {41, 41, 41}, 1e-3});
+  for (const Volume& v : volumes) {
+    SCOPED_TRACE(v.name);
+    const Encoded plain = encodeWith(v.values, v.n, v.bound, nullptr);
+    const Encoded ahead =
+        encodeWith(v.values, v.n, v.bound, std::make_shared<CpuLeastSquaresBatch>());
+    const Encoded lied = encodeWith(v.values, v.n, v.bound, std::make_shared<EverythingPasses>());
+    std::printf(
+        "[ahead] %s: fits %lld plain, %lld asked ahead (%lld residuals), %lld with wrong "
+        "verdicts; %zu bytes\n",
+        v.name, (long long)plain.stats.fits, (long long)ahead.stats.fits,
+        (long long)ahead.stats.askedAhead, (long long)lied.stats.fits, plain.bytes.size());
+    EXPECT_TRUE(ahead.bytes == plain.bytes) << "asked ahead, the file differs";
+    EXPECT_TRUE(lied.bytes == plain.bytes) << "with wrong verdicts, the file differs";
+    EXPECT_GT(ahead.stats.askedAhead, 0);
+    EXPECT_LT(2 * ahead.stats.fits, plain.stats.fits);
+  }
+}

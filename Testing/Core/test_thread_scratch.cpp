@@ -4,6 +4,7 @@
 #include <cstring>
 #include <thread>
 
+#include "afam/base/huge_pages.hpp"
 #include "afam/base/thread_scratch.hpp"
 
 using namespace afam;
@@ -36,4 +37,18 @@ TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
   EXPECT_EQ(threadScratch<uint8_t>(ScratchSlot::Frame, 10), small);
   releaseAllThreadScratch();  // the small one too
   EXPECT_EQ(threadScratchBytes(), before);
+}
+
+TEST(HugePages, LargeBuffersAreAlignedToAHugePageAndKeepTheirValuesAsTheyGrow) {
+  HugePageVector<double> small(1000, 1.5), large(300000);  // 8 kB, 2.4 MB
+  for (size_t i = 0; i < large.size(); ++i) large[i] = double(i);
+#if defined(__linux__)
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(large.data()) % kHugePageBytes, 0u);
+#endif
+  large.resize(700000, -1.0);  // 5.6 MB: a new mapping, the values copied over
+  small.resize(200000, 2.5);   // from operator new to a mapping
+  for (size_t i = 0; i < 300000; ++i) ASSERT_EQ(large[i], double(i));
+  EXPECT_EQ(large[699999], -1.0);
+  EXPECT_EQ(small[999], 1.5);
+  EXPECT_EQ(small[199999], 2.5);
 }

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "afam/base/huge_pages.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/volume/volume_source.hpp"
 
@@ -30,7 +31,7 @@ class PlaneReader {
   VolumeSource& src_;
   int64_t rowSize_;
   uint64_t bytesRead_ = 0;
-  std::vector<float> buf_;
+  HugePageVector<float> buf_;
 };
 
 /// Runs fn(block) for block in [0, count), on several threads when the caller provides them

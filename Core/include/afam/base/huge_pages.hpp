@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Large work buffers on transparent huge pages: a buffer of a megabyte or more is mapped on its
+// own, 2 MB aligned, and marked for huge pages (Linux's madvise setting gives them to marked memory
+// only). Its first touch then costs one page fault per 2 MB instead of 512: measured on a VM at
+// ~9 us a fault, first touches were 10-30% of an encode's time. Smaller buffers, and systems
+// without madvise, use operator new.
+#pragma once
+
+#include <cstddef>
+#include <new>
+#include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+namespace afam {
+
+constexpr size_t kHugePageBytes = size_t(2) << 20;
+constexpr size_t kHugePageMinBytes = size_t(1) << 20;  ///< smaller: operator new
+
+template <typename T>
+class HugePageAllocator {
+ public:
+  using value_type = T;
+  HugePageAllocator() = default;
+  template <typename U>
+  HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+
+  T* allocate(size_t n) {
+    const size_t bytes = n * sizeof(T);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (bytes >= kHugePageMinBytes) {
+      // Map one huge page more, keep the aligned part, give the ends back.
+      const size_t size = roundUp(bytes), mapped = size + kHugePageBytes;
+      void* p = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (p == MAP_FAILED) throw std::bad_alloc();
+      char* base = static_cast<char*>(p);
+      char* aligned = reinterpret_cast<char*>(roundUp(reinterpret_cast<size_t>(base)));
+      if (aligned > base) munmap(base, size_t(aligned - base));
+      const size_t tail = size_t(base + mapped - (aligned + size));
+      if (tail > 0) munmap(aligned + size, tail);
+      madvise(aligned, size, MADV_HUGEPAGE);  // advice: without it the buffer still works
+      return reinterpret_cast<T*>(aligned);
+    }
+#endif
+    return static_cast<T*>(::operator new(bytes));
+  }
+
+  void deallocate(T* p, size_t n) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (n * sizeof(T) >= kHugePageMinBytes) {
+      munmap(p, roundUp(n * sizeof(T)));
+      return;
+    }
+#endif
+    ::operator delete(p);
+  }
+
+  template <typename U>
+  bool operator==(const HugePageAllocator<U>&) const noexcept {
+    return true;
+  }
+  template <typename U>
+  bool operator!=(const HugePageAllocator<U>&) const noexcept {
+    return false;
+  }
+
+ private:
+  static size_t roundUp(size_t bytes) {
+    return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  }
+};
+
+/// A vector whose storage, once large, lies on huge pages (HugePageAllocator).
+template <typename T>
+using HugePageVector = std::vector<T, HugePageAllocator<T>>;
+
+}  // namespace afam

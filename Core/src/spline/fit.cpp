@@ -7,6 +7,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -268,6 +269,27 @@ AFAM_FIT_INLINE void evaluateRows(const AxisSystem& s, const In* in, size_t inSt
   }
 }
 
+/// dst[c * dstStride + r] = src[r * srcStride + c] for r, c < 4, in registers (two rounds of
+/// shuffles).
+AFAM_FIT_INLINE void transpose4x4(const double* src, size_t srcStride, double* dst,
+                                  size_t dstStride) {
+  // Unaligned whole-vector loads and stores (a vector type that may alias doubles).
+  using Four = double __attribute__((vector_size(32), aligned(8), may_alias));
+  using Pick = int64_t __attribute__((vector_size(32)));
+  const Four a0 = *reinterpret_cast<const Four*>(src);
+  const Four a1 = *reinterpret_cast<const Four*>(src + srcStride);
+  const Four a2 = *reinterpret_cast<const Four*>(src + 2 * srcStride);
+  const Four a3 = *reinterpret_cast<const Four*>(src + 3 * srcStride);
+  const Four t0 = __builtin_shuffle(a0, a1, Pick{0, 4, 2, 6});
+  const Four t1 = __builtin_shuffle(a0, a1, Pick{1, 5, 3, 7});
+  const Four t2 = __builtin_shuffle(a2, a3, Pick{0, 4, 2, 6});
+  const Four t3 = __builtin_shuffle(a2, a3, Pick{1, 5, 3, 7});
+  *reinterpret_cast<Four*>(dst) = __builtin_shuffle(t0, t2, Pick{0, 1, 4, 5});
+  *reinterpret_cast<Four*>(dst + dstStride) = __builtin_shuffle(t1, t3, Pick{0, 1, 4, 5});
+  *reinterpret_cast<Four*>(dst + 2 * dstStride) = __builtin_shuffle(t0, t2, Pick{2, 3, 6, 7});
+  *reinterpret_cast<Four*>(dst + 3 * dstStride) = __builtin_shuffle(t1, t3, Pick{2, 3, 6, 7});
+}
+
 /// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along
 /// x become the vectors of the row kernels.
 template <typename In, typename Out>
@@ -277,8 +299,16 @@ AFAM_FIT_INLINE void transpose(const In* __restrict src, size_t rows, size_t col
   for (size_t r0 = 0; r0 < rows; r0 += kTile)
     for (size_t c0 = 0; c0 < cols; c0 += kTile) {
       const size_t r1 = std::min(rows, r0 + kTile), c1 = std::min(cols, c0 + kTile);
-      for (size_t r = r0; r < r1; ++r)
-        for (size_t c = c0; c < c1; ++c) dst[c * rows + r] = Out(src[r * cols + c]);
+      size_t rq = r0, cq = c0;  // where the 4 x 4 blocks end
+      if constexpr (std::is_same<In, double>::value && std::is_same<Out, double>::value) {
+        rq = r0 + (r1 - r0) / 4 * 4;
+        cq = c0 + (c1 - c0) / 4 * 4;
+        for (size_t r = r0; r < rq; r += 4)
+          for (size_t c = c0; c < cq; c += 4)
+            transpose4x4(src + r * cols + c, cols, dst + c * rows + r, rows);
+      }
+      for (size_t r = r0; r < r1; ++r)  // what the blocks left: columns past cq, rows past rq
+        for (size_t c = r < rq ? cq : c0; c < c1; ++c) dst[c * rows + r] = Out(src[r * cols + c]);
     }
 }
 
@@ -514,10 +544,25 @@ float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
   out.ncp = {ax.ncp, ay.ncp, az.ncp};
   out.degree = {ax.p, ay.p, az.p};
   out.control.resize(mx * lines);
-  float* control = out.control.data();
+  // Eight lanes of |control point| maxima (max is exact in any order; NaN ignored as std::max
+  // does).
+  float* __restrict control = out.control.data();
+  const double* __restrict c = bufC.data();
+  using Eight = float __attribute__((vector_size(32)));
+  Eight most = {0, 0, 0, 0, 0, 0, 0, 0};
+  const size_t count = mx * lines;
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8) {
+    Eight v;
+    for (int l = 0; l < 8; ++l) v[l] = float(c[i + size_t(l)]);
+    std::memcpy(control + i, &v, sizeof v);
+    const Eight magnitude = v < 0 ? -v : v;
+    most = most < magnitude ? magnitude : most;
+  }
   float largest = 0;
-  for (size_t i = 0; i < mx * lines; ++i) {
-    control[i] = float(bufC[i]);
+  for (int l = 0; l < 8; ++l) largest = std::max(largest, most[l]);
+  for (; i < count; ++i) {
+    control[i] = float(c[i]);
     largest = std::max(largest, std::fabs(control[i]));
   }
   return largest;

@@ -404,7 +404,8 @@ constexpr int kNoiseMinSamples = 16;  ///< smaller blocks: the search is cheap, 
 
 }  // namespace
 
-std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t) {
+std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t,
+                                  const std::array<double, 3>& rough) {
   const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
   if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return std::nullopt;
   // The probe only where the samples' second differences say noise of half the bound or more
@@ -412,7 +413,6 @@ std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, con
   // elsewhere it would be one fit more.
   // And only where every axis is about as rough as the roughest (refineNcpPerAxis would give none
   // fewer points): a block smooth along some axis may be a spline of few points there.
-  const std::array<double, 3> rough = axisRoughness(t.samples.data(), e.samples);
   double smoothest = std::numeric_limits<double>::infinity(), roughest = 0;
   for (int a = 0; a < 3; ++a)
     if (e.samples[a] >= 3) {
@@ -433,7 +433,10 @@ namespace {
 /// Whether the block is noise-dominated in that sense (noiseProbeNcp's probe misses the fit's
 /// share of the bound: its verdict given ahead, else a fit); then t's search statistics say so.
 bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
-  const std::optional<Int3> ncp = noiseProbeNcp(c, e, t);
+  const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
+  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return false;
+  const std::optional<Int3> ncp =
+      noiseProbeNcp(c, e, t, axisRoughness(t.samples.data(), e.samples));
   if (!ncp) return false;
   const double bound = searchBound(c.opt, c.bound);
   const Verdict v = t.verdicts.bound == bound ? t.verdicts.of(*ncp) : Verdict::Unknown;

@@ -56,7 +56,9 @@ struct FitContext {
 /// Compact storage: the NCP at which one fit tells whether a searched block is noise-dominated
 /// (its spline would need nearly as many points as samples), where the block's content says the
 /// probe could pay; none elsewhere.
-std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t);
+/// `rough`: axisRoughness of t's samples.
+std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t,
+                                  const std::array<double, 3>& rough);
 
 /// Whether a model whose error on the block's samples is `es` keeps the bound: their RMSE, or
 /// every sample's error (a pointwise bound).

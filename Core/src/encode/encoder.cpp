@@ -10,6 +10,7 @@
 #include <future>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -326,6 +327,9 @@ class LevelEncoder {
     std::vector<BlockTask> tasks;
     int64_t endLine = 0;  ///< the first line not in this batch
     double seconds = 0;   ///< spent sampling it
+    bool asked = false;   ///< its searches asked ahead (askAheadOf)
+    AheadStats ahead;
+    double aheadSeconds = 0;  ///< spent asking
   };
 
   /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and
@@ -378,6 +382,11 @@ class LevelEncoder {
     Batch cur = pending.valid() ? pending.get() : gatherLines(l, lines.first, lines.end);
     for (;;) {
       ls.sampleSeconds += cur.seconds;
+      if (!cur.asked) askAheadOf(l, cur);  // before the next batch's questions take the device
+      ls.askedAhead += cur.ahead.requests;
+      ls.aheadRounds += cur.ahead.rounds;
+      ls.aheadSeconds += cur.aheadSeconds;
+      ls.residualSeconds += cur.ahead.residualSeconds;
       const bool more = cur.endLine < lines.end;
       std::future<Batch> next;
       const WorkShare nextLines = more                     ? WorkShare{cur.endLine, lines.end}
@@ -387,12 +396,15 @@ class LevelEncoder {
         const int nl = more ? l : l + 1;
         const auto policy =
             source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
-        next = std::async(policy, [this, nl, nextLines] {
-          return gatherLines(nl, nextLines.first, nextLines.end);
+        // The next batch of this level is asked ahead while this one is fitted; the next level's
+        // first when its turn comes (which of its blocks search depends on this level's).
+        next = std::async(policy, [this, nl, nextLines, more] {
+          Batch b = gatherLines(nl, nextLines.first, nextLines.end);
+          if (more) askAheadOf(nl, b);
+          return b;
         });
       }
       try {
-        askAheadOf(l, cur.tasks, ls);
         fitBatch(l, cur.tasks, levelDone);
       } catch (...) {
         settle(next);
@@ -482,35 +494,47 @@ class LevelEncoder {
     return batch;
   }
 
-  /// With EncoderOptions::leastSquares: the searches of the batch's searched blocks (finite
-  /// samples) asked ahead, their verdicts in the tasks. A run's steps search at bounds that depend
-  /// on the step before: not asked.
-  void askAheadOf(int l, std::vector<BlockTask>& tasks, LevelStats& ls) {
-    for (BlockTask& t : tasks) t.search = searches(l, t.ijk);
+  /// Which of the batch's blocks search; with EncoderOptions::leastSquares, their searches asked
+  /// ahead (the blocks with finite samples), the verdicts in the tasks. A run's steps search at
+  /// bounds that depend on the step before: not asked. Uses the sampling pool.
+  void askAheadOf(int l, Batch& b) {
+    b.asked = true;
+    for (BlockTask& t : b.tasks) t.search = searches(l, t.ijk);
     if (!opt_.leastSquares || !bounded(opt_.mode) || opt_.boundKind != BoundKind::Rmse ||
         opt_.runStep)
       return;
     const auto t0 = Clock::now();
     const FitContext ctx{opt_, bound_, l, source_.name()};
+    std::vector<std::optional<AheadBlock>> asked(b.tasks.size());
+    samplePool_.run(
+        int64_t(b.tasks.size()),
+        [&](int, int64_t i) {
+          BlockTask& t = b.tasks[size_t(i)];
+          t.verdicts = NcpVerdicts{};
+          if (!t.search || std::any_of(t.samples.begin(), t.samples.end(),
+                                       [](float v) { return std::isnan(v); }))
+            return;
+          const BlockExtent e = part_.extent(l, t.ijk);
+          AheadBlock a;
+          a.samples = t.samples.data();
+          a.n = e.samples;
+          a.out = &t.verdicts;
+          a.rough = axisRoughness(t.samples.data(), e.samples);
+          if (opt_.compact) a.probe = noiseProbeNcp(ctx, e, t, *a.rough);
+          asked[size_t(i)] = a;
+        },
+        [] { return true; });
     std::vector<AheadBlock> blocks;
-    for (BlockTask& t : tasks) {
-      t.verdicts = NcpVerdicts{};
-      if (!t.search ||
-          std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); }))
-        continue;
-      const BlockExtent e = part_.extent(l, t.ijk);
-      blocks.push_back({t.samples.data(), e.samples, &t.verdicts,
-                        opt_.compact ? noiseProbeNcp(ctx, e, t) : std::nullopt});
-    }
+    for (std::optional<AheadBlock>& a : asked)
+      if (a) blocks.push_back(*a);
     if (blocks.empty()) return;
     const SearchSettings settings{opt_.degree, searchBound(opt_, bound_), opt_.search,
                                   opt_.fastWindow, opt_.perAxisNcp};
-    const AheadStats a = askAhead(*opt_.leastSquares, blocks, settings);
-    ls.askedAhead += a.requests;
-    ls.aheadRounds += a.rounds;
-    ls.aheadSeconds += secondsSince(t0);
+    b.ahead = askAhead(*opt_.leastSquares, blocks, settings);
+    b.aheadSeconds = secondsSince(t0);
   }
 
+  /// Fits the batch's blocks (askAheadOf said which search).
   void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
     const FitContext ctx{opt_, bound_, l, source_.name()};
     std::mutex doneMutex;

@@ -76,7 +76,7 @@ void CpuLeastSquaresBatch::residuals(const std::vector<LsqRequest>& requests,
     const double squares = lsqTreeSum(lanes);
     std::fill(lanes, lanes + kLsqLanes, 0.0);
     for (int64_t j = 0; j < shape.slice; ++j)
-      lanes[j % kLsqLanes] += lsqAlongZSquared(rows[2], afterY_.data(), n, k, j);
+      lanes[j % kLsqLanes] += lsqColumnEnergy(rows[2], afterY_.data() + j, shape.slice, n, k);
     out[r] = {squares, squares - lsqTreeSum(lanes)};
   }
 }

@@ -2,6 +2,7 @@
 #include "afam/search/ncp_verdicts.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <optional>
 
 #include "afam/spline/fit.hpp"
@@ -66,7 +67,8 @@ AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blo
     b.out->known.clear();
   }
   batch.setBlocks(samples, shapes, settings.degree);
-  std::vector<std::optional<std::array<double, 3>>> rough(blocks.size());
+  std::vector<std::optional<std::array<double, 3>>> rough;
+  for (const AheadBlock& b : blocks) rough.push_back(b.rough);
   std::vector<uint8_t> open(blocks.size(), 1);
   std::vector<LsqRequest> requests;
   std::vector<LsqResidual> answers;
@@ -83,7 +85,10 @@ AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blo
         open[b] = 0;
     }
     if (requests.empty()) return stats;
+    const auto t0 = std::chrono::steady_clock::now();
     batch.residuals(requests, answers);
+    stats.residualSeconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ++stats.rounds;
     stats.requests += int64_t(requests.size());
     for (size_t r = 0; r < requests.size(); ++r) {

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Batched least-squares residuals on the GPU (least_squares_batch.hpp): one thread block of
 // kLsqLanes threads a request. The block's mean and squares, then plane by plane along z the
-// centred samples, their x contraction and their y contraction (in shared memory, the rows of the
-// axes' Q^T beside them), the slices after y in global scratch, and the z contraction's energy
-// column by column; every sum in the order of least_squares_order.hpp (compiled with -fmad=false),
-// so the doubles are the CPU reference's.
+// centred samples, their x contraction and their y contraction (in shared memory, the rows of
+// Qx^T and Qy^T beside them), the slices after y in global scratch, and the z contraction's energy
+// column by column (a thread's column copied to shared memory once, the rows of Qz^T beside); every
+// sum in the order of least_squares_order.hpp (compiled with -fmad=false), so the doubles are the
+// CPU reference's.
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -27,11 +28,13 @@ struct LsqJob {
   int n[3] = {0, 0, 0}, k[3] = {0, 0, 0};
 };
 
-/// Shared doubles a request needs: the plane (rows padded by one), after x, and Q^T per axis (y's
-/// rows padded by one), as laid out by the kernel.
+/// Shared doubles a request needs: along x and y, the plane (rows padded by one), after x, and
+/// the rows of Qx and Qy (y's padded by one); along z, a column a thread and the rows of Qz.
 uint64_t sharedDoubles(Int3 n, Int3 k) {
-  return uint64_t(n[1]) * (n[0] + 1) + uint64_t(k[0]) * n[1] + uint64_t(k[0]) * n[0] +
-         uint64_t(k[1]) * (n[1] + 1) + uint64_t(k[2]) * n[2];
+  const uint64_t alongXY = uint64_t(n[1]) * (n[0] + 1) + uint64_t(k[0]) * n[1] +
+                           uint64_t(k[0]) * n[0] + uint64_t(k[1]) * (n[1] + 1);
+  const uint64_t alongZ = uint64_t(n[2]) * kLsqLanes + uint64_t(k[2]) * n[2];
+  return std::max(alongXY, alongZ);
 }
 
 __device__ double treeSumShared(double* lanes, double mine) {
@@ -66,10 +69,8 @@ __global__ void __launch_bounds__(kLsqLanes)
   double* afterX = plane + int64_t(n[1]) * planeStride;
   double* qx = afterX + shape.afterX;
   double* qy = qx + int64_t(k[0]) * n[0];
-  double* qz = qy + int64_t(k[1]) * qyStride;
   copyRows(q + job.q[0], k[0], n[0], qx, n[0]);
   copyRows(q + job.q[1], k[1], n[1], qy, qyStride);
-  copyRows(q + job.q[2], k[2], n[2], qz, n[2]);
   double part = 0;
   for (int z = 0; z < n[2]; ++z)
     for (int64_t e = threadIdx.x; e < shape.plane; e += kLsqLanes)
@@ -90,11 +91,18 @@ __global__ void __launch_bounds__(kLsqLanes)
       afterY[z * shape.slice + o] = lsqAlongY(qy, qyStride, afterX, n, k, o);
     __syncthreads();
   }
-  const double squares = treeSumShared(lanes, part);
-  __threadfence_block();
+  const double squares = treeSumShared(lanes, part);  // its barrier ends the x and y passes
+  // Along z: each thread's column of the slices after y into shared memory, Qz's rows beside.
+  double* column = shared;
+  double* qz = column + int64_t(n[2]) * kLsqLanes;
+  copyRows(q + job.q[2], k[2], n[2], qz, n[2]);
+  __syncthreads();
   part = 0;
-  for (int64_t j = threadIdx.x; j < shape.slice; j += kLsqLanes)
-    part += lsqAlongZSquared(qz, afterY, n, k, j);
+  for (int64_t j = threadIdx.x; j < shape.slice; j += kLsqLanes) {
+    for (int z = 0; z < n[2]; ++z)
+      column[z * kLsqLanes + threadIdx.x] = afterY[z * shape.slice + j];
+    part += lsqColumnEnergy(qz, column + threadIdx.x, kLsqLanes, n, k);
+  }
   const double energy = treeSumShared(lanes, part);
   if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);
 }

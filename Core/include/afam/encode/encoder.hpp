@@ -38,12 +38,12 @@
 #include "afam/base/errors.hpp"
 #include "afam/encode/block_sampling.hpp"
 #include "afam/encode/encode_team.hpp"
-#include "afam/search/least_squares_batch.hpp"
 #include "afam/encode/model_sink.hpp"
-#include "afam/search/ncp_search.hpp"
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/search/least_squares_batch.hpp"
+#include "afam/search/ncp_search.hpp"
 #include "afam/spline/fit.hpp"
 #include "afam/volume/volume_source.hpp"
 
@@ -143,10 +143,11 @@ struct LevelStats {
   double sampleSeconds =
       0;  ///< time spent sampling the volume (overlaps fitting after the first batch)
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
-  /// EncoderOptions::leastSquares: residuals asked ahead of the searches, in how many rounds, and
-  /// the seconds the batches waited for them.
+  /// EncoderOptions::leastSquares: residuals asked ahead of the searches, in how many rounds; the
+  /// seconds spent asking (on the sampling thread, beside the fitting of the batch before, but for
+  /// a level's first batch) and of them waiting for the residuals.
   int64_t askedAhead = 0, aheadRounds = 0;
-  double aheadSeconds = 0;
+  double aheadSeconds = 0, residualSeconds = 0;
 };
 
 struct EncodeStats {

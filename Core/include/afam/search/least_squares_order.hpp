@@ -61,15 +61,15 @@ AFAM_HD double lsqAlongY(const double* qy, int64_t qyStride, const double* after
   return sum;
 }
 
-/// For column j (kx * ncp1 + ky) of the slices after y (n2 slices of ncp0 x ncp1): the sum over
-/// kz of (sum over z of Qz[kz][z] * afterY[z][j])^2, the projection's energy on that column.
-AFAM_HD double lsqAlongZSquared(const double* qz, const double* afterY, Int3 n, Int3 k, int64_t j) {
-  const int64_t slice = int64_t(k[0]) * k[1];
+/// The projection's energy on one column of the slices after y (its n2 values `stride` apart):
+/// the sum over kz of (sum over z of Qz[kz][z] * column[z])^2.
+AFAM_HD double lsqColumnEnergy(const double* qz, const double* column, int64_t stride, Int3 n,
+                               Int3 k) {
   double energy = 0;
   for (int kz = 0; kz < k[2]; ++kz) {
     const double* row = qz + int64_t(kz) * n[2];
     double sum = 0;
-    for (int z = 0; z < n[2]; ++z) sum += row[z] * afterY[z * slice + j];
+    for (int z = 0; z < n[2]; ++z) sum += row[z] * column[z * stride];
     energy += sum * sum;
   }
   return energy;

@@ -36,11 +36,13 @@ struct AheadBlock {
   Int3 n{};
   NcpVerdicts* out = nullptr;
   std::optional<Int3> probe;
+  std::optional<std::array<double, 3>> rough;  ///< axisRoughness of the samples, when known
 };
 
 /// What asking ahead took.
 struct AheadStats {
   int64_t requests = 0, rounds = 0, unsure = 0;
+  double residualSeconds = 0;  ///< waiting for the batch's residuals
 };
 
 /// The verdict a residual gives at `bound` for a block of `count` samples: Fails when its RMSE is

@@ -6,6 +6,8 @@
 #include <functional>
 #include <limits>
 
+#include "afam/base/cpu_features.hpp"
+
 namespace afam {
 
 namespace {
@@ -113,10 +115,10 @@ struct BlockTaps {
 /// only the block's rows. The plane holds rows from yBase on. Masked: NaN samples (missing) are
 /// left out, and `weight` gathers the filter's weight of the valid ones the same way.
 template <bool Masked>
-void addFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
-                      std::vector<double>& rows, std::vector<double>& acc,
-                      std::vector<double>* rowWeights = nullptr,
-                      std::vector<double>* weight = nullptr) {
+__attribute__((always_inline)) inline void addFilteredPlane(
+    const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
+    std::vector<double>& rows, std::vector<double>& acc, std::vector<double>* rowWeights = nullptr,
+    std::vector<double>* weight = nullptr) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const size_t width = size_t(bt.x1 - bt.x0 + 1);
   rows.resize(size_t(bt.ny) * width);
@@ -197,9 +199,9 @@ size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& ou
 
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
 /// yBase on).
-void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
-                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt,
-                    float* out) {
+__attribute__((always_inline)) inline void fillBlockChunkBody(
+    const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X, int64_t yBase,
+    const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
   std::vector<double> rows, acc;
@@ -225,6 +227,22 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
     refilterMissing(planeOf, X, yBase, tz, t0, t1, bt, dst);
   }
+}
+
+// The filtering compiled also for AVX2 (its float-to-double rows convert in one instruction there)
+// and chosen at run time; no FMA, so the same samples.
+AFAM_TARGET_AVX2 void fillBlockChunkAvx2(const float* buf, const std::vector<int64_t>& zs,
+                                         size_t plane, int64_t X, int64_t yBase, const AxisTaps& tz,
+                                         int k0, int k1, const BlockTaps& bt, float* out) {
+  fillBlockChunkBody(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
+}
+void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt,
+                    float* out) {
+  if (cpuHasAvx2())
+    fillBlockChunkAvx2(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
+  else
+    fillBlockChunkBody(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "vtkAFAMMissingSamples.h"
 #include "vtkAFAMModelTree.h"
 
+#include "afam/cuda/make_gpu_least_squares.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
@@ -218,6 +219,19 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
   options.threads = this->NumberOfThreads;
   options.hasMissingValue = this->UseMissingValue;
   options.missingValue = this->MissingValue;
+  if (this->Device != DEVICE_CPU)
+  {
+    options.leastSquares = afam::makeGpuLeastSquares(
+      [this](const std::string& why)
+      {
+        if (this->Device == DEVICE_GPU)
+        {
+          vtkWarningMacro("Device GPU: " << why << "; encoding on the CPU");
+        }
+      });
+  }
+  this->LastDevice =
+    options.leastSquares ? "gpu " + options.leastSquares->description() : std::string("cpu");
   options.progress = [this](double f)
   {
     this->UpdateProgress(0.95 * f);
@@ -725,6 +739,7 @@ void vtkAFAMEncoder::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Mode: " << this->Mode << "\n";
   os << indent << "FixedNcp: " << this->FixedNcp << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "Device: " << this->Device << " (last used: " << this->LastDevice << ")\n";
   os << indent << "EncodeTimeSteps: " << this->EncodeTimeSteps << "\n";
   os << indent << "ValidPointMaskArrayName: "
      << (this->ValidPointMaskArrayName ? this->ValidPointMaskArrayName : "(none)") << "\n";

@@ -185,6 +185,25 @@ public:
   vtkGetMacro(NumberOfThreads, int);
   ///@}
 
+  enum EncodeDevices
+  {
+    DEVICE_AUTO = 0, ///< the GPU when one is usable, else the CPU
+    DEVICE_GPU = 1,  ///< the GPU; a warning, then the CPU, where none is usable
+    DEVICE_CPU = 2
+  };
+  ///@{
+  /// Where the NCP searches are asked ahead (afam encode --device): DEVICE_AUTO (default),
+  /// DEVICE_GPU or DEVICE_CPU. The same models either way; under MPI each rank takes its node's
+  /// GPU of its local rank.
+  vtkSetClampMacro(Device, int, DEVICE_AUTO, DEVICE_CPU);
+  vtkGetMacro(Device, int);
+  /// What the last encoding used: "cpu", or "gpu " and the GPU's name.
+  const char* GetLastDevice()
+  {
+    return this->LastDevice.c_str();
+  }
+  ///@}
+
   /// The temporary .afam file holding the last encoding (empty before the first execution).
   const char* GetModelFileName()
   {
@@ -290,6 +309,8 @@ protected:
   int Mode = MODE_ADAPTIVE;
   int FixedNcp = 0;
   int NumberOfThreads = 0;
+  int Device = DEVICE_AUTO;
+  std::string LastDevice = "cpu";
   bool EncodeTimeSteps = true;
   char* ValidPointMaskArrayName = nullptr;
   bool UseMissingValue = false;

@@ -122,6 +122,14 @@ if [ -x "$dec" ] && [ -x "$afam" ]; then
   grep -E "^\[gpu-decode\]" "$logs/tests.log" | tail -1 | sed 's/^/  frames: /' >>"$logs/summary.txt"
 fi
 
+# --- GPU encoding (issue 42): afam encode --device cpu against --device gpu on the head made
+# 602x740x632, every core, one run of each (Testing/Benchmarks/encode_gpu.sh; the same bytes).
+if [ -x "$afam" ]; then
+  REPS=1 WORK="$e2e/encode" "$root/Testing/Benchmarks/encode_gpu.sh" "$afam" >"$logs/encode_gpu.log" 2>&1
+  status "encode --device gpu vs cpu" "$(tail -1 "$logs/encode_gpu.log")"
+  rm -rf "$e2e/encode"
+fi
+
 echo
 echo "================ gpu_check summary ================"
 echo "GPU: ${gpu:-none}"

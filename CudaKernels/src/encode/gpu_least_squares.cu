@@ -14,6 +14,7 @@
 #include "../cuda_check.hpp"
 #include "afam/cuda/gpu_error.hpp"
 #include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/ranks/device_selection.hpp"
 #include "afam/search/least_squares_order.hpp"
 
 namespace afam {
@@ -250,8 +251,9 @@ std::shared_ptr<LeastSquaresBatch> makeGpuLeastSquares(
     report(why);
     return nullptr;
   }
-  try {
-    return std::make_shared<GpuLeastSquaresBatch>(device);
+  try {  // by default one GPU per MPI rank on a node with several (device_selection.hpp)
+    return std::make_shared<GpuLeastSquaresBatch>(device >= 0 ? device
+                                                              : selectGpuDevice(gpuDeviceCount()));
   } catch (const GpuError& e) {
     report(e.what());
     return nullptr;

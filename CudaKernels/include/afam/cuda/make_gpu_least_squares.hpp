@@ -13,10 +13,11 @@
 
 namespace afam {
 
-/// GPU residuals on CUDA device `device`, or null with the reason given to `report`. The doubles
+/// GPU residuals on CUDA device `device` (-1: the MPI local rank's, as the ray caster picks it,
+/// device_selection.hpp), or null with the reason given to `report`. The doubles
 /// equal CpuLeastSquaresBatch's bit for bit (least_squares_order.hpp); requests whose block does
 /// not fit a thread block's shared memory are computed by the CPU reference.
 std::shared_ptr<LeastSquaresBatch> makeGpuLeastSquares(
-    const std::function<void(const std::string&)>& report, int device = 0);
+    const std::function<void(const std::string&)>& report, int device = -1);
 
 }  // namespace afam

@@ -108,23 +108,29 @@ __global__ void __launch_bounds__(kLsqLanes)
   if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);
 }
 
-/// Device memory that grows to the largest request seen and frees itself.
-struct DeviceArray {
-  void* data = nullptr;
-  size_t bytes = 0;
-  ~DeviceArray() { (void)cudaFree(data); }
-  void reserve(size_t want) {
-    if (want <= bytes) return;
-    (void)cudaFree(data);
+/// Device memory (or pinned host memory) that grows to the largest request seen and frees itself.
+struct GrowingArray {
+  explicit GrowingArray(bool pinnedHost = false) : pinned(pinnedHost) {}
+  ~GrowingArray() { release(); }
+  void release() {
+    (void)(pinned ? cudaFreeHost(data) : cudaFree(data));
     data = nullptr;
     bytes = 0;
-    AFAM_CUDA_CHECK(cudaMalloc(&data, std::max<size_t>(want, 1)));
+  }
+  void reserve(size_t want) {
+    if (want <= bytes) return;
+    release();
+    const size_t size = std::max<size_t>(want, 1);
+    AFAM_CUDA_CHECK(pinned ? cudaMallocHost(&data, size) : cudaMalloc(&data, size));
     bytes = want;
   }
   template <typename T>
   T* as() const {
     return static_cast<T*>(data);
   }
+  bool pinned = false;
+  void* data = nullptr;
+  size_t bytes = 0;
 };
 
 class GpuLeastSquaresBatch final : public LeastSquaresBatch {
@@ -150,11 +156,16 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
     offsets_.assign(samples.size() + 1, 0);
     for (size_t b = 0; b < samples.size(); ++b)
       offsets_[b + 1] = offsets_[b] + uint64_t(n[b][0]) * n[b][1] * n[b][2];
-    samples_.reserve(offsets_.back() * sizeof(float));
+    // One copy through pinned memory: pageable copies are staged by the driver a block at a time.
+    const size_t bytes = offsets_.back() * sizeof(float);
+    AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));  // the staging buffer's last copy is done
+    staging_.reserve(bytes);
+    samples_.reserve(bytes);
     for (size_t b = 0; b < samples.size(); ++b)
-      AFAM_CUDA_CHECK(cudaMemcpyAsync(samples_.as<float>() + offsets_[b], samples[b],
-                                      (offsets_[b + 1] - offsets_[b]) * sizeof(float),
-                                      cudaMemcpyHostToDevice, stream_));
+      std::copy(samples[b], samples[b] + (offsets_[b + 1] - offsets_[b]),
+                staging_.as<float>() + offsets_[b]);
+    AFAM_CUDA_CHECK(
+        cudaMemcpyAsync(samples_.data, staging_.data, bytes, cudaMemcpyHostToDevice, stream_));
   }
 
   void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override;
@@ -175,7 +186,7 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
   std::vector<uint64_t> offsets_;
   AxisProjections projections_;
   size_t uploadedProjections_ = 0;
-  DeviceArray samples_, matrices_, scratch_, jobs_, results_;
+  GrowingArray samples_, matrices_, scratch_, jobs_, results_, staging_{true};
 };
 
 uint64_t GpuLeastSquaresBatch::prepare(const std::vector<LsqRequest>& requests,

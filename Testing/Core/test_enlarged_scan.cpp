@@ -132,6 +132,30 @@ TEST(EnlargedScan, DetailHasTheAskedDeviationAndEnergyAtCoarseScales) {
   EXPECT_LT(wblockVar / wvar, 0.002) << "white noise averages away: the test tells them apart";
 }
 
+TEST(EnlargedScan, DetailStaysOutOfTheAir) {
+  // Air (0) below z = 4 of 8 source planes, tissue (200) above: the detail is whole in the
+  // tissue and absent from the air, beyond the two source samples the interpolation reaches.
+  std::vector<float> half(8 * 8 * 8, 0.f);
+  std::fill(half.begin() + 8 * 8 * 4, half.end(), 200.f);
+  const int64_t n = 64;
+  EnlargedScanSource s(half, {8, 8, 8}, {n, n, n}, 0.0, 3, -1e9, 1e9);
+  s.setDetail(10.0);
+  const std::vector<float> v = readAll(s);
+  double airWorst = 0, tissueSq = 0;
+  int64_t tissue = 0;
+  for (int64_t z = 0; z < n; ++z)
+    for (int64_t i = 0; i < n * n; ++i) {
+      const double x = v[size_t(z * n * n + i)];
+      if (z < 14) airWorst = std::max(airWorst, std::fabs(x));
+      if (z > 50) {
+        tissueSq += (x - 200) * (x - 200);
+        ++tissue;
+      }
+    }
+  EXPECT_EQ(airWorst, 0.0) << "the air took detail";
+  EXPECT_NEAR(std::sqrt(tissueSq / double(tissue)), 10.0, 3.0) << "the tissue's detail";
+}
+
 TEST(EnlargedScan, DetailIsTheSameHoweverTheVolumeIsCut) {
   const std::vector<float> src = randomSource(5);
   const Index3 big{37, 29, 41};

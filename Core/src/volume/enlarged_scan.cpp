@@ -89,6 +89,15 @@ EnlargedScanSource::EnlargedScanSource(std::vector<float> samples, Index3 dims, 
   tx_ = taps(dims_[0], target_[0]);
   ty_ = taps(dims_[1], target_[1]);
   tz_ = taps(dims_[2], target_[2]);
+  const auto [smin, smax] = std::minmax_element(source_.begin(), source_.end());
+  airEnd_ = *smin + kAirShare[0] * (*smax - *smin);
+  tissueStart_ = *smin + kAirShare[1] * (*smax - *smin);
+}
+
+float EnlargedScanSource::tissueWeight(float v) const {
+  if (!(tissueStart_ > airEnd_)) return 1.f;  // a constant source: no air to tell apart
+  const float t = std::clamp((v - airEnd_) / (tissueStart_ - airEnd_), 0.f, 1.f);
+  return t * t * (3 - 2 * t);
 }
 
 std::vector<EnlargedScanSource::Taps> EnlargedScanSource::taps(int64_t from, int64_t to) {
@@ -208,7 +217,11 @@ void EnlargedScanSource::readSlab(int64_t z0, int64_t zCount, float* out) {
       const std::vector<float>& p = plane(t.first[j]);
       for (int64_t i = 0; i < nxy; ++i) dst[i] += t.weight[j] * p[size_t(i)];
     }
-    if (!octaves_.empty()) addDetail(z, dst);
+    if (!octaves_.empty()) {
+      detail_.assign(size_t(nxy), 0.f);
+      addDetail(z, detail_.data());
+      for (int64_t i = 0; i < nxy; ++i) dst[i] += tissueWeight(dst[i]) * detail_[size_t(i)];
+    }
     const uint64_t base = uint64_t(z * nxy);
     for (int64_t i = 0; i < nxy; ++i) {
       const float v = sigma > 0 ? dst[i] + sigma * gaussianAt(base + uint64_t(i), seed_) : dst[i];

@@ -124,11 +124,33 @@ struct Candidate {
   bool roundedPoints = false;  ///< an interpolant whose bytes end with its points' shift
 };
 
+/// The RMSE of the value m on all the samples, summed in four lanes (vectorised).
+double rmseAround(const std::vector<float>& s, double m) {
+  double lane[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= s.size(); i += 4)
+    for (size_t l = 0; l < 4; ++l) {
+      const double d = double(s[i + l]) - m;
+      lane[l] += d * d;
+    }
+  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  for (; i < s.size(); ++i) sum += (double(s[i]) - m) * (double(s[i]) - m);
+  return std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
+}
+
+/// Whether no constant can keep the bound, by a floor under every constant's error: half the
+/// samples' range (the worst error of their middle), or their RMSE around their mean (where every
+/// sample is valid). Clear of rounding by a margin: a block near the bound is measured.
+bool noConstantFits(double floor, double bound, double scale) {
+  return floor > bound * (1 + 1e-6) + 1e-9 * std::fabs(scale);
+}
+
 bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint32_t* valid,
                   int degree, double bound, BoundKind kind, Candidate& out) {
   float c;
-  const ErrorStats range = compare([&s](size_t i) { return s[i]; }, s, valid);
   if (kind == BoundKind::MaxError) {  // the middle of the range: the smallest worst error
+    const ErrorStats range = compare([&s](size_t i) { return s[i]; }, s, valid);
+    if (noConstantFits(0.5 * (range.maxValue - range.minValue), bound, 0)) return false;
     c = float(0.5 * (range.minValue + range.maxValue));
   } else {  // the mean: the smallest RMSE
     double mean = 0;
@@ -138,7 +160,9 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
         mean += double(s[i]);
         ++used;
       }
-    c = float(mean / double(used));
+    mean /= double(used);
+    if (!valid && noConstantFits(rmseAround(s, mean), bound, mean)) return false;
+    c = float(mean);
   }
   const ErrorStats es = compare([c](size_t) { return c; }, s, valid);
   if (!keeps(kind, es, bound)) return false;

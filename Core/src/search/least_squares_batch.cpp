@@ -69,14 +69,15 @@ void CpuLeastSquaresBatch::residuals(const std::vector<LsqRequest>& requests,
         lanes[e % kLsqLanes] += d * d;
       }
       for (int64_t o = 0; o < shape.afterX; ++o)
-        afterX_[size_t(o)] = lsqAlongX(rows[0], centred_.data(), n[0], n, o);
+        lsqAlongX<1>(rows[0], centred_.data(), n[0], n, o, 0, shape.afterX, &afterX_[size_t(o)]);
       for (int64_t o = 0; o < shape.slice; ++o)
-        afterY_[size_t(z * shape.slice + o)] = lsqAlongY(rows[1], n[1], afterX_.data(), n, k, o);
+        lsqAlongY<1>(rows[1], n[1], afterX_.data(), n, k, o, 0, shape.slice,
+                     &afterY_[size_t(z * shape.slice + o)]);
     }
     const double squares = lsqTreeSum(lanes);
     std::fill(lanes, lanes + kLsqLanes, 0.0);
     for (int64_t j = 0; j < shape.slice; ++j)
-      lanes[j % kLsqLanes] += lsqColumnEnergy(rows[2], afterY_.data() + j, shape.slice, n, k);
+      lanes[j % kLsqLanes] += lsqColumnEnergy<1>(rows[2], afterY_.data() + j, shape.slice, n, k);
     out[r] = {squares, squares - lsqTreeSum(lanes)};
   }
 }

@@ -38,6 +38,9 @@ uint64_t sharedDoubles(Int3 n, Int3 k) {
   return std::max(alongXY, alongZ);
 }
 
+/// Outputs a thread sums at once (independent chains in flight; each in the reference's order).
+constexpr int kOutputs = 4;
+
 __device__ double treeSumShared(double* lanes, double mine) {
   lanes[threadIdx.x] = mine;
   __syncthreads();
@@ -85,11 +88,18 @@ __global__ void __launch_bounds__(kLsqLanes)
       part += d * d;
     }
     __syncthreads();
-    for (int64_t o = threadIdx.x; o < shape.afterX; o += kLsqLanes)
-      afterX[o] = lsqAlongX(qx, plane, planeStride, n, o);
+    double v[kOutputs];
+    for (int64_t o = threadIdx.x; o < shape.afterX; o += kOutputs * kLsqLanes) {
+      lsqAlongX<kOutputs>(qx, plane, planeStride, n, o, kLsqLanes, shape.afterX, v);
+      for (int r = 0; r < kOutputs && o + r * kLsqLanes < shape.afterX; ++r)
+        afterX[o + r * kLsqLanes] = v[r];
+    }
     __syncthreads();
-    for (int64_t o = threadIdx.x; o < shape.slice; o += kLsqLanes)
-      afterY[z * shape.slice + o] = lsqAlongY(qy, qyStride, afterX, n, k, o);
+    for (int64_t o = threadIdx.x; o < shape.slice; o += kOutputs * kLsqLanes) {
+      lsqAlongY<kOutputs>(qy, qyStride, afterX, n, k, o, kLsqLanes, shape.slice, v);
+      for (int r = 0; r < kOutputs && o + r * kLsqLanes < shape.slice; ++r)
+        afterY[z * shape.slice + o + r * kLsqLanes] = v[r];
+    }
     __syncthreads();
   }
   const double squares = treeSumShared(lanes, part);  // its barrier ends the x and y passes
@@ -102,7 +112,7 @@ __global__ void __launch_bounds__(kLsqLanes)
   for (int64_t j = threadIdx.x; j < shape.slice; j += kLsqLanes) {
     for (int z = 0; z < n[2]; ++z)
       column[z * kLsqLanes + threadIdx.x] = afterY[z * shape.slice + j];
-    part += lsqColumnEnergy(qz, column + threadIdx.x, kLsqLanes, n, k);
+    part += lsqColumnEnergy<kOutputs>(qz, column + threadIdx.x, kLsqLanes, n, k);
   }
   const double energy = treeSumShared(lanes, part);
   if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);

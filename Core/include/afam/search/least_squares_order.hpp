@@ -37,40 +37,62 @@ AFAM_HD double lsqTreeSum(double* lanes) {
   return lanes[0];
 }
 
-/// Output o = kx * n1 + y of the x contraction of one centred plane (x fastest, rows of y
-/// `planeStride` apart): sum over x of Qx[kx][x] * plane[y][x]. Qx: ncp0 x n0 rows.
-AFAM_HD double lsqAlongX(const double* qx, const double* plane, int64_t planeStride, Int3 n,
-                         int64_t o) {
-  const int64_t kx = o / n[1], y = o % n[1];
-  const double* row = qx + kx * n[0];
-  const double* line = plane + y * planeStride;
-  double sum = 0;
-  for (int x = 0; x < n[0]; ++x) sum += row[x] * line[x];
-  return sum;
+/// Outputs o + r * step (r < R) of the x contraction of one centred plane (x fastest, rows of y
+/// `planeStride` apart) into out[r]: output p = kx * n1 + y is the sum over x, in order, of
+/// Qx[kx][x] * plane[y][x] (Qx: ncp0 x n0 rows). Outputs at or past `end` are computed as o and
+/// left unused (R independent sums: a GPU thread's several outputs in flight at once).
+template <int R>
+AFAM_HD void lsqAlongX(const double* qx, const double* plane, int64_t planeStride, Int3 n,
+                       int64_t o, int64_t step, int64_t end, double* out) {
+  const double* row[R];
+  const double* line[R];
+  for (int r = 0; r < R; ++r) {
+    const int64_t p = o + r * step < end ? o + r * step : o;
+    row[r] = qx + (p / n[1]) * n[0];
+    line[r] = plane + (p % n[1]) * planeStride;
+    out[r] = 0;
+  }
+  for (int x = 0; x < n[0]; ++x)
+    for (int r = 0; r < R; ++r) out[r] += row[r][x] * line[r][x];
 }
 
-/// Output o = kx * ncp1 + ky of the y contraction of one plane after x (ncp0 x n1, y fastest):
-/// sum over y of afterX[kx][y] * Qy[ky][y] (Qy's rows `qyStride` apart).
-AFAM_HD double lsqAlongY(const double* qy, int64_t qyStride, const double* afterX, Int3 n, Int3 k,
-                         int64_t o) {
-  const int64_t kx = o / k[1], ky = o % k[1];
-  const double* row = qy + ky * qyStride;
-  const double* line = afterX + kx * n[1];
-  double sum = 0;
-  for (int y = 0; y < n[1]; ++y) sum += line[y] * row[y];
-  return sum;
+/// Outputs o + r * step (r < R) of the y contraction of one plane after x (ncp0 x n1, y fastest)
+/// into out[r]: output p = kx * ncp1 + ky is the sum over y, in order, of afterX[kx][y] *
+/// Qy[ky][y] (Qy's rows `qyStride` apart). Outputs at or past `end` as in lsqAlongX.
+template <int R>
+AFAM_HD void lsqAlongY(const double* qy, int64_t qyStride, const double* afterX, Int3 n, Int3 k,
+                       int64_t o, int64_t step, int64_t end, double* out) {
+  const double* row[R];
+  const double* line[R];
+  for (int r = 0; r < R; ++r) {
+    const int64_t p = o + r * step < end ? o + r * step : o;
+    row[r] = qy + (p % k[1]) * qyStride;
+    line[r] = afterX + (p / k[1]) * n[1];
+    out[r] = 0;
+  }
+  for (int y = 0; y < n[1]; ++y)
+    for (int r = 0; r < R; ++r) out[r] += line[r][y] * row[r][y];
 }
 
 /// The projection's energy on one column of the slices after y (its n2 values `stride` apart):
-/// the sum over kz of (sum over z of Qz[kz][z] * column[z])^2.
+/// the sum over kz, in order, of (sum over z, in order, of Qz[kz][z] * column[z])^2; R rows of Qz
+/// at a time.
+template <int R>
 AFAM_HD double lsqColumnEnergy(const double* qz, const double* column, int64_t stride, Int3 n,
                                Int3 k) {
   double energy = 0;
-  for (int kz = 0; kz < k[2]; ++kz) {
-    const double* row = qz + int64_t(kz) * n[2];
-    double sum = 0;
-    for (int z = 0; z < n[2]; ++z) sum += row[z] * column[z * stride];
-    energy += sum * sum;
+  for (int kz0 = 0; kz0 < k[2]; kz0 += R) {
+    double sum[R];
+    const double* row[R];
+    for (int r = 0; r < R; ++r) {
+      row[r] = qz + int64_t(kz0 + r < k[2] ? kz0 + r : kz0) * n[2];
+      sum[r] = 0;
+    }
+    for (int z = 0; z < n[2]; ++z) {
+      const double c = column[z * stride];
+      for (int r = 0; r < R; ++r) sum[r] += row[r][z] * c;
+    }
+    for (int r = 0; r < R && kz0 + r < k[2]; ++r) energy += sum[r] * sum[r];
   }
   return energy;
 }

@@ -147,6 +147,10 @@ int runEncode(int argc, char** argv) {
   opt.progress = [&](double f) { return bar(f); };
   const EncodeStats s = encodeVolume(*source, opt, args.positional()[1]);
   bar.finish();
+  if (!s.aheadFailure.empty())
+    std::fprintf(stderr,
+                 "afam encode: asking the GPU failed (%s); the rest was fitted on the CPU\n",
+                 s.aheadFailure.c_str());
   if (filled && filled->matches() == 0)
     std::fprintf(stderr,
                  "afam encode: warning: no sample equals the missing value %s; every sample was "

@@ -46,7 +46,7 @@ int runEnlarge(int argc, char** argv) {
         "                  quarter of the largest axis (at most 128), so that coarse levels and "
         "camera\n"
         "                  paths cost what a real scan's do, not only the finest level; in\n"
-        "                  tissue only (whole above 15% of IN's value range, none below 5%:\n"
+        "                  tissue only (whole above 15%% of IN's value range, none below 5%%:\n"
         "                  air keeps its noise alone)\n"
         "  --detail-beta B octave amplitudes ~ spacing^B, 0..3 (default 0.5)\n"
         "  --seed N        noise and detail seed (default 1)\n"

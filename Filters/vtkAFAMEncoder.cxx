@@ -280,6 +280,11 @@ std::string vtkAFAMEncoder::NewModelPath()
 
 void vtkAFAMEncoder::KeepStatistics(const afam::EncodeStats& stats)
 {
+  if (!stats.aheadFailure.empty())
+  {
+    vtkWarningMacro(
+      "asking the GPU failed (" << stats.aheadFailure << "); the rest was fitted on the CPU");
+  }
   this->LastEncodeSeconds = stats.seconds;
   this->LastMaxRmse = stats.maxRmse;
   this->LastMaxError = stats.maxError;

@@ -37,6 +37,24 @@ class EverythingPasses final : public LeastSquaresBatch {
   std::string description() const override { return "liar"; }
 };
 
+/// A device that fails at its third batch of questions.
+class FailsOnTheThirdCall final : public LeastSquaresBatch {
+ public:
+  void setBlocks(const std::vector<const float*>& s, const std::vector<Int3>& n,
+                 int degree) override {
+    cpu_.setBlocks(s, n, degree);
+  }
+  void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override {
+    if (++calls_ == 3) throw Error("the device was lost");
+    cpu_.residuals(requests, out);
+  }
+  std::string description() const override { return "failing"; }
+
+ private:
+  CpuLeastSquaresBatch cpu_;
+  int calls_ = 0;
+};
+
 struct Encoded {
   std::vector<char> bytes;
   EncodeStats stats;
@@ -137,4 +155,14 @@ TEST(NcpVerdicts, AskedAheadTheEncoderWritesTheSameFileWithAFractionOfTheFits) {
     EXPECT_GT(ahead.stats.askedAhead, 0);
     EXPECT_LT(2 * ahead.stats.fits, plain.stats.fits);
   }
+}
+
+TEST(NcpVerdicts, ADeviceThatFailsMidEncodeLeavesTheRestToTheFits) {
+  const std::vector<float> v = afam_test::headMri();
+  const Encoded plain = encodeWith(v, {48, 62, 42}, 1e-2, nullptr);
+  const Encoded failed = encodeWith(v, {48, 62, 42}, 1e-2, std::make_shared<FailsOnTheThirdCall>());
+  EXPECT_TRUE(failed.bytes == plain.bytes) << "the file differs after the device failed";
+  EXPECT_NE(failed.stats.aheadFailure.find("the device was lost"), std::string::npos)
+      << "'" << failed.stats.aheadFailure << "'";
+  EXPECT_TRUE(plain.stats.aheadFailure.empty());
 }

@@ -2,6 +2,7 @@
 #include "afam/encode/encoder.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cfloat>
 #include <chrono>
 #include <cmath>
@@ -501,7 +502,7 @@ class LevelEncoder {
     b.asked = true;
     for (BlockTask& t : b.tasks) t.search = searches(l, t.ijk);
     if (!opt_.leastSquares || !bounded(opt_.mode) || opt_.boundKind != BoundKind::Rmse ||
-        opt_.runStep)
+        opt_.runStep || aheadFailed_)
       return;
     const auto t0 = Clock::now();
     const FitContext ctx{opt_, bound_, l, source_.name()};
@@ -530,10 +531,24 @@ class LevelEncoder {
     if (blocks.empty()) return;
     const SearchSettings settings{opt_.degree, searchBound(opt_, bound_), opt_.search,
                                   opt_.fastWindow, opt_.perAxisNcp};
-    b.ahead = askAhead(*opt_.leastSquares, blocks, settings);
+    try {
+      b.ahead = askAhead(*opt_.leastSquares, blocks, settings);
+    } catch (const std::exception& e) {  // asking ahead only spares fits: the rest is fitted
+      std::lock_guard<std::mutex> lock(aheadMutex_);
+      aheadFailure_ = e.what();
+      aheadFailed_ = true;
+    }
     b.aheadSeconds = secondsSince(t0);
   }
 
+ public:
+  /// Why asking ahead stopped (every block after it searched by fitting); empty when it did not.
+  std::string aheadFailure() {
+    std::lock_guard<std::mutex> lock(aheadMutex_);
+    return aheadFailure_;
+  }
+
+ private:
   /// Fits the batch's blocks (askAheadOf said which search).
   void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
     const FitContext ctx{opt_, bound_, l, source_.name()};
@@ -577,6 +592,9 @@ class LevelEncoder {
   EncodeTeam& team_;
   std::vector<uint8_t> outgoing_;  ///< a team's records of this level's fitted blocks
   std::vector<BlockFitter> fitters_;
+  std::atomic<bool> aheadFailed_{false};
+  std::mutex aheadMutex_;
+  std::string aheadFailure_;
   WorkerPool pool_;
   WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
   BlockLoop sampleLoop_;
@@ -678,6 +696,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
     addLevel(stats.levels.back(), stats);
   }
   stats.fitSeconds = secondsSince(tFit0);
+  stats.aheadFailure = levels.aheadFailure();
   stats.bytesOut = fileBytes(uint64_t(stats.blocks), stats.payloadBytes);
   stats.seconds = secondsSince(t0);
   stats.cpuSeconds = processCpuSeconds() - cpu0;

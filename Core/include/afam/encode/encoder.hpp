@@ -117,7 +117,8 @@ struct EncoderOptions {
   /// Bounded modes with an RMSE bound: least-squares residuals that answer the NCP searches'
   /// questions ahead, a batch of blocks at a time (ncp_verdicts.hpp): the GPU's
   /// (afam/cuda/make_gpu_least_squares.hpp) or the CPU reference. The searches then fit about once
-  /// a block and find the same NCPs. Null: every question is a fit.
+  /// a block and find the same NCPs. Null: every question is a fit. Should it throw, the encode
+  /// goes on fitting (EncodeStats::aheadFailure says why).
   std::shared_ptr<LeastSquaresBatch> leastSquares;
 };
 
@@ -154,6 +155,9 @@ struct EncodeStats {
   std::vector<LevelStats> levels;
   int64_t fits = 0;
   int64_t askedAhead = 0;  ///< least-squares residuals asked ahead (EncoderOptions::leastSquares)
+  /// Why asking ahead stopped (a GPU that failed or ran out of memory): the blocks after it were
+  /// searched by fitting, the same file. Empty when it did not.
+  std::string aheadFailure;
   int64_t blocks = 0;
   int64_t inputVoxels = 0;
   uint64_t bytesIn = 0;   ///< raw volume size as float32 (dims product * 4)

@@ -73,7 +73,7 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
     t.complex = t.ncpStar > lo;
     if (c.opt.perAxisNcp && t.complex && keeps(kind, fr.error, bound))
       refineNcpPerAxis(fitter, t.samples.data(), e.samples, c.opt.degree, bound, fr, t.fits, kind,
-                       &t.verdicts);
+                       &t.verdicts, t.roughness ? &*t.roughness : nullptr);
   };
   if (t.search) {
     search();
@@ -459,8 +459,8 @@ namespace {
 bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
   if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return false;
-  const std::optional<Int3> ncp =
-      noiseProbeNcp(c, e, t, axisRoughness(t.samples.data(), e.samples));
+  if (!t.roughness) t.roughness = axisRoughness(t.samples.data(), e.samples);
+  const std::optional<Int3> ncp = noiseProbeNcp(c, e, t, *t.roughness);
   if (!ncp) return false;
   const double bound = searchBound(c.opt, c.bound);
   const Verdict v = t.verdicts.bound == bound ? t.verdicts.of(*ncp) : Verdict::Unknown;

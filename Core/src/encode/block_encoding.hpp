@@ -38,6 +38,8 @@ struct BlockTask {
   /// Answers to its search's questions given ahead (EncoderOptions::leastSquares), at the bound
   /// searchBound gives; none: every question is a fit.
   NcpVerdicts verdicts;
+  /// axisRoughness of `samples`, once computed (the noise probe's and the refinement's).
+  std::optional<std::array<double, 3>> roughness;
   double rmse = 0,
          maxError = 0;  ///< of the stored model on the block's samples (the entry keeps floats)
 };

@@ -520,7 +520,8 @@ class LevelEncoder {
           a.samples = t.samples.data();
           a.n = e.samples;
           a.out = &t.verdicts;
-          a.rough = axisRoughness(t.samples.data(), e.samples);
+          t.roughness = axisRoughness(t.samples.data(), e.samples);
+          a.rough = t.roughness;
           if (opt_.compact) a.probe = noiseProbeNcp(ctx, e, t, *a.rough);
           asked[size_t(i)] = a;
         },

@@ -184,9 +184,10 @@ Int3 fewerPointsPerAxis(const std::array<double, 3>& rough, Int3 start, Int3 n, 
 }
 
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int degree, double bound,
-                      FitResult& result, int64_t& fits, BoundKind kind, const NcpVerdicts* given) {
+                      FitResult& result, int64_t& fits, BoundKind kind, const NcpVerdicts* given,
+                      const std::array<double, 3>* roughness) {
   const NcpVerdicts* verdicts = verdictsAt(given, bound, kind);
-  const std::array<double, 3> rough = axisRoughness(samples, n);
+  const std::array<double, 3> rough = roughness ? *roughness : axisRoughness(samples, n);
   const Int3 start = result.ncp;
   FitResult trial, entry;
   if (verdicts) entry = result;  // to refine again by fitting should a verdict be wrong
@@ -207,7 +208,8 @@ bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, Int3 n, int deg
   if (result.ncp != ncp) {  // a verdict's NCP: fit it
     if (!fitAt(ncp)) {
       result = std::move(entry);
-      return refineNcpPerAxis(fitter, samples, n, degree, bound, result, fits, kind);
+      return refineNcpPerAxis(fitter, samples, n, degree, bound, result, fits, kind, nullptr,
+                              &rough);
     }
     std::swap(result, trial);
   }

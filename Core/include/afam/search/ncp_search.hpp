@@ -55,10 +55,11 @@ int searchNcp(BlockFitter& fitter, const float* samples, std::array<int, 3> n, i
 /// NCP on that axis, the others fixed, whose fit still meets `bound` (bisection between p+1 and the
 /// current NCP). Smoothest axis first. `result` must meet the bound on entry and still does on
 /// return (its error measured), with a control-point count never larger. Returns true when an axis
-/// was reduced.
+/// was reduced. `roughness`: axisRoughness of the samples where the caller has it.
 bool refineNcpPerAxis(BlockFitter& fitter, const float* samples, std::array<int, 3> n, int degree,
                       double bound, FitResult& result, int64_t& fits,
-                      BoundKind kind = BoundKind::Rmse, const NcpVerdicts* verdicts = nullptr);
+                      BoundKind kind = BoundKind::Rmse, const NcpVerdicts* verdicts = nullptr,
+                      const std::array<double, 3>* roughness = nullptr);
 
 /// The refinement's questions alone: from `start` (passing), for each axis at most 1/kAnisotropy
 /// as rough as the roughest (`rough`, axisRoughness), smoothest first, the smallest NCP on that

@@ -27,6 +27,8 @@ inline const char* renderOptionsHelp() {
          "                         or float32 (the same images)\n"
          "  --sample-distance D    ray sample spacing in the normalised [-1,1]^3 frame (default "
          "0.005)\n"
+         "  --termination A        a ray stops once its opacity reaches A, in (0, 1] (default\n"
+         "                         1 - 1/255)\n"
          "  --shading on|off       Phong shading from the model's gradient (default on)\n"
          "  --lod distance|screen  the paper's distance bands (default) or projected sample size\n"
          "  --pixel-budget P       screen policy: allowed projected sample spacing in pixels (1)\n"
@@ -50,7 +52,7 @@ inline const std::set<std::string>& renderValueOptions() {
                                           "shading",        "lod",          "pixel-budget",
                                           "threads",        "trajectory",   "load-threads",
                                           "miss-budget-ms", "step",         "nan-color",
-                                          "models",         "load-nice"};
+                                          "models",         "load-nice",    "termination"};
   return s;
 }
 
@@ -93,6 +95,9 @@ inline RenderOptions parseRenderOptions(const Args& a) {
     throw InvalidArgument("--miss-budget-ms must be a number >= 0");
   o.sampleDistance = float(a.real("sample-distance", 0.005));
   if (!(o.sampleDistance > 0)) throw InvalidArgument("--sample-distance must be > 0");
+  o.terminationOpacity = float(a.real("termination", kTerminationOpacity));
+  if (!(o.terminationOpacity > 0 && o.terminationOpacity <= 1))
+    throw InvalidArgument("--termination must be in (0, 1]");
   const std::string sh = a.str("shading", "on");
   if (sh != "on" && sh != "off") throw InvalidArgument("--shading must be on or off");
   o.shading = sh == "on";

@@ -9,6 +9,12 @@
 //    the number of visible models changes. A linear scan of the visible list would grow ~64x.
 //  * BM_LinearScanReference/<level>: the same frames with the authors' design (scan the visible
 //    block list for every sample), as the side-by-side baseline.
+//  * BM_TerminationOpacity/<termination>/<tf>: the cost of early ray termination at 1 - 1/255
+//    (termination 1; every rank of a sort-last run must stop where one renderer would, within
+//    1/255) against 0.95 (termination 0), ray casting only, on the same ML 129^3 file at its LOD
+//    by distance, under the renderer's preset (tf 0: thin translucent shells, rays rarely reach
+//    either opacity), an opaque ramp (tf 1: most rays stop at a surface) and a soft one (tf 2: a
+//    cloud most rays cross deep into).
 // The encoding is written once to $TMPDIR (or /tmp).
 #include <benchmark/benchmark.h>
 
@@ -89,17 +95,22 @@ struct LinearScanSampler {
   }
 };
 
-void BM_LookupVisibleBlocks(benchmark::State& state) {
-  Renderer r(lookupFile(), lookupOptions(int(state.range(0))));
+/// Casts the lookup file's frame of `camera` on one thread, again and again.
+void castRepeatedly(benchmark::State& state, const RenderOptions& o, const Camera& camera) {
+  Renderer r(lookupFile(), o);
   PreparedFrame fr;
   FrameStats st;
-  r.prepare(lookupCamera(), fr, st);
+  r.prepare(camera, fr, st);
   ImageRGBA img;
   for (auto _ : state) {
     renderCpu(fr.view, img, 1);
     benchmark::DoNotOptimize(img.rgba.data());
   }
   state.counters["visible_blocks"] = double(st.slots);
+}
+
+void BM_LookupVisibleBlocks(benchmark::State& state) {
+  castRepeatedly(state, lookupOptions(int(state.range(0))), lookupCamera());
 }
 BENCHMARK(BM_LookupVisibleBlocks)
     ->Arg(1)
@@ -133,6 +144,29 @@ BENCHMARK(BM_LinearScanReference)
     ->Arg(1)
     ->Arg(2)
     ->Arg(3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_TerminationOpacity(benchmark::State& state) {
+  RenderOptions o;
+  o.threads = 1;
+  o.cache = CacheBudget{};
+  o.terminationOpacity = state.range(0) ? 1.f - 1.f / 255.f : 0.95f;
+  if (state.range(1)) {  // a ramp up to 0.5 (surfaces) or 0.05 (a soft cloud) per 0.01
+    const double top = state.range(1) == 1 ? 0.5 : 0.05;
+    o.hasTransferFunction = true;
+    o.transferFunction.colors = {{0.0, 0.2, 0.4, 0.9}, {1.0, 0.9, 0.5, 0.1}};
+    o.transferFunction.opacities = {{0.0, 0.0}, {0.45, 0.0}, {0.7, top}, {1.0, top}};
+  }
+  castRepeatedly(state, o, Camera::lookAt({2.2, 1.6, 1.3}, {0, 0, 0}, {0, 0, 1}, 40, 128, 128));
+}
+BENCHMARK(BM_TerminationOpacity)
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Args({0, 2})
+    ->Args({1, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

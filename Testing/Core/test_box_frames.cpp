@@ -138,8 +138,9 @@ TEST(BoxFrames, WithoutEarlyTerminationOnlyRoundingDiffers) {
   EXPECT_LE(largestDifference(kBlendComposite, 1.f, false), 1e-5f);
 }
 
-// At the renderer's default termination (0.95) the ranks add the light the one-box ray left
-// out after its stop: up to 1 - 0.95 of it (12.75/255), which the 2/255 bar does not allow.
+// At a termination of 0.95 (the renderer's default before kTerminationOpacity) the ranks add the
+// light the one-box ray left out after its stop: up to 1 - 0.95 of it (12.75/255), which the
+// 2/255 bar does not allow.
 TEST(BoxFrames, AtTheDefaultTerminationRanksAddWhatTheOneBoxRayLeftOut) {
   const float d = largestDifference(kBlendComposite, 0.95f, false);
   EXPECT_LE(d, 0.05f + 1e-5f);

@@ -120,6 +120,11 @@ std::string tableProblem(const FrameSettings& s) {
   return "transfer-function table size " + std::to_string(s.tfTableSize) + " is not in [2, 2^20]";
 }
 
+std::string terminationProblem(const FrameSettings& s) {
+  if (s.terminationOpacity > 0 && s.terminationOpacity <= 1) return {};
+  return "termination opacity " + number(s.terminationOpacity) + " is not in (0, 1]";
+}
+
 std::string missBudgetProblem(const FrameSettings& s) {
   if (!std::isnan(s.missBudgetMs)) return {};
   return "miss budget " + number(s.missBudgetMs) + " ms is not a number";
@@ -129,7 +134,7 @@ std::string missBudgetProblem(const FrameSettings& s) {
 
 std::string frameSettingsProblem(const FrameSettings& s) {
   for (const std::string& p : {sampleDistanceProblem(s), blendModeProblem(s), lodProblem(s),
-                               tableProblem(s), missBudgetProblem(s)})
+                               tableProblem(s), terminationProblem(s), missBudgetProblem(s)})
     if (!p.empty()) return p;
   if (s.hasTransferFunction) return transferFunctionProblem(s.transferFunction);
   return nanColorProblem(s.transferFunction);  // kept over the preset
@@ -155,6 +160,10 @@ FrameSettings acceptFrameSettings(const FrameSettings& wanted, const FrameSettin
   if (const std::string p = tableProblem(wanted); !p.empty()) {
     s.tfTableSize = kept.tfTableSize;
     warnings.push_back(p + "; keeping " + std::to_string(kept.tfTableSize));
+  }
+  if (const std::string p = terminationProblem(wanted); !p.empty()) {
+    s.terminationOpacity = kept.terminationOpacity;
+    warnings.push_back(p + "; keeping " + number(kept.terminationOpacity));
   }
   if (const std::string p = missBudgetProblem(wanted); !p.empty()) {
     s.missBudgetMs = kept.missBudgetMs;

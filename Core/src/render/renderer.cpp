@@ -133,6 +133,7 @@ void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
   v.tfMax = float(tfHi_);
   v.tfReferenceDistance = settings_.sampleDistance;
   v.sampleDistance = settings_.sampleDistance;
+  v.terminationOpacity = settings_.terminationOpacity;
   v.shading = settings_.shading ? 1 : 0;
   v.jitter = settings_.jitter ? 1 : 0;
   // Splines: one value+gradient evaluation per shaded sample is cheaper (H200, ae8b2c9). Raw DS

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/render/raycast.hpp"
 #include "afam/scene/lod.hpp"
 #include "afam/scene/transfer_function.hpp"
 
@@ -33,6 +34,9 @@ struct FrameSettings {
   /// transfer function (a block the table makes transparent can still hold a ray's largest or
   /// smallest value, and counts in the mean).
   int blendMode = 0;
+  /// A composited ray stops once its opacity reaches this (early ray termination), in (0, 1];
+  /// 1: never before it leaves the volume. kTerminationOpacity (raycast.hpp) says why its value.
+  float terminationOpacity = kTerminationOpacity;
   /// How long a frame waits for its misses, which the renderer's load threads read and decode all
   /// at once. < 0 (default): until every selected block is resident (the exact frame). >= 0: at
   /// most this many milliseconds; a block still loading is drawn from its nearest resident

@@ -102,8 +102,8 @@
 //  A table whose alpha is already corrected for the sample distance is signalled by
 //  tfReferenceDistance == sampleDistance: no pow() per sample then (the Renderer does this).
 //  Compositing is front to back with premultiplied colour; the ray stops once the accumulated
-//  opacity reaches terminationOpacity (0.95). castRay returns premultiplied RGBA; compose it over a
-//  background with c + (1 - a) * background.
+//  opacity reaches terminationOpacity (kTerminationOpacity). castRay returns premultiplied RGBA;
+//  compose it over a background with c + (1 - a) * background.
 #pragma once
 
 #include <stdint.h>
@@ -121,6 +121,13 @@
 #endif
 
 namespace afam {
+
+/// The opacity at which a composited ray stops by default (early ray termination): VTK's
+/// 1 - 1/255, so that the light a ray leaves out is below one step of an 8-bit channel, and the
+/// ranks of a sort-last frame, each stopping on its own in its box, composite the image of one
+/// renderer within 1/255 (ranks/rank_images.hpp). 0.95 left up to 12.75/255 out; the samples
+/// after it cost 2-12% more ray casting (bench_render's BM_TerminationOpacity).
+constexpr float kTerminationOpacity = 1.f - 1.f / 255.f;
 
 /// Premultiplied colour and opacity of one ray.
 struct RGBA {
@@ -201,8 +208,8 @@ struct FrameView {
   float nanOpacity = 0.f;
 
   // Sampling and shading.
-  float sampleDistance = 0.01f;  ///< normalised units
-  float terminationOpacity = 0.95f;
+  float sampleDistance = 0.01f;                    ///< normalised units
+  float terminationOpacity = kTerminationOpacity;  ///< FrameSettings::terminationOpacity
   float ambient = 0.3f, diffuse = 0.6f, specular = 0.3f, specularPower = 20.f;
   float specularColor[3] = {1.f, 1.f, 1.f};
   int32_t shading = 1;  ///< informative: the caster picks castRay<true> or castRay<false> from it
@@ -223,7 +230,7 @@ struct FrameView {
   /// the pixel only (rayJitter; VTK's UseJittering), which turns the banding of a regular lattice
   /// into fine noise and is stable from frame to frame; 0: none.
   int32_t jitter = 0;
-  /// 1: the frame draws one rank's box of the volume (sort-last rendering; ranks/box_frame.hpp):
+  /// 1: the frame draws one rank's box of the volume (sort-last rendering; clipFrameToBox):
   /// each ray takes only the samples of the volume's ray (the same lattice, the same end weights)
   /// near [clipLo, clipHi] (normalised frame), and the cells outside the box hold -1, so a sample
   /// is drawn by the one box whose finest cell holds it. 0: the whole volume.

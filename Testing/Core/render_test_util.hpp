@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 #include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -87,6 +89,21 @@ inline afam::TransferFunction ramp(double lo, double hi, double from, double red
   tf.opacities = {{lo, 0.0}, {from, 0.0}, {hi, 0.8}};
   tf.referenceDistance = 0.02;
   return tf;
+}
+
+/// The largest channel difference of two images of the same size.
+inline float maxDifference(const afam::ImageRGBA& a, const afam::ImageRGBA& b) {
+  float most = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i)
+    most = std::max(most, std::fabs(a.rgba[i] - b.rgba[i]));
+  return most;
+}
+
+/// The largest opacity of an image (0: transparent everywhere).
+inline float largestAlpha(const afam::ImageRGBA& im) {
+  float most = 0;
+  for (size_t i = 3; i < im.rgba.size(); i += 4) most = std::max(most, im.rgba[i]);
+  return most;
 }
 
 /// What two renderers of one file hold after drawing the same frame, one whose cache keeps models

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Sort-last rendering on the CPU: each rank draws its box of the frame (box_frame.hpp), and the
+// Sort-last rendering on the CPU: each rank draws its box of the frame (clipFrameToBox), and the
 // ranks' images composited in visibility order (rank_images.hpp) equal the image of one box, for
 // 2, 3 and 4 ranks, composite and maximum-intensity blending, cameras outside and inside the
 // volume, on a cubic volume (Marschner-Lobb) and a non-cubic one (the skewed blob).
@@ -10,9 +10,10 @@
 #include <cstdio>
 
 #include "afam/base/errors.hpp"
-#include "afam/ranks/box_frame.hpp"
+#include "afam/ranks/rank_boxes.hpp"
 #include "afam/ranks/rank_images.hpp"
 #include "afam/render/frame_caster.hpp"
+#include "afam/render/prepared_frame.hpp"
 #include "render_test_util.hpp"
 #include "skewed_blob.hpp"
 
@@ -41,13 +42,6 @@ RenderOptions options(const AfamFile& file, int blendMode, int forceLevel) {
   return o;
 }
 
-float maxDifference(const ImageRGBA& a, const ImageRGBA& b) {
-  float most = 0;
-  for (size_t i = 0; i < a.rgba.size(); ++i)
-    most = std::max(most, std::fabs(a.rgba[i] - b.rgba[i]));
-  return most;
-}
-
 /// What one comparison measured: the largest channel difference, and how many ranks drew
 /// something (an opacity above 1/255 somewhere).
 struct Compared {
@@ -74,14 +68,11 @@ Compared compareRanks(const std::shared_ptr<const AfamFile>& file, const Camera&
     PreparedFrame part = whole;
     clipFrameToBox(part, split.boxes()[size_t(r)]);
     caster.cast(part, {}, images[size_t(r)]);
-    float alpha = 0;
-    for (size_t i = 3; i < images[size_t(r)].rgba.size(); i += 4)
-      alpha = std::max(alpha, images[size_t(r)].rgba[i]);
-    c.ranksDrawing += alpha > 1.f / 255.f ? 1 : 0;
+    c.ranksDrawing += afam_test::largestAlpha(images[size_t(r)]) > 1.f / 255.f ? 1 : 0;
   }
   const std::vector<int> order = split.visibilityOrder(whole.view.camera, whole.view.boxLo,
                                                        whole.view.boxHi, file->partition().dims());
-  c.maxDiff = maxDifference(compositeRankImages(images, order, o.blendMode), one);
+  c.maxDiff = afam_test::maxDifference(compositeRankImages(images, order, o.blendMode), one);
   return c;
 }
 

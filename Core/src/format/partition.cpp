@@ -118,6 +118,17 @@ Int3 Partition::parent(int level, Int3 ijk) const {
   return {ijk[0] / 2, ijk[1] / 2, ijk[2] / 2};
 }
 
+CellBox Partition::cells(int level, Int3 ijk) const {
+  const int r = stride(level);
+  CellBox box;
+  for (int a = 0; a < 3; ++a) {
+    const int finest = static_cast<int>(finestBounds_[a].size()) - 1;
+    box.lo[a] = ijk[a] * r;
+    box.hi[a] = std::min((ijk[a] + 1) * r, finest);
+  }
+  return box;
+}
+
 PartitionShape defaultPartition(const Index3& dims, int blockEdge) {
   if (blockEdge < 2)
     throw InvalidArgument("block edge " + std::to_string(blockEdge) + " must be >= 2 samples");

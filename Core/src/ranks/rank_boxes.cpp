@@ -243,4 +243,12 @@ void RankSplit::visit(int node, const std::vector<char>& lowFirst, std::vector<i
   visit(low ? n.high : n.low, lowFirst, order);
 }
 
+CellBox rankBox(const AfamFile& file, int rank, int ranks) {
+  if (rank < 0 || rank >= ranks)
+    throw InvalidArgument("rank boxes: rank " + std::to_string(rank) + " of " +
+                          std::to_string(ranks) + " ranks (ranks are numbered 0 .. " +
+                          std::to_string(ranks - 1) + "): the ranks disagree on how many they are");
+  return RankSplit::ofFile(file, ranks).boxes()[size_t(rank)];
+}
+
 }  // namespace afam

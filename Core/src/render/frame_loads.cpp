@@ -28,8 +28,9 @@ bool Renderer::isEmptyBlock(const BlockRef& block) const {
 double Renderer::keepResidentLevels(FrameStats& st) {
   if (!residentReady_) {
     const auto t0 = Clock::now();
-    const ResidentLevels kept = residentLevels(*file_, resources_.cache);
-    cache_->setKept(kept.entries);  // before they load: they never evict one another
+    ResidentLevels kept = residentLevels(*file_, resources_.cache);
+    kept.entries = inBox(kept.entries);  // a rank keeps its box's only
+    cache_->setKept(kept.entries);       // before they load: they never evict one another
     loader_->request(kept.entries, LruCache::Purpose::Frame);
     loader_->waitFor(kept.entries, Clock::time_point::max());
     residentLevels_ = kept.levels;

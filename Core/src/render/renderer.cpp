@@ -25,6 +25,27 @@ uint64_t modelFloats(const AfamFile& file, const Placement& m) {
                             : m.data->size();
 }
 
+bool meetsBox(const Partition& p, const CellBox& box, int level, const Int3& ijk) {
+  return !p.cells(level, ijk).intersection(box).empty();
+}
+
+/// Drops the blocks whose region lies outside a rank's `box` from `sel` (another rank's).
+void keepInBox(const AfamFile& file, const CellBox& box, Selection& sel) {
+  std::vector<BlockRef> kept;
+  for (const BlockRef& b : sel.visible) {
+    if (meetsBox(file.partition(), box, b.level, b.ijk)) {
+      kept.push_back(b);
+      continue;
+    }
+    const int64_t bytes = int64_t(file.entries()[size_t(b.entry)].size);
+    sel.counts.otherRankBlocks++;
+    sel.counts.otherRankBytes += bytes;
+    sel.counts.visibleBlocks--;
+    sel.counts.visibleBytes -= bytes;
+  }
+  sel.visible = std::move(kept);
+}
+
 }  // namespace
 
 Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resources,
@@ -67,6 +88,7 @@ Renderer::Renderer(std::shared_ptr<const AfamFile> file, RendererResources resou
       bounds_[a][size_t(i) + 1] = float(e.hi[a]);
     }
   }
+  if (resources_.box) box_ = resources_.box->intersection(CellBox{{0, 0, 0}, bf});
 }
 
 Renderer::~Renderer() {
@@ -89,8 +111,20 @@ void Renderer::setFrameSettings(const FrameSettings& settings) {
 
 Selection Renderer::select(const Camera& camera) const {
   static const std::vector<float> none;
-  return lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none, tfLo_,
-                     tfHi_, settings_.transferFunction.nanOpacity > 0);
+  Selection sel = lod_.select(*file_, camera, settings_.blendMode == kBlendComposite ? tf_ : none,
+                              tfLo_, tfHi_, settings_.transferFunction.nanOpacity > 0);
+  if (box_) keepInBox(*file_, *box_, sel);
+  return sel;
+}
+
+std::vector<int64_t> Renderer::inBox(const std::vector<int64_t>& entries) const {
+  if (!box_) return entries;
+  std::vector<int64_t> kept;
+  for (int64_t e : entries) {
+    const ModelEntry& m = file_->entries()[size_t(e)];
+    if (meetsBox(file_->partition(), *box_, m.level, m.block)) kept.push_back(e);
+  }
+  return kept;
 }
 
 void Renderer::prepareEmpty(const Camera& camera, PreparedFrame& fr) const {
@@ -156,15 +190,11 @@ int32_t Renderer::addSlot(const BlockRef& model, PreparedFrame& fr, uint64_t off
 void Renderer::fillCells(const BlockRef& region, int32_t slot, PreparedFrame& fr) const {
   const Partition& p = file_->partition();
   const Int3 bf = p.blocksPerAxis(p.levels() - 1);
-  const int r = p.stride(region.level);
-  int c0[3], c1[3];
-  for (int a = 0; a < 3; ++a) {
-    c0[a] = region.ijk[a] * r;
-    c1[a] = std::min((region.ijk[a] + 1) * r, bf[a]);
-  }
-  for (int z = c0[2]; z < c1[2]; ++z)
-    for (int y = c0[1]; y < c1[1]; ++y)
-      for (int x = c0[0]; x < c1[0]; ++x) fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
+  const CellBox c = p.cells(region.level, region.ijk);
+  for (int z = c.lo[2]; z < c.hi[2]; ++z)
+    for (int y = c.lo[1]; y < c.hi[1]; ++y)
+      for (int x = c.lo[0]; x < c.hi[0]; ++x)
+        fr.cellSlot[(size_t(z) * bf[1] + y) * bf[0] + x] = slot;
 }
 
 void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, bool hostPool) {
@@ -206,6 +236,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
     fillCells(m.region, slot, fr);
   }
   fr.bind();
+  if (box_) clipFrameToBox(fr, *box_);
   const CacheStats after = cache_->stats();
   st.hits = after.hits - before.hits;
   st.misses = after.misses - before.misses;
@@ -281,6 +312,7 @@ ImageRGBA Renderer::renderFrame(const Camera& camera, FrameStats& st, const Fram
             if (!predictor->predict(history, next)) return;
             for (const BlockRef& b : self->select(next).visible) entries.push_back(b.entry);
           }
+          entries = self->inBox(entries);  // a predictor's own blocks: the rank's only
           if (!stop.load(std::memory_order_acquire))
             loader->request(entries, LruCache::Purpose::Prefetch);
         });

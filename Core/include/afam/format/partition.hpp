@@ -53,6 +53,31 @@ struct BlockExtent {
   Int3 samples{};  ///< micro-block samples per axis
 };
 
+/// A box of finest blocks (a rank's share of the volume, ranks/rank_boxes.hpp): cells [lo, hi)
+/// per axis (finest block indices). Empty when any axis has hi <= lo.
+struct CellBox {
+  Int3 lo{0, 0, 0}, hi{0, 0, 0};
+  bool empty() const { return hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]; }
+  int64_t cells() const {
+    return empty() ? 0 : int64_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+  }
+  bool contains(const Int3& c) const {
+    for (int a = 0; a < 3; ++a)
+      if (c[a] < lo[a] || c[a] >= hi[a]) return false;
+    return true;
+  }
+  /// The cells both boxes hold (empty when they do not meet).
+  CellBox intersection(const CellBox& o) const {
+    CellBox both;
+    for (int a = 0; a < 3; ++a) {
+      both.lo[a] = lo[a] > o.lo[a] ? lo[a] : o.lo[a];
+      both.hi[a] = hi[a] < o.hi[a] ? hi[a] : o.hi[a];
+    }
+    return both;
+  }
+  bool operator==(const CellBox& o) const { return lo == o.lo && hi == o.hi; }
+};
+
 class Partition {
  public:
   Partition() = default;
@@ -75,6 +100,8 @@ class Partition {
   /// Children at level+1 of a block (1 to 8 of them), as ijk.
   std::vector<Int3> children(int level, Int3 ijk) const;
   Int3 parent(int level, Int3 ijk) const;  ///< block at level-1 holding this one
+  /// The finest blocks (cells) a block of `level` covers.
+  CellBox cells(int level, Int3 ijk) const;
 
   /// How every message names a block: "level 2 block (3, 0, 7)".
   static std::string blockName(int level, Int3 ijk);

@@ -22,7 +22,7 @@
 // Any N >= 1 works. With N at least the number of finest blocks, every finest block is a box of
 // its own and the ranks beyond them get empty boxes (CellBox::empty(); they draw nothing and
 // their images are transparent). A block of a coarser level that spans several boxes is drawn by
-// each of their ranks within its own box only (box_frame.hpp).
+// each of their ranks within its own box only (clipFrameToBox, render/prepared_frame.hpp).
 #pragma once
 
 #include <array>
@@ -38,22 +38,6 @@ namespace afam {
 /// Ranks a split accepts at most: far more than any machine runs, small enough that a mistake
 /// (a negative number read as unsigned, a byte count) is refused.
 constexpr int kMaxRanks = 1 << 20;
-
-/// A box of finest blocks: cells [lo, hi) per axis (finest block indices). Empty when any axis has
-/// hi <= lo.
-struct CellBox {
-  Int3 lo{0, 0, 0}, hi{0, 0, 0};
-  bool empty() const { return hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]; }
-  int64_t cells() const {
-    return empty() ? 0 : int64_t(hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-  }
-  bool contains(const Int3& c) const {
-    for (int a = 0; a < 3; ++a)
-      if (c[a] < lo[a] || c[a] >= hi[a]) return false;
-    return true;
-  }
-  bool operator==(const CellBox& o) const { return lo == o.lo && hi == o.hi; }
-};
 
 /// The finest block grid a split works on: cells per axis, each cell's work (x fastest) and its
 /// boundaries in voxels (cells + 1 per axis, for the axis lengths and coarse-level alignment).
@@ -102,5 +86,10 @@ class RankSplit {
   std::vector<double> work_;
   std::vector<Node> nodes_;
 };
+
+/// Rank `rank`'s box among `ranks` (RankSplit::ofFile), what its Renderer draws
+/// (RendererResources::box). Throws InvalidArgument, naming both numbers, when rank is not one of
+/// 0 .. ranks-1 (a run whose ranks disagree on how many they are), and as RankSplit does.
+CellBox rankBox(const AfamFile& file, int rank, int ranks);
 
 }  // namespace afam

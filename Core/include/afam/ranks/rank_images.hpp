@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The ranks' images of one frame made one (sort-last compositing, what IceT does in ParaView):
-// premultiplied RGBA images of the same size, one a rank (box_frame.hpp), blended pixel by pixel.
+// premultiplied RGBA images of the same size, one a rank (clipFrameToBox, prepared_frame.hpp),
+// blended pixel by pixel.
 //  * Composite blending: front-to-back "over" in visibility order (RankSplit::visibilityOrder).
 //    The boxes' samples are the whole ray's, so the result is the one-box image up to rounding,
 //    except where early ray termination cut the one-box ray short: a rank cannot know the
 //    opacity in front of its box, so each stops at terminationOpacity of its own, and the ray's
 //    light after the one-box ray's stop (at most 1 - terminationOpacity of it) is added: below
-//    1/255 at a termination of 1 - 1/255 (VTK's), up to 12.75/255 at the renderer's 0.95
-//    (test_box_frames.cpp measures both). Without termination only rounding differs.
+//    1/255 at the renderer's termination of 1 - 1/255 (VTK's; kTerminationOpacity), up to
+//    12.75/255 at 0.95 (test_box_frames.cpp measures both). Without termination only rounding
+//    differs.
 //  * Maximum intensity: the per-channel maximum (order free). Equal to the one-box image when
 //    the transfer function's premultiplied colour and opacity do not decrease with the value (the
 //    usual ramps); otherwise the ranks would have to send their maximum values instead.

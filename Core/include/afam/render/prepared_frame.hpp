@@ -56,6 +56,16 @@ struct PreparedFrame {
   std::string writeSlot(size_t s, float* out) const;
 };
 
+/// Restricts `frame` (a bound frame of the whole volume) to one rank's box of finest cells
+/// (sort-last rendering; ranks/rank_boxes.hpp gives the boxes): cells outside it culled, rays
+/// clipped to it (FrameView::clipped), bound again. Every ray keeps the whole volume's sample
+/// lattice and end weights and is marched only near the box, so each sample is drawn by the one
+/// box whose cell holds it, and a coarser model spanning several boxes by each within its own.
+/// Early ray termination and the skipping of culled cells work inside the box as in any frame.
+/// An empty box leaves every cell culled (a transparent image). Throws InvalidArgument for a box
+/// outside the frame's grid.
+void clipFrameToBox(PreparedFrame& frame, const CellBox& box);
+
 /// Writes a cached model's `floats` floats at `out`: copied, or decoded from its stored form (the
 /// one host decoding of a frame's models; NaN, drawn as nothing, where its payload does not
 /// decode). Returns why it did not decode; empty when it did.

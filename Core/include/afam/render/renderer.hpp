@@ -22,6 +22,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,14 @@ struct RendererResources {
   /// Integer-coded models cached in their compact form (cache.hpp; false: float32 control
   /// points, for comparison). The same images either way.
   bool compactModels = true;
+  /// One rank's share of the volume in sort-last rendering (its box of finest cells;
+  /// ranks/rank_boxes.hpp splits a file among N ranks). The renderer then selects, loads, caches
+  /// and prefetches only the blocks whose region meets the box (a coarser block spanning several
+  /// boxes is read by each of their ranks) and draws only inside it (clipFrameToBox); the LOD cut
+  /// and the culling are the whole volume's, the same on every rank, restricted to the box. Cells
+  /// beyond the volume's grid are dropped: a box outside it, or an empty box, draws a transparent
+  /// image and reads nothing. None (default): the whole volume.
+  std::optional<CellBox> box;
 };
 
 /// Both at once, for front ends that set everything in one place (the command line, benchmarks).
@@ -194,6 +203,8 @@ class Renderer {
   int standInLevel(const BlockRef& block) const;   ///< nearest resident intact ancestor; -1: none
   bool placeStandIn(const BlockRef& block, std::vector<Placement>& placed);
   bool isEmptyBlock(const BlockRef& block) const;  ///< no valid sample: no payload to load
+  /// The entries whose region meets the rank's box (all of them without a box).
+  std::vector<int64_t> inBox(const std::vector<int64_t>& entries) const;
   int32_t addSlot(const BlockRef& model, PreparedFrame& frame, uint64_t offset) const;
   void fillCells(const BlockRef& region, int32_t slot, PreparedFrame& frame) const;
 
@@ -209,6 +220,7 @@ class Renderer {
   std::vector<float> tf_;
   double tfLo_ = 0, tfHi_ = 1;
   std::array<std::vector<float>, 3> bounds_;
+  std::optional<CellBox> box_;  ///< resources_.box within the volume's finest cells
   std::unique_ptr<FrameCaster> caster_;
   bool residentReady_ = false;  ///< the resident levels of file_ loaded and kept
   int residentLevels_ = 0;

@@ -58,6 +58,9 @@ struct CullCounts {
   int64_t tfBlocks = 0, tfBytes = 0;            ///< removed by transfer-function culling
   int64_t emptyBlocks = 0;  ///< empty blocks (no valid sample, no bytes) removed: nothing to draw
   int64_t visibleBlocks = 0, visibleBytes = 0;  ///< left to load and render
+  /// Removed because their region lies outside a rank's box (RendererResources::box; counted
+  /// after the other culling): another rank draws them.
+  int64_t otherRankBlocks = 0, otherRankBytes = 0;
 };
 
 struct Selection {

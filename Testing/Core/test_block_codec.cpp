@@ -244,6 +244,33 @@ TEST(BlockCodec, FreeValuesKeepTheValidOnesAndStayWithinTheirSlackOfTheFilling) 
     }
 }
 
+TEST(BlockCodec, AKeptQuantizationCodesAndEstimatesAsTheValuesDo) {
+  // An encoder's step ladder keeps the passing step's quantization and codes it without
+  // quantizing again: after a buffer held another step, its estimate (whose codes may be sorted,
+  // at a tiny step) and then its coding give what estimateCodedBytes and encodeValues give.
+  const Int3 n{19, 14, 11};
+  const std::vector<float> v = field(n, 3u);
+  std::vector<uint32_t> valid(size_t((v.size() + 31) / 32), 0x5f5f5f5fu);
+  for (const Predictor p : {Predictor::Lorenzo, Predictor::Interpolation, Predictor::IntegerLorenzo,
+                            Predictor::IntegerInterpolation})
+    for (const double step : {0.01, 1e-5})
+      for (const bool withFree : {false, true}) {
+        SCOPED_TRACE(std::to_string(int(p)) + " step " + std::to_string(step) +
+                     (withFree ? " free" : ""));
+        const FreeValues free = withFree ? FreeValues{valid.data(), 16} : FreeValues{};
+        QuantizedValues q;
+        ASSERT_TRUE(quantizeValues(v.data(), n, 0.3, p, q, free));
+        ASSERT_TRUE(quantizeValues(v.data(), n, step, p, q, free));
+        EXPECT_EQ(estimateCodedBytes(v.data(), n, step, p, free), estimateQuantizedBytes(q));
+        std::vector<uint8_t> kept, direct;
+        std::vector<float> recon;
+        encodeQuantized(q, EntropyCoding{3}, kept);
+        ASSERT_TRUE(encodeValues(v.data(), n, step, p, EntropyCoding{3}, direct, recon, free));
+        EXPECT_EQ(direct, kept);
+        EXPECT_EQ(recon, q.reconstructed);
+      }
+}
+
 TEST(BlockCodec, RecodingAFrameGivesThePayloadCodedAtTheOtherLevel) {
   // An encoder compares candidates coded at a fast zstd level and codes the kept one again at
   // the file's: the same bytes as coding it at the file's level directly, the same values, the

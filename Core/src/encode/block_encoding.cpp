@@ -192,12 +192,15 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   FitResult q = fr;
   bool lattice = true;
   FitResult passed;  // the last passing step's model (its error measured only near the bound)
+  // The trial step's quantization, and the last passing step's: the one coded.
+  thread_local QuantizedValues trial, kept;
   auto passes = [&](double k) {
     const double step = ladderStep(kind, budget, k);
-    if (!quantizeValues(fr.control.data(), fr.ncp, step, form, q.control)) {
+    if (!quantizeValues(fr.control.data(), fr.ncp, step, form, trial)) {
       lattice = false;
       return false;
     }
+    q.control.swap(trial.reconstructed);
     if (kind == BoundKind::MaxError) {
       q.errorMeasured = false;
       fitter.measure(s.data(), n, q);
@@ -206,23 +209,19 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
       return false;
     }
     passed = q;
+    std::swap(trial, kept);
     return true;
   };
   const int best = largestPassingStepFrom(rung, passes);
   rung = best;
   if (best < 0 || !lattice) return false;
+  // The coder codes what the ladder decided on: its verdict stands (the error the entry stores is
+  // measured as a reader decodes the kept candidate: checkAsRead).
   const double step = ladderStep(kind, budget, kStepFactors[best]);
+  if (kept.step != step) return false;
   std::vector<uint8_t> bytes;
-  if (!encodeValues(fr.control.data(), fr.ncp, step, form, coding, bytes, q.control)) return false;
-  // The coder reconstructs what the ladder decided on: its verdict stands (the error the entry
-  // stores is measured as a reader decodes the kept candidate: checkAsRead); else it is measured.
-  if (q.control == passed.control) {
-    q = std::move(passed);
-  } else {
-    q.errorMeasured = false;
-    fitter.measure(s.data(), n, q);
-  }
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, q.error, std::move(bytes)};
+  encodeQuantized(kept, coding, bytes);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, passed.error, std::move(bytes)};
   return keeps(kind, out.error, bound);
 }
 
@@ -304,26 +303,31 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
                        Int3 n, int degree, double bound, BoundKind kind, EntropyCoding coding,
                        double beat, Predictor form, Candidate& out, int& rung) {
   const FreeValues free{valid, holeSlack};
-  thread_local std::vector<float> recon;  // kept between calls: no allocation a block
+  // The trial step's quantization, and the last passing step's: the one estimated and coded (kept
+  // between calls: no allocation a block).
+  thread_local QuantizedValues trial, kept;
   bool lattice = true;
   auto passes = [&](double k) {
-    if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, recon, free)) {
+    if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, trial, free)) {
       lattice = false;
       return false;
     }
-    return keeps(kind, compare([](size_t i) { return recon[i]; }, s, valid), bound);
+    const std::vector<float>& recon = trial.reconstructed;
+    if (!keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound))
+      return false;
+    std::swap(trial, kept);
+    return true;
   };
   const int best = largestPassingStepFrom(rung, passes);
   rung = best;
   if (best < 0 || !lattice) return false;
-  const double step = ladderStep(kind, bound, kStepFactors[best]);
-  if (estimateCodedBytes(s.data(), n, step, form, free) > beat)
-    return false;  // cannot win: spare the coding
+  if (kept.step != ladderStep(kind, bound, kStepFactors[best])) return false;
+  if (estimateQuantizedBytes(kept) > beat) return false;  // cannot win: spare the coding
   Candidate c;
   c.kind = BlockKind::Interpolant;
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-  if (!encodeValues(s.data(), n, step, form, coding, c.bytes, recon, free)) return false;
+  encodeQuantized(kept, coding, c.bytes);
   out = std::move(c);
   return true;
 }

@@ -79,11 +79,8 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
     for (size_t i = 0; i < delta.size(); ++i) delta[i] = fitted.control[i] - model.control[i];
   }
   const Predictor form = onSamples ? Predictor::IntegerInterpolation : Predictor::IntegerLorenzo;
-  std::vector<float> q;
   FitResult trial = model;
-  auto passes = [&](double k) {
-    if (!quantizeValues(delta.data(), model.ncp, ladderStep(kind, budget, k), form, q))
-      return false;
+  auto keepsBound = [&](const std::vector<float>& q) {
     if (onSamples) return keeps(kind, errorOfSum(values, q, s), c.bound);
     for (size_t i = 0; i < q.size(); ++i) trial.control[i] = model.control[i] + q[i];
     trial.errorMeasured = false;
@@ -91,13 +88,20 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
     fitter.measure(s.data(), n, trial);
     return keeps(kind, trial.error, c.bound);
   };
+  // The trial step's quantization, and the last passing step's: the one coded.
+  QuantizedValues quantized, kept;
+  auto passes = [&](double k) {
+    if (!quantizeValues(delta.data(), model.ncp, ladderStep(kind, budget, k), form, quantized) ||
+        !keepsBound(quantized.reconstructed))
+      return false;
+    std::swap(quantized, kept);
+    return true;
+  };
   const int best = largestPassingStep(passes);
-  if (best < 0) return false;
+  if (best < 0 || kept.step != ladderStep(kind, budget, kStepFactors[best])) return false;
   std::vector<uint8_t> bytes;
-  if (!encodeValues(delta.data(), model.ncp, ladderStep(kind, budget, kStepFactors[best]), form,
-                    entropyCoding(c.opt), bytes, q) ||
-      bytes.size() >= t.stored.size())
-    return false;
+  encodeQuantized(kept, entropyCoding(c.opt), bytes);
+  if (bytes.size() >= t.stored.size()) return false;
   const FitResult decoded = applyResidual(
       before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));
   ModelEntry decodedEntry = before;

@@ -115,58 +115,53 @@ Predictor choosePredictorForm(const float* values, size_t count, double step, Pr
 }
 
 namespace {
-bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
-                   std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
-                   FreeValues free);
+/// The residual codes of q: an integer form's are formed from its k when first asked.
+const std::vector<int64_t>& codesOf(QuantizedValues& q) {
+  if (!q.hasCodes) {
+    thread_local std::vector<int32_t> r;
+    codec::integerResiduals(q.predictor, q.n, q.k, r);
+    q.codes.assign(r.begin(), r.end());
+    q.hasCodes = true;
+  }
+  return q.codes;
+}
 }  // namespace
 
 bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
-                    std::vector<float>& reconstructed, FreeValues free) {
-  if (!(step > 0) || !std::isfinite(step)) return false;
-  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  if (free.valid) {  // free values may be their predictions: the predictor's order decides
-    thread_local std::vector<int64_t> codes;
-    int64_t base = 0;
-    return residualCodes(values, n, step, predictor, codes, reconstructed, base, free);
-  }
-  if (isIntegerForm(predictor)) {  // the reconstruction does not depend on the predictor
-    int64_t base;
-    thread_local std::vector<int32_t> k;
-    if (!codec::integerQuantize(values, count, step, base, k)) return false;
-    reconstructed.resize(count);
-    for (size_t i = 0; i < count; ++i) reconstructed[i] = codec::integerValue(base, k[i], step);
-    return true;
-  }
-  thread_local std::vector<int64_t> codes;
-  return predictQuantize(values, n, step, predictor, codes, reconstructed, FreeValues{});
-}
-
-namespace {
-
-/// The codes encodeValues would store for `values` (false when they do not fit), and the
-/// reconstruction; `base` is set for the integer forms; `free` as in encodeValues.
-bool residualCodes(const float* values, Int3 n, double step, Predictor predictor,
-                   std::vector<int64_t>& codes, std::vector<float>& reconstructed, int64_t& base,
-                   FreeValues free) {
+                    QuantizedValues& q, FreeValues free) {
+  q.hasCodes = false;
   if (!(step > 0) || !std::isfinite(step) || uint8_t(predictor) > 3) return false;
+  q.n = n;
+  q.step = step;
+  q.predictor = predictor;
+  q.base = 0;
   if (!isIntegerForm(predictor))
-    return predictQuantize(values, n, step, predictor, codes, reconstructed, free);
+    return q.hasCodes = predictQuantize(values, n, step, predictor, q.codes, q.reconstructed, free);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  thread_local std::vector<int32_t> k, r;
-  if (!codec::integerQuantize(values, count, step, base, k)) return false;
-  codec::integerResiduals(predictor, n, k, r,
-                          predictor == Predictor::IntegerInterpolation ? free : FreeValues{});
-  codes.assign(r.begin(), r.end());
-  reconstructed.resize(count);
-  for (size_t i = 0; i < count; ++i) reconstructed[i] = codec::integerValue(base, k[i], step);
+  if (!codec::integerQuantize(values, count, step, q.base, q.k)) return false;
+  if (free.valid && predictor == Predictor::IntegerInterpolation) {
+    // A free value may take its prediction, which changes its k: the predictor's order decides.
+    thread_local std::vector<int32_t> r;
+    codec::integerResiduals(predictor, n, q.k, r, free);
+    q.codes.assign(r.begin(), r.end());
+    q.hasCodes = true;
+  }
+  q.reconstructed.resize(count);
+  for (size_t i = 0; i < count; ++i) q.reconstructed[i] = codec::integerValue(q.base, q.k[i], step);
   return true;
 }
 
-}  // namespace
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
+                    std::vector<float>& reconstructed, FreeValues free) {
+  thread_local QuantizedValues q;
+  if (!quantizeValues(values, n, step, predictor, q, free)) return false;
+  reconstructed.swap(q.reconstructed);
+  return true;
+}
 
 namespace {
 /// Order-0 entropy of the codes, in bits: a histogram where they span few values, else sorted.
-double orderZeroBits(std::vector<int64_t>& codes) {
+double orderZeroBits(const std::vector<int64_t>& codes) {
   if (codes.empty()) return 0;
   const auto [lo, hi] = std::minmax_element(codes.begin(), codes.end());
   const double total = double(codes.size());
@@ -181,10 +176,12 @@ double orderZeroBits(std::vector<int64_t>& codes) {
     for (const uint32_t h : histogram) add(double(h));
     return bits;
   }
-  std::sort(codes.begin(), codes.end());
-  for (size_t i = 0; i < codes.size();) {
+  thread_local std::vector<int64_t> sorted;
+  sorted.assign(codes.begin(), codes.end());
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t i = 0; i < sorted.size();) {
     size_t j = i;
-    while (j < codes.size() && codes[j] == codes[i]) ++j;
+    while (j < sorted.size() && sorted[j] == sorted[i]) ++j;
     add(double(j - i));
     i = j;
   }
@@ -192,36 +189,44 @@ double orderZeroBits(std::vector<int64_t>& codes) {
 }
 }  // namespace
 
+double estimateQuantizedBytes(QuantizedValues& q) {
+  const double bits = orderZeroBits(codesOf(q));
+  return double(isIntegerForm(q.predictor) ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) +
+         bits / 8;
+}
+
 double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
                           FreeValues free) {
-  thread_local std::vector<int64_t> codes;
-  thread_local std::vector<float> recon;
-  int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, recon, base, free))
+  thread_local QuantizedValues q;
+  if (!quantizeValues(values, n, step, predictor, q, free))
     return std::numeric_limits<double>::infinity();
-  const double bits = orderZeroBits(codes);
-  return double(isIntegerForm(predictor) ? kIntegerCodedHeaderBytes : kCodedHeaderBytes) + bits / 8;
+  return estimateQuantizedBytes(q);
+}
+
+void encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out) {
+  const std::vector<int64_t>& codes = codesOf(q);
+  thread_local std::vector<uint8_t> varints;
+  varints.clear();
+  varints.reserve(codes.size() + codes.size() / 4);
+  for (const int64_t c : codes) codec::putVarint(codec::zigzag(c), varints);
+  out.resize(kCodedHeaderBytes);
+  std::memcpy(out.data(), &q.step, 8);
+  out[8] = uint8_t(q.predictor);
+  if (isIntegerForm(q.predictor)) {
+    out.resize(kIntegerCodedHeaderBytes);
+    std::memcpy(out.data() + kCodedHeaderBytes, &q.base, 8);
+  }
+  codec::appendEntropyFrame(varints, coding, out);
 }
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
                   EntropyCoding coding, std::vector<uint8_t>& out,
                   std::vector<float>& reconstructed, FreeValues free) {
   out.clear();
-  thread_local std::vector<int64_t> codes;
-  int64_t base = 0;
-  if (!residualCodes(values, n, step, predictor, codes, reconstructed, base, free)) return false;
-  thread_local std::vector<uint8_t> varints;
-  varints.clear();
-  varints.reserve(codes.size() + codes.size() / 4);
-  for (const int64_t c : codes) codec::putVarint(codec::zigzag(c), varints);
-  out.resize(kCodedHeaderBytes);
-  std::memcpy(out.data(), &step, 8);
-  out[8] = uint8_t(predictor);
-  if (isIntegerForm(predictor)) {
-    out.resize(kIntegerCodedHeaderBytes);
-    std::memcpy(out.data() + kCodedHeaderBytes, &base, 8);
-  }
-  codec::appendEntropyFrame(varints, coding, out);
+  thread_local QuantizedValues q;
+  if (!quantizeValues(values, n, step, predictor, q, free)) return false;
+  encodeQuantized(q, coding, out);
+  reconstructed.swap(q.reconstructed);
   return true;
 }
 

@@ -132,6 +132,30 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
 double estimateCodedBytes(const float* values, Int3 n, double step, Predictor predictor,
                           FreeValues free = {});
 
+/// One quantization of values (quantizeValues below), kept so that an encoder estimates and codes
+/// the step its ladder chose without quantizing the values again. Its buffers keep their capacity
+/// from one use to the next.
+struct QuantizedValues {
+  Int3 n{};
+  double step = 0;
+  Predictor predictor = Predictor::Lorenzo;
+  int64_t base = 0;            ///< the integer forms' base
+  std::vector<int32_t> k;      ///< the integer forms' values in steps (less base)
+  std::vector<int64_t> codes;  ///< the residual codes encodeValues stores, once hasCodes
+  bool hasCodes = false;       ///< the integer forms' residuals are formed when first asked
+  std::vector<float> reconstructed;
+};
+
+/// quantizeValues, keeping the quantization in q (q.reconstructed the values as decoded).
+bool quantizeValues(const float* values, Int3 n, double step, Predictor predictor,
+                    QuantizedValues& q, FreeValues free = {});
+
+/// encodeValues of the values q holds quantized: the same bytes, without quantizing again.
+void encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out);
+
+/// estimateCodedBytes of the values q holds quantized.
+double estimateQuantizedBytes(QuantizedValues& q);
+
 /// Decodes a coded payload of n[0] * n[1] * n[2] values into out. Throws FormatError (with
 /// `where` in the message) when the bytes are not a valid coded payload of that size.
 void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);

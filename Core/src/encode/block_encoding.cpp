@@ -430,12 +430,18 @@ void finalFrame(const FitContext& c, Candidate& best) {
 constexpr double kNoiseShare = 0.9;
 constexpr int kNoiseMinSamples = 16;  ///< smaller blocks: the search is cheap, and decides
 
+/// Whether the probe may apply at all (before the samples' roughness is known): a searched block of
+/// at least kNoiseMinSamples along some axis, with no missing samples.
+bool mayProbeForNoise(const BlockExtent& e, const BlockTask& t) {
+  const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
+  return t.search && nmax >= kNoiseMinSamples && t.mask.empty();
+}
+
 }  // namespace
 
 std::optional<Int3> noiseProbeNcp(const FitContext& c, const BlockExtent& e, const BlockTask& t,
                                   const std::array<double, 3>& rough) {
-  const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
-  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return std::nullopt;
+  if (!mayProbeForNoise(e, t)) return std::nullopt;
   // The probe only where the samples' second differences say noise of half the bound or more
   // (white noise of deviation s has a mean squared second difference of 6 s^2 along every axis):
   // elsewhere it would be one fit more.
@@ -461,13 +467,12 @@ namespace {
 /// Whether the block is noise-dominated in that sense (noiseProbeNcp's probe misses the fit's
 /// share of the bound: its verdict given ahead, else a fit); then t's search statistics say so.
 bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
-  const int nmax = std::max({e.samples[0], e.samples[1], e.samples[2]});
-  if (!t.search || nmax < kNoiseMinSamples || !t.mask.empty()) return false;
+  if (!mayProbeForNoise(e, t)) return false;
   if (!t.roughness) t.roughness = axisRoughness(t.samples.data(), e.samples);
   const std::optional<Int3> ncp = noiseProbeNcp(c, e, t, *t.roughness);
   if (!ncp) return false;
   const double bound = searchBound(c.opt, c.bound);
-  const Verdict v = t.verdicts.bound == bound ? t.verdicts.of(*ncp) : Verdict::Unknown;
+  const Verdict v = t.verdicts.at(*ncp, bound);
   thread_local FitResult probe;
   if (v == Verdict::Unknown) ++t.fits;
   if (v == Verdict::Unknown

@@ -31,6 +31,10 @@ struct NcpVerdicts {
   double bound = -1;  ///< the RMSE bound they answer for (the searches use them at it only)
   std::vector<std::pair<std::array<int, 3>, Verdict>> known;
   Verdict of(std::array<int, 3> ncp) const;
+  /// of(ncp) where the verdicts answer for the bound `asked`, else Unknown.
+  Verdict at(std::array<int, 3> ncp, double asked) const {
+    return asked == bound ? of(ncp) : Verdict::Unknown;
+  }
   void set(std::array<int, 3> ncp, Verdict verdict);
 };
 

@@ -273,21 +273,21 @@ AFAM_FIT_INLINE void evaluateRows(const AxisSystem& s, const In* in, size_t inSt
 /// shuffles).
 AFAM_FIT_INLINE void transpose4x4(const double* src, size_t srcStride, double* dst,
                                   size_t dstStride) {
-  // Unaligned whole-vector loads and stores (a vector type that may alias doubles).
-  using Four = double __attribute__((vector_size(32), aligned(8), may_alias));
-  using Pick = int64_t __attribute__((vector_size(32)));
-  const Four a0 = *reinterpret_cast<const Four*>(src);
-  const Four a1 = *reinterpret_cast<const Four*>(src + srcStride);
-  const Four a2 = *reinterpret_cast<const Four*>(src + 2 * srcStride);
-  const Four a3 = *reinterpret_cast<const Four*>(src + 3 * srcStride);
-  const Four t0 = __builtin_shuffle(a0, a1, Pick{0, 4, 2, 6});
-  const Four t1 = __builtin_shuffle(a0, a1, Pick{1, 5, 3, 7});
-  const Four t2 = __builtin_shuffle(a2, a3, Pick{0, 4, 2, 6});
-  const Four t3 = __builtin_shuffle(a2, a3, Pick{1, 5, 3, 7});
-  *reinterpret_cast<Four*>(dst) = __builtin_shuffle(t0, t2, Pick{0, 1, 4, 5});
-  *reinterpret_cast<Four*>(dst + dstStride) = __builtin_shuffle(t1, t3, Pick{0, 1, 4, 5});
-  *reinterpret_cast<Four*>(dst + 2 * dstStride) = __builtin_shuffle(t0, t2, Pick{2, 3, 6, 7});
-  *reinterpret_cast<Four*>(dst + 3 * dstStride) = __builtin_shuffle(t1, t3, Pick{2, 3, 6, 7});
+  // Whole-vector loads and stores through memcpy: unaligned, and no aliasing question.
+  using Four = double __attribute__((vector_size(32)));
+  Four a0, a1, a2, a3;
+  std::memcpy(&a0, src, sizeof(Four));
+  std::memcpy(&a1, src + srcStride, sizeof(Four));
+  std::memcpy(&a2, src + 2 * srcStride, sizeof(Four));
+  std::memcpy(&a3, src + 3 * srcStride, sizeof(Four));
+  const Four t0 = __builtin_shufflevector(a0, a1, 0, 4, 2, 6);
+  const Four t1 = __builtin_shufflevector(a0, a1, 1, 5, 3, 7);
+  const Four t2 = __builtin_shufflevector(a2, a3, 0, 4, 2, 6);
+  const Four t3 = __builtin_shufflevector(a2, a3, 1, 5, 3, 7);
+  const Four d[4] = {
+      __builtin_shufflevector(t0, t2, 0, 1, 4, 5), __builtin_shufflevector(t1, t3, 0, 1, 4, 5),
+      __builtin_shufflevector(t0, t2, 2, 3, 6, 7), __builtin_shufflevector(t1, t3, 2, 3, 6, 7)};
+  for (int r = 0; r < 4; ++r) std::memcpy(dst + r * dstStride, &d[r], sizeof(Four));
 }
 
 /// dst[c * rows + r] = src[r * cols + c]: a rows x cols matrix transposed, so that the lines along

@@ -8,10 +8,12 @@
 
 #include "afam/cuda/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
 #include "afam/format/afam_file.hpp"
+#include "afam/ranks/rank_boxes.hpp"
 #include "afam/render/renderer.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 struct vtkAFAMCoreRenderer::Internals
 {
@@ -31,6 +33,36 @@ struct vtkAFAMCoreRenderer::Internals
   std::shared_ptr<afam::DamageLog> Damage;
   std::vector<std::string> Messages; // the GPU's set-up notes, handed to the frame that made it
   bool BuiltUnreported = false;      // built by Prepare: the next Render reports it
+  // The last rank box asked for, from the file first opened (a run's later steps keep it, as
+  // they keep the renderer): the split is computed once, not every frame.
+  struct RankBoxKey
+  {
+    int Rank = 0, Ranks = 1;
+    afam::CellBox Box;
+  };
+  mutable std::optional<RankBoxKey> LastBox;
+
+  const afam::CellBox& BoxOf(int rank, int ranks) const
+  {
+    if (!this->LastBox || this->LastBox->Rank != rank || this->LastBox->Ranks != ranks)
+    {
+      this->LastBox = RankBoxKey{ rank, ranks, afam::rankBox(*this->File, rank, ranks) };
+    }
+    return this->LastBox->Box;
+  }
+
+  afam::RendererResources ResourcesFor(const vtkAFAMFrameRequest& request) const
+  {
+    afam::RendererResources resources;
+    resources.threads = request.Threads;
+    resources.cache = afam::CacheBudget{ static_cast<uint64_t>(request.CacheBudgetMB * 1e6), 0 };
+    resources.prefetch = request.Prefetcher == 1 ? "linear" : "none";
+    if (request.Ranks != 1)
+    {
+      resources.box = this->BoxOf(request.Rank, request.Ranks);
+    }
+    return resources;
+  }
 
   void InstallGpu(double budgetMB, int threads)
   {
@@ -79,7 +111,7 @@ bool SameResources(const afam::RendererResources& a, const afam::RendererResourc
 {
   return a.threads == b.threads && a.cache.bytes == b.cache.bytes &&
     a.cache.blocks == b.cache.blocks && a.cold == b.cold && a.storageMBps == b.storageMBps &&
-    a.prefetch == b.prefetch;
+    a.prefetch == b.prefetch && a.box == b.box;
 }
 }
 
@@ -142,6 +174,7 @@ void vtkAFAMCoreRenderer::Close()
   this->Impl->File.reset();
   this->Impl->Next.reset();
   this->Impl->Damage.reset();
+  this->Impl->LastBox.reset();
   this->OpenPath.clear();
 }
 
@@ -161,22 +194,29 @@ void vtkAFAMCoreRenderer::Volume(int64_t dims[3],
   range[1] = h.valueMax;
 }
 
-namespace
+bool vtkAFAMCoreRenderer::RankBounds(int rank, int ranks, double bounds[6]) const
 {
-afam::RendererResources ResourcesFor(const vtkAFAMFrameRequest& request)
-{
-  afam::RendererResources resources;
-  resources.threads = request.Threads;
-  resources.cache = afam::CacheBudget{ static_cast<uint64_t>(request.CacheBudgetMB * 1e6), 0 };
-  resources.prefetch = request.Prefetcher == 1 ? "linear" : "none";
-  return resources;
-}
+  const afam::AfamFile& file = *this->Impl->File;
+  const afam::BlockExtent e = file.partition().samples(this->Impl->BoxOf(rank, ranks));
+  if (e.samples[0] < 1)
+  {
+    return false;
+  }
+  const afam::VolumeHeader& h = file.header();
+  for (int a = 0; a < 3; ++a)
+  {
+    const double lo = h.origin[a] + h.spacing[a] * static_cast<double>(e.lo[a]);
+    const double hi = h.origin[a] + h.spacing[a] * static_cast<double>(e.hi[a]);
+    bounds[2 * a] = std::min(lo, hi);
+    bounds[2 * a + 1] = std::max(lo, hi);
+  }
+  return true;
 }
 
 bool vtkAFAMCoreRenderer::NeedsBuild(const vtkAFAMFrameRequest& request) const
 {
   const Internals& m = *this->Impl;
-  return !m.Renderer || !SameResources(ResourcesFor(request), m.Resources) ||
+  return !m.Renderer || !SameResources(m.ResourcesFor(request), m.Resources) ||
     (request.Device != 1) != m.GpuWanted;
 }
 
@@ -188,9 +228,9 @@ bool vtkAFAMCoreRenderer::WillCastOnGpu(const vtkAFAMFrameRequest& request) cons
 void vtkAFAMCoreRenderer::Build(const vtkAFAMFrameRequest& request,
   const afam::FrameSettings& settings)
 {
-  const afam::RendererResources resources = ResourcesFor(request);
-  const bool wantGpu = request.Device != 1;
   Internals& m = *this->Impl;
+  const afam::RendererResources resources = m.ResourcesFor(request);
+  const bool wantGpu = request.Device != 1;
   m.Gpu = nullptr;
   m.Renderer.reset(); // the old cache, prefetch thread and GPU pool go before the new ones come
   m.Renderer = std::make_unique<afam::Renderer>(m.File, resources, settings, m.Damage);

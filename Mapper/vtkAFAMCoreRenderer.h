@@ -31,6 +31,10 @@ struct vtkAFAMFrameRequest
   int Prefetcher = 0; ///< 0 none, 1 linear
   int Device = 0;     ///< 0 auto (GPU when usable), 1 CPU, 2 GPU (CPU when unusable)
   int Threads = 0;
+  /// Sort-last rendering over ranks: the renderer draws rank Rank's box of Ranks
+  /// (afam::rankBox); the images of all ranks blended in visibility order are the image of one.
+  /// Ranks 1: the whole volume.
+  int Rank = 0, Ranks = 1;
   /// Where this frame's image goes and what stops its rays (this frame only):
   /// maxDistance: per-pixel ray length limit from opaque geometry on the host (normalised-frame
   /// distance from the eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.
@@ -95,6 +99,11 @@ public:
   {
     return this->OpenPath;
   }
+  /// World bounds of rank `rank`'s box of `ranks` (afam::rankBox, from the open file alone):
+  /// what the rank draws, for ordered compositing. False, bounds untouched, when the box is empty
+  /// (more ranks than finest blocks). Throws afam::InvalidArgument for a rank outside
+  /// 0 .. ranks-1.
+  bool RankBounds(int rank, int ranks, double bounds[6]) const;
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
   /// True when this build has the CUDA renderer (built with nvcc: afam::gpuCasterBuilt).

@@ -119,6 +119,33 @@ void vtkAFAMVolumeMapper::SetRenderDevice(int device)
   }
 }
 
+void vtkAFAMVolumeMapper::SetRank(int rank, int ranks)
+{
+  if (rank != this->Rank || ranks != this->NumberOfRanks)
+  {
+    this->Rank = rank;
+    this->NumberOfRanks = ranks;
+    this->Modified();
+  }
+}
+
+bool vtkAFAMVolumeMapper::GetRankBounds(double bounds[6])
+{
+  if (!vtkMath::AreBoundsInitialized(this->GetBounds())) // opens the file when it can
+  {
+    return false;
+  }
+  try
+  {
+    return this->Core->RankBounds(this->Rank, this->NumberOfRanks, bounds);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return false;
+  }
+}
+
 bool vtkAFAMVolumeMapper::HasCudaRenderer()
 {
   return vtkAFAMCoreRenderer::HasCuda();
@@ -439,6 +466,8 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   request.Prefetcher = this->Prefetcher;
   request.Device = this->RenderDevice;
   request.Threads = this->NumberOfThreads;
+  request.Rank = this->Rank;
+  request.Ranks = this->NumberOfRanks;
 }
 
 double vtkAFAMVolumeMapper::DefaultSampleDistance(const double spacing[3])
@@ -656,6 +685,7 @@ void vtkAFAMVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "UseJittering: " << this->UseJittering << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
+  os << indent << "Rank: " << this->Rank << " of " << this->NumberOfRanks << "\n";
   os << indent << "AutoAdjustImageScale: " << this->AutoAdjustImageScale << "\n";
   os << indent << "MinimumImageScale: " << this->MinimumImageScale << "\n";
   os << indent << "InteractiveMissBudget: " << this->InteractiveMissBudget << " ms\n";

@@ -228,6 +228,24 @@ public:
   ///@}
 
   ///@{
+  /**
+   * Sort-last rendering over MPI ranks (pvbatch, pvserver): this mapper draws only rank `rank`'s
+   * share of `ranks`, one box of finest blocks from a k-d split by work that every rank computes
+   * alike from the file (afam::rankBox), its rays clipped to the box on the one global lattice of
+   * samples, so that the ranks' images blended in visibility order (ordered compositing, with the
+   * boxes GetRankBounds gives) are the image of one mapper. Its cache, loads and prefetch hold
+   * only the blocks that meet its box. Default 0 of 1: the whole volume. A rank outside
+   * 0 .. ranks-1 is an error the frame reports.
+   */
+  void SetRank(int rank, int ranks);
+  vtkGetMacro(Rank, int);
+  vtkGetMacro(NumberOfRanks, int);
+  /// World bounds of this rank's box in the mapper's file; false, bounds untouched, when there
+  /// is no readable file or the box is empty (more ranks than finest blocks: it draws nothing).
+  bool GetRankBounds(double bounds[6]);
+  ///@}
+
+  ///@{
   /// CPU threads for the CPU ray caster, 0 = all cores (default).
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
   vtkGetMacro(NumberOfThreads, int);
@@ -371,6 +389,7 @@ protected:
   double SampleDistance = 0;
   bool UseJittering = true;
   int NumberOfThreads = 0;
+  int Rank = 0, NumberOfRanks = 1;
   bool AutoAdjustImageScale = true;
   double MinimumImageScale = 0.25;
   double InteractiveMissBudget = 20;

@@ -61,18 +61,30 @@ int vtkAFAMVolumeRepresentation::RequestData(vtkInformation* request,
                     << vtkAFAMModelTree::FileNameArray << " field data).");
     }
   }
-  // Every rank knows the file; only rank 0 renders it (see class documentation).
+  // Every rank renders its own box of the volume (see class documentation).
   auto* controller = vtkMultiProcessController::GetGlobalController();
-  const bool renders = !controller || controller->GetLocalProcessId() == 0;
-  this->RendersHere = renders && !this->FileName.empty();
+  const int ranks = controller ? std::max(1, controller->GetNumberOfProcesses()) : 1;
+  const int rank = controller ? controller->GetLocalProcessId() : 0;
+  this->RendersHere = !this->FileName.empty();
   this->Mapper->SetFileName(this->RendersHere ? this->FileName.c_str() : nullptr);
   this->Mapper->SetTimeStep(step);
+  this->Mapper->SetRank(rank, ranks);
   this->Actor->SetVisibility(this->GetVisibility() && this->RendersHere);
-  if (!this->FileName.empty())
+  vtkMath::UninitializeBounds(this->DataBounds);
+  vtkMath::UninitializeBounds(this->RankBounds);
+  if (this->RendersHere)
   {
-    vtkNew<vtkAFAMVolumeMapper> probe; // bounds from the file's header, identical on every rank
-    probe->SetFileName(this->FileName.c_str());
-    probe->GetBounds(this->DataBounds);
+    std::copy_n(this->Mapper->GetBounds(), 6, this->DataBounds); // the file's header
+    if (vtkMath::AreBoundsInitialized(this->DataBounds) &&
+      !this->Mapper->GetRankBounds(this->RankBounds))
+    {
+      // More ranks than finest blocks: this rank draws nothing; a flat box at the volume's
+      // corner keeps the ordering of the others' boxes well defined.
+      for (int a = 0; a < 3; ++a)
+      {
+        this->RankBounds[2 * a] = this->RankBounds[2 * a + 1] = this->DataBounds[2 * a + 1];
+      }
+    }
   }
   if (vtkMath::AreBoundsInitialized(this->DataBounds))
   {
@@ -115,22 +127,13 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(vtkInformationRequestKey* re
     // (2). Builtin mode and one-process pvbatch ignore the request, so they are unchanged.
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
     outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
-    if (vtkMath::AreBoundsInitialized(this->DataBounds))
+    if (vtkMath::AreBoundsInitialized(this->RankBounds))
     {
-      vtkPVRenderView::SetGeometryBounds(inInfo, this, this->DataBounds);
-      // Ordered compositing needs disjoint boxes per rank; building a kd-tree from the (identical)
-      // outlines aborts in DIY. Each rank declares a z-slab of the volume: only rank 0 draws the
-      // volume, the others are transparent, so any blending order yields rank 0's image.
-      auto* controller = vtkMultiProcessController::GetGlobalController();
-      const int ranks = controller ? std::max(1, controller->GetNumberOfProcesses()) : 1;
-      const int rank = controller ? controller->GetLocalProcessId() : 0;
-      double slab[6];
-      std::copy(this->DataBounds, this->DataBounds + 6, slab);
-      const double dz = (this->DataBounds[5] - this->DataBounds[4]) / ranks;
-      slab[4] = this->DataBounds[4] + rank * dz;
-      slab[5] = this->DataBounds[4] + (rank + 1) * dz;
+      // Each rank's geometry is its box (their union is the volume, which the view's camera
+      // and clipping range see), and the boxes are what ordered compositing sorts.
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, this->RankBounds);
       vtkPVRenderView::SetOrderedCompositingConfiguration(
-        inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, slab);
+        inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, this->RankBounds);
     }
   }
   else if (request_type == vtkPVView::REQUEST_UPDATE_LOD())

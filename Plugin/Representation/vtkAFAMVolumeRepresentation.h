@@ -11,8 +11,11 @@
  * opacity transfer functions, shading and the opacity unit distance arrive through the properties
  * inherited from vtkVolumeRepresentation, exactly as for ParaView's own "Volume".
  *
- * Under MPI only rank 0 renders the volume (the other ranks contribute empty images to the
- * ordered compositing), so the image equals the one-rank image. Connected to pvserver, the view
+ * Under MPI (pvbatch, pvserver) every rank renders its share: the mapper draws one box of finest
+ * blocks per rank (afam::rankBox, the same split on every rank from the file alone), with its own
+ * file handle, cache, loads and GPU, and the representation declares each rank's box to
+ * ParaView's ordered compositing, so that IceT blends the ranks' images in visibility order into
+ * the image of one rank. Connected to pvserver, the view
  * always renders on the server (the representation requires distributed rendering), whatever
  * the remote-render threshold, since only the server can read the file.
  */
@@ -41,7 +44,7 @@ public:
     vtkInformation* inInfo,
     vtkInformation* outInfo) override;
 
-  /// Shows or hides the volume (hidden on ranks other than 0, see above).
+  /// Shows or hides the volume.
   void SetVisibility(bool visible) override;
 
   ///@{
@@ -119,6 +122,8 @@ protected:
   vtkNew<vtkImageData> StandIn;
   std::string FileName;
   bool RendersHere = false;
+  // This rank's box in world coordinates (what it draws and declares for ordered compositing).
+  double RankBounds[6] = { 0, -1, 0, -1, 0, -1 };
 
 private:
   vtkAFAMVolumeRepresentation(const vtkAFAMVolumeRepresentation&) = delete;

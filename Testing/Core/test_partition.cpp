@@ -8,8 +8,11 @@
 #include "afam/base/errors.hpp"
 #include "afam/format/partition.hpp"
 
+using afam::BlockExtent;
+using afam::CellBox;
 using afam::Index3;
 using afam::Int3;
+using afam::InvalidArgument;
 using afam::Partition;
 
 namespace {
@@ -163,4 +166,25 @@ TEST(Partition, DefaultShapeFollowsTheDimensions) {
   EXPECT_EQ(shape({2049, 100, 3}), (std::array<int, 2>{5, 32})) << "the longest axis decides";
   EXPECT_EQ(shape({1, 1, 1}), (std::array<int, 2>{1, 1}));
   EXPECT_THROW(afam::defaultPartition({64, 64, 64}, 1), afam::InvalidArgument);
+}
+
+TEST(Partition, SamplesOfABoxOfFinestBlocks) {
+  // 101 samples in 4 finest blocks along x (boundaries 0, 25, 50, 75, 100), 9 in 1 along y, z.
+  const Partition p({101, 9, 9}, 2, 4);
+  ASSERT_EQ(p.blocksPerAxis(1)[0], 4);
+  const BlockExtent whole = p.samples(CellBox{{0, 0, 0}, p.blocksPerAxis(1)});
+  EXPECT_EQ(whole.lo, (Index3{0, 0, 0}));
+  EXPECT_EQ(whole.hi, (Index3{100, 8, 8}));
+  // Two boxes that meet share the boundary sample, as the blocks they hold do.
+  const BlockExtent low = p.samples(CellBox{{0, 0, 0}, {1, 1, 1}});
+  const BlockExtent high = p.samples(CellBox{{1, 0, 0}, {4, 1, 1}});
+  EXPECT_EQ(low.hi[0], p.extent(1, {0, 0, 0}).hi[0]);
+  EXPECT_EQ(high.lo[0], low.hi[0]);
+  EXPECT_EQ(high.hi[0], 100);
+  EXPECT_EQ(high.samples[0], 100 - low.hi[0] + 1);
+  const BlockExtent none = p.samples(CellBox{});
+  EXPECT_EQ(none.lo, (Index3{0, 0, 0}));
+  EXPECT_EQ(none.hi, (Index3{0, 0, 0}));
+  EXPECT_THROW(p.samples(CellBox{{0, 0, 0}, {5, 1, 1}}), InvalidArgument);
+  EXPECT_THROW(p.samples(CellBox{{-1, 0, 0}, {1, 1, 1}}), InvalidArgument);
 }

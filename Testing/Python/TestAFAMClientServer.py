@@ -6,7 +6,8 @@ would render on the client, which cannot draw the volume) and with the threshold
 and in a SaveScreenshot larger than the view: every pixel within 8/255 for the volume alone with
 ParaView's default image delivery ("vtkLZ4Compressor 0 3", whose colour mask drops low bits of each
 channel), and within 2/255 when the server sends its images losslessly
-(RenderViewSettings.CompressorConfig "vtkLZ4Compressor 0 0"). ParaView's FXAA (on by default) runs
+(RenderViewSettings.CompressorConfig "vtkLZ4Compressor 0 0"; 3/255 with several ranks, whose
+images IceT blends after rounding each to 8 bits). ParaView's FXAA (on by default) runs
 on the client over the whole delivered image, the volume included, while builtin mode applies it
 before volumes: the volume's own image must hold no pixel-scale steps for FXAA to smooth. It did
 when whole ray samples switched on and off where the box faces cut the sample lattice (a grid on
@@ -14,12 +15,14 @@ the faces, 3/255 off on a few pixels); with the ray's end samples weighted by th
 for (raycast.hpp, endWeight) the view and the screenshot equal builtin's (measured 0/255, 1 and 2
 ranks, CPU ray caster under Mesa; on the GPU machine NVIDIA's OpenGL still moves one pixel of a
 steep, smooth gradient by 3/255, and this check fails there). With the client's FXAA off, the
-lossless view must equal builtin's exactly (the plugin's image, untouched: 0/255 under Mesa and on
-the GPU machine, CPU and GPU frames, 1 and 2 ranks). With an
+lossless view must equal builtin's exactly with one rank (the plugin's image, untouched: 0/255 under
+Mesa and on the GPU machine, CPU and GPU frames), and within 2/255 with several (each rank draws its
+box; 8-bit rounding before the blend). With an
 opaque sphere inside it (depth compositing, default threshold): the VTK tests' comparison at
 threshold 0, and at most 0.5 % of the pixels (the sphere's antialiased rim) off by more than 24/255.
-The frame statistics summed over the server ranks (afam_client.frame_statistics) show the bytes
-builtin mode reads for the same cold view (bar: within 1.1x); an interactive frame is drawn smaller on
+The frame statistics summed over the server ranks (afam_client.frame_statistics): every rank drew,
+none read more than 1.3/N of the bytes builtin mode reads for the same cold view, all of them
+together at least builtin's and at most 1.3x; an interactive frame is drawn smaller on
 the server and a still one whole. The Wavelet encoded on the server's ranks (split among them) and
 saved from the client holds builtin's micro-models. A file missing on the server gives a clear error
 on the client."""
@@ -85,12 +88,16 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
     settings.UseFXAA = 0
     images = render("server%d_lossless_nofxaa" % ranks, default_threshold)
     for png, reference in zip(images, builtin[False]):
-        afam_scene.same_image(png, reference, out, 0, 0.0)
+        # One rank: the plugin's image, untouched. Several: each rank's image of its box is
+        # rounded to 8 bits before IceT blends them (the blend of the unrounded images equals one
+        # rank's within 1/255: RankRenderers in the Core tests).
+        afam_scene.same_image(png, reference, out, 0 if ranks == 1 else 2, 0.0)
     settings.UseFXAA = default_fxaa
     for threshold, name in ((default_threshold, "default"), (0.0, "threshold0")):
         images = render("server%d_%s_lossless" % (ranks, name), threshold)
         for png, reference in zip(images, builtin[False]):
-            afam_scene.same_image(png, reference, out, 2, 0.0)
+            # several ranks: their rounding (above) under the client's FXAA
+            afam_scene.same_image(png, reference, out, 2 if ranks == 1 else 3, 0.0)
     settings.CompressorConfig = default_compressor
 
     # Frame statistics over the server ranks: the bytes one builtin process reads for the same
@@ -99,9 +106,17 @@ with afam_server.PVServer(pvserver, ranks, os.path.join(out, "pvserver.log"),
     print("frame statistics: builtin %s; server %s" % (want, got), flush=True)
     if got["NumberOfRanks"] != ranks or got["TotalBytesRead"] <= 0:
         u.fail("frame statistics over %d ranks: %s" % (ranks, got))
-    if not want["TotalBytesRead"] <= got["TotalBytesRead"] <= 1.1 * want["TotalBytesRead"]:
+    # Every rank draws its box (a coarse block that spans boxes is read and drawn by each of
+    # their ranks, within its own box): all ranks took part, no rank read more than 1.3/N of
+    # builtin's bytes, and together they read every block builtin read.
+    if got["RanksDrawingBlocks"] != ranks:
+        u.fail("%d of the %d server ranks drew blocks" % (got["RanksDrawingBlocks"], ranks))
+    if got["MaxBytesRead"] > 1.3 / ranks * want["TotalBytesRead"]:
+        u.fail("a server rank read %d bytes, more than 1.3/%d of builtin's %d"
+               % (got["MaxBytesRead"], ranks, want["TotalBytesRead"]))
+    if not want["TotalBytesRead"] <= got["TotalBytesRead"] <= 1.3 * want["TotalBytesRead"]:
         u.fail("the server ranks read %d bytes, builtin %d" % (got["TotalBytesRead"], want["TotalBytesRead"]))
-    if got["TotalVisibleBlocks"] != want["TotalVisibleBlocks"]:
+    if not want["TotalVisibleBlocks"] <= got["TotalVisibleBlocks"] <= ranks * want["TotalVisibleBlocks"]:
         u.fail("the server ranks drew %d blocks, builtin %d" % (got["TotalVisibleBlocks"], want["TotalVisibleBlocks"]))
     # The ranks that drew blocks cast them where builtin mode cast its frame on this machine (the
     # CPU without a GPU; the GPU, through interop with NVIDIA's OpenGL, on the GPU machine).

@@ -129,6 +129,23 @@ CellBox Partition::cells(int level, Int3 ijk) const {
   return box;
 }
 
+BlockExtent Partition::samples(const CellBox& box) const {
+  BlockExtent e;
+  if (box.empty()) return e;
+  for (int a = 0; a < 3; ++a) {
+    const auto& fb = finestBounds_[a];
+    const int finest = static_cast<int>(fb.size()) - 1;
+    if (box.lo[a] < 0 || box.hi[a] > finest)
+      throw InvalidArgument("partition: cells " + std::to_string(box.lo[a]) + ".." +
+                            std::to_string(box.hi[a]) + " on axis " + std::to_string(a) +
+                            " outside the " + std::to_string(finest) + " finest blocks");
+    e.lo[a] = fb[static_cast<size_t>(box.lo[a])];
+    e.hi[a] = fb[static_cast<size_t>(box.hi[a])];
+    e.samples[a] = static_cast<int>(e.hi[a] - e.lo[a] + 1);
+  }
+  return e;
+}
+
 PartitionShape defaultPartition(const Index3& dims, int blockEdge) {
   if (blockEdge < 2)
     throw InvalidArgument("block edge " + std::to_string(blockEdge) + " must be >= 2 samples");

@@ -102,6 +102,11 @@ class Partition {
   Int3 parent(int level, Int3 ijk) const;  ///< block at level-1 holding this one
   /// The finest blocks (cells) a block of `level` covers.
   CellBox cells(int level, Int3 ijk) const;
+  /// The samples a box of finest blocks spans, [lo, hi] per axis (boxes that meet share their
+  /// boundary samples, as blocks do): what a rank's box covers in the volume's index space.
+  /// An empty box spans nothing (lo = hi = 0). Throws afam::InvalidArgument for a box that
+  /// reaches outside the finest blocks.
+  BlockExtent samples(const CellBox& box) const;
 
   /// How every message names a block: "level 2 block (3, 0, 7)".
   static std::string blockName(int level, Int3 ijk);

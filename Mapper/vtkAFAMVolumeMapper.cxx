@@ -99,7 +99,7 @@ bool vtkAFAMVolumeMapper::EnsureOpen()
     // changes, not once per frame.
     if (this->LastOpenError != e.what())
     {
-      vtkErrorMacro(<< e.what());
+      vtkErrorMacro(<< this->RankPrefix() << e.what());
     }
     this->LastOpenError = e.what();
     return false;
@@ -117,6 +117,13 @@ void vtkAFAMVolumeMapper::SetRenderDevice(int device)
     this->WarnedDevice = false; // a new choice reports its fallback again, once
     this->Modified();
   }
+}
+
+std::string vtkAFAMVolumeMapper::RankPrefix() const
+{
+  return this->NumberOfRanks > 1
+    ? "rank " + std::to_string(this->Rank) + " of " + std::to_string(this->NumberOfRanks) + ": "
+    : std::string();
 }
 
 void vtkAFAMVolumeMapper::SetRank(int rank, int ranks)
@@ -141,7 +148,7 @@ bool vtkAFAMVolumeMapper::GetRankBounds(double bounds[6])
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro(<< e.what());
+    vtkErrorMacro(<< this->RankPrefix() << e.what());
     return false;
   }
 }
@@ -199,6 +206,7 @@ struct vtkAFAMVolumeMapper::Frame
   afam::FrameMap Map;
   std::vector<float> Limits;
   bool DepthOnGpu = false; // the depth buffer may go to CUDA (the image does)
+  bool Idle = false;       // this rank draws nothing this frame (ReadFrameSettings)
   vtkAFAMFrameRequest Request;
 };
 
@@ -221,7 +229,8 @@ bool vtkAFAMVolumeMapper::RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAF
     }
     catch (const std::exception& e)
     {
-      vtkErrorMacro(<< changed.what() << "; opening it again failed: " << e.what());
+      vtkErrorMacro(<< this->RankPrefix() << changed.what()
+                    << "; opening it again failed: " << e.what());
       this->LastOpenError = e.what(); // not repeated by the next frames' EnsureOpen
       return false;
     }
@@ -229,7 +238,7 @@ bool vtkAFAMVolumeMapper::RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAF
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro(<< e.what());
+    vtkErrorMacro(<< this->RankPrefix() << e.what());
     return false;
   }
   try
@@ -238,7 +247,7 @@ bool vtkAFAMVolumeMapper::RenderCore(Frame& frame, afam::ImageRGBA& image, vtkAF
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro(<< e.what());
+    vtkErrorMacro(<< this->RankPrefix() << e.what());
     return false;
   }
   return true;
@@ -253,6 +262,11 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     return;
   }
   this->ReadFrameSettings(vol->GetProperty(), frame);
+  if (frame.Idle)
+  {
+    this->RecordStatistics(frame, vtkAFAMFrameStats{});
+    return;
+  }
   auto* renWin = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
   // Frames cast on the GPU go straight into an OpenGL buffer when CUDA can write into one, and
   // then take the depth buffer the same way (ReadDepthLimits). A frame that needs a new renderer
@@ -466,8 +480,13 @@ void vtkAFAMVolumeMapper::ReadFrameSettings(vtkVolumeProperty* property, Frame& 
   request.Prefetcher = this->Prefetcher;
   request.Device = this->RenderDevice;
   request.Threads = this->NumberOfThreads;
-  request.Rank = this->Rank;
-  request.Ranks = this->NumberOfRanks;
+  // Ordered compositing blends the ranks' images "over", composite blending's own operator; the
+  // maximum, minimum and average of several images are not blended that way, so rank 0 draws
+  // those whole and the other ranks nothing (frame.Idle).
+  const bool shared = settings.blendMode == COMPOSITE_BLEND;
+  request.Rank = shared ? this->Rank : 0;
+  request.Ranks = shared ? this->NumberOfRanks : 1;
+  frame.Idle = !shared && this->Rank != 0;
 }
 
 double vtkAFAMVolumeMapper::DefaultSampleDistance(const double spacing[3])

@@ -234,8 +234,10 @@ public:
    * alike from the file (afam::rankBox), its rays clipped to the box on the one global lattice of
    * samples, so that the ranks' images blended in visibility order (ordered compositing, with the
    * boxes GetRankBounds gives) are the image of one mapper. Its cache, loads and prefetch hold
-   * only the blocks that meet its box. Default 0 of 1: the whole volume. A rank outside
-   * 0 .. ranks-1 is an error the frame reports.
+   * only the blocks that meet its box. Composite blending only: the maximum, minimum and average
+   * of several images are not their "over" blend, so in those modes rank 0 draws the whole volume
+   * and the other ranks nothing. Default 0 of 1: the whole volume. A rank outside 0 .. ranks-1
+   * is an error the frame reports.
    */
   void SetRank(int rank, int ranks);
   vtkGetMacro(Rank, int);
@@ -348,6 +350,8 @@ protected:
   /// Opens the file in Core when it changed; false (and an error, once per distinct error) when
   /// it cannot.
   bool EnsureOpen();
+  /// "rank R of N: " when drawn by several ranks, else empty: what begins this rank's errors.
+  std::string RankPrefix() const;
   /// Core's frame; a file changed on disk is opened again and drawn anew in the same frame. False
   /// (and an error) when nothing can be drawn.
   struct Frame;

@@ -1,10 +1,12 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Per-rank rendering and I/O: the same cold view of one file rendered by pvbatch on 1 rank and on 2
-and 3 ranks (mpirun, symmetric mode, so each rank reports its own frame statistics). Each rank draws
+and 4 ranks (mpirun, symmetric mode, so each rank reports its own frame statistics). Each rank draws
 its own box of the volume (afam::rankBox) and reads only the micro-models of the blocks that meet
 it: every rank draws, none reads more than 1.3/N of the 1-rank bytes, all together read at least the
 1-rank bytes and at most 1.3x, and the image IceT composites in visibility order equals the 1-rank
-image (every pixel within 8/255)."""
+image (FXAA off; 2 ranks: every pixel within 2/255; 4 ranks: within 3/255, at most 0.1 % of the
+pixels beyond 2/255, IceT's 8-bit blends truncating), as do the images of maximum intensity
+blending (drawn whole by rank 0) and of a camera inside the volume."""
 import json
 import os
 import subprocess
@@ -46,7 +48,7 @@ one = run(1)
 reference = one["bytes_read"][0]
 if reference <= 0:
     u.fail("the 1-rank frame read nothing: the test view shows no block")
-for ranks in (2, 3):
+for ranks in (2, 4):
     many = run(ranks)
     total = sum(many["bytes_read"])
     print("bytes read: 1 rank %d; %d ranks %s, sum %d (%.3fx); blocks drawn %s" % (
@@ -61,8 +63,12 @@ for ranks in (2, 3):
         u.fail("%d ranks read %d bytes in all, the 1-rank %d" % (ranks, total, reference))
     if sum(many["visible_blocks"]) < one["visible_blocks"][0]:
         u.fail("%d ranks drew %s blocks, 1 rank %d" % (ranks, many["visible_blocks"], one["visible_blocks"][0]))
-    fraction, worst = u.differing_fraction(many["image"], one["image"], 8)
-    print("%d-rank image: %.3f %% of pixels differ from 1 rank by more than 8/255 (largest %d/255)"
-          % (ranks, 100 * fraction, worst))
-    if fraction > 0.0:
-        u.fail("the %d-rank image differs from the 1-rank image" % ranks)
+    for key in ("image", "mip", "inside"):
+        fraction, worst = u.differing_fraction(many[key], one[key], 2)
+        print("%d-rank %s: %.3f %% of pixels differ from 1 rank by more than 2/255 (largest %d/255)"
+              % (ranks, key, 100 * fraction, worst))
+        # IceT blends 8-bit images, truncating each product: a blend of N images may lose up to
+        # N-1 more 1/255 steps than one image. 2 ranks: every pixel within 2/255; more: within
+        # 3/255, and at most 0.1 % of the pixels beyond 2/255.
+        if worst > (2 if ranks == 2 else 3) or fraction > (0.0 if ranks == 2 else 0.001):
+            u.fail("the %d-rank %s differs from the 1-rank one" % (ranks, key))

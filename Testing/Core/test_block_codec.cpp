@@ -12,7 +12,11 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/encode/encoder.hpp"
+#include "afam/format/afam_file.hpp"
 #include "afam/format/block_codec.hpp"
+#include "afam/format/rounded_points.hpp"
+#include "scratch_dir.hpp"
 
 using namespace afam;
 
@@ -296,4 +300,77 @@ TEST(BlockCodec, RecodingAFrameGivesThePayloadCodedAtTheOtherLevel) {
     }
   std::vector<uint8_t> header(kCodedHeaderBytes, 0);
   EXPECT_THROW(recodeFrame(header, kCodedHeaderBytes, 0, 8, EntropyCoding{}), FormatError);
+}
+
+TEST(BlockCodec, RecodingWithTheTrialsFramesGivesTheSameBytes) {
+  // The frames' sizes of the trial coding spare work only: the lanes frame is not formed again.
+  // Of the frames lanesFrameSure keeps, white noise's (codes of a few bits, where zstd's Huffman
+  // spends nearly a bit on the likeliest) is the frame zstd at level 15 gives too; a smooth
+  // periodic field at a coarse step is one it would not keep (its codes repeat, zstd's matches
+  // code them), which is why the encoder asks it of noise-dominated blocks only.
+  const Int3 n{40, 40, 40};
+  std::vector<float> noise(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]));
+  std::mt19937 rng(9u);
+  std::normal_distribution<double> g(100, 1);
+  for (float& x : noise) x = float(g(rng));
+  int sureNoise = 0, sureSmoothLost = 0;
+  for (const bool isNoise : {false, true})
+    for (const Predictor p : {Predictor::Lorenzo, Predictor::IntegerInterpolation})
+      for (const double step : {0.002, 0.05, 1.0, 3.0}) {
+        SCOPED_TRACE(std::to_string(int(p)) + " step " + std::to_string(step));
+        const std::vector<float> v = isNoise ? noise : field(n, 5u);
+        QuantizedValues q;
+        ASSERT_TRUE(quantizeValues(v.data(), n, step, p, q));
+        std::vector<uint8_t> fast, slow;
+        const FrameSizes trial = encodeQuantized(q, EntropyCoding{1}, fast);
+        encodeQuantized(q, EntropyCoding{15}, slow);
+        const size_t head = codedHeaderBytes(fast.data(), fast.size());
+        const bool lanes = payloadIsLanesCoded(fast.data(), fast.size());
+        EXPECT_GT(trial.zstd, 0u);
+        EXPECT_EQ(lanes ? trial.lanes : trial.zstd, fast.size() - head);
+        const bool sure = lanesFrameSure(trial, fast.size() - head, v.size());
+        EXPECT_EQ(sure, lanes && double(trial.lanes) <= kLanesSure * double(trial.zstd));
+        if (sure && isNoise) {
+          ++sureNoise;
+          EXPECT_EQ(fast, slow);
+        }
+        if (sure && !isNoise && fast != slow) ++sureSmoothLost;
+        recodeFrame(fast, head, 0, v.size(), EntropyCoding{15}, trial);
+        EXPECT_EQ(fast, slow);
+      }
+  EXPECT_GE(sureNoise, 2);
+  EXPECT_GE(sureSmoothLost, 1);
+}
+
+TEST(BlockCodec, ANoisyBlocksSureLanesFrameIsTheOneTheSlowLevelGives) {
+  // The encoder keeps a noise-dominated block's coded samples in their lanes frame without trying
+  // zstd at the file's level where lanesFrameSure says it cannot win: the payload it writes is
+  // the one coding its frame again at that level gives.
+  const Index3 dims{40, 40, 40};
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal(0, 1);
+  std::vector<float> noise(size_t(dims[0] * dims[1] * dims[2]));
+  for (float& x : noise) x = float(normal(rng));
+  EncoderOptions opt;
+  opt.errorBound = 0.5;
+  opt.levels = 1;
+  opt.blocksPerAxis = 1;
+  opt.threads = 1;
+  ArraySource source(noise.data(), dims);
+  const std::string path = afam_test::scratchPath("noise.afam");
+  encodeVolume(source, opt, path);
+  const auto file = AfamFile::open(path);
+  const ModelEntry& m = file->entries()[0];
+  ASSERT_EQ(m.kind, BlockKind::Interpolant);
+  const std::vector<uint8_t> stored = file->readStored(0);
+  const size_t head = codedHeaderBytes(stored.data(), stored.size());
+  const size_t tail = m.roundedPoints ? kRoundedPointsBytes : 0;
+  const size_t frame = stored.size() - head - tail, values = noise.size();
+  ASSERT_TRUE(payloadIsLanesCoded(stored.data(), stored.size()));
+  std::vector<uint8_t> fast = stored;  // the trial's zstd frame, for the rule's sizes
+  recodeFrame(fast, head, tail, values, EntropyCoding{1, EntropyStage::Zstd});
+  EXPECT_TRUE(lanesFrameSure(FrameSizes{fast.size() - head - tail, frame}, frame, values));
+  std::vector<uint8_t> slow = stored;
+  recodeFrame(slow, head, tail, values, EntropyCoding{});
+  EXPECT_EQ(slow, stored);
 }

@@ -122,6 +122,7 @@ struct Candidate {
   ErrorStats error;
   std::vector<uint8_t> bytes;
   bool roundedPoints = false;  ///< an interpolant whose bytes end with its points' shift
+  FrameSizes frames;           ///< the entropy frames formed when it was coded (recodeFrame)
 };
 
 /// The RMSE of the value m on all the samples, summed in four lanes (vectorised).
@@ -220,8 +221,9 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   const double step = ladderStep(kind, budget, kStepFactors[best]);
   if (kept.step != step) return false;
   std::vector<uint8_t> bytes;
-  encodeQuantized(kept, coding, bytes);
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, passed.error, std::move(bytes)};
+  const FrameSizes frames = encodeQuantized(kept, coding, bytes);
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, passed.error,
+                  std::move(bytes),  false,  frames};
   return keeps(kind, out.error, bound);
 }
 
@@ -327,7 +329,7 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   c.kind = BlockKind::Interpolant;
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
-  encodeQuantized(kept, coding, c.bytes);
+  c.frames = encodeQuantized(kept, coding, c.bytes);
   out = std::move(c);
   return true;
 }
@@ -414,13 +416,17 @@ void storeCandidate(Candidate& c, BlockTask& t) {
 }
 
 /// The kept candidate's entropy frame coded at the file's level (it was compared at the trial
-/// level): the same values, so the same error.
-void finalFrame(const FitContext& c, Candidate& best) {
+/// level): the same values, so the same error. A noise-dominated block's lanes frame that
+/// lanesFrameSure keeps is left as it is.
+void finalFrame(const FitContext& c, Candidate& best, bool noisy = false) {
   if (best.kind == BlockKind::Constant || c.opt.entropy == EntropyStage::Lanes) return;
   const size_t head = codedHeaderBytes(best.bytes.data(), best.bytes.size());
+  const size_t tail = best.roundedPoints ? kRoundedPointsBytes : 0;
   const size_t values = size_t(best.ncp[0]) * size_t(best.ncp[1]) * size_t(best.ncp[2]);
-  recodeFrame(best.bytes, head, best.roundedPoints ? kRoundedPointsBytes : 0, values,
-              entropyCoding(c.opt));
+  if (noisy && c.opt.entropy == EntropyStage::Auto &&
+      lanesFrameSure(best.frames, best.bytes.size() - head - tail, values))
+    return;
+  recodeFrame(best.bytes, head, tail, values, entropyCoding(c.opt), best.frames);
 }
 
 /// A block whose spline needs more than kNoiseShare of its samples per axis to meet the bound
@@ -498,7 +504,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   if (noiseDominated(c, e, fitter, t) &&
       codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
                   std::numeric_limits<double>::infinity(), SIZE_MAX, fitter, best)) {
-    finalFrame(c, best);
+    finalFrame(c, best, true);
     storeCandidate(best, t);
     return;
   }

@@ -22,6 +22,7 @@ namespace {
 using codec::coarsestSpacing;
 using codec::Lattice;
 using codec::lorenzo;
+using codec::roundHalfEven;
 
 constexpr double kMaxCode = 1125899906842624.0;  // 2^50: residual codes beyond are refused
 
@@ -89,7 +90,9 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
   codes.reserve(count);
   bool ok = true;
   visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
-    double q = std::nearbyint((double(values[i]) - pred) / step);
+    const double x = (double(values[i]) - pred) / step;
+    // nearbyint's result; beyond kRoundExact (> 2^50, refused below) x itself.
+    double q = std::fabs(x) < codec::kRoundExact ? roundHalfEven(x) : x;
     if (free.isFree(i) && std::fabs(q) <= double(free.slack)) q = 0.0;
     if (!(std::fabs(q) <= kMaxCode)) {
       ok = false;
@@ -203,7 +206,7 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
   return estimateQuantizedBytes(q);
 }
 
-void encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out) {
+FrameSizes encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out) {
   const std::vector<int64_t>& codes = codesOf(q);
   thread_local std::vector<uint8_t> varints;
   varints.clear();
@@ -216,7 +219,7 @@ void encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8
     out.resize(kIntegerCodedHeaderBytes);
     std::memcpy(out.data() + kCodedHeaderBytes, &q.base, 8);
   }
-  codec::appendEntropyFrame(varints, coding, out);
+  return codec::appendEntropyFrame(varints, coding, out);
 }
 
 bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
@@ -230,16 +233,35 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
   return true;
 }
 
+bool lanesFrameSure(FrameSizes trial, size_t frameBytes, size_t values) {
+  return trial.zstd > 0 && trial.lanes == frameBytes && values >= kLanesSureValues &&
+         double(frameBytes) <= kLanesSure * double(trial.zstd);
+}
+
 void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t values,
-                 EntropyCoding coding) {
+                 EntropyCoding coding, FrameSizes trial) {
   if (payload.size() <= head + tail) throw codec::badPayload("recode", "has no frame");
   size_t got = 0;
   const size_t frameBytes = payload.size() - head - tail;
+  const bool holdsLanes = lanes::isLanesFrame(payload.data() + head, frameBytes);
   const uint8_t* symbols =
       codec::unpackFrame(payload.data() + head, frameBytes, values * 10, 0, "recode", got);
-  const std::vector<uint8_t> varints(symbols, symbols + got);
+  thread_local std::vector<uint8_t> varints;
+  varints.assign(symbols, symbols + got);
+  // The lanes frame's size where known (the payload's own frame, or the trial's): Auto then forms
+  // only the zstd frame, and the lanes frame again only where it is kept in place of a zstd one.
+  const size_t lanesBytes = holdsLanes ? frameBytes : trial.lanes;
   std::vector<uint8_t> out(payload.begin(), payload.begin() + std::ptrdiff_t(head));
-  codec::appendEntropyFrame(varints, coding, out);
+  if (coding.stage == EntropyStage::Auto && lanesBytes > 0) {
+    codec::appendZstdFrame(varints, coding.zstdLevel, out);
+    if (keepsLanes(double(lanesBytes), double(out.size() - head))) {
+      if (holdsLanes) return;  // the payload keeps its frame
+      out.resize(head);
+      lanes::appendFrame(varints, out);
+    }
+  } else {
+    codec::appendEntropyFrame(varints, coding, out);
+  }
   out.insert(out.end(), payload.end() - std::ptrdiff_t(tail), payload.end());
   payload = std::move(out);
 }
@@ -310,15 +332,6 @@ void decodeValues(const uint8_t* data, size_t bytes, Int3 n, float* out, const c
 // ------------------------------------------------------------------------------------------------
 // Rounded interpolant points (rounded_points.hpp). This file is compiled with -ffp-contract=off:
 // the sum below must round the product first.
-
-namespace {
-/// x rounded to the nearest integer, ties to even, for |x| < 2^51: adding 1.5 * 2^52 leaves no
-/// fraction bits (the default rounding mode rounds there), subtracting it gives the integer back.
-inline double roundHalfEven(double x) {
-  constexpr double kShift = 6755399441055744.0;  // 1.5 * 2^52
-  return (x + kShift) - kShift;
-}
-}  // namespace
 
 namespace {
 /// roundPoints without a branch a point (so that the loop vectorizes): a point out of range is

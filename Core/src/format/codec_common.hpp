@@ -49,6 +49,17 @@ inline void putVarint(uint64_t u, std::vector<uint8_t>& out) {
 
 inline uint64_t zigzag(int64_t c) { return (uint64_t(c) << 1) ^ uint64_t(c >> 63); }
 
+/// roundHalfEven is exact below this magnitude (2^51).
+constexpr double kRoundExact = 2251799813685248.0;
+
+/// x rounded to the nearest integer, ties to even (nearbyint's result in the default rounding
+/// mode), for |x| < kRoundExact: adding 1.5 * 2^52 leaves no fraction bits, subtracting it gives
+/// the integer back. No libm call and no branch: loops over it vectorize.
+inline double roundHalfEven(double x) {
+  constexpr double kShift = 6755399441055744.0;  // 1.5 * 2^52
+  return (x + kShift) - kShift;
+}
+
 /// Appends one zstd frame of `bytes` to out (after what out holds).
 inline void appendZstdFrame(const std::vector<uint8_t>& bytes, int level,
                             std::vector<uint8_t>& out) {
@@ -61,20 +72,25 @@ inline void appendZstdFrame(const std::vector<uint8_t>& bytes, int level,
 }
 
 /// Appends the frame `coding` asks for: zstd, lanes, or (Auto) the lanes frame unless the zstd
-/// frame is more than kLanesMargin smaller.
-inline void appendEntropyFrame(const std::vector<uint8_t>& bytes, EntropyCoding coding,
-                               std::vector<uint8_t>& out) {
+/// frame is more than kLanesMargin smaller (keepsLanes). Returns the sizes of the frames formed.
+inline FrameSizes appendEntropyFrame(const std::vector<uint8_t>& bytes, EntropyCoding coding,
+                                     std::vector<uint8_t>& out) {
   const size_t head = out.size();
-  if (coding.stage != EntropyStage::Lanes) appendZstdFrame(bytes, coding.zstdLevel, out);
-  if (coding.stage == EntropyStage::Zstd) return;
-  std::vector<uint8_t> frame;
+  FrameSizes sizes;
+  if (coding.stage != EntropyStage::Lanes) {
+    appendZstdFrame(bytes, coding.zstdLevel, out);
+    sizes.zstd = out.size() - head;
+  }
+  if (coding.stage == EntropyStage::Zstd) return sizes;
+  thread_local std::vector<uint8_t> frame;
+  frame.clear();
   lanes::appendFrame(bytes, frame);
-  const double zstdBytes = double(out.size() - head);
-  if (coding.stage == EntropyStage::Lanes ||
-      double(frame.size()) <= (1 + kLanesMargin) * zstdBytes) {
+  sizes.lanes = frame.size();
+  if (coding.stage == EntropyStage::Lanes || keepsLanes(double(sizes.lanes), double(sizes.zstd))) {
     out.resize(head);
     out.insert(out.end(), frame.begin(), frame.end());
   }
+  return sizes;
 }
 
 /// The error of a payload that does not decode: "<where>: coded payload <what>".

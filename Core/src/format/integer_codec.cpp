@@ -258,24 +258,52 @@ IntegerWords decodeWords(const uint8_t* data, size_t bytes, Int3 n, const char* 
 
 }  // namespace
 
+namespace {
+/// The smallest and largest of the values, in eight lanes (a loop that vectorizes, unlike
+/// std::minmax_element); a NaN among them is skipped, as there.
+void valueRange(const float* values, size_t count, float& lo, float& hi) {
+  float l[8], h[8];
+  for (int j = 0; j < 8; ++j) l[j] = h[j] = values[0];
+  size_t i = 0;
+  for (; i + 8 <= count; i += 8)
+    for (int j = 0; j < 8; ++j) {
+      const float v = values[i + size_t(j)];
+      l[j] = v < l[j] ? v : l[j];
+      h[j] = v > h[j] ? v : h[j];
+    }
+  for (; i < count; ++i) {
+    l[0] = values[i] < l[0] ? values[i] : l[0];
+    h[0] = values[i] > h[0] ? values[i] : h[0];
+  }
+  lo = l[0];
+  hi = h[0];
+  for (int j = 1; j < 8; ++j) {
+    lo = l[j] < lo ? l[j] : lo;
+    hi = h[j] > hi ? h[j] : hi;
+  }
+}
+}  // namespace
+
 bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
                      std::vector<int32_t>& k) {
   if (count == 0) return false;
-  const auto [lo, hi] = std::minmax_element(values, values + count);
-  if (!std::isfinite(*lo) || !std::isfinite(*hi)) return false;
-  const double middle = std::nearbyint((double(*lo) + double(*hi)) / 2 / step);
+  float lo, hi;
+  valueRange(values, count, lo, hi);
+  if (!std::isfinite(lo) || !std::isfinite(hi)) return false;
+  const double middle = std::nearbyint((double(lo) + double(hi)) / 2 / step);
   if (!(std::fabs(middle) < 4503599627370496.0)) return false;  // 2^52
   base = int64_t(middle);
   k.resize(count);
-  // nearbyint (ties to even) as the sum below rounds it, for |x| < 2^51; a branch-free loop that
-  // vectorizes. A value out of that range, or a code out of kLimit, fails the whole block.
-  constexpr double kShift = 6755399441055744.0, kExact = 2251799813685248.0;  // 1.5 2^52, 2^51
+  // nearbyint as roundHalfEven gives it, in a branch-free loop that vectorizes (each k on its own:
+  // no chain through `ok`). A value out of that range, or a code out of kLimit, fails the block.
+  int32_t* out = k.data();
   bool ok = true;
   for (size_t i = 0; i < count; ++i) {
     const double x = double(values[i]) / step;
-    const double q = ((x + kShift) - kShift) - middle;
-    ok &= (std::fabs(x) < kExact) & (std::fabs(q) < kLimit);
-    k[i] = ok ? int32_t(q) : 0;
+    const double q = roundHalfEven(x) - middle;
+    const bool in = (std::fabs(x) < kRoundExact) & (std::fabs(q) < kLimit);
+    ok &= in;
+    out[i] = in ? int32_t(q) : 0;
   }
   return ok;
 }

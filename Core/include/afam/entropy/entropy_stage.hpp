@@ -20,6 +20,11 @@ enum class EntropyStage : unsigned char { Auto = 0, Zstd = 1, Lanes = 2 };
 /// decodes; on a scan's payloads the lanes frame is the smaller one anyway).
 constexpr double kLanesMargin = 0.02;
 
+/// Whether Auto keeps a lanes frame of `lanesBytes` over a zstd frame of `zstdBytes`.
+inline bool keepsLanes(double lanesBytes, double zstdBytes) {
+  return lanesBytes <= (1 + kLanesMargin) * zstdBytes;
+}
+
 struct EntropyCoding {
   int zstdLevel = 15;
   EntropyStage stage = EntropyStage::Auto;

@@ -115,12 +115,33 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
                   EntropyCoding coding, std::vector<uint8_t>& out,
                   std::vector<float>& reconstructed, FreeValues free = {});
 
+/// The sizes of the entropy frames formed for a payload's codes, 0 where not formed: the zstd
+/// frame at the coding's level and the lanes frame (Auto forms both and keeps one: keepsLanes).
+struct FrameSizes {
+  size_t zstd = 0, lanes = 0;
+};
+
+/// Whether a payload's lanes frame (of `frameBytes`, coding `values` values; `trial` its first
+/// coding's frames) is kept without trying zstd at the slow level, for a noisy block's codes (a
+/// caller's judgement: white noise of half the bound or more): at most kLanesSure of the trial's
+/// zstd frame at a fast level, with kLanesSureValues values or more. Measured on 1,704 payloads
+/// (the corpus at RMSE 1e-2, 1e-3 and max error 1e-3, whole and in 4^3 blocks of 2 levels, the head
+/// MRI made large with noise 2.5 and 6 and with --detail 18): zstd at level 15 was never more than
+/// kLanesMargin smaller there. It was on smaller payloads (up to 10% on 2,500 values of the head
+/// MRI in blocks of about 14^3), and it can be on smooth periodic values at a coarse step, whose
+/// codes repeat (test_block_codec.cpp); those cost little to code again, or are not noise.
+constexpr double kLanesSure = 0.9;
+constexpr size_t kLanesSureValues = 16384;
+bool lanesFrameSure(FrameSizes trial, size_t frameBytes, size_t values);
+
 /// Codes the entropy frame of a coded payload of `values` values again with `coding` (the header's
 /// `head` bytes and the last `tail` bytes kept as they are): an encoder compares its candidates
 /// coded at a fast zstd level and gives only the one it keeps the slow level's frame. The payload
-/// decodes to the same values. Throws FormatError when the frame does not decode.
+/// decodes to the same values. `trial`: the frames formed when it was first coded (encodeQuantized
+/// with the same stage), where known: a lanes frame is then not formed again to be compared (the
+/// same bytes). Throws FormatError when the frame does not decode.
 void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t values,
-                 EntropyCoding coding);
+                 EntropyCoding coding, FrameSizes trial = {});
 
 /// The values as encodeValues would reconstruct them, without the entropy coding (to choose a
 /// step).
@@ -151,7 +172,8 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
                     QuantizedValues& q, FreeValues free = {});
 
 /// encodeValues of the values q holds quantized: the same bytes, without quantizing again.
-void encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out);
+/// Returns the sizes of the frames formed.
+FrameSizes encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out);
 
 /// estimateCodedBytes of the values q holds quantized.
 double estimateQuantizedBytes(QuantizedValues& q);

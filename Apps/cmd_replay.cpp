@@ -89,10 +89,12 @@ class StepPlayback {
 };
 
 /// `--ssim`: each frame's image against the exact frame of the same view, drawn by a second
-/// renderer of the same file that waits for every block (unlimited cache, no prefetching).
+/// renderer of the same file that waits for every block (unlimited cache, no prefetching), on the
+/// same device (its own GPU pool), after the frame's timing.
 class ExactReference {
  public:
-  ExactReference(const std::shared_ptr<const AfamFile>& file, const RenderOptions& opts) {
+  ExactReference(const std::shared_ptr<const AfamFile>& file, const RenderOptions& opts,
+                 const std::string& device, long long gpuBudgetMiB) {
     RenderOptions exact = opts;
     exact.cache = CacheBudget{};
     exact.cold = false;
@@ -100,6 +102,7 @@ class ExactReference {
     exact.prefetch = "none";
     exact.missBudgetMs = -1;
     renderer_ = std::make_unique<Renderer>(file, exact);
+    useDevice(*renderer_, device, gpuBudgetMiB);
   }
   double ssimOf(const ImageRGBA& image, const Camera& camera) {
     FrameStats st;
@@ -155,7 +158,8 @@ int runReplay(int argc, char** argv) {
         "                         with a still camera); --frames sets how many (default: as many\n"
         "                         as the trajectory has)\n"
         "  --ssim                 each frame's SSIM against the exact frame of its view (a\n"
-        "                         second renderer waiting for every block; not timed)\n"
+        "                         second renderer waiting for every block, on the same\n"
+        "                         --device; not timed)\n"
         "                         CSV columns after on_gpu: stand_ins, blocks_behind,\n"
         "                         bytes_behind (blocks of the selection drawn from a coarser\n"
         "                         level or not at all: the miss budget ran out), ssim (-1\n"
@@ -201,7 +205,9 @@ int runReplay(int argc, char** argv) {
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend, ssims;
   std::unique_ptr<ExactReference> reference;
-  if (args.has("ssim")) reference = std::make_unique<ExactReference>(file, opts);
+  if (args.has("ssim"))
+    reference = std::make_unique<ExactReference>(file, opts, args.str("device", "cpu"),
+                                                 args.integer("gpu-budget-mb", 2048));
   int64_t behind = 0;
   uint64_t hits = 0, misses = 0, bytes = 0, cachePeak = 0, poolPeak = 0;
   int64_t standIns = 0;

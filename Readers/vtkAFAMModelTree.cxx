@@ -5,13 +5,16 @@
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
 
+#include "vtkArrayIteratorTemplate.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
+#include "vtkGenericDataArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkIntArray.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkNew.h"
+#include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
@@ -24,9 +27,132 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace
 {
+/// The scalar array of a level's leaf: one NaN ("no sample here") per point, held in no memory.
+/// ParaView marks an array "(partial)" when a leaf with points lacks it (vtkPVDataSetAttributes-
+/// Information::AddInformation); with it on every leaf, the "Value range" leaf alone gives the
+/// array's range, and the leaves keep their extents, so that the data information (points, cells,
+/// bounds: the default Scalar Opacity Unit Distance) is what it was. Its range is empty, found
+/// without a pass over the points; raw access (a filter or ParaView's own Volume applied to the
+/// model set) gets NaNs made on demand.
+class vtkAFAMNoSamplesArray : public vtkGenericDataArray<vtkAFAMNoSamplesArray, double>
+{
+  using Base = vtkGenericDataArray<vtkAFAMNoSamplesArray, double>;
+
+public:
+  vtkAbstractTypeMacro(vtkAFAMNoSamplesArray, Base);
+  static vtkAFAMNoSamplesArray* New();
+
+  static double NaN()
+  {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double GetValue(vtkIdType) const
+  {
+    return NaN();
+  }
+  void SetValue(vtkIdType, double) {}
+  void GetTypedTuple(vtkIdType, double* tuple) const
+  {
+    std::fill_n(tuple, this->NumberOfComponents, NaN());
+  }
+  void SetTypedTuple(vtkIdType, const double*) {}
+  double GetTypedComponent(vtkIdType, int) const
+  {
+    return NaN();
+  }
+  void SetTypedComponent(vtkIdType, int, double) {}
+
+  unsigned long GetActualMemorySize() const override
+  {
+    return static_cast<unsigned long>(this->Materialized.size() * sizeof(double) / 1024 + 1);
+  }
+  void* GetVoidPointer(vtkIdType valueIdx) override
+  {
+    this->Materialized.assign(static_cast<size_t>(this->GetNumberOfValues()), NaN());
+    return this->Materialized.data() + valueIdx;
+  }
+  vtkArrayIterator* NewIterator() override
+  {
+    vtkArrayIterator* iterator = vtkArrayIteratorTemplate<double>::New();
+    iterator->Initialize(this);
+    return iterator;
+  }
+
+protected:
+  // A new array of this kind (what filters allocate their outputs with, what DeepCopy fills) is an
+  // ordinary vtkDoubleArray: it must hold the values written to it.
+  vtkObjectBase* NewInstanceInternal() const override
+  {
+    return vtkDoubleArray::New();
+  }
+
+  vtkAFAMNoSamplesArray() = default;
+  ~vtkAFAMNoSamplesArray() override = default;
+
+  bool AllocateTuples(vtkIdType)
+  {
+    return true;
+  }
+  bool ReallocateTuples(vtkIdType)
+  {
+    return true;
+  }
+
+  // NaN everywhere: no range, as VTK finds for an array of NaNs, without visiting them.
+  static bool NoRange(double* ranges, int components)
+  {
+    for (int c = 0; c < components; ++c)
+    {
+      ranges[2 * c] = VTK_DOUBLE_MAX;
+      ranges[2 * c + 1] = VTK_DOUBLE_MIN;
+    }
+    return true;
+  }
+  bool ComputeScalarRange(double* ranges) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
+  }
+  bool ComputeScalarRange(double* ranges, const unsigned char*, unsigned char) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
+  }
+  bool ComputeVectorRange(double range[2]) override
+  {
+    return NoRange(range, 1);
+  }
+  bool ComputeVectorRange(double range[2], const unsigned char*, unsigned char) override
+  {
+    return NoRange(range, 1);
+  }
+  bool ComputeFiniteScalarRange(double* ranges) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
+  }
+  bool ComputeFiniteScalarRange(double* ranges, const unsigned char*, unsigned char) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
+  }
+  bool ComputeFiniteVectorRange(double range[2]) override
+  {
+    return NoRange(range, 1);
+  }
+  bool ComputeFiniteVectorRange(double range[2], const unsigned char*, unsigned char) override
+  {
+    return NoRange(range, 1);
+  }
+
+private:
+  friend Base;
+  std::vector<double> Materialized; // only when raw access asks for it
+  vtkAFAMNoSamplesArray(const vtkAFAMNoSamplesArray&) = delete;
+  void operator=(const vtkAFAMNoSamplesArray&) = delete;
+};
+vtkStandardNewMacro(vtkAFAMNoSamplesArray);
+
 template<typename ArrayT, typename T>
 void AddTuple(vtkFieldData* fd, const char* name, std::initializer_list<T> values)
 {
@@ -72,8 +198,13 @@ void AddColumn(vtkFieldData* fd,
   fd->AddArray(a);
 }
 
-/// The leaf of one level: an image covering its models' blocks (no samples) whose field data has
-/// one row per model.
+std::string ScalarName(const afam::VolumeHeader& header)
+{
+  return header.scalarName.empty() ? "scalars" : header.scalarName;
+}
+
+/// The leaf of one level: an image covering its models' blocks (no samples: its scalar array is
+/// NaN and costs nothing) whose field data has one row per model.
 vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
   const afam::Partition& partition,
   const std::vector<afam::ModelEntry>& entries,
@@ -94,6 +225,10 @@ vtkSmartPointer<vtkImageData> LevelLeaf(const afam::VolumeHeader& header,
   leaf->SetExtent(extent);
   leaf->SetOrigin(header.origin.data());
   leaf->SetSpacing(header.spacing.data());
+  vtkNew<vtkAFAMNoSamplesArray> scalars;
+  scalars->SetName(ScalarName(header).c_str());
+  scalars->SetNumberOfTuples(leaf->GetNumberOfPoints());
+  leaf->GetPointData()->SetScalars(scalars);
   vtkFieldData* fd = leaf->GetFieldData();
   auto entry = [&](int64_t r) -> const afam::ModelEntry&
   { return entries[static_cast<size_t>(r)]; };
@@ -192,7 +327,8 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
   }
   // Last block: a 2x2x2 probe spanning the volume whose point array holds the value range, so that
   // ParaView's colour-map machinery (array list, range, transfer functions) has an array to bind
-  // to; the leaves above carry no samples. Present on piece 0 only.
+  // to; the leaves above carry no samples (their array of that name is NaN and holds no memory,
+  // so that the array is on every leaf: not "(partial)"). Present on piece 0 only.
   if (piece == 0)
   {
     vtkNew<vtkImageData> probe;
@@ -206,7 +342,7 @@ void vtkAFAMModelTree::Build(const afam::VolumeHeader& header,
     }
     probe->SetSpacing(spacing);
     vtkNew<vtkDoubleArray> range;
-    range->SetName(header.scalarName.empty() ? "scalars" : header.scalarName.c_str());
+    range->SetName(ScalarName(header).c_str());
     range->SetNumberOfTuples(8);
     range->FillValue(header.valueMax);
     range->SetValue(0, header.valueMin);

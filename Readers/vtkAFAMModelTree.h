@@ -42,7 +42,8 @@ constexpr const char* MissingKindArray = "AFAM_MissingKind";   // root: "none", 
 constexpr const char* MissingValueArray = "AFAM_MissingValue"; // root: the fill value (NaN if none)
 
 /// Fills `out`: blocks 0..levels-1 are the levels, block `levels` the "Value range" probe. A
-/// level's leaf is a vtkImageData spanning its models' blocks (no samples) whose field-data arrays
+/// level's leaf is a vtkImageData spanning its models' blocks (no samples: its point array of the
+/// scalar's name is NaN and holds no memory) whose field-data arrays
 /// hold one tuple per model, in file order. Piece `piece` of `numPieces` keeps the models whose
 /// coarsest-level ancestor lies in its contiguous range of coarsest blocks (z-major slabs:
 /// spatially coherent); a level with none of them is a null block, so every rank has the same

@@ -6,7 +6,9 @@
  *
  * The output is a vtkMultiBlockDataSet with one leaf per level of detail and a last "Value range"
  * leaf. A level's leaf is a vtkImageData covering its micro-models' blocks (origin, spacing and
- * extent of the encoded volume) with no point data; its field data has one row per micro-model:
+ * extent of the encoded volume) with no samples (its point array of the scalar's name is NaN and
+ * holds no memory: ParaView then lists the array whole, not "(partial)"; the "Value range" leaf's
+ * gives the range); its field data has one row per micro-model:
  * level, block index, NCP, degree, value range, achieved RMSE and max error, index in the file,
  * bytes of its decoded control points and bytes stored in the file (ParaView's spreadsheet shows
  * them). The root's field data names the file.
@@ -57,6 +59,15 @@ public:
   vtkSetClampMacro(DecodeLevel, int, -1, 64);
   vtkGetMacro(DecodeLevel, int);
   ///@}
+
+  /// What is wrong with the file, as the one error reported for it said (naming the path), or
+  /// empty while it reads. Set by the reader's first pass over the pipeline (OpenDataFile's, in
+  /// ParaView), so that a script can tell a bad file without parsing the output window: the
+  /// reader proxy's "ReadError" property.
+  const char* GetReadError()
+  {
+    return this->LastError.c_str();
+  }
 
   /// 1 when `filename` starts with the .afam magic or is named .afam, whether or not the rest is
   /// valid: the reader then says what is wrong with it (truncated, checksum, version, not an .afam

@@ -81,15 +81,32 @@ def value_range(afam, path):
     return lo, (hi if hi > lo else lo + 1.0)
 
 
+PRESET_COLOUR_NODES = 256  # nodes of the colour map that stands for Core's preset
+
+
 def preset_tf(lo, hi):
     """Core's TransferFunction::preset(lo, hi) (Core/src/scene/transfer_function.cpp) as ParaView
-    RGBPoints / opacity Points, and its reference distance (normalised units)."""
+    RGBPoints / opacity Points, and its reference distance (normalised units). The preset's colours
+    are interpolated in RGB between its five nodes (what `afam render` and the ground truth draw);
+    a ParaView colour map interpolates between its nodes in its own colour space (Diverging by
+    default), so the map gets the preset's colour at PRESET_COLOUR_NODES evenly spaced values:
+    between nodes that close, every colour space draws the preset within 8-bit rounding, and the
+    map keeps ParaView's default colour space."""
     at = lambda f: lo + f * (hi - lo)  # noqa: E731
     colors = [(0.0, 0.10, 0.20, 0.90), (0.25, 0.15, 0.45, 1.00), (0.5, 0.20, 0.90, 0.35),
               (0.75, 1.00, 0.55, 0.10), (1.0, 0.90, 0.10, 0.10)]
     alphas = [(0.0, 0.0), (0.15, 0.0), (0.2, 0.0), (0.25, 0.015), (0.3, 0.0), (0.45, 0.0), (0.5, 0.03),
               (0.55, 0.0), (0.7, 0.0), (0.75, 0.12), (0.8, 0.0), (1.0, 0.0)]
-    rgb = [x for f, r, g, b in colors for x in (at(f), r, g, b)]
+
+    def colour(f):  # RGB interpolation between the preset's nodes
+        for (f0, *c0), (f1, *c1) in zip(colors, colors[1:]):
+            if f <= f1:
+                t = (f - f0) / (f1 - f0)
+                return [a + t * (b - a) for a, b in zip(c0, c1)]
+        return list(colors[-1][1:])
+
+    fractions = [i / (PRESET_COLOUR_NODES - 1) for i in range(PRESET_COLOUR_NODES)]
+    rgb = [x for f in fractions for x in [at(f)] + colour(f)]
     pts = [x for f, a in alphas for x in (at(f), a, 0.5, 0.0)]
     return rgb, pts, 0.01
 
@@ -185,10 +202,6 @@ def apply_tf(display, array, lo, hi, unit_distance):
     rgb, pts, _ = preset_tf(lo, hi)
     lut = GetColorTransferFunction(array)
     lut.AutomaticRescaleRangeMode = "Never"
-    # Core's preset is defined by RGB interpolation (what `afam render` and the ground truth draw,
-    # the plugin's images are compared with them); the plugin honours whatever colour space the
-    # map has (TestAFAMMatchesVolume checks every one against ParaView's own mapping).
-    lut.ColorSpace = "RGB"
     lut.RGBPoints = rgb
     pwf = GetOpacityTransferFunction(array)
     pwf.Points = pts

@@ -20,6 +20,7 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 #include "vtkTypeInt64Array.h"
+#include "vtkVersionMacros.h"
 
 #include <algorithm>
 #include <limits>
@@ -116,15 +117,7 @@ protected:
   {
     return NoRange(ranges, this->NumberOfComponents);
   }
-  bool ComputeScalarRange(double* ranges, const unsigned char*, unsigned char) override
-  {
-    return NoRange(ranges, this->NumberOfComponents);
-  }
   bool ComputeVectorRange(double range[2]) override
-  {
-    return NoRange(range, 1);
-  }
-  bool ComputeVectorRange(double range[2], const unsigned char*, unsigned char) override
   {
     return NoRange(range, 1);
   }
@@ -132,18 +125,28 @@ protected:
   {
     return NoRange(ranges, this->NumberOfComponents);
   }
-  bool ComputeFiniteScalarRange(double* ranges, const unsigned char*, unsigned char) override
-  {
-    return NoRange(ranges, this->NumberOfComponents);
-  }
   bool ComputeFiniteVectorRange(double range[2]) override
   {
     return NoRange(range, 1);
+  }
+#if VTK_VERSION_NUMBER >= VTK_VERSION_CHECK(9, 2, 0) // the ranges that skip ghosts
+  bool ComputeScalarRange(double* ranges, const unsigned char*, unsigned char) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
+  }
+  bool ComputeVectorRange(double range[2], const unsigned char*, unsigned char) override
+  {
+    return NoRange(range, 1);
+  }
+  bool ComputeFiniteScalarRange(double* ranges, const unsigned char*, unsigned char) override
+  {
+    return NoRange(ranges, this->NumberOfComponents);
   }
   bool ComputeFiniteVectorRange(double range[2], const unsigned char*, unsigned char) override
   {
     return NoRange(range, 1);
   }
+#endif
 
 private:
   friend Base;

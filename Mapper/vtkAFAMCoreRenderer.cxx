@@ -9,6 +9,7 @@
 #include "afam/cuda/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
 #include "afam/format/afam_file.hpp"
 #include "afam/ranks/rank_boxes.hpp"
+#include "afam/ranks/same_file.hpp"
 #include "afam/render/renderer.hpp"
 
 #include <algorithm>
@@ -192,6 +193,11 @@ void vtkAFAMCoreRenderer::Volume(int64_t dims[3],
   }
   range[0] = h.valueMin;
   range[1] = h.valueMax;
+}
+
+uint64_t vtkAFAMCoreRenderer::Fingerprint() const
+{
+  return afam::contentFingerprint(*this->Impl->File);
 }
 
 bool vtkAFAMCoreRenderer::RankBounds(int rank, int ranks, double bounds[6]) const

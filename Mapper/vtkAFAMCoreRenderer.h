@@ -104,6 +104,8 @@ public:
   /// (more ranks than finest blocks). Throws afam::InvalidArgument for a rank outside
   /// 0 .. ranks-1.
   bool RankBounds(int rank, int ranks, double bounds[6]) const;
+  /// afam::contentFingerprint of the open file: what ranks compare to know they draw one file.
+  uint64_t Fingerprint() const;
   /// Volume header values the mapper needs for bounds and the normalised frame.
   void Volume(int64_t dims[3], double origin[3], double spacing[3], double range[2]) const;
   /// True when this build has the CUDA renderer (built with nvcc: afam::gpuCasterBuilt).

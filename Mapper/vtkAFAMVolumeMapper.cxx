@@ -153,6 +153,11 @@ bool vtkAFAMVolumeMapper::GetRankBounds(double bounds[6])
   }
 }
 
+vtkTypeUInt64 vtkAFAMVolumeMapper::GetFileFingerprint()
+{
+  return this->EnsureOpen() ? this->Core->Fingerprint() : 0; // EnsureOpen says why not
+}
+
 bool vtkAFAMVolumeMapper::HasCudaRenderer()
 {
   return vtkAFAMCoreRenderer::HasCuda();

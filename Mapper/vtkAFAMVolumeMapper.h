@@ -245,6 +245,9 @@ public:
   /// World bounds of this rank's box in the mapper's file; false, bounds untouched, when there
   /// is no readable file or the box is empty (more ranks than finest blocks: it draws nothing).
   bool GetRankBounds(double bounds[6]);
+  /// A fingerprint of the file this mapper draws (afam::contentFingerprint), 0 when it cannot
+  /// open it: ranks compare theirs to know that they draw one file.
+  vtkTypeUInt64 GetFileFingerprint();
   ///@}
 
   ///@{

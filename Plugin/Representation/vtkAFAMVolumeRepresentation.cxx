@@ -2,6 +2,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAFAMVolumeRepresentation.h"
 
+#include "afam/ranks/same_file.hpp"
+
 #include "vtkAFAMModelTree.h"
 #include "vtkAFAMVolumeMapper.h"
 
@@ -15,6 +17,7 @@
 #include "vtkMath.h"
 #include "vtkMultiBlockDataSet.h"
 #include "vtkMultiProcessController.h"
+#include "vtkMultiProcessStream.h"
 #include "vtkObjectFactory.h"
 #include "vtkOutlineSource.h"
 #include "vtkPVLODVolume.h"
@@ -114,6 +117,7 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(vtkInformationRequestKey* re
   }
   if (request_type == vtkPVView::REQUEST_UPDATE())
   {
+    this->AgreeOnFile();
     // Only the outline travels through the delivery path; the mapper reads the file itself.
     vtkPVView::SetPiece(inInfo, this, this->OutlineSource->GetOutputDataObject(0));
     // The volume can only be drawn where the .afam file is: on the server. ParaView offers two
@@ -127,14 +131,19 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(vtkInformationRequestKey* re
     // (2). Builtin mode and one-process pvbatch ignore the request, so they are unchanged.
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
     outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
-    if (vtkMath::AreBoundsInitialized(this->RankBounds))
-    {
-      // Each rank's geometry is its box (their union is the volume, which the view's camera
-      // and clipping range see), and the boxes are what ordered compositing sorts.
-      vtkPVRenderView::SetGeometryBounds(inInfo, this, this->RankBounds);
-      vtkPVRenderView::SetOrderedCompositingConfiguration(
-        inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, this->RankBounds);
-    }
+    // Each rank's geometry is its box (their union is the volume, which the view's camera and
+    // clipping range see), and the boxes are what ordered compositing sorts. Every rank declares
+    // both, also a rank that draws nothing (the outline's box, else a flat one at the origin),
+    // since ParaView's ordering of the ranks is collective and takes the same branch on every
+    // rank only then.
+    static const double nothing[6] = { 0, 0, 0, 0, 0, 0 };
+    const double* box = (this->RendersHere && vtkMath::AreBoundsInitialized(this->RankBounds))
+      ? this->RankBounds
+      : vtkMath::AreBoundsInitialized(this->DataBounds) ? this->DataBounds
+                                                        : nothing;
+    vtkPVRenderView::SetGeometryBounds(inInfo, this, box);
+    vtkPVRenderView::SetOrderedCompositingConfiguration(
+      inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION, box);
   }
   else if (request_type == vtkPVView::REQUEST_UPDATE_LOD())
   {
@@ -151,6 +160,49 @@ int vtkAFAMVolumeRepresentation::ProcessViewRequest(vtkInformationRequestKey* re
     this->Actor->SetMapper(this->Mapper);
   }
   return 1;
+}
+
+void vtkAFAMVolumeRepresentation::AgreeOnFile()
+{
+  // The ranks of a parallel view must draw one file (their boxes come from its index): each says
+  // what it opened, all learn what the others did, and a disagreement hides the volume on every
+  // rank, with one error naming the ranks and the path. A view's update is collective: every
+  // rank is here, whatever its reader did.
+  auto* controller = vtkMultiProcessController::GetGlobalController();
+  const int ranks = controller ? controller->GetNumberOfProcesses() : 1;
+  if (ranks < 2)
+  {
+    return;
+  }
+  const unsigned long long mine = this->FileName.empty() ? 0 : this->Mapper->GetFileFingerprint();
+  std::vector<unsigned long long> all(static_cast<size_t>(ranks), 0);
+  controller->AllGather(&mine, all.data(), 1);
+  // The path as rank 0 names it (a rank whose reader failed has none), for the same sentence on
+  // every rank.
+  vtkMultiProcessStream name;
+  if (controller->GetLocalProcessId() == 0)
+  {
+    name << (this->FileName.empty() ? std::string("the file") : this->FileName);
+  }
+  controller->Broadcast(name, 0);
+  std::string path;
+  name >> path;
+  const bool anyFile =
+    std::any_of(all.begin(), all.end(), [](unsigned long long f) { return f != 0; });
+  const std::string problem = anyFile
+    ? afam::ranksFileDisagreement(std::vector<uint64_t>(all.begin(), all.end()), path)
+    : std::string(); // no rank has a file: the input's own error said why
+  if (!problem.empty())
+  {
+    if (problem != this->RanksProblem)
+    {
+      vtkErrorMacro(<< "rank " << controller->GetLocalProcessId() << " of " << ranks << ": "
+                    << problem);
+    }
+    this->RendersHere = false;
+    this->Actor->SetVisibility(false);
+  }
+  this->RanksProblem = problem;
 }
 
 void vtkAFAMVolumeRepresentation::SetVisibility(bool visible)

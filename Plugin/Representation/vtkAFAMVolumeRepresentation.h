@@ -122,6 +122,10 @@ protected:
   vtkNew<vtkImageData> StandIn;
   std::string FileName;
   bool RendersHere = false;
+  /// Under MPI: checks that every rank opened one file (afam::ranksFileDisagreement); when not,
+  /// hides the volume on every rank with one error each. Collective: REQUEST_UPDATE calls it.
+  void AgreeOnFile();
+  std::string RanksProblem; // the last disagreement reported (each is reported once)
   // This rank's box in world coordinates (what it draws and declares for ordered compositing).
   double RankBounds[6] = { 0, -1, 0, -1, 0, -1 };
 

@@ -28,8 +28,11 @@ inline float skewedBlobValue(double fx, double fy, double fz) {
   return float(bump * (0.75 + 0.25 * std::sin(9 * fx) * std::cos(7 * fy + 3 * fz)));
 }
 
-inline std::shared_ptr<const afam::AfamFile> encodeSkewedBlob() {
-  const std::string path = scratchPath("skewed_blob.afam");
+/// The blob encoded (once per process and name) at an RMSE bound: 1e-3 by default; another bound
+/// and name give another file of the same volume.
+inline std::shared_ptr<const afam::AfamFile> encodeSkewedBlob(
+    double bound = 1e-3, const std::string& name = "skewed_blob.afam") {
+  const std::string path = scratchPath(name);
   if (::access(path.c_str(), R_OK) != 0) {
     const afam::Index3 dims{81, 57, 41};
     std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
@@ -43,7 +46,7 @@ inline std::shared_ptr<const afam::AfamFile> encodeSkewedBlob() {
     afam::EncoderOptions o;
     o.levels = 3;
     o.blocksPerAxis = 8;
-    o.errorBound = 1e-3;
+    o.errorBound = bound;
     o.threads = 2;
     afam::encodeVolume(src, o, path);
   }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
@@ -160,4 +161,84 @@ TEST(NcpSearch, EncodeOfALayeredVolumeIsSmallerAndMeetsTheBound) {
   std::printf("layered 65^3 at 1e-3: isotropic %llu bytes, per-axis %llu bytes\n",
               (unsigned long long)bytes[0], (unsigned long long)bytes[1]);
   EXPECT_LT(double(bytes[1]), 0.8 * double(bytes[0]));
+}
+
+TEST(NcpSearch, TheFewestPointsFloorLiesUnderEveryFitOfTheFewestPoints) {
+  // fewestPointsRmseFloor is under the RMSE of the least-squares fit at p + 1 (the smallest error
+  // any model of that NCP has) on smooth, rough and noisy blocks of odd shapes, every degree; and
+  // close to it where x carries the detail (the floor reads a sixteenth of the x-lines).
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 1);
+  BlockFitter fitter;
+  const Int3 shapes[] = {{17, 9, 13}, {33, 20, 17}, {2, 7, 30}, {40, 40, 40}};
+  double closest = 0;
+  for (const Int3& n : shapes)
+    for (int degree : {1, 2, 3})
+      for (double amplitude : {0.0, 0.3, 3.0}) {
+        std::vector<float> v(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]));
+        size_t i = 0;
+        for (int z = 0; z < n[2]; ++z)
+          for (int y = 0; y < n[1]; ++y)
+            for (int x = 0; x < n[0]; ++x)
+              v[i++] = float(std::sin(0.7 * x) + 0.2 * y + 0.01 * z * z + amplitude * noise(rng));
+        Int3 degs{};
+        for (int a = 0; a < 3; ++a) degs[a] = effectiveDegree(degree, n[a]);
+        const int nmax = std::max({n[0], n[1], n[2]});
+        const FitResult fit =
+            fitter.fit(v.data(), n, clampNcp(std::min(degree + 1, nmax), n, degs), degree);
+        const double floor = fewestPointsRmseFloor(v.data(), n, degree);
+        SCOPED_TRACE(testing::Message() << n[0] << "x" << n[1] << "x" << n[2] << " degree "
+                                        << degree << " noise " << amplitude);
+        EXPECT_LE(floor, fit.error.rmse * (1 + 1e-9));
+        if (n[0] > degree + 1) closest = std::max(closest, floor / fit.error.rmse);
+        // The verdict: Fails exactly where the floor is above the bound (clear of rounding: a
+        // floor of rounding alone, x a line of 2 points, decides nothing), for that NCP only.
+        for (const double bound : {0.5 * floor, 2 * floor}) {
+          NcpVerdicts verdicts;
+          const bool failed = fewestPointsFail(v.data(), n, degree, bound, verdicts);
+          EXPECT_EQ(failed, bound < floor && floor > 1e-6);
+          EXPECT_EQ(verdicts.at(fit.ncp, bound), failed ? Verdict::Fails : Verdict::Unknown);
+          if (failed) {
+            EXPECT_GT(fit.error.rmse, bound);
+          }
+        }
+      }
+  EXPECT_GT(closest, 0.2);  // a floor that can decide: a fifth of the fit's error or more
+}
+
+TEST(NcpSearch, AnInterpolantPassesWhereItsRoundingIsSureToKeepTheBound) {
+  // interpolationGain bounds the interpolating spline's points by its samples' largest magnitude
+  // (and is reached within a factor of 2 by the worst sign pattern); interpolantPasses gives
+  // Passes for NCP = n where twice the float32 rounding is within the bound, and then the fit at
+  // n does keep it; a bound below the rounding gets no verdict.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  BlockFitter fitter;
+  for (int degree : {1, 2, 3})
+    for (const Int3& n : {Int3{17, 9, 13}, Int3{2, 7, 30}, Int3{40, 33, 1}}) {
+      SCOPED_TRACE(testing::Message()
+                   << n[0] << "x" << n[1] << "x" << n[2] << " degree " << degree);
+      std::vector<float> v(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]));
+      for (float& x : v) x = float(1000 * uniform(rng));
+      double gain = 1;
+      for (int a = 0; a < 3; ++a) {
+        gain *= interpolationGain(n[a], degree);
+        EXPECT_GE(interpolationGain(n[a], degree), 1.0);
+        EXPECT_LT(interpolationGain(n[a], degree), 10.0);
+      }
+      const FitResult fit = fitter.fit(v.data(), n, n, degree);
+      float largest = 0;
+      for (const float c : fit.control) largest = std::max(largest, std::fabs(c));
+      EXPECT_LE(largest, gain * 1000 * (1 + 1e-6));
+      for (const double bound : {0.1, 1e-6}) {
+        NcpVerdicts verdicts;
+        const bool passes = interpolantPasses(v.data(), n, degree, bound, verdicts);
+        EXPECT_EQ(passes, bound == 0.1);  // twice the rounding of 1000: 1.2e-4 x the gain (< 110)
+        EXPECT_EQ(verdicts.at(n, bound), passes ? Verdict::Passes : Verdict::Unknown);
+        if (passes) {
+          EXPECT_LE(fit.error.rmse, bound);
+          EXPECT_LE(fit.error.maxError, bound);
+        }
+      }
+    }
 }

@@ -68,6 +68,10 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   const int lo = std::min(c.opt.degree + 1, nmax);
   const BoundKind kind = c.opt.boundKind;
   auto search = [&]() {
+    if (kind == BoundKind::Rmse && t.mask.empty()) {  // the first two questions without a fit
+      fewestPointsFail(t.samples.data(), e.samples, c.opt.degree, bound, t.verdicts);
+      interpolantPasses(t.samples.data(), e.samples, c.opt.degree, bound, t.verdicts);
+    }
     t.ncpStar = searchNcp(fitter, t.samples.data(), e.samples, c.opt.degree, bound, c.opt.search,
                           c.opt.fastWindow, fr, t.fits, kind, &t.verdicts);
     t.complex = t.ncpStar > lo;

@@ -2,8 +2,11 @@
 #include "afam/search/ncp_search.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <vector>
+
+#include <Eigen/Dense>
 
 #include "afam/spline/fit.hpp"
 
@@ -153,6 +156,100 @@ std::array<double, 3> axisRoughness(const float* samples, Int3 n) {
     r[size_t(a)] = sum / (double(interior[0]) * double(interior[1]) * double(interior[2]));
   }
   return r;
+}
+
+namespace {
+
+/// An orthonormal basis of the polynomials of degree <= p on the points 0..n-1 (Gram-Schmidt in
+/// double), p + 1 columns of n values; fewer when n <= p.
+std::vector<std::vector<double>> polynomialBasis(int n, int p) {
+  std::vector<std::vector<double>> q;
+  for (int d = 0; d <= p && d < n; ++d) {
+    std::vector<double> v(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) v[size_t(i)] = std::pow(double(i) / double(std::max(1, n - 1)), d);
+    for (int pass = 0; pass < 2; ++pass)  // twice: orthogonal to rounding
+      for (const std::vector<double>& b : q) {
+        double dot = 0;
+        for (int i = 0; i < n; ++i) dot += v[size_t(i)] * b[size_t(i)];
+        for (int i = 0; i < n; ++i) v[size_t(i)] -= dot * b[size_t(i)];
+      }
+    double norm = 0;
+    for (double x : v) norm += x * x;
+    norm = std::sqrt(norm);
+    for (double& x : v) x /= norm;
+    q.push_back(std::move(v));
+  }
+  return q;
+}
+
+}  // namespace
+
+double fewestPointsRmseFloor(const float* samples, Int3 n, int degree, int stride,
+                             double* squares) {
+  const int nx = n[0];
+  const std::vector<std::vector<double>> q = polynomialBasis(nx, effectiveDegree(degree, nx));
+  std::vector<double> r(static_cast<size_t>(nx));
+  double residual = 0;
+  for (int z = 0; z < n[2]; z += stride)
+    for (int y = 0; y < n[1]; y += stride) {
+      const float* line = samples + (size_t(z) * size_t(n[1]) + size_t(y)) * size_t(nx);
+      for (int i = 0; i < nx; ++i) r[size_t(i)] = double(line[i]);
+      if (squares) *squares += sumOfSquares(line, {nx, 1, 1});
+      for (const std::vector<double>& b : q) {  // r minus its projection, one column at a time
+        double dot = 0;
+        for (int i = 0; i < nx; ++i) dot += r[size_t(i)] * b[size_t(i)];
+        for (int i = 0; i < nx; ++i) r[size_t(i)] -= dot * b[size_t(i)];
+      }
+      for (double v : r) residual += v * v;
+    }
+  return std::sqrt(residual / (double(n[0]) * double(n[1]) * double(n[2])));
+}
+
+bool fewestPointsFail(const float* samples, Int3 n, int degree, double bound,
+                      NcpVerdicts& verdicts) {
+  double squares = 0;  // of the lines the floor read: their scale, for the rounding's margin
+  const double floor = fewestPointsRmseFloor(samples, n, degree, 4, &squares);
+  const double scale = std::sqrt(squares / (double(n[0]) * double(n[1]) * double(n[2])));
+  if (!(floor > bound * (1 + 1e-6) + 1e-9 * scale)) return false;  // clear of the rounding
+  if (verdicts.bound != bound) verdicts = NcpVerdicts{bound, {}};
+  const int nmax = std::max({1, n[0], n[1], n[2]});
+  const Int3 fewest = clampNcp(std::min(degree + 1, nmax), n, degreesOf(degree, n));
+  if (verdicts.of(fewest) != Verdict::Unknown) return false;  // one given ahead stands
+  verdicts.set(fewest, Verdict::Fails);
+  return true;
+}
+
+double interpolationGain(int n, int degree) {
+  thread_local std::vector<std::pair<std::pair<int, int>, double>> known;
+  const std::pair<int, int> key{n, effectiveDegree(degree, n)};
+  for (const auto& [at, gain] : known)
+    if (at == key) return gain;
+  const std::vector<double> a = collocationMatrix(n, n, degree);
+  const Eigen::MatrixXd inverse =
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+          a.data(), n, n)
+          .fullPivLu()
+          .inverse();
+  const double gain = inverse.cwiseAbs().rowwise().sum().maxCoeff();
+  known.emplace_back(key, gain);
+  return gain;
+}
+
+bool interpolantPasses(const float* samples, Int3 n, int degree, double bound,
+                       NcpVerdicts& verdicts) {
+  double gain = 1;
+  for (int a = 0; a < 3; ++a) gain *= interpolationGain(n[a], degree);
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  float largest = 0;
+  for (size_t i = 0; i < count; ++i) largest = std::max(largest, std::fabs(samples[i]));
+  // float32 rounding of the points (2^-24 relative) and the double solve's error (1e-9 of them:
+  // ~1e-13 at a condition number of 100), twice over.
+  const double worst = 2 * (std::ldexp(1.0, -24) + 1e-9) * gain * double(largest);
+  if (!(worst <= bound) || !(gain < 1e6)) return false;
+  if (verdicts.bound != bound) verdicts = NcpVerdicts{bound, {}};
+  if (verdicts.of(n) != Verdict::Unknown) return false;  // one given ahead stands
+  verdicts.set(n, Verdict::Passes);
+  return true;
 }
 
 Int3 fewerPointsPerAxis(const std::array<double, 3>& rough, Int3 start, Int3 n, int degree,

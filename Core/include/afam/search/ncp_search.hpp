@@ -72,6 +72,36 @@ std::array<int, 3> fewerPointsPerAxis(const std::array<double, 3>& rough, std::a
                                       std::array<int, 3> n, int degree,
                                       const std::function<bool(std::array<int, 3>)>& pass);
 
+/// A floor under the RMSE of every model of the fewest control points (NCP = p + 1 on every axis,
+/// clampNcp's lowest: along each axis a polynomial of that axis's effective degree): the least-
+/// squares residual of every `stride`-th x-line (in y and z) by such polynomials in x, over all
+/// the block's samples. Each model is such a polynomial along each x-line, so its squared error on
+/// those lines is at least that residual. A few passes over a share of the samples, where a fit
+/// reads them all several times: the search's first question (p + 1) needs no fit where the floor
+/// is above its bound (fewestPointsFail). `squares`, where given, gains the sum of the squared
+/// samples of the lines read.
+double fewestPointsRmseFloor(const float* samples, std::array<int, 3> n, int degree, int stride = 4,
+                             double* squares = nullptr);
+
+/// Sets the verdict Fails for the fewest control points in `verdicts` (answering for `bound`: any
+/// verdicts for another bound are dropped) where fewestPointsRmseFloor is above the RMSE bound
+/// beyond rounding; returns whether it did.
+bool fewestPointsFail(const float* samples, std::array<int, 3> n, int degree, double bound,
+                      NcpVerdicts& verdicts);
+
+/// The most an interpolating spline's control points exceed its samples in magnitude, on one axis
+/// of n samples (NCP = n, the degree reduced by effectiveDegree): the infinity norm of the inverse
+/// of its collocation matrix (computed once per thread for each (n, degree)).
+double interpolationGain(int n, int degree);
+
+/// Sets the verdict Passes for NCP = n on every axis (the interpolating spline) in `verdicts`
+/// (answering for `bound`, as fewestPointsFail) where that spline's float32 control points are
+/// sure to keep the RMSE bound: its error is their rounding (at most 2^-24 of the largest, the
+/// samples' largest magnitude times the product of the axes' interpolationGain) and the solve's
+/// (far below), and twice both is within the bound. Returns whether it did.
+bool interpolantPasses(const float* samples, std::array<int, 3> n, int degree, double bound,
+                       NcpVerdicts& verdicts);
+
 /// Roughness ratio between the roughest and an axis at which refineNcpPerAxis tries that axis.
 constexpr double kAnisotropy = 8.0;
 

@@ -194,9 +194,16 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
           ? bound - fr.error.maxError
           : std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
-  FitResult q = fr;
+  // The trial step's model (its points swapped in from the quantization: the thread's buffers
+  // pass between q, trial and kept, and no block's worth is allocated), and the last passing
+  // step's error (measured only near the bound).
+  thread_local FitResult q;
+  q.ncp = fr.ncp;
+  q.degree = fr.degree;
+  q.error = fr.error;
+  q.errorMeasured = fr.errorMeasured;
   bool lattice = true;
-  FitResult passed;  // the last passing step's model (its error measured only near the bound)
+  ErrorStats passed;
   // The trial step's quantization, and the last passing step's: the one coded.
   thread_local QuantizedValues trial, kept;
   auto passes = [&](double k) {
@@ -213,7 +220,7 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
     } else if (!fitter.changeWithin(s.data(), n, fr, q, bound)) {
       return false;
     }
-    passed = q;
+    passed = q.error;
     std::swap(trial, kept);
     return true;
   };
@@ -226,8 +233,7 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   if (kept.step != step) return false;
   std::vector<uint8_t> bytes;
   const FrameSizes frames = encodeQuantized(kept, coding, bytes);
-  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, passed.error,
-                  std::move(bytes),  false,  frames};
+  out = Candidate{BlockKind::Spline, fr.ncp, fr.degree, passed, std::move(bytes), false, frames};
   return keeps(kind, out.error, bound);
 }
 
@@ -278,8 +284,12 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
   std::memcpy(&step, c.bytes.data(), sizeof step);  // the coded samples' step, as a reader reads it
   const double allowed = std::min(
       bound, kRoundingGrowth * (kind == BoundKind::MaxError ? c.error.maxError : c.error.rmse));
-  FitResult rounded = model;
-  std::vector<int64_t> k(model.control.size());
+  // The thread's buffers, kept between blocks (a block's worth of fresh pages is costly).
+  thread_local FitResult rounded;
+  thread_local std::vector<int64_t> k;
+  rounded.ncp = model.ncp;
+  rounded.degree = model.degree;
+  k.resize(model.control.size());
   bool spanFits = true;
   auto passes = [&](int j, ErrorStats& e) {
     const double q = std::ldexp(step, -j);
@@ -352,7 +362,7 @@ bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n
   probe.degree = c.degree;
   probe.size = payloadBytes(n);
   probe.storedSize = c.bytes.size();
-  FitResult model;
+  thread_local FitResult model;  // kept between blocks, as its pages
   model.ncp = n;
   model.degree = c.degree;
   model.control.resize(s.size());

@@ -75,10 +75,20 @@ void visit(Predictor p, const Lattice& L, const double* q, Fn&& fn) {
     interpolation(L, q, fn);
 }
 
+/// One value's code: round((value - pred) / step) (nearbyint's result; beyond kRoundExact, > 2^50
+/// and refused, x itself); 0 for a free value whose code lies within its slack.
+inline double codeOf(double value, double pred, double step, bool isFree, int64_t slack) {
+  const double x = (value - pred) / step;
+  const double q = std::fabs(x) < codec::kRoundExact ? roundHalfEven(x) : x;
+  return isFree && std::fabs(q) <= double(slack) ? 0.0 : q;
+}
+
 /// Predicts every value from the values already reconstructed (in the predictor's order) and
 /// quantizes the prediction residual: code = round((v - prediction) / step), reconstruction =
 /// prediction + code * step, so each reconstructed value lies within step / 2 of its value.
-/// false when a code exceeds 2^50.
+/// false when a code exceeds 2^50. Lorenzo without free values walks four rows at once
+/// (lorenzoFourRows: each value waits for its prediction, a chain of dependent divisions), its
+/// codes stored at their values' places, which is its visiting order.
 bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor,
                      std::vector<int64_t>& codes, std::vector<float>& reconstructed,
                      FreeValues free) {
@@ -86,22 +96,31 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
   // The thread's buffer, not cleared: every value a prediction reads is written first (as in
   // decodeValues).
   double* r = threadScratch<double>(ScratchSlot::Doubles, count);
-  codes.clear();
-  codes.reserve(count);
   bool ok = true;
-  visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
-    const double x = (double(values[i]) - pred) / step;
-    // nearbyint's result; beyond kRoundExact (> 2^50, refused below) x itself.
-    double q = std::fabs(x) < codec::kRoundExact ? roundHalfEven(x) : x;
-    if (free.isFree(i) && std::fabs(q) <= double(free.slack)) q = 0.0;
+  // Value i's code (r[i] its reconstruction); false (and ok false) past 2^50.
+  auto quantize = [&](int64_t i, double pred, int64_t& code) {
+    const double q = codeOf(double(values[i]), pred, step, free.isFree(i), free.slack);
     if (!(std::fabs(q) <= kMaxCode)) {
       ok = false;
       r[size_t(i)] = double(values[i]);
-      return;
+      return false;
     }
-    codes.push_back(int64_t(q));
+    code = int64_t(q);
     r[size_t(i)] = pred + q * step;
-  });
+    return true;
+  };
+  if (predictor == Predictor::Lorenzo && !free.valid) {
+    codes.resize(count);
+    codec::lorenzoFourRows(Lattice{n}, r,
+                           [&](int64_t i, double pred) { quantize(i, pred, codes[size_t(i)]); });
+  } else {
+    codes.clear();
+    codes.reserve(count);
+    visit(predictor, Lattice{n}, r, [&](int64_t i, double pred) {
+      int64_t code;
+      if (quantize(i, pred, code)) codes.push_back(code);
+    });
+  }
   reconstructed.resize(count);
   for (size_t i = 0; i < count; ++i) reconstructed[i] = static_cast<float>(r[i]);
   return ok;

@@ -135,34 +135,75 @@ struct Lattice {
   int64_t index(int x, int y, int z) const { return (int64_t(z) * n[1] + y) * n[0] + x; }
 };
 
+/// Lorenzo's prediction of point i from its seven lower neighbours (strides sx, sy, sz), all inside
+/// the lattice: the sum in its one fixed order.
+template <typename T>
+inline T lorenzoInterior(const T* q, int64_t i, int64_t sx, int64_t sy, int64_t sz) {
+  return q[i - sx] + q[i - sy] + q[i - sz] - q[i - sx - sy] - q[i - sx - sz] - q[i - sy - sz] +
+         q[i - sx - sy - sz];
+}
+
+/// Lorenzo's prediction of a row's first point (no neighbour below in x; one outside reads 0).
+template <typename T>
+inline T lorenzoRowStart(const T* q, int64_t row, int64_t sy, int64_t sz, bool hasY, bool hasZ) {
+  const T b = hasY ? q[row - sy] : T(0), c = hasZ ? q[row - sz] : T(0);
+  const T f = hasY && hasZ ? q[row - sy - sz] : T(0);
+  return T(0) + b + c - T(0) - T(0) - f + T(0);
+}
+
+/// Lorenzo over the row (y, z) of the points whose coordinates are multiples of s, as lorenzo
+/// walks it.
+template <typename T, typename Fn>
+inline void lorenzoRow(const Lattice& L, const T* q, int s, int y, int z, Fn&& fn) {
+  const int64_t sx = s, sy = int64_t(s) * L.n[0], sz = int64_t(s) * L.n[0] * L.n[1];
+  const int64_t row = L.index(0, y, z);
+  const bool hasY = y >= s, hasZ = z >= s;
+  fn(row, lorenzoRowStart(q, row, sy, sz, hasY, hasZ));  // x = 0
+  if (hasY && hasZ) {  // every neighbour inside: the common case, no tests
+    for (int64_t i = row + sx; i < row + L.n[0]; i += sx) fn(i, lorenzoInterior(q, i, sx, sy, sz));
+    return;
+  }
+  for (int64_t i = row + sx; i < row + L.n[0]; i += sx) {
+    const T a = q[i - sx];
+    const T b = hasY ? q[i - sy] : T(0), c = hasZ ? q[i - sz] : T(0);
+    const T d = hasY ? q[i - sx - sy] : T(0), e = hasZ ? q[i - sx - sz] : T(0);
+    fn(i, a + b + c - d - e - T(0) + T(0));
+  }
+}
+
 /// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
 /// q[index] known when it returns. A neighbour outside the lattice reads 0.0; the sum is formed in
 /// one fixed order, so encoder and decoder predict bit for bit alike.
 template <typename T, typename Fn>
 inline void lorenzo(const Lattice& L, const T* q, int s, Fn&& fn) {
-  const int64_t sx = s, sy = int64_t(s) * L.n[0], sz = int64_t(s) * L.n[0] * L.n[1];
   for (int z = 0; z < L.n[2]; z += s)
-    for (int y = 0; y < L.n[1]; y += s) {
-      const int64_t row = L.index(0, y, z);
-      const bool hasY = y >= s, hasZ = z >= s;
-      // x = 0: no neighbour below in x.
-      {
-        const T b = hasY ? q[row - sy] : T(0), c = hasZ ? q[row - sz] : T(0);
-        const T f = hasY && hasZ ? q[row - sy - sz] : T(0);
-        fn(row, T(0) + b + c - T(0) - T(0) - f + T(0));
-      }
-      if (hasY && hasZ) {  // every neighbour inside: the common case, no tests
-        for (int64_t i = row + sx; i < row + L.n[0]; i += sx)
-          fn(i, q[i - sx] + q[i - sy] + q[i - sz] - q[i - sx - sy] - q[i - sx - sz] -
-                    q[i - sy - sz] + q[i - sx - sy - sz]);
+    for (int y = 0; y < L.n[1]; y += s) lorenzoRow(L, q, s, y, z, fn);
+}
+
+/// lorenzo at s = 1 with the interior rows of a plane four at a time, each a point behind the one
+/// before (row y + 1 at x reads row y at x and x - 1, known by then): four independent chains in
+/// flight where fn's work on a point waits for the point before it (a quantization through
+/// floating-point predictions). The same predictions of the same points, in another order: fn
+/// must not depend on the order.
+template <typename T, typename Fn>
+inline void lorenzoFourRows(const Lattice& L, const T* q, Fn&& fn) {
+  const int64_t nx = L.n[0], sy = L.n[0], sz = int64_t(L.n[0]) * L.n[1];
+  for (int z = 0; z < L.n[2]; ++z)
+    for (int y = 0; y < L.n[1];) {
+      if (z == 0 || y == 0 || y + 4 > L.n[1]) {
+        lorenzoRow(L, q, 1, y, z, fn);
+        ++y;
         continue;
       }
-      for (int64_t i = row + sx; i < row + L.n[0]; i += sx) {
-        const T a = q[i - sx];
-        const T b = hasY ? q[i - sy] : T(0), c = hasZ ? q[i - sz] : T(0);
-        const T d = hasY ? q[i - sx - sy] : T(0), e = hasZ ? q[i - sx - sz] : T(0);
-        fn(i, a + b + c - d - e - T(0) + T(0));
-      }
+      for (int64_t t = 0; t < nx + 3; ++t)
+        for (int j = 0; j < 4; ++j) {
+          const int64_t x = t - j;
+          if (x < 0 || x >= nx) continue;
+          const int64_t i = L.index(0, y + j, z) + x;
+          fn(i,
+             x == 0 ? lorenzoRowStart(q, i, sy, sz, true, true) : lorenzoInterior(q, i, 1, sy, sz));
+        }
+      y += 4;
     }
 }
 

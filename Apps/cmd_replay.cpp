@@ -12,11 +12,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "afam/base/errors.hpp"
 #include "afam/eval/image_metrics.hpp"
 #include "afam/eval/png_io.hpp"
+#include "afam/ranks/rank_boxes.hpp"
 #include "afam/render/renderer.hpp"
 #include "afam/scene/camera.hpp"
 #include "cli.hpp"
@@ -88,6 +91,21 @@ class StepPlayback {
   std::shared_ptr<const AfamFile> next_;
 };
 
+struct RankOfRanks {
+  int rank = 0, ranks = 1;
+};
+
+/// `--rank R/N`: 0 <= R < N (rankBox checks the pair again).
+RankOfRanks parseRank(const std::string& text) {
+  RankOfRanks r;
+  char slash = 0;
+  std::istringstream in(text);
+  if (!(in >> r.rank >> slash >> r.ranks) || slash != '/' || !in.eof() || r.ranks < 1 ||
+      r.rank < 0 || r.rank >= r.ranks)
+    throw InvalidArgument("--rank must be R/N with 0 <= R < N, not '" + text + "'");
+  return r;
+}
+
 /// `--ssim`: each frame's image against the exact frame of the same view, drawn by a second
 /// renderer of the same file that waits for every block (unlimited cache, no prefetching), on the
 /// same device (its own GPU pool), after the frame's timing.
@@ -118,7 +136,7 @@ class ExactReference {
 
 int runReplay(int argc, char** argv) {
   std::set<std::string> values = renderValueOptions();
-  values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out", "steps", "view"});
+  values.insert({"csv", "frames", "device", "gpu-budget-mb", "still-out", "steps", "view", "rank"});
   Args args(argc, argv, values, {"cold", "no-culling", "quiet", "ssim"});
   const char* usage =
       "afam replay FILE --trajectory T.dat [--size W,H] [--cache-blocks N | --cache-bytes B] "
@@ -157,6 +175,9 @@ int runReplay(int argc, char** argv) {
         "  --view K               every frame from the trajectory's point of view K (playback\n"
         "                         with a still camera); --frames sets how many (default: as many\n"
         "                         as the trajectory has)\n"
+        "  --rank R/N             draw only rank R's box of N (sort-last rendering, as each of\n"
+        "                         N pvbatch or pvserver ranks does): what that rank reads,\n"
+        "                         caches and casts\n"
         "  --ssim                 each frame's SSIM against the exact frame of its view (a\n"
         "                         second renderer waiting for every block, on the same\n"
         "                         --device; not timed)\n"
@@ -172,7 +193,7 @@ int runReplay(int argc, char** argv) {
   if (!args.has("trajectory"))
     throw InvalidArgument("--trajectory is required; usage: " + std::string(usage));
   const auto size = parseSize(args.str("size", "256,256"));
-  const RenderOptions opts = parseRenderOptions(args);
+  RenderOptions opts = parseRenderOptions(args);
   auto poses = loadTrajectory(args.str("trajectory"));
   if (args.has("frames")) {
     const long long n = args.integer("frames", 0);
@@ -191,6 +212,8 @@ int runReplay(int argc, char** argv) {
   auto file = AfamFile::open(path, args.integer("step", 0));
   StepPlayback playback(path, args.str("steps", ""), *file);
   if (playback.active()) file = playback.open(0);
+  const RankOfRanks rank = parseRank(args.str("rank", "0/1"));
+  if (rank.ranks > 1) opts.box = rankBox(*file, rank.rank, rank.ranks);
   Renderer renderer(file, opts);
   const DeviceChoice device =
       useDevice(renderer, args.str("device", "cpu"), args.integer("gpu-budget-mb", 2048));
@@ -271,6 +294,11 @@ int runReplay(int argc, char** argv) {
       opts.prefetch.c_str(), opts.cold ? 1 : 0, opts.storageMBps);
   std::printf("device=%s%s%s\n", device.used.c_str(), device.description.empty() ? "" : " ",
               device.description.c_str());
+  if (rank.ranks > 1) {
+    const CellBox& b = *opts.box;
+    std::printf("rank=%d ranks=%d box=[%d,%d)x[%d,%d)x[%d,%d) finest blocks\n", rank.rank,
+                rank.ranks, b.lo[0], b.hi[0], b.lo[1], b.hi[1], b.lo[2], b.hi[2]);
+  }
   std::printf("%-12s %10s\n", "median", "ms");
   std::printf("%-12s %10.3f\n%-12s %10.3f\n%-12s %10.3f\n", "latency", median(lat), "caching",
               median(cach), "rendering", median(rend));

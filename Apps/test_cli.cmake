@@ -129,4 +129,19 @@ if (CMAKE_MATCH_1 GREATER 20000 OR CMAKE_MATCH_1 LESS 5000)
   message(FATAL_ERROR "replay with --cache-bytes 20000: cache peak ${CMAKE_MATCH_1} bytes")
 endif ()
 
+# One rank's share of 2 (sort-last rendering): it says its box and reads less than the whole view.
+run_ok(whole ${AFAM} replay ml.afam --trajectory "${TRAJ}" --frames 4 --size 16,16 --threads 2 --quiet)
+run_ok(half ${AFAM} replay ml.afam --trajectory "${TRAJ}" --frames 4 --size 16,16 --threads 2 --quiet
+       --rank 1/2)
+if (NOT half MATCHES "rank=1 ranks=2 box=" OR NOT whole MATCHES "bytes_read=([0-9]+)")
+  message(FATAL_ERROR "replay --rank 1/2: ${half}")
+endif ()
+set(whole_bytes ${CMAKE_MATCH_1})
+string(REGEX MATCH "bytes_read=([0-9]+)" _ "${half}")
+if (NOT CMAKE_MATCH_1 LESS whole_bytes)
+  message(FATAL_ERROR "replay --rank 1/2 read ${CMAKE_MATCH_1} bytes, the whole view ${whole_bytes}")
+endif ()
+run_fails("--rank must be R/N" ${AFAM} replay ml.afam --trajectory "${TRAJ}" --rank 2/2)
+run_fails("--rank must be R/N" ${AFAM} replay ml.afam --trajectory "${TRAJ}" --rank 1)
+
 message(STATUS "afam CLI test passed: rmse=${rmse}")

@@ -18,15 +18,7 @@ size_t cellIndex(const Int3& cells, int x, int y, int z) {
   return (size_t(z) * size_t(cells[1]) + size_t(y)) * size_t(cells[0]) + size_t(x);
 }
 
-/// Voxels of finest block ijk (an axis of extent 0 counts 1).
-int64_t blockVoxels(const Partition& p, const Int3& ijk) {
-  const BlockExtent e = p.extent(p.levels() - 1, ijk);
-  int64_t v = 1;
-  for (int a = 0; a < 3; ++a) v *= std::max<int64_t>(1, e.hi[a] - e.lo[a]);
-  return v;
-}
-
-/// Whether a block's rays and bytes count (header comment): not empty, not all at the lowest value.
+/// Whether a block's bytes count (header comment): not empty, not all at the lowest value.
 bool countsWork(const AfamFile& file, const ModelEntry& e) {
   return e.kind != BlockKind::Empty && e.maxValue > float(file.header().valueMin);
 }
@@ -150,6 +142,20 @@ void checkGrid(const CellGrid& g, int ranks) {
 
 }  // namespace
 
+/// The bytes of a finest block's coarser ancestors that fall to it: each ancestor's stored bytes
+/// shared among the finest blocks it covers (a view that draws a coarser level there reads them).
+double ancestorShare(const AfamFile& file, const Int3& finestIjk) {
+  const Partition& p = file.partition();
+  double share = 0;
+  Int3 ijk = finestIjk;
+  for (int level = p.levels() - 2; level >= 0; --level) {
+    ijk = p.parent(level + 1, ijk);
+    const ModelEntry& e = file.entries()[size_t(file.entryIndex(level, ijk))];
+    share += double(e.storedSize) / double(p.cells(level, ijk).cells());
+  }
+  return share;
+}
+
 CellGrid cellWork(const AfamFile& file) {
   const Partition& p = file.partition();
   const int finest = p.levels() - 1;
@@ -164,23 +170,19 @@ CellGrid cellWork(const AfamFile& file) {
       g.bounds[size_t(a)][size_t(i) + 1] = p.extent(finest, ijk).hi[a];
     }
   }
-  std::vector<double> voxels, bytes;  // of the blocks that count; 0 for the others
-  double voxelSum = 0, byteSum = 0;
+  std::vector<double> bytes;  // of the blocks that count; 0 for the others
+  double byteSum = 0;
   int64_t counted = 0;
   for (int64_t i = 0; i < p.blockCount(finest); ++i) {
     const Int3 ijk = p.blockFromLinear(finest, i);
     const ModelEntry& e = file.entries()[size_t(file.entryIndex(finest, ijk))];
     const bool counts = countsWork(file, e);
-    voxels.push_back(counts ? double(blockVoxels(p, ijk)) : 0.0);
-    bytes.push_back(counts ? double(e.storedSize) : 0.0);
-    voxelSum += voxels.back();
+    bytes.push_back(counts ? double(e.storedSize) + ancestorShare(file, ijk) : 0.0);
     byteSum += bytes.back();
     counted += counts ? 1 : 0;
   }
-  const double meanVoxels = counted ? voxelSum / double(counted) : 1.0;
   const double meanBytes = counted && byteSum > 0 ? byteSum / double(counted) : 1.0;
-  for (size_t i = 0; i < voxels.size(); ++i)
-    g.work.push_back(kWorkFloor + 0.5 * (voxels[i] / meanVoxels + bytes[i] / meanBytes));
+  for (const double b : bytes) g.work.push_back(kWorkFloor + b / meanBytes);
   return g;
 }
 

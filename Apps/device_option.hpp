@@ -10,7 +10,7 @@
 #include <string>
 
 #include "afam/base/errors.hpp"
-#include "afam/cuda/make_gpu_caster.hpp"
+#include "afam/cuda/render/make_gpu_caster.hpp"
 #include "afam/render/renderer.hpp"
 
 namespace afam::cli {

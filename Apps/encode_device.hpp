@@ -9,7 +9,7 @@
 #include <string>
 
 #include "afam/base/errors.hpp"
-#include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/encode/encoder.hpp"
 
 namespace afam::cli {

@@ -7,7 +7,7 @@
 #include "vtkAFAMMissingSamples.h"
 #include "vtkAFAMModelTree.h"
 
-#include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"

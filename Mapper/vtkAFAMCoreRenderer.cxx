@@ -6,7 +6,7 @@
 #include <malloc.h>
 #endif
 
-#include "afam/cuda/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
+#include "afam/cuda/render/make_gpu_caster.hpp" // plain C++; a stub in builds without nvcc
 #include "afam/format/afam_file.hpp"
 #include "afam/ranks/rank_boxes.hpp"
 #include "afam/ranks/same_file.hpp"

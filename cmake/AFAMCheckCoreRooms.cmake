@@ -1,25 +1,41 @@
 # SPDX-License-Identifier: BSD-3-Clause
-# cmake -DAFAM_SOURCE_DIR=<root> -P AFAMCheckCoreRooms.cmake
-# Keeps Core's rooms in order (docs/ARCHITECTURE.md): every file of a room (its headers under
-# Core/include/afam/<room>/, its sources under Core/src/<room>/) includes Core headers of its own
-# room or of rooms below it only, and no room's folder holds more than AFAM_ROOM_MAX_FILES files.
-# A file outside the rooms, or an include of a room not listed here, fails too.
+# cmake -DAFAM_SOURCE_DIR=<root> [-DAFAM_ROOMS_OF=Core|CudaKernels] -P AFAMCheckCoreRooms.cmake
+# Keeps a layer's rooms in order (docs/ARCHITECTURE.md): every file of a room (its headers under
+# <layer>/include/afam/[cuda/]<room>/, its sources under <layer>/src/<room>/) includes headers of
+# its own room or of rooms below it only, and no room's folder holds more than AFAM_ROOM_MAX_FILES
+# files. A file outside the rooms, or an include of a room not listed here, fails too.
+#  Core: its rooms, by <afam/ROOM/...>.
+#  CudaKernels: its rooms, by <afam/cuda/ROOM/...> and, within src/, by "ROOM/..."; any Core
+#  header may be included (Core lies below CudaKernels).
 cmake_policy(SET CMP0057 NEW)
 if (NOT AFAM_SOURCE_DIR)
   message(FATAL_ERROR "pass -DAFAM_SOURCE_DIR=<source root>")
 endif ()
+if (NOT AFAM_ROOMS_OF)
+  set(AFAM_ROOMS_OF Core)
+endif ()
 # Bottom to top: a room may include the rooms before it in this list.
-set(_rooms base entropy spline format volume search encode scene predict render ranks eval)
+if (AFAM_ROOMS_OF STREQUAL "Core")
+  set(_rooms base entropy spline format volume search encode scene predict render ranks eval)
+  set(_tops include/afam src)
+  set(_public "afam/")
+elseif (AFAM_ROOMS_OF STREQUAL "CudaKernels")
+  set(_rooms common decode encode render)
+  set(_tops include/afam/cuda src)
+  set(_public "afam/cuda/")
+else ()
+  message(FATAL_ERROR "AFAM_ROOMS_OF is Core or CudaKernels, not ${AFAM_ROOMS_OF}")
+endif ()
+set(_layer "${AFAM_SOURCE_DIR}/${AFAM_ROOMS_OF}")
 set(AFAM_ROOM_MAX_FILES 15)
 set(_offenders "")
-foreach (_top IN ITEMS include/afam src)
-  file(GLOB _entries LIST_DIRECTORIES true RELATIVE "${AFAM_SOURCE_DIR}/Core/${_top}"
-       "${AFAM_SOURCE_DIR}/Core/${_top}/*")
+foreach (_top IN LISTS _tops)
+  file(GLOB _entries LIST_DIRECTORIES true RELATIVE "${_layer}/${_top}" "${_layer}/${_top}/*")
   foreach (_entry IN LISTS _entries)
-    if (NOT IS_DIRECTORY "${AFAM_SOURCE_DIR}/Core/${_top}/${_entry}")
-      list(APPEND _offenders "Core/${_top}/${_entry}: a file outside the rooms")
+    if (NOT IS_DIRECTORY "${_layer}/${_top}/${_entry}")
+      list(APPEND _offenders "${AFAM_ROOMS_OF}/${_top}/${_entry}: a file outside the rooms")
     elseif (NOT _entry IN_LIST _rooms)
-      list(APPEND _offenders "Core/${_top}/${_entry}: a room the layering does not list")
+      list(APPEND _offenders "${AFAM_ROOMS_OF}/${_top}/${_entry}: a room the layering does not list")
     endif ()
   endforeach ()
 endforeach ()
@@ -27,20 +43,30 @@ list(LENGTH _rooms _count)
 math(EXPR _last "${_count} - 1")
 foreach (_rank RANGE ${_last})
   list(GET _rooms ${_rank} _room)
-  foreach (_top IN ITEMS include/afam src)
-    set(_dir "${AFAM_SOURCE_DIR}/Core/${_top}/${_room}")
+  foreach (_top IN LISTS _tops)
+    set(_dir "${_layer}/${_top}/${_room}")
     file(GLOB_RECURSE _files LIST_DIRECTORIES false "${_dir}/*")
     list(LENGTH _files _n)
     if (_n GREATER AFAM_ROOM_MAX_FILES)
-      list(APPEND _offenders "Core/${_top}/${_room}: ${_n} files (at most ${AFAM_ROOM_MAX_FILES})")
+      list(APPEND _offenders "${AFAM_ROOMS_OF}/${_top}/${_room}: ${_n} files (at most ${AFAM_ROOM_MAX_FILES})")
     endif ()
     foreach (_f IN LISTS _files)
-      file(STRINGS "${_f}" _includes REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]afam/")
+      file(STRINGS "${_f}" _includes REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]")
       foreach (_line IN LISTS _includes)
-        string(REGEX REPLACE ".*[<\"]afam/([^/\">]+)/.*" "\\1" _target "${_line}")
+        set(_target "")
+        if (_line MATCHES "[<\"]${_public}([^/\">]+)/")
+          set(_target "${CMAKE_MATCH_1}")
+        elseif (AFAM_ROOMS_OF STREQUAL "CudaKernels" AND _line MATCHES "[<\"]afam/")
+          continue ()  # a Core header: below every room of CudaKernels
+        elseif (AFAM_ROOMS_OF STREQUAL "CudaKernels" AND _top STREQUAL "src" AND
+                _line MATCHES "\"([^/\"]+)/[^\"]*\"")
+          set(_target "${CMAKE_MATCH_1}")  # a private header of a room: "render/kernels.cuh"
+        else ()
+          continue ()  # a system or third-party header, or one of the room's own
+        endif ()
         list(FIND _rooms "${_target}" _target_rank)
         if (_target_rank EQUAL -1)
-          list(APPEND _offenders "${_f}: ${_line} (not a room of Core)")
+          list(APPEND _offenders "${_f}: ${_line} (not a room of ${AFAM_ROOMS_OF})")
         elseif (_target_rank GREATER _rank)
           list(APPEND _offenders "${_f}: ${_line} (room ${_room} includes the higher room ${_target})")
         endif ()
@@ -50,7 +76,7 @@ foreach (_rank RANGE ${_last})
 endforeach ()
 if (_offenders)
   string(REPLACE ";" "\n  " _msg "${_offenders}")
-  message(FATAL_ERROR "Core's rooms out of order:\n  ${_msg}")
+  message(FATAL_ERROR "${AFAM_ROOMS_OF}'s rooms out of order:\n  ${_msg}")
 endif ()
 string(REPLACE ";" " < " _order "${_rooms}")
-message(STATUS "Core's rooms in order: ${_order}")
+message(STATUS "${AFAM_ROOMS_OF}'s rooms in order: ${_order}")

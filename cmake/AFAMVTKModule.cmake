@@ -58,5 +58,5 @@ vtk_module_link(AFAM::vtkAFAM PRIVATE afam_core)
 # afam_cuda, static, PIC, linking cudart statically and bringing AFAM_HAVE_CUDA=1 (its PUBLIC
 # definition) for the one file that talks to CUDA itself (Mapper/vtkAFAMCudaGLBuffer.cxx: CUDA's
 # runtime and OpenGL-interop headers, through cudart's include directories); without nvcc, a stub
-# that says so. The module includes only its plain C++ header (afam/cuda/make_gpu_caster.hpp).
+# that says so. The module includes only its plain C++ header (afam/cuda/render/make_gpu_caster.hpp).
 vtk_module_link(AFAM::vtkAFAM PRIVATE afam_gpu_caster)

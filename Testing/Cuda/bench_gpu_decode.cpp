@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/cuda/gpu_block_decoder.hpp"
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "gpu_decode_batch.hpp"
 
 namespace {

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/cuda/gpu_block_decoder.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "afam/format/afam_file.hpp"
 
 namespace afam::gputest {

@@ -11,8 +11,8 @@
 #include <random>
 
 #include "../Core/scratch_dir.hpp"
-#include "afam/cuda/gpu_block_decoder.hpp"
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"

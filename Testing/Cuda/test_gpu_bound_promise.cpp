@@ -20,8 +20,8 @@
 #include "../Core/bound_promise_cases.hpp"
 #include "../Core/decoded_bound.hpp"
 #include "../Core/scratch_dir.hpp"
-#include "afam/cuda/gpu_block_decoder.hpp"
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "gpu_decode_batch.hpp"
 
 namespace afam {

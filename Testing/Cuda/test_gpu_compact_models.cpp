@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "../Core/render_test_util.hpp"
-#include "afam/cuda/gpu_caster.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/render/gpu_caster.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 #include "afam/render/renderer.hpp"
 
 namespace afam {

@@ -8,8 +8,8 @@
 
 #include "../Core/damaged_copy.hpp"
 #include "../Core/render_test_util.hpp"
-#include "afam/cuda/gpu_caster.hpp"
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/render/gpu_caster.hpp"
 #include "afam/render/renderer.hpp"
 
 namespace afam {

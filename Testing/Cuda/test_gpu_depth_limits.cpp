@@ -11,8 +11,8 @@
 #include <cstring>
 #include <vector>
 
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 #include "afam/scene/view_mapping.hpp"
 
 namespace afam {

@@ -12,9 +12,9 @@
 #include <cstdio>
 
 #include "../Core/render_test_util.hpp"
-#include "afam/cuda/gpu_caster.hpp"
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/render/gpu_caster.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 #include "afam/render/renderer.hpp"
 
 namespace afam {

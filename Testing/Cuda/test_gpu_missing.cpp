@@ -9,8 +9,8 @@
 #include <cstdio>
 
 #include "../Core/masked_scene.hpp"
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 #include "afam/render/cpu_raycaster.hpp"
 #include "gpu_scene.hpp"
 

@@ -14,7 +14,7 @@
 #include <tuple>
 #include <vector>
 
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 #include "afam/render/cpu_raycaster.hpp"
 #include "gpu_scene.hpp"
 

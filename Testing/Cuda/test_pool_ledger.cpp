@@ -8,8 +8,8 @@
 #include <map>
 #include <random>
 
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/pool_ledger.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/decode/pool_ledger.hpp"
 
 namespace afam {
 namespace {

@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <vector>
 
-#include "../cuda_check.hpp"
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/ranks/device_selection.hpp"
 #include "afam/search/least_squares_order.hpp"
+#include "common/cuda_check.hpp"
 
 namespace afam {
 

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // makeGpuLeastSquares of a build without nvcc: none, and the reason in words.
-#include "afam/cuda/make_gpu_least_squares.hpp"
+#include "afam/cuda/encode/make_gpu_least_squares.hpp"
 
 namespace afam {
 

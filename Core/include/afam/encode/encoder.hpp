@@ -116,9 +116,9 @@ struct EncoderOptions {
   double missingValue = 0;
   /// Bounded modes with an RMSE bound: least-squares residuals that answer the NCP searches'
   /// questions ahead, a batch of blocks at a time (ncp_verdicts.hpp): the GPU's
-  /// (afam/cuda/make_gpu_least_squares.hpp) or the CPU reference. The searches then fit about once
-  /// a block and find the same NCPs. Null: every question is a fit. Should it throw, the encode
-  /// goes on fitting (EncodeStats::aheadFailure says why).
+  /// (afam/cuda/encode/make_gpu_least_squares.hpp) or the CPU reference. The searches then fit
+  /// about once a block and find the same NCPs. Null: every question is a fit. Should it throw, the
+  /// encode goes on fitting (EncodeStats::aheadFailure says why).
   std::shared_ptr<LeastSquaresBatch> leastSquares;
 };
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Least-squares residuals of many blocks at once: what the NCP search asks of a fit, answered ahead
-// of it for a whole batch of blocks (on the GPU: afam/cuda/make_gpu_least_squares.hpp; on the CPU:
-// CpuLeastSquaresBatch, the reference, of the same math).
+// of it for a whole batch of blocks (on the GPU: afam/cuda/encode/make_gpu_least_squares.hpp; on
+// the CPU: CpuLeastSquaresBatch, the reference, of the same math).
 //
 // Math. On each axis the least-squares fit projects the samples onto the span of the collocation
 // matrix A (n x ncp); with A = QR (Q orthonormal, n x ncp) the projection is Q Q^T, and the tensor

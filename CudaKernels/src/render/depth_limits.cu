@@ -3,7 +3,7 @@
 // CPU's math (afam/scene/depth_limits.hpp). Compiled with -fmad=false: the same roundings as the
 // CPU's rayLengthsFromDepth, so GPU and CPU frames stop their rays at the same samples.
 #include "afam/scene/depth_limits.hpp"
-#include "kernel_launch.hpp"
+#include "render/kernel_launch.hpp"
 
 namespace afam::kernels_depth {
 namespace {

@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/cuda/gpu_model_pool.hpp"
+#include "afam/cuda/decode/gpu_model_pool.hpp"
 
 #include <cuda_runtime_api.h>
 
 #include <cstring>
 #include <vector>
 
-#include "cuda_check.hpp"
+#include "common/cuda_check.hpp"
 
 namespace afam {
 

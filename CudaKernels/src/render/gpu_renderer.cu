@@ -2,7 +2,7 @@
 // Host side of the CUDA ray caster: model pool, frame tables, image, timing. The kernels are in
 // kernels.cuh (one thread per pixel calling the shared afam::castRay), built once per
 // floating-point contract (kernels_exact.cu, kernels_fma.cu, kernels_fast.cu).
-#include "afam/cuda/gpu_renderer.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
 
 #include <cuda_runtime.h>
 
@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "afam/base/hash.hpp"
-#include "cuda_check.hpp"
-#include "kernel_launch.hpp"
+#include "common/cuda_check.hpp"
+#include "render/kernel_launch.hpp"
 
 namespace afam {
 

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
 
 namespace afam::cuda_detail {
 

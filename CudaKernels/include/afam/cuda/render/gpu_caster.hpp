@@ -10,9 +10,9 @@
 #include <memory>
 #include <string>
 
-#include "afam/cuda/gpu_model_pool.hpp"
-#include "afam/cuda/gpu_renderer.hpp"
-#include "afam/cuda/make_gpu_caster.hpp"
+#include "afam/cuda/decode/gpu_model_pool.hpp"
+#include "afam/cuda/render/gpu_renderer.hpp"
+#include "afam/cuda/render/make_gpu_caster.hpp"
 #include "afam/render/frame_caster.hpp"
 
 namespace afam {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "afam/render/raycast.hpp"
-#include "cuda_check.hpp"
-#include "kernel_launch.hpp"
+#include "common/cuda_check.hpp"
+#include "render/kernel_launch.hpp"
 
 #ifndef AFAM_KERNEL_NS
 #error "define AFAM_KERNEL_NS before including kernels.cuh"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/cuda/gpu_caster.hpp"
+#include "afam/cuda/render/gpu_caster.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/cuda/gpu_block_decoder.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "afam/ranks/device_selection.hpp"
 #include "afam/render/cpu_raycaster.hpp"
 #include "afam/render/prepared_frame.hpp"

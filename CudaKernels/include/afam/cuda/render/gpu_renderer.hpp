@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/cuda/gpu_error.hpp"
-#include "afam/cuda/gpu_model_pool.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
+#include "afam/cuda/decode/gpu_model_pool.hpp"
 #include "afam/render/frame_caster.hpp"  // DeviceDepth
 #include "afam/render/raycast.hpp"
 

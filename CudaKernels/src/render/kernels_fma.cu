@@ -1,4 +1,4 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Kernels with the "fma" floating-point contract (compile options in CMakeLists.txt).
 #define AFAM_KERNEL_NS kernels_fma
-#include "kernels.cuh"
+#include "render/kernels.cuh"

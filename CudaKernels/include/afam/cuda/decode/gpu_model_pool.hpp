@@ -13,8 +13,8 @@
 #include <utility>
 #include <vector>
 
-#include "afam/cuda/gpu_block_decoder.hpp"
-#include "afam/cuda/pool_ledger.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
+#include "afam/cuda/decode/pool_ledger.hpp"
 
 namespace afam {
 

@@ -2,7 +2,7 @@
 // GpuBlockDecoder (gpu_block_decoder.hpp). Compiled with -fmad=false; the one floating-point
 // expression, float((double(base) + double(k)) * step), is also spelled with round-to-nearest
 // intrinsics, so it rounds as Core's integerValue does on the CPU.
-#include "afam/cuda/gpu_block_decoder.hpp"
+#include "afam/cuda/decode/gpu_block_decoder.hpp"
 
 #include <cuda_runtime.h>
 
@@ -12,7 +12,7 @@
 
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"
-#include "cuda_check.hpp"
+#include "common/cuda_check.hpp"
 
 namespace afam {
 

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "afam/render/raycast.hpp"
-#include "cuda_check.hpp"
-#include "kernel_launch.hpp"
+#include "common/cuda_check.hpp"
+#include "render/kernel_launch.hpp"
 
 namespace afam::kernels_texture {
 

@@ -1,4 +1,4 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Kernels with the "exact" floating-point contract (compile options in CMakeLists.txt).
 #define AFAM_KERNEL_NS kernels_exact
-#include "kernels.cuh"
+#include "render/kernels.cuh"

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/cuda/pool_ledger.hpp"
+#include "afam/cuda/decode/pool_ledger.hpp"
 
 #include <string>
 
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
 
 namespace afam {
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/cuda/gpu_error.hpp"
+#include "afam/cuda/common/gpu_error.hpp"
 
 #include "afam/ranks/device_selection.hpp"
 

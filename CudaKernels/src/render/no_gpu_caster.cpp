@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // makeGpuCaster of a build without nvcc: no GPU, and the reason in words.
-#include "afam/cuda/make_gpu_caster.hpp"
+#include "afam/cuda/render/make_gpu_caster.hpp"
 
 namespace afam {
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/base/hash.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
@@ -500,6 +501,42 @@ TEST(Encoder, DecodeLevelBoxJoinsBlocksAndReadsSubBoxes) {
   }
   EXPECT_THROW(decodeLevelBox(*file, 3, {0, 0, 0}, {0, 0, 0}, nullptr), InvalidArgument);
   EXPECT_THROW(decodeLevelBox(*file, 0, {0, 0, 0}, {n, 0, 0}, nullptr), InvalidArgument);
+}
+
+TEST(Encoder, ANoisyBlocksFormIsCheckedOnlyWhereItCouldBeKept) {
+  // A block coded as its samples checks, of its integer and double forms, the one the sizes keep
+  // whatever rounded-points byte the checks add, and the other only where that one fails: the
+  // payloads (the kept integer form at 0.3, the double form at 0.5) are the bytes both checked
+  // gave (their FNV-1a 64 with both checked, 5113b15).
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal(0, 1);
+  const Index3 dims{40, 40, 40};
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]));
+  for (size_t i = 0; i < v.size(); ++i)
+    v[i] = float(4 * std::sin(0.25 * double(i % 40)) * std::cos(0.2 * double(i / 40 % 40)) +
+                 normal(rng));
+  const struct {
+    double bound;
+    bool integerForm;
+    uint64_t hash;
+  } cases[] = {{0.3, true, 0x944883fbc596d9feull}, {0.5, false, 0x9a1af33ad3319474ull}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.bound);
+    EncoderOptions opt;
+    opt.errorBound = c.bound;
+    opt.levels = 1;
+    opt.blocksPerAxis = 1;
+    opt.threads = 1;
+    ArraySource src(v.data(), dims);
+    const std::string path = tmpPath("noisy_forms.afam");
+    encodeVolume(src, opt, path);
+    const auto file = AfamFile::open(path);
+    ASSERT_EQ(file->entries().size(), 1u);
+    EXPECT_EQ(file->entries()[0].kind, BlockKind::Interpolant);
+    EXPECT_EQ(file->entries()[0].integerCoded, c.integerForm);
+    const std::vector<uint8_t> stored = file->readStored(0);
+    EXPECT_EQ(fnv1a64(stored.data(), stored.size()), c.hash);
+  }
 }
 
 TEST(Encoder, NoiseAboveTheBoundIsCodedAsSamplesAfterOneFit) {

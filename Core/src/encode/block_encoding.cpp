@@ -241,10 +241,12 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
 /// than 2% of its bytes (the integer form decodes about 2.7x faster; block_codec.hpp). At coarse
 /// steps (a step of a few noise sigmas) the double form can code noticeably smaller, as its
 /// predictions keep the fractions the integer form rounds away.
+/// Whether a double form of `dbl` bytes wins over an integer form of `integer` bytes.
+bool doubleFormWins(size_t dbl, size_t integer) { return double(dbl) < 0.98 * double(integer); }
+
 bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candidate& dbl,
                      Candidate& out) {
-  if (hasDouble &&
-      (!hasInteger || double(dbl.bytes.size()) < 0.98 * double(integer.bytes.size()))) {
+  if (hasDouble && (!hasInteger || doubleFormWins(dbl.bytes.size(), integer.bytes.size()))) {
     out = std::move(dbl);
     return true;
   }
@@ -374,6 +376,31 @@ bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n
   return true;
 }
 
+/// checkInterpolant of the coded forms that keepSmallerForm may keep: where their sizes decide
+/// between them whatever rounded-points byte the checks add, the one it prefers first and the
+/// other only where that one fails its check (which form is kept, and how, is as with both
+/// checked); else both. `has*`: coded and checked, keeping the bound.
+void checkBothForms(const std::vector<float>& s, const uint32_t* valid, Int3 n, double bound,
+                    BoundKind kind, BlockFitter& fitter, bool codedInteger, Candidate& integer,
+                    bool& hasInteger, bool codedDouble, Candidate& dbl, bool& hasDouble) {
+  auto check = [&](bool coded, Candidate& c) {
+    return coded && checkInterpolant(s, valid, n, bound, kind, fitter, c);
+  };
+  const size_t di = integer.bytes.size(), dd = dbl.bytes.size(), r = kRoundedPointsBytes;
+  const bool sure =
+      codedInteger && codedDouble && (doubleFormWins(dd + r, di) || !doubleFormWins(dd, di + r));
+  if (sure && doubleFormWins(dd, di)) {
+    hasDouble = check(true, dbl);
+    hasInteger = !hasDouble && check(true, integer);
+  } else if (sure) {
+    hasInteger = check(true, integer);
+    hasDouble = !hasInteger && check(true, dbl);
+  } else {
+    hasInteger = check(codedInteger, integer);
+    hasDouble = check(codedDouble, dbl);
+  }
+}
+
 /// How the holes of a block with missing samples are coded (FreeValues::slack), each tried: as
 /// filled (hole_fill.hpp), free where their prediction lies within kNearFillSteps of the filling,
 /// and free everywhere. Measured on the 44 masked files of Testing/Benchmarks/missing_values.sh:
@@ -405,9 +432,9 @@ bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int
     if (!(codedInteger && integer.bytes.size() < loses) &&
         !(codedDouble && dbl.bytes.size() < loses))
       continue;
-    const bool hasInteger =
-        codedInteger && checkInterpolant(s, valid, n, bound, kind, fitter, integer);
-    const bool hasDouble = codedDouble && checkInterpolant(s, valid, n, bound, kind, fitter, dbl);
+    bool hasInteger = false, hasDouble = false;
+    checkBothForms(s, valid, n, bound, kind, fitter, codedInteger, integer, hasInteger, codedDouble,
+                   dbl, hasDouble);
     if (!keepSmallerForm(hasInteger, integer, hasDouble, dbl, best)) continue;
     if (!found || best.bytes.size() < out.bytes.size()) out = std::move(best);
     found = true;

@@ -91,8 +91,8 @@ inline RenderOptions parseRenderOptions(const Args& a) {
   o.loadNice = int(a.integer("load-nice", o.loadNice));
   if (o.loadNice < 0 || o.loadNice > 19) throw InvalidArgument("--load-nice must be in 0..19");
   o.missBudgetMs = a.real("miss-budget-ms", -1);
-  if (a.has("miss-budget-ms") && !(o.missBudgetMs >= 0))
-    throw InvalidArgument("--miss-budget-ms must be a number >= 0");
+  if (a.has("miss-budget-ms") && !(o.missBudgetMs >= 0 && o.missBudgetMs <= kMaxMissBudgetMs))
+    throw InvalidArgument("--miss-budget-ms must be a number in [0, 3600000] (an hour)");
   o.sampleDistance = float(a.real("sample-distance", 0.005));
   if (!(o.sampleDistance > 0)) throw InvalidArgument("--sample-distance must be > 0");
   o.terminationOpacity = float(a.real("termination", kTerminationOpacity));

@@ -407,14 +407,23 @@ TEST(Renderer, AFrameWaitsNoLongerThanItsMissBudgetAndTheStillFrameIsExact) {
 TEST(Renderer, AnUnusableMissBudgetIsRefused) {
   const auto file = afam_test::encodeMl(33, EncodingMode::Adaptive, 2, 4, 1e-3);
   Renderer r(file, testOptions());
-  FrameSettings s = r.settings();
-  s.missBudgetMs = std::nan("");
-  EXPECT_THROW(r.setFrameSettings(s), InvalidArgument);
-  std::vector<std::string> warnings;
-  const FrameSettings kept = acceptFrameSettings(s, r.settings(), warnings);
-  EXPECT_EQ(kept.missBudgetMs, -1);
-  ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("miss budget"), std::string::npos) << warnings[0];
+  for (const double absurd : {std::nan(""), HUGE_VAL, 1e20, kMaxMissBudgetMs * 1.01}) {
+    SCOPED_TRACE(absurd);
+    FrameSettings s = r.settings();
+    s.missBudgetMs = absurd;
+    EXPECT_THROW(r.setFrameSettings(s), InvalidArgument);
+    std::vector<std::string> warnings;
+    const FrameSettings kept = acceptFrameSettings(s, r.settings(), warnings);
+    EXPECT_EQ(kept.missBudgetMs, -1);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("miss budget"), std::string::npos) << warnings[0];
+  }
+  // An hour is a budget; so is -infinity (no budget: every block waited for).
+  for (const double usable : {kMaxMissBudgetMs, 0.0, -HUGE_VAL}) {
+    FrameSettings s = r.settings();
+    s.missBudgetMs = usable;
+    EXPECT_NO_THROW(r.setFrameSettings(s)) << usable;
+  }
 }
 
 namespace {

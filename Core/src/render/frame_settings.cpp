@@ -126,8 +126,9 @@ std::string terminationProblem(const FrameSettings& s) {
 }
 
 std::string missBudgetProblem(const FrameSettings& s) {
-  if (!std::isnan(s.missBudgetMs)) return {};
-  return "miss budget " + number(s.missBudgetMs) + " ms is not a number";
+  if (s.missBudgetMs <= kMaxMissBudgetMs) return {};  // negative: no budget
+  return "miss budget " + number(s.missBudgetMs) + " ms is not a number of milliseconds up to " +
+         number(kMaxMissBudgetMs) + " (an hour; negative: wait for every block)";
 }
 
 }  // namespace

@@ -41,9 +41,13 @@ struct FrameSettings {
   /// at once. < 0 (default): until every selected block is resident (the exact frame). >= 0: at
   /// most this many milliseconds; a block still loading is drawn from its nearest resident
   /// coarser level and refined in the next frames (FrameStats::standInBlocks). A block with no
-  /// resident coarser level is always waited for.
+  /// resident coarser level is always waited for. At most kMaxMissBudgetMs; NaN is refused.
   double missBudgetMs = -1;
 };
+
+/// The largest miss budget a frame takes (an hour): a larger one is a mistake (seconds for
+/// milliseconds, a byte count), not a frame's wait, and its deadline would not fit the clock.
+constexpr double kMaxMissBudgetMs = 3.6e6;
 
 /// Why `tf` cannot be drawn, in words, or empty when it can: no colour or no opacity point, a
 /// point whose value, colour or opacity is not finite, an opacity outside [0, 1], a reference

@@ -42,6 +42,9 @@ struct vtkAFAMCoreRenderer::Internals
     afam::CellBox Box;
   };
   mutable std::optional<RankBoxKey> LastBox;
+  // The open file's fingerprint, computed once a file (ranks compare it at every view update).
+  mutable std::weak_ptr<const afam::AfamFile> FingerprintOf;
+  mutable uint64_t FingerprintValue = 0;
 
   const afam::CellBox& BoxOf(int rank, int ranks) const
   {
@@ -197,7 +200,13 @@ void vtkAFAMCoreRenderer::Volume(int64_t dims[3],
 
 uint64_t vtkAFAMCoreRenderer::Fingerprint() const
 {
-  return afam::contentFingerprint(*this->Impl->File);
+  const Internals& m = *this->Impl;
+  if (m.FingerprintOf.lock() != m.File)
+  {
+    m.FingerprintValue = afam::contentFingerprint(*m.File);
+    m.FingerprintOf = m.File;
+  }
+  return m.FingerprintValue;
 }
 
 bool vtkAFAMCoreRenderer::RankBounds(int rank, int ranks, double bounds[6]) const

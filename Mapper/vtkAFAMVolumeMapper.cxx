@@ -172,7 +172,10 @@ void vtkAFAMVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 double* vtkAFAMVolumeMapper::GetBounds()
 {
   vtkMath::UninitializeBounds(this->Bounds);
-  if (this->Core->Path().empty())
+  // Opens the file when none is open, or when FileName names another (the pipeline's input is
+  // resolved only when nothing is open: it updates the input).
+  const bool renamed = this->FileName && *this->FileName && this->Core->Path() != this->FileName;
+  if (this->Core->Path().empty() || renamed)
   {
     const std::string path = this->ResolveFileName();
     if (path.empty())

@@ -1,11 +1,12 @@
 // SPDX-FileCopyrightText: Adaptive-FAM authors
 // SPDX-License-Identifier: BSD-3-Clause
 // Plain VTK: a vtkAFAMVolumeMapper given only a FileName (no input connection) draws the volume,
-// the same picture as the mapper fed by the encoder's output.
+// the same picture as the mapper fed by the encoder's output, and its bounds follow the name.
 // Usage: TestAFAMMapperFileName
 #include "AFAMTestScene.h"
 #include "vtkAFAMVolumeMapper.h"
 
+#include "vtkMath.h"
 #include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
 
@@ -47,7 +48,15 @@ int main(int, char*[])
   std::cout << "FileName only (" << file << "): " << alone->GetNumberOfFrames() << " frame(s), "
             << foreground << " foreground pixels, " << differing
             << " pixels differ from the connected mapper's image\n";
+  // Bounds follow FileName: another name is opened (here none can be), not the old file kept.
+  const bool hadBounds = vtkMath::AreBoundsInitialized(alone->GetBounds());
+  alone->SetFileName((file + ".gone").c_str());
+  const bool renamedBounds = vtkMath::AreBoundsInitialized(alone->GetBounds());
+  std::cout << "bounds with the file: " << hadBounds << ", after naming a missing one "
+            << renamedBounds << "\n";
+  alone->SetFileName(file.c_str());
   const bool ok = alone->GetNumberOfFrames() >= 1 && foreground > 1000 && differing == 0 &&
+    hadBounds && !renamedBounds &&
     afam_vtk_test::GpuMatchesCpu(window, alone, "MapperFileName, FileName only");
   std::cout << (ok ? "ok" : "FAILED") << "\n";
   return ok ? EXIT_SUCCESS : EXIT_FAILURE;

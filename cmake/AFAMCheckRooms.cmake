@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: BSD-3-Clause
-# cmake -DAFAM_SOURCE_DIR=<root> [-DAFAM_ROOMS_OF=Core|CudaKernels] -P AFAMCheckCoreRooms.cmake
+# cmake -DAFAM_SOURCE_DIR=<root> [-DAFAM_ROOMS_OF=Core|CudaKernels] -P AFAMCheckRooms.cmake
 # Keeps a layer's rooms in order (docs/ARCHITECTURE.md): every file of a room (its headers under
 # <layer>/include/afam/[cuda/]<room>/, its sources under <layer>/src/<room>/) includes headers of
 # its own room or of rooms below it only, and no room's folder holds more than AFAM_ROOM_MAX_FILES

@@ -68,7 +68,7 @@ struct vtkAFAMCoreRenderer::Internals
     return resources;
   }
 
-  void InstallGpu(double budgetMB, int threads)
+  void InstallGpu(double budgetMB, int threads, const std::optional<afam::DeviceUuid>& openGl)
   {
     this->Gpu = nullptr;
     if (!this->GpuUnusable.empty())
@@ -76,10 +76,11 @@ struct vtkAFAMCoreRenderer::Internals
       return; // known unusable: not probed again (Render reports GpuUnusable)
     }
     std::vector<std::string>& notes = this->Messages;
-    std::unique_ptr<afam::FrameCaster> gpu =
-      afam::makeGpuCaster(static_cast<size_t>(std::max(16.0, budgetMB) * 1e6),
-        threads,
-        [&notes](const std::string& message) { notes.push_back(message); });
+    std::unique_ptr<afam::FrameCaster> gpu = afam::makeGpuCaster(
+      static_cast<size_t>(std::max(16.0, budgetMB) * 1e6),
+      threads,
+      [&notes](const std::string& message) { notes.push_back(message); },
+      openGl);
     if (gpu)
     {
       this->Gpu = gpu.get();
@@ -254,7 +255,7 @@ void vtkAFAMCoreRenderer::Build(const vtkAFAMFrameRequest& request,
   m.BuiltUnreported = true;
   if (wantGpu)
   {
-    m.InstallGpu(request.CacheBudgetMB, resources.threads);
+    m.InstallGpu(request.CacheBudgetMB, resources.threads, request.OpenGLDevice);
   }
   // A run: the step after this one is loaded while this one is shown (playback goes forward
   // first; Open() follows the direction of play from the first step change on).

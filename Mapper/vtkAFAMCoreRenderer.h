@@ -9,6 +9,7 @@
 #ifndef vtkAFAMCoreRenderer_h
 #define vtkAFAMCoreRenderer_h
 
+#include "afam/ranks/device_selection.hpp"
 #include "afam/scene/camera.hpp"
 #include "afam/render/frame_caster.hpp"
 #include "afam/render/frame_settings.hpp"
@@ -16,6 +17,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +37,10 @@ struct vtkAFAMFrameRequest
   /// (afam::rankBox); the images of all ranks blended in visibility order are the image of one.
   /// Ranks 1: the whole volume.
   int Rank = 0, Ranks = 1;
+  /// The GPU the window's OpenGL context runs on (GL_DEVICE_UUID_EXT), when the OpenGL says: the
+  /// GPU renderer is built on that CUDA device where it can be (afam::chooseGpuDevice), so that
+  /// frames reach the window through CUDA-OpenGL interop. Read when a renderer is built.
+  std::optional<afam::DeviceUuid> OpenGLDevice;
   /// Where this frame's image goes and what stops its rays (this frame only):
   /// maxDistance: per-pixel ray length limit from opaque geometry on the host (normalised-frame
   /// distance from the eye, Camera.width * Camera.height floats, row 0 = top); nullptr: none.

@@ -20,6 +20,31 @@ std::string CudaProblem(const char* step, cudaError_t e)
 #endif
 }
 
+std::optional<std::array<uint8_t, 16>> vtkAFAMCudaGLBuffer::ContextDeviceUuid()
+{
+  std::array<uint8_t, 16> uuid{};
+  static_assert(GL_UUID_SIZE_EXT == 16, "OpenGL's UUIDs are CUDA's 16 bytes");
+  if (!GLEW_EXT_memory_object || !glGetUnsignedBytei_vEXT)
+  {
+    return std::nullopt;
+  }
+  while (glGetError() != GL_NO_ERROR)
+  {
+  }
+  GLint devices = 0;
+  glGetIntegerv(GL_NUM_DEVICE_UUIDS_EXT, &devices);
+  if (devices < 1 || glGetError() != GL_NO_ERROR)
+  {
+    return std::nullopt;
+  }
+  glGetUnsignedBytei_vEXT(GL_DEVICE_UUID_EXT, 0, uuid.data());
+  if (glGetError() != GL_NO_ERROR)
+  {
+    return std::nullopt;
+  }
+  return uuid;
+}
+
 vtkAFAMCudaGLBuffer::vtkAFAMCudaGLBuffer(Direction direction)
   : Dir(direction)
 {

@@ -8,7 +8,10 @@
 #ifndef vtkAFAMCudaGLBuffer_h
 #define vtkAFAMCudaGLBuffer_h
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <optional>
 #include <string>
 
 class vtkAFAMCudaGLBuffer
@@ -20,6 +23,10 @@ public:
     CUDA_READS   ///< written by OpenGL, read by CUDA
   };
   explicit vtkAFAMCudaGLBuffer(Direction direction);
+  /// The UUID of the GPU the current OpenGL context runs on (GL_EXT_memory_object's
+  /// GL_DEVICE_UUID_EXT, as CUDA's cudaDeviceProp::uuid gives it), or none where the OpenGL does
+  /// not say. Interop needs CUDA on that GPU.
+  static std::optional<std::array<uint8_t, 16>> ContextDeviceUuid();
   /// Unregisters from CUDA; the OpenGL name goes with the context (Free while it is current).
   ~vtkAFAMCudaGLBuffer();
   vtkAFAMCudaGLBuffer(const vtkAFAMCudaGLBuffer&) = delete;

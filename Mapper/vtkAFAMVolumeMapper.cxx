@@ -280,6 +280,12 @@ void vtkAFAMVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   // then take the depth buffer the same way (ReadDepthLimits). A frame that needs a new renderer
   // (the first, or after a change of device or cache) builds it first, so that it goes that way
   // too (in ParaView, the image of OpenDataFile + Show + SaveScreenshot is such a frame).
+  if (renWin != this->UuidWindow)
+  {
+    this->UuidWindow = renWin; // asked once a window: a renderer built later takes it
+    this->OpenGLDevice = vtkAFAMCudaGLBuffer::ContextDeviceUuid();
+  }
+  frame.Request.OpenGLDevice = this->OpenGLDevice;
   if (this->GpuImageInterop)
   {
     try

@@ -44,10 +44,12 @@
 #include "vtkAFAMModule.h" // for export macro
 #include "vtkVolumeMapper.h"
 
-#include <array>  // for std::array
-#include <memory> // for std::unique_ptr
-#include <string> // for std::string
-#include <vector> // for std::vector
+#include <array>    // for std::array
+#include <cstdint>  // for uint8_t
+#include <memory>   // for std::unique_ptr
+#include <optional> // for std::optional
+#include <string>   // for std::string
+#include <vector>   // for std::vector
 
 class vtkAFAMCoreRenderer;
 class vtkAFAMCudaGLBuffer;
@@ -392,6 +394,10 @@ protected:
   bool DepthCompositing = true;
   bool WarnedDevice = false;
   std::string ReportedInteropProblem; // the interop problem last said (once per problem)
+  // The GPU of the window's OpenGL context (vtkAFAMCudaGLBuffer::ContextDeviceUuid), asked once a
+  // window: the GPU renderer is built on that CUDA device where it can be (interop).
+  const void* UuidWindow = nullptr;
+  std::optional<std::array<uint8_t, 16>> OpenGLDevice;
   bool WarnedBlendMode = false;
   double SampleDistance = 0;
   bool UseJittering = true;

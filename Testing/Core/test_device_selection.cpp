@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "afam/ranks/device_selection.hpp"
 
@@ -48,4 +50,61 @@ TEST(DeviceSelection, LaunchersAndOverrides) {
 TEST(DeviceSelection, GarbageIsNotARank) {
   for (const char* bad : {"", "-1", "x", "1x", "99999999999"})
     EXPECT_EQ(localRankFromEnvironment(fakeEnv({{"OMPI_COMM_WORLD_LOCAL_RANK", bad}})), -1) << bad;
+}
+
+namespace {
+
+std::vector<DeviceUuid> uuids(int count) {
+  std::vector<DeviceUuid> out(static_cast<size_t>(count));
+  for (int d = 0; d < count; ++d) out[size_t(d)].fill(uint8_t(0x10 + d));
+  return out;
+}
+
+}  // namespace
+
+TEST(DeviceSelection, AloneOnItsNodeTheOpenGlContextsGpu) {
+  const auto gpus = uuids(4);
+  const GpuChoice c = chooseGpuDevice(gpus, gpus[2], fakeEnv({}));
+  EXPECT_EQ(c.device, 2) << "no launcher: interop's GPU, not device 0";
+  EXPECT_EQ(c.why, "the OpenGL context's GPU");
+  EXPECT_EQ(chooseGpuDevice(
+                gpus, gpus[3],
+                fakeEnv({{"OMPI_COMM_WORLD_LOCAL_RANK", "0"}, {"OMPI_COMM_WORLD_LOCAL_SIZE", "1"}}))
+                .device,
+            3)
+      << "one rank on its node";
+  EXPECT_EQ(chooseGpuDevice(gpus, gpus[1], fakeEnv({{"AFAM_CUDA_DEVICE", "0"}})).device, 0)
+      << "an explicit choice wins";
+}
+
+TEST(DeviceSelection, RanksWithTheirOwnOpenGlGpusUseThem) {
+  const auto gpus = uuids(4);
+  for (int rank = 0; rank < 4; ++rank) {
+    const auto env = fakeEnv({{"OMPI_COMM_WORLD_LOCAL_RANK", std::to_string(rank)},
+                              {"OMPI_COMM_WORLD_LOCAL_SIZE", "4"}});
+    const GpuChoice c = chooseGpuDevice(gpus, gpus[size_t(rank)], env);
+    EXPECT_EQ(c.device, rank);
+    EXPECT_EQ(c.why, "the OpenGL context's GPU");
+  }
+}
+
+TEST(DeviceSelection, RanksSharingOneOpenGlGpuStillSpreadOverTheGpus) {
+  const auto gpus = uuids(2);
+  for (int rank = 0; rank < 2; ++rank) {
+    const auto env = fakeEnv({{"MPI_LOCALRANKID", std::to_string(rank)}, {"MPI_LOCALNRANKS", "2"}});
+    const GpuChoice c = chooseGpuDevice(gpus, gpus[0], env);
+    EXPECT_EQ(c.device, rank) << "rank " << rank << ": N ranks on N GPUs, interop or not";
+    EXPECT_EQ(c.why.find("through the host") != std::string::npos, rank == 1) << c.why;
+  }
+}
+
+TEST(DeviceSelection, AnOpenGlOnNoCudaDeviceIsIgnored) {
+  const auto gpus = uuids(2);
+  DeviceUuid mesa{};
+  mesa.fill(0xee);  // llvmpipe reports a UUID of its own
+  EXPECT_EQ(chooseGpuDevice(gpus, mesa, fakeEnv({{"SLURM_LOCALID", "1"}})).device, 1);
+  EXPECT_EQ(chooseGpuDevice(gpus, std::nullopt, fakeEnv({})).device, 0);
+  EXPECT_EQ(chooseGpuDevice({}, mesa, fakeEnv({})).device, -1);
+  EXPECT_EQ(localSizeFromEnvironment(fakeEnv({{"OMPI_COMM_WORLD_LOCAL_SIZE", "0"}})), -1);
+  EXPECT_EQ(localSizeFromEnvironment(fakeEnv({{"MV2_COMM_WORLD_LOCAL_SIZE", "3"}})), 3);
 }

@@ -35,6 +35,37 @@ int localRankFromEnvironment(const EnvironmentLookup& env) {
   return -1;
 }
 
+int localSizeFromEnvironment(const EnvironmentLookup& env) {
+  for (const char* name :
+       {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS", "MV2_COMM_WORLD_LOCAL_SIZE"}) {
+    const int size = parseIndex(lookup(env, name));
+    if (size >= 1) return size;
+  }
+  return -1;
+}
+
+GpuChoice chooseGpuDevice(const std::vector<DeviceUuid>& devices,
+                          const std::optional<DeviceUuid>& openGl, const EnvironmentLookup& env) {
+  const int count = int(devices.size());
+  if (count < 1) return {-1, "no CUDA device"};
+  const int chosen = parseIndex(lookup(env, "AFAM_CUDA_DEVICE"));
+  if (chosen >= 0 && chosen < count) return {chosen, "AFAM_CUDA_DEVICE"};
+  const int rank = localRankFromEnvironment(env);
+  const int own = rank >= 0 ? rank % count : 0;
+  const std::string ownWhy = rank >= 0 ? "local rank " + std::to_string(rank) + "'s own GPU"
+                                       : std::string("the first GPU");
+  int gl = -1;
+  if (openGl)
+    for (int d = 0; d < count && gl < 0; ++d)
+      if (devices[size_t(d)] == *openGl) gl = d;
+  if (gl < 0) return {own, ownWhy};
+  const int size = localSizeFromEnvironment(env);
+  if (rank < 0 || size == 1 || gl == own) return {gl, "the OpenGL context's GPU"};
+  return {own, ownWhy + " (its OpenGL runs on GPU " + std::to_string(gl) +
+                   ": frames reach the window through the host; give each rank its own GPU for "
+                   "OpenGL, e.g. ParaView's --displays, or set AFAM_CUDA_DEVICE)"};
+}
+
 int selectGpuDevice(int deviceCount, const EnvironmentLookup& env) {
   if (deviceCount < 1) return -1;
   const int chosen = parseIndex(lookup(env, "AFAM_CUDA_DEVICE"));

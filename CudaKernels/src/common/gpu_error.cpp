@@ -6,6 +6,8 @@
 #include <cuda_runtime_api.h>
 
 #include <cstdio>
+#include <cstring>
+#include <vector>
 
 namespace afam {
 
@@ -18,7 +20,17 @@ int gpuDeviceCount() {
   return count;
 }
 
-bool gpuAvailable(std::string* why) {
+GpuChoice gpuChoice(const std::optional<DeviceUuid>& openGl) {
+  std::vector<DeviceUuid> uuids(static_cast<size_t>(gpuDeviceCount()));
+  for (size_t d = 0; d < uuids.size(); ++d) {
+    cudaDeviceProp prop{};
+    if (cudaGetDeviceProperties(&prop, int(d)) != cudaSuccess) (void)cudaGetLastError();
+    std::memcpy(uuids[d].data(), prop.uuid.bytes, uuids[d].size());
+  }
+  return chooseGpuDevice(uuids, openGl);
+}
+
+bool gpuAvailable(std::string* why, const std::optional<DeviceUuid>& openGl) {
   int count = 0;
   const cudaError_t status = cudaGetDeviceCount(&count);
   if (status != cudaSuccess) {
@@ -43,7 +55,7 @@ bool gpuAvailable(std::string* why) {
   // A device may be listed but unusable (compute-prohibited, wrong architecture for this binary):
   // touch the context once, on the device this process will use (one per MPI rank), so that ranks
   // do not all open a context on device 0.
-  const int device = selectGpuDevice(count);
+  const int device = gpuChoice(openGl).device;
   const cudaError_t chosen = cudaSetDevice(device);
   const cudaError_t touch = chosen != cudaSuccess ? chosen : cudaFree(nullptr);
   if (touch != cudaSuccess) {

@@ -17,14 +17,19 @@
 namespace afam {
 
 std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
-                                             const GpuReport& report) {
+                                             const GpuReport& report,
+                                             const std::optional<DeviceUuid>& openGl) {
   std::string why;
-  if (!gpuAvailable(&why)) {
+  if (!gpuAvailable(&why, openGl)) {
     report("no usable GPU: " + why);
     return nullptr;
   }
-  // One GPU per MPI rank on a node with several (device_selection.hpp).
-  const int device = selectGpuDevice(gpuDeviceCount());
+  // One GPU per MPI rank on a node with several, the OpenGL context's where it can be
+  // (device_selection.hpp); a rank whose OpenGL is on another GPU is told so.
+  const GpuChoice choice = gpuChoice(openGl);
+  const int device = choice.device;
+  if (choice.why.find("through the host") != std::string::npos)
+    report("CUDA device " + std::to_string(device) + ", " + choice.why);
   std::unique_ptr<GpuRenderer> gpu;
   // What was asked for, halved while the device has no room for it, down to 16 MiB.
   const size_t minBudget = std::min(budgetBytes, size_t(16) << 20);
@@ -45,9 +50,9 @@ std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
   return std::unique_ptr<GpuCaster>(new GpuCaster(std::move(gpu), threads));
 }
 
-std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads,
-                                           const GpuReport& report) {
-  return GpuCaster::create(budgetBytes, threads, report);
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report,
+                                           const std::optional<DeviceUuid>& openGl) {
+  return GpuCaster::create(budgetBytes, threads, report, openGl);
 }
 
 bool gpuCasterBuilt() { return true; }

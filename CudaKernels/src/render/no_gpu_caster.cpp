@@ -4,7 +4,8 @@
 
 namespace afam {
 
-std::unique_ptr<FrameCaster> makeGpuCaster(size_t, int, const GpuReport& report) {
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t, int, const GpuReport& report,
+                                           const std::optional<DeviceUuid>&) {
   report("this build has no CUDA renderer (built without nvcc)");
   return nullptr;
 }

@@ -3,7 +3,10 @@
 // Apps and the VTK mapper can include it and catch afam::GpuError without nvcc.
 #pragma once
 
+#include <optional>
 #include <string>
+
+#include "afam/ranks/device_selection.hpp"
 
 #include "afam/base/errors.hpp"
 
@@ -41,9 +44,13 @@ class GpuOutOfMemory : public GpuError {
 /// True when a CUDA device can be used by this process. On false, `why` (if given) says why in
 /// words, e.g. "CUDA driver is missing or too old (cudaErrorInsufficientDriver, 35)" or
 /// "no CUDA device", so the caller can print it and take the CPU path. Never throws.
-bool gpuAvailable(std::string* why = nullptr);
+/// The device it touches is the one gpuChoice(openGl) picks for this process.
+bool gpuAvailable(std::string* why = nullptr, const std::optional<DeviceUuid>& openGl = {});
 /// CUDA devices visible to this process (0 when CUDA is unusable).
 int gpuDeviceCount();
+/// This process's CUDA device (chooseGpuDevice over the visible devices' UUIDs) for an OpenGL
+/// context on the GPU `openGl` (none: no context, or not known).
+GpuChoice gpuChoice(const std::optional<DeviceUuid>& openGl = {});
 
 /// "NVIDIA H200 (sm_90, 132 SMs, 139.8 GiB)" for device `device`; "" when there is none.
 std::string gpuDescription(int device = 0);

@@ -20,11 +20,11 @@ namespace afam {
 class GpuCaster : public FrameCaster {
  public:
   /// What makeGpuCaster does, with the concrete type: probes for a usable device, takes this
-  /// process's (selectGpuDevice) and allocates a model pool of `budgetBytes`, halving down to
-  /// 16 MiB while device memory is short. Returns nullptr, every reason given to `report`, when
-  /// no GPU is usable.
-  static std::unique_ptr<GpuCaster> create(size_t budgetBytes, int threads,
-                                           const GpuReport& report);
+  /// process's (gpuChoice for an OpenGL context on `openGl`) and allocates a model pool of
+  /// `budgetBytes`, halving down to 16 MiB while device memory is short. Returns nullptr, every
+  /// reason given to `report`, when no GPU is usable.
+  static std::unique_ptr<GpuCaster> create(size_t budgetBytes, int threads, const GpuReport& report,
+                                           const std::optional<DeviceUuid>& openGl = {});
   ~GpuCaster() override;
 
   /// Casts on the GPU into targets.deviceRgba when given and large enough (nothing comes back to

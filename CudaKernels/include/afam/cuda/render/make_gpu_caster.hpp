@@ -9,8 +9,10 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
+#include "afam/ranks/device_selection.hpp"
 #include "afam/render/frame_caster.hpp"
 
 namespace afam {
@@ -18,14 +20,15 @@ namespace afam {
 /// Takes the reasons, in words, why the GPU is not (or not fully) used.
 using GpuReport = std::function<void(const std::string&)>;
 
-/// A caster on this process's GPU (selectGpuDevice: one per MPI rank) with a model pool of
+/// A caster on this process's GPU (gpuChoice: one per MPI rank, the OpenGL context's GPU `openGl`
+/// where that allows CUDA-OpenGL interop; device_selection.hpp) with a model pool of
 /// `budgetBytes` (halved down to 16 MiB while device memory is short); frames it cannot cast on
 /// the GPU go to the CPU on `threads` threads (0: all cores). Returns nullptr when no GPU is
 /// usable, every reason given to `report` (e.g. "no usable GPU: CUDA driver is missing or too
 /// old (cudaErrorInsufficientDriver, 35)", or "this build has no CUDA renderer (built without
 /// nvcc)"). Never throws for a missing, full or failing GPU.
-std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads,
-                                           const GpuReport& report);
+std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report,
+                                           const std::optional<DeviceUuid>& openGl = {});
 
 /// True when this build has the CUDA renderer (built with nvcc).
 bool gpuCasterBuilt();

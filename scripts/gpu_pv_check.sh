@@ -34,7 +34,8 @@
 #     pvpython client on the loopback address (AFAM_PV_SERVER_BENCH=0 leaves it out).
 # AFAM_PV_PARTS picks among "tests faults bench" (default all); AFAM_PV_TESTS names the tests to
 # run (default all: Pipeline ShowColoured Placement State Scenes DefaultLod EditKeepsCache Damage
-# DecodeDamaged FileChanged DecodeLevel TimeSteps ClientServer1 ClientServer2). OpenGL is NVIDIA's
+# DecodeDamaged FileChanged DecodeLevel TimeSteps MatchesVolume ColourArray BadFiles Panel FrameBudget
+# ClientServer1 ClientServer2). OpenGL is NVIDIA's
 # own on the GPU (AFAM_PV_GLX=nvidia, default) or Mesa's llvmpipe (AFAM_PV_GLX=mesa: no interop;
 # the GPU frames then go through the host; give it its own AFAM_PV_WORK). Logs, CSVs and images go
 # to $OUT/<work folder's name>.tar.gz when OUT is set; a table is printed last.
@@ -234,6 +235,11 @@ if part tests; then
     "FileChanged pvbatch TestAFAMFileChanged.py"
     "DecodeLevel pvbatch TestAFAMDecodeLevel.py"
     "TimeSteps pvbatch TestAFAMTimeSteps.py"
+    "MatchesVolume pvpython TestAFAMMatchesVolume.py"
+    "ColourArray pvpython TestAFAMColourArray.py"
+    "BadFiles pvpython TestAFAMBadFiles.py"
+    "Panel pvpython TestAFAMPanel.py"
+    "FrameBudget pvpython TestAFAMFrameBudget.py"
     "ClientServer1 pvpython TestAFAMClientServer.py AFAM_SERVER_RANKS=1 AFAM_PVSERVER=$work/pvserver1"
     "ClientServer2 pvpython TestAFAMClientServer.py AFAM_SERVER_RANKS=2 AFAM_PVSERVER=$pv/pvserver AFAM_MPIRUN=$work/mpirun"
   )

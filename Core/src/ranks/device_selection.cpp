@@ -62,8 +62,7 @@ GpuChoice chooseGpuDevice(const std::vector<DeviceUuid>& devices,
   const int size = localSizeFromEnvironment(env);
   if (rank < 0 || size == 1 || gl == own) return {gl, "the OpenGL context's GPU"};
   return {own, ownWhy + " (its OpenGL runs on GPU " + std::to_string(gl) +
-                   ": frames reach the window through the host; give each rank its own GPU for "
-                   "OpenGL, e.g. ParaView's --displays, or set AFAM_CUDA_DEVICE)"};
+                   ": each image crosses to it; ParaView's --displays gives each rank its own)"};
 }
 
 int selectGpuDevice(int deviceCount, const EnvironmentLookup& env) {

@@ -25,11 +25,9 @@ std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
     return nullptr;
   }
   // One GPU per MPI rank on a node with several, the OpenGL context's where it can be
-  // (device_selection.hpp); a rank whose OpenGL is on another GPU is told so.
+  // (device_selection.hpp); the description says which and why.
   const GpuChoice choice = gpuChoice(openGl);
   const int device = choice.device;
-  if (choice.why.find("through the host") != std::string::npos)
-    report("CUDA device " + std::to_string(device) + ", " + choice.why);
   std::unique_ptr<GpuRenderer> gpu;
   // What was asked for, halved while the device has no room for it, down to 16 MiB.
   const size_t minBudget = std::min(budgetBytes, size_t(16) << 20);
@@ -47,7 +45,9 @@ std::unique_ptr<GpuCaster> GpuCaster::create(size_t budgetBytes, int threads,
     report("no GPU memory for a model pool");
     return nullptr;
   }
-  return std::unique_ptr<GpuCaster>(new GpuCaster(std::move(gpu), threads));
+  auto caster = std::unique_ptr<GpuCaster>(new GpuCaster(std::move(gpu), threads));
+  caster->description_ += ", CUDA device " + std::to_string(device) + ": " + choice.why;
+  return caster;
 }
 
 std::unique_ptr<FrameCaster> makeGpuCaster(size_t budgetBytes, int threads, const GpuReport& report,

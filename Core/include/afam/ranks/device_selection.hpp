@@ -48,8 +48,9 @@ struct GpuChoice {
 /// `devices` and the process is alone on its node or that GPU is its local rank's own
 /// (selectGpuDevice): interop then works. Where several ranks share a node and this rank's
 /// OpenGL runs on another rank's GPU (all contexts on one GPU, ParaView's default), the rank keeps
-/// its own GPU, so that N ranks cast on N GPUs, and `why` says that its frames reach the window
-/// through the host and how to give each rank its own GPU for OpenGL. Else as selectGpuDevice.
+/// its own GPU, so that N ranks cast on N GPUs (the driver carries each image across to the
+/// OpenGL's GPU), and `why` says so and how to give each rank its own GPU for OpenGL. Else as
+/// selectGpuDevice.
 /// device -1 when `devices` is empty.
 GpuChoice chooseGpuDevice(const std::vector<DeviceUuid>& devices,
                           const std::optional<DeviceUuid>& openGl,

@@ -37,7 +37,7 @@ class GpuCaster : public FrameCaster {
   bool castsOnGpu() const override { return !failed_; }
   /// The cudaStream_t of the pool and the kernels.
   void* deviceStream() const override { return stream(); }
-  /// "NVIDIA H200 (sm_90, ...)".
+  /// "NVIDIA H200 (sm_90, ...), CUDA device 1: local rank 1's own GPU".
   std::string description() const override { return description_; }
   /// Reads the cached models (PreparedFrame::slotHost): the pool copies only those not resident,
   /// a compact one expanded to float32 points or kept compact (GpuRenderer::setPoolModels; the

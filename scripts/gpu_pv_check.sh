@@ -321,6 +321,19 @@ if part bench; then
   status "camera path" "$(cat "$work/trajectories.txt")"
   file="$work/ml${n}.afam"
   raw="$work/ml${n}.raw"
+  what="ML ${n}^3"
+  if [ -n "${AFAM_PV_ENLARGE:-}" ]; then  # the repository's head MRI made large, at 1e-2
+    d="${AFAM_PV_ENLARGE//,/x}"
+    raw="$work/head_${d}_uint8.raw"
+    file="$work/head_${d}.afam"
+    what="head MRI made ${d} (noise ${AFAM_PV_NOISE:-2.5}, detail ${AFAM_PV_DETAIL:-0}), 1e-2"
+    t0=$(date +%s)
+    [ -f "$file" ] || { "$afam" enlarge "$repo/Testing/Data/volumes/HeadMRVolume_48x62x42_uint8.raw" "$raw" \
+        --dims "$AFAM_PV_ENLARGE" --noise "${AFAM_PV_NOISE:-2.5}" --detail "${AFAM_PV_DETAIL:-0}" >/dev/null &&
+      "$afam" encode "$raw" "$file" --error-bound 1e-2 --relative --quiet >"$work/encode.log" 2>&1 &&
+      rm -f "$raw"; } || { tail "$work/encode.log"; exit 1; }
+    status "$what" "made and encoded in $(( $(date +%s) - t0 )) s, $(stat -c %s "$file") bytes"
+  fi
   if [ ! -f "$file" ]; then
     t0=$(date +%s)
     "$afam" ml --size "$n" "$raw" >/dev/null &&
@@ -334,6 +347,7 @@ if part bench; then
     echo "|---|---|---|---|---|---|---|---|---|"
   } >"$table"
   for size in ${AFAM_PV_SIZES:-512 1024}; do
+    [ "${AFAM_PV_LOOPS:-1}" = 1 ] || break  # 0: only the rank benchmarks below
     for regime in warm cold; do
       cold=(); [ $regime = cold ] && cold=(--cold)
       tag="${size}_$regime"
@@ -359,7 +373,7 @@ if part bench; then
       echo "| ${size}^2 | $regime | ${pm:-?} / $(value p95_render_ms "$p") | $(value fps "$p") | $(value gpu_frames "$p") / $(value interop_frames "$p") of $(value frames "$p") | ${vm:-?} | ${r:-?} | $ratio | $bar |" >>"$table"
     done
   done
-  echo "ML ${n}^3, user_1's first $nframes views, cache ${cache_mb} MB and GPU pool ${cache_mb} MB everywhere; medians of frames 2..N" >>"$table"
+  echo "$what, user_1's first $nframes views, cache ${cache_mb} MB and GPU pool ${cache_mb} MB everywhere; medians of frames 2..N" >>"$table"
   # The same views through pvserver (1 rank, and 2 under mpirun sharing the GPU), a pvpython client
   # on the loopback address timing each Render() with the image delivered to it.
   if [ "${AFAM_PV_SERVER_BENCH:-1}" = 1 ]; then
@@ -384,7 +398,30 @@ if part bench; then
       b=$(grep "^pv_render_loop" "$work/pv_${size}_warm.log" | tail -1)
       echo "| $ranks | $(value median_render_ms "$c") / $(value p95_render_ms "$c") | $(value fps "$c") | $(value gpu_frames "$c") / $(value interop_frames "$c") of $(value frames "$c") | $(value median_render_ms "$b") | $(awk -v a="$(value median_render_ms "$c")" -v b="$(value median_render_ms "$b")" 'BEGIN { if (a > 0 && b > 0) printf "%.2f", a / b; else print "?" }') | $(value first_image_ms "$c") |" >>"$table"
     done
-    echo "ML ${n}^3 at ${size}^2, warm, the same $nframes views; the server's ranks on this machine's one GPU" >>"$table"
+    echo "$what at ${size}^2, warm, the same $nframes views; the server's ranks, one GPU each where there are several" >>"$table"
+  fi
+  # pvbatch with 1, 2, ... ranks (AFAM_PV_BATCH_RANKS), each on its own GPU (the local rank's),
+  # every rank drawing its box and IceT compositing: the largest size, warm, the same views.
+  if [ -n "${AFAM_PV_BATCH_RANKS:-}" ]; then
+    size="${AFAM_PV_SIZES:-512 1024}"; size="${size##* }"
+    {
+      echo
+      echo "| pvbatch ranks | Render() ms (median / p95) | fps | first image ms | median / 1 rank's |"
+      echo "|---|---|---|---|---|"
+    } >>"$table"
+    one=""
+    for ranks in $AFAM_PV_BATCH_RANKS; do
+      launch=("$pv/pvbatch3.11" --no-mpi)
+      [ "$ranks" = 1 ] || launch=("$work/mpirun" -np "$ranks" --oversubscribe "$pv/pvbatch3.11")
+      timeout 300 "${launch[@]}" "$root/Apps/pvbatch/afam_pv_loop.py" --plugin "$plugin" --file "$file" \
+        --trajectory "$traj" --size "$size" --frames "$nframes" --cache-mb "$cache_mb" \
+        --csv "$work/pvbatch${ranks}_$size.csv" >"$work/pvbatch${ranks}_$size.log" 2>&1 ||
+        { failed=1; tail -n 5 "$work/pvbatch${ranks}_$size.log"; }
+      c=$(grep "^pv_render_loop" "$work/pvbatch${ranks}_$size.log" | tail -1)
+      m=$(value median_render_ms "$c"); [ "$ranks" = 1 ] && one="$m"
+      echo "| $ranks | $m / $(value p95_render_ms "$c") | $(value fps "$c") | $(value first_image_ms "$c") | $(awk -v a="$m" -v b="$one" 'BEGIN { if (a > 0 && b > 0) printf "%.2f", a / b; else print "?" }') |" >>"$table"
+    done
+    echo "$what at ${size}^2, warm, $nframes views, cache and GPU pool ${cache_mb} MB a rank; $(nvidia-smi -L | wc -l) GPU(s)" >>"$table"
   fi
   # ParaView's own Volume representation (its GPU ray caster on this OpenGL) on the raw samples.
   if [ -f "$raw" ] && [ "${AFAM_PV_RAW:-1}" = 1 ]; then

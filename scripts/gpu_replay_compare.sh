@@ -8,12 +8,13 @@
 # repetitions of each replay's median latency, last.
 #   here:  mkdir -p build-oldsrc && git archive COMMIT | gzip > build-oldsrc/src.tar.gz
 #   there: scripts/gpu_replay_compare.sh build-oldsrc/src.tar.gz   (build-oldsrc carried)
-# Environment: AFAM_REPLAY_N (1024), AFAM_REPLAY_CACHE_BYTES (220e6), AFAM_COMPARE_REPS (3),
+# Environment: AFAM_REPLAY_N (1024), AFAM_REPLAY_SIZE (512, the image's side), AFAM_REPLAY_CACHE_BYTES (220e6), AFAM_COMPARE_REPS (3),
 # AFAM_REPLAY_TRAJECTORIES ("user_1 user_2"), AFAM_REPLAY_WORK (/tmp/afam_compare), AFAM_JOBS (16).
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 old_tar="${1:?usage: gpu_replay_compare.sh OLD_SOURCE.tar.gz}"
 n="${AFAM_REPLAY_N:-1024}"
+size="${AFAM_REPLAY_SIZE:-512}"
 cache="${AFAM_REPLAY_CACHE_BYTES:-220000000}"
 reps="${AFAM_COMPARE_REPS:-3}"
 trajectories="${AFAM_REPLAY_TRAJECTORIES:-user_1 user_2}"
@@ -58,7 +59,7 @@ for rep in $(seq 1 "$reps"); do
     for combo in $combos; do
       bin="$old"; [ "${combo%%:*}" = new ] && bin="$new"
       log="$logs/${traj}_${combo/:/_}_$rep.log"
-      "$bin" replay "$work/ml_${combo##*:}.afam" --trajectory "$AFAM_TRAJ_DIR/$traj.dat" --size 512,512 \
+      "$bin" replay "$work/ml_${combo##*:}.afam" --trajectory "$AFAM_TRAJ_DIR/$traj.dat" --size "$size,$size" \
         --device gpu --cold --cache-bytes "$cache" --cache-blocks 0 --prefetch none --quiet >"$log" 2>&1
       sed -n 's/.*median_latency_ms=\([^ ]*\).*/\1/p' "$log" | tail -1 >"$log.median"
     done
@@ -78,6 +79,6 @@ table="$logs/compare_table.md"
   done
 } >"$table"
 grep -h -m1 -i "device" "$logs"/*_1.log | head -1 || true
-echo "ML ${n}^3 at the paper's settings, 512x512, --device gpu --cold, prefetch none, cache $cache bytes"
+echo "ML ${n}^3 at the paper's settings, ${size}x${size}, --device gpu --cold, prefetch none, cache $cache bytes"
 cat "$logs/trajectories.txt"
 cat "$table"

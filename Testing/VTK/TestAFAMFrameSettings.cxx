@@ -3,9 +3,10 @@
 // vtkAFAMVolumeMapper keeps its renderer (RAM cache, GPU pool) while the volume property changes:
 // colour, opacity, shading, sample-distance and blend-mode edits read nothing from the file, and
 // only a change of resources (the cache budget) builds a new one. Unusable settings (an opacity
-// function without points, a colour with NaN, an opacity unit distance of 0 or below) give one
-// warning naming the setting and the value kept, and the frame is drawn with the last usable
-// settings: the same picture as before the bad edit, never a blank one.
+// or colour function without points, a colour with NaN, an opacity unit distance of 0 or below)
+// give one warning naming the setting and the value kept, and the frame is drawn with the last
+// usable settings: the same picture as before the bad edit, never a blank one. Odd but usable
+// ones (opacity zero everywhere, every point at one value) are drawn as VTK maps them.
 // Usage: TestAFAMFrameSettings
 #include "AFAMTestScene.h"
 #include "vtkAFAMVolumeMapper.h"
@@ -111,12 +112,18 @@ int main(int, char*[])
   };
   vtkNew<vtkPiecewiseFunction> saved;
   saved->DeepCopy(opacity);
+  vtkNew<vtkColorTransferFunction> savedColor;
+  savedColor->DeepCopy(color);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::vector<Bad> bad = {
     { "opacity without points",
       [&] { opacity->RemoveAllPoints(); },
       [&] { opacity->DeepCopy(saved); },
       { "opacity transfer function has no points", "keeping the last transfer function" } },
+    { "colour without points",
+      [&] { color->RemoveAllPoints(); },
+      [&] { color->DeepCopy(savedColor); },
+      { "colour transfer function has no points", "keeping the last transfer function" } },
     { "colour with NaN",
       [&] { color->AddRGBPoint(0.7, nan, 0.5, 0.5); },
       [&] { color->RemovePoint(0.7); },
@@ -154,6 +161,51 @@ int main(int, char*[])
     Check(std::string(mapper->GetLastSettingWarning()).empty(),
       b.name + " undone: the warning is gone");
   }
+
+  // Transfer functions ParaView lets a user make: drawn as VTK maps them, never a crash, no
+  // warning. Opacity zero everywhere: nothing; every point at one value (a range of zero width):
+  // the values below take the first point's colour and opacity and those above the last's.
+  struct Odd
+  {
+    std::string name;
+    std::function<void()> apply;
+    std::function<bool(long foreground)> expected;
+  };
+  const std::vector<Odd> odd = {
+    { "opacity zero everywhere",
+      [&]
+      {
+        opacity->RemoveAllPoints();
+        opacity->AddPoint(0.0, 0.0);
+        opacity->AddPoint(1.0, 0.0);
+      },
+      [&](long fg) { return fg == 0; } },
+    { "a range of zero width",
+      [&]
+      {
+        color->RemoveAllPoints();
+        color->AddRGBPoint(0.4, 0.9, 0.6, 0.2);
+        opacity->RemoveAllPoints();
+        opacity->AddPoint(0.4, 0.5);
+      },
+      [&](long fg) { return fg > 0; } },
+  };
+  for (const Odd& o : odd)
+  {
+    warnings.clear();
+    o.apply();
+    window->Render();
+    const long fg = Foreground(afam_vtk_test::ReadPixels(window));
+    Check(o.expected(fg), o.name + ": " + std::to_string(fg) + " foreground pixels");
+    Check(warnings.empty(),
+      o.name + ": no warning (" + (warnings.empty() ? std::string() : warnings[0]) + ")");
+    Check(afam_vtk_test::GpuMatchesCpu(window, mapper, "FrameSettings, " + o.name),
+      o.name + ": GPU frame equals the CPU frame");
+    color->DeepCopy(savedColor);
+    opacity->DeepCopy(saved);
+  }
+  window->Render();
+  Check(afam_vtk_test::ReadPixels(window) == good, "the usable settings again: the same image");
 
   // A resource change is what builds a new renderer (and cache): the counters can tell.
   mapper->SetCacheBudgetMB(64);

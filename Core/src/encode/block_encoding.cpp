@@ -457,14 +457,14 @@ void storeCandidate(Candidate& c, BlockTask& t) {
 }
 
 /// The kept candidate's entropy frame coded at the file's level (it was compared at the trial
-/// level): the same values, so the same error. A noise-dominated block's lanes frame that
-/// lanesFrameSure keeps is left as it is.
-void finalFrame(const FitContext& c, Candidate& best, bool noisy = false) {
+/// level): the same values, so the same error. A lanes frame that lanesFrameSure keeps is left
+/// as it is (zstd at the file's level would rarely beat it by the 2% it must).
+void finalFrame(const FitContext& c, Candidate& best) {
   if (best.kind == BlockKind::Constant || c.opt.entropy == EntropyStage::Lanes) return;
   const size_t head = codedHeaderBytes(best.bytes.data(), best.bytes.size());
   const size_t tail = best.roundedPoints ? kRoundedPointsBytes : 0;
   const size_t values = size_t(best.ncp[0]) * size_t(best.ncp[1]) * size_t(best.ncp[2]);
-  if (noisy && c.opt.entropy == EntropyStage::Auto &&
+  if (c.opt.entropy == EntropyStage::Auto &&
       lanesFrameSure(best.frames, best.bytes.size() - head - tail, values))
     return;
   recodeFrame(best.bytes, head, tail, values, entropyCoding(c.opt), best.frames);
@@ -545,7 +545,7 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
   if (noiseDominated(c, e, fitter, t) &&
       codeSamples(t.samples, validOf(t), e.samples, c.opt.degree, c.bound, kind, trialCoding(c.opt),
                   std::numeric_limits<double>::infinity(), SIZE_MAX, fitter, best)) {
-    finalFrame(c, best, true);
+    finalFrame(c, best);
     storeCandidate(best, t);
     return;
   }

@@ -258,7 +258,8 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
                 BoundKind kind, EntropyCoding coding, BlockFitter& fitter, Candidate& out) {
   Candidate integer, dbl;
-  int rung = -1;  // the integer form's rung: the likely one of the double form
+  // Then the integer form's rung: the likely one of the double form.
+  int rung = kind == BoundKind::Rmse ? kLikelySplineRung : -1;
   const bool hasInteger = codeSplineInForm(fr, s, n, bound, kind, coding, Predictor::IntegerLorenzo,
                                            fitter, integer, rung);
   const bool hasDouble =
@@ -423,7 +424,8 @@ bool codeSamples(const std::vector<float>& s, const uint32_t* valid, Int3 n, int
   for (const int64_t slack : kHoleSlacks) {
     if (slack > 0 && !valid) break;
     Candidate integer, dbl, best;
-    int rung = -1;  // the integer form's rung: the likely one of the double form
+    // Then the integer form's rung: the likely one of the double form.
+    int rung = kind == BoundKind::Rmse ? kRoundingRung : -1;
     const bool codedInteger =
         codeSamplesInForm(s, valid, slack, n, degree, bound, kind, coding, beat,
                           Predictor::IntegerInterpolation, integer, rung);

@@ -278,7 +278,9 @@ void addLevel(const LevelStats& ls, EncodeStats& stats) {
 
 /// Sample buffers of fitted blocks, handed to the blocks sampled next: their pages are already
 /// faulted in and nothing is freed or allocated a block (the batches' blocks are of a few sizes).
-/// Shared by the fitting threads (give) and the sampling thread (take).
+/// A buffer keeps its size (its stale samples): the sampling overwrites every sample, and a block
+/// of the same size is then not filled with zeros first. Shared by the fitting threads (give) and
+/// the sampling thread (take).
 class SampleBuffers {
  public:
   std::vector<float> take() {
@@ -289,7 +291,6 @@ class SampleBuffers {
     return v;
   }
   void give(std::vector<float>&& v) {
-    v.clear();
     std::lock_guard<std::mutex> lock(mutex_);
     free_.push_back(std::move(v));
   }

@@ -17,11 +17,11 @@
 namespace afam::cli {
 
 int runEnlarge(int argc, char** argv) {
-  Args args(argc, argv, {"dims", "noise", "detail", "detail-beta", "seed", "threads"},
+  Args args(argc, argv, {"dims", "noise", "tissue-noise", "detail", "detail-beta", "seed", "threads"},
             {"progress"});
   const char* usage =
-      "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--detail D [--detail-beta B]] "
-      "[--seed N] [--threads T]";
+      "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--tissue-noise S] [--detail D "
+      "[--detail-beta B]] [--seed N] [--threads T]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
@@ -39,6 +39,9 @@ int runEnlarge(int argc, char** argv) {
         "  --noise auto|S  noise standard deviation in IN's units; auto (default): IN's own, from "
         "its\n"
         "                  finest differences along x (median absolute difference / 0.954)\n"
+        "  --tissue-noise S  noise standard deviation in tissue (as --detail tells it from air; "
+        "default:\n"
+        "                  --noise's): a scan whose air is quiet and whose tissue is noisier\n"
         "  --detail D      add detail at every scale, standard deviation D in IN's units "
         "(default 0:\n"
         "                  none): octaves of value noise, lattice spacings 2, 4, ... voxels up to "
@@ -73,8 +76,10 @@ int runEnlarge(int argc, char** argv) {
   sampleTypeRange(type, lo, hi);
   const uint64_t seed = uint64_t(args.integer("seed", 1));
   const double detail = args.real("detail", 0), beta = args.real("detail-beta", 0.5);
-  EnlargedScanSource(std::vector<float>(1, 0.f), {1, 1, 1}, target, 0, seed, lo, hi)
-      .setDetail(detail, beta);  // bad values refused before OUT.tmp is created
+  const double tissueSigma = args.has("tissue-noise") ? args.real("tissue-noise", 0) : sigma;
+  EnlargedScanSource check(std::vector<float>(1, 0.f), {1, 1, 1}, target, 0, seed, lo, hi);
+  check.setDetail(detail, beta);  // bad values refused before OUT.tmp is created
+  check.setTissueNoise(tissueSigma);
   const int threads = int(args.integer("threads", 0)) > 0
                           ? int(args.integer("threads", 0))
                           : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -87,6 +92,7 @@ int runEnlarge(int argc, char** argv) {
     for (int t = 0; t < threads; ++t) {
       sources.emplace_back(samples, dims, target, sigma, seed, lo, hi);
       sources.back().setDetail(detail, beta);
+      sources.back().setTissueNoise(tissueSigma);
     }
     const size_t slabBytes = size_t(plane * chunk) * size_t(sampleTypeSize(type));
     std::vector<std::vector<float>> values(static_cast<size_t>(threads));
@@ -118,6 +124,7 @@ int runEnlarge(int argc, char** argv) {
               (long long)target[0], (long long)target[1], (long long)target[2],
               sampleTypeName(type), in.c_str(), (long long)dims[0], (long long)dims[1],
               (long long)dims[2], sigma);
+  if (tissueSigma != sigma) std::printf(", in tissue %.4g", tissueSigma);
   if (detail > 0) std::printf(", detail sd %.4g beta %.4g", detail, beta);
   std::printf("\n");
   return 0;

@@ -156,6 +156,37 @@ TEST(EnlargedScan, DetailStaysOutOfTheAir) {
   EXPECT_NEAR(std::sqrt(tissueSq / double(tissue)), 10.0, 3.0) << "the tissue's detail";
 }
 
+TEST(EnlargedScan, TissueNoiseInTheTissueAndTheAirsOwnInTheAir) {
+  // Air (0) below z = 4 of 8 source planes, tissue (200) above, the air's noise 2, the tissue's 6.
+  std::vector<float> half(8 * 8 * 8, 0.f);
+  std::fill(half.begin() + 8 * 8 * 4, half.end(), 200.f);
+  const int64_t n = 64;
+  EnlargedScanSource s(half, {8, 8, 8}, {n, n, n}, 2.0, 3, -1e9, 1e9);
+  EnlargedScanSource same = s;
+  s.setTissueNoise(6.0);
+  const std::vector<float> v = readAll(s);
+  double airSq = 0, tissueSq = 0;
+  int64_t air = 0, tissue = 0;
+  for (int64_t z = 0; z < n; ++z)
+    for (int64_t i = 0; i < n * n; ++i) {
+      const double x = v[size_t(z * n * n + i)];
+      if (z < 14) {
+        airSq += x * x;
+        ++air;
+      } else if (z > 50) {
+        tissueSq += (x - 200) * (x - 200);
+        ++tissue;
+      }
+    }
+  EXPECT_NEAR(std::sqrt(airSq / double(air)), 2.0, 0.05) << "the air keeps --noise";
+  EXPECT_NEAR(std::sqrt(tissueSq / double(tissue)), 6.0, 0.15) << "the tissue's --tissue-noise";
+  const std::vector<float> plain = readAll(same);
+  same.setTissueNoise(2.0);
+  EXPECT_EQ(readAll(same), plain) << "the air's noise everywhere: the bytes without it";
+  for (double bad : {-1.0, std::nan(""), double(INFINITY)})
+    EXPECT_THROW(same.setTissueNoise(bad), InvalidArgument) << bad;
+}
+
 TEST(EnlargedScan, DetailIsTheSameHoweverTheVolumeIsCut) {
   const std::vector<float> src = randomSource(5);
   const Index3 big{37, 29, 41};

@@ -75,7 +75,8 @@ EnlargedScanSource::EnlargedScanSource(std::vector<float> samples, Index3 dims, 
       sigma_(noiseSigma),
       seed_(seed),
       lo_(clampLo),
-      hi_(clampHi) {
+      hi_(clampHi),
+      tissueSigma_(noiseSigma) {
   for (int a = 0; a < 3; ++a) {
     if (dims_[a] < 1) throw InvalidArgument("the volume to enlarge is empty");
     if (target_[a] < 2)
@@ -217,17 +218,30 @@ void EnlargedScanSource::readSlab(int64_t z0, int64_t zCount, float* out) {
       const std::vector<float>& p = plane(t.first[j]);
       for (int64_t i = 0; i < nxy; ++i) dst[i] += t.weight[j] * p[size_t(i)];
     }
+    const bool tissueNoise = tissueSigma_ != sigma_;
+    if (!octaves_.empty() || tissueNoise) {
+      weight_.resize(size_t(nxy));
+      for (int64_t i = 0; i < nxy; ++i) weight_[size_t(i)] = tissueWeight(dst[i]);
+    }
     if (!octaves_.empty()) {
       detail_.assign(size_t(nxy), 0.f);
       addDetail(z, detail_.data());
-      for (int64_t i = 0; i < nxy; ++i) dst[i] += tissueWeight(dst[i]) * detail_[size_t(i)];
+      for (int64_t i = 0; i < nxy; ++i) dst[i] += weight_[size_t(i)] * detail_[size_t(i)];
     }
     const uint64_t base = uint64_t(z * nxy);
+    const float extra = float(tissueSigma_ - sigma_);
     for (int64_t i = 0; i < nxy; ++i) {
-      const float v = sigma > 0 ? dst[i] + sigma * gaussianAt(base + uint64_t(i), seed_) : dst[i];
+      const float s = tissueNoise ? sigma + weight_[size_t(i)] * extra : sigma;
+      const float v = s > 0 ? dst[i] + s * gaussianAt(base + uint64_t(i), seed_) : dst[i];
       dst[i] = std::clamp(v, lo, hi);
     }
   }
+}
+
+void EnlargedScanSource::setTissueNoise(double sd) {
+  if (!(sd >= 0) || !std::isfinite(sd))
+    throw InvalidArgument("the tissue noise must be finite and >= 0");
+  tissueSigma_ = sd;
 }
 
 }  // namespace afam

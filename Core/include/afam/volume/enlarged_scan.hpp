@@ -19,7 +19,7 @@
 // detail is added where the source shows tissue only: in full above 15% of the source's value
 // range (from its lowest value), none below 5% (a scan's air keeps its noise alone, as a real
 // scan's does: air made textured made nearly every block of a head complex, 93% against a real
-// T1 MRI's 51%), a smooth step between.
+// T1 MRI's 51%), a smooth step between. The noise may differ there too (setTissueNoise).
 #pragma once
 
 #include <cstdint>
@@ -47,6 +47,10 @@ class EnlargedScanSource : public VolumeSource {
   /// without it) with octave amplitudes ~ spacing^beta. Throws InvalidArgument for a negative or
   /// non-finite sd, or beta outside [0, 3].
   void setDetail(double sd, double beta = 0.5);
+  /// Noise of standard deviation `sd` in tissue instead of the constructor's (which air keeps),
+  /// blended as the detail is (tissueWeight): a real scan whose air is quiet and whose tissue's
+  /// texture is above the bound. Throws InvalidArgument for a negative or non-finite sd.
+  void setTissueNoise(double sd);
 
  private:
   struct Octave {
@@ -76,7 +80,9 @@ class EnlargedScanSource : public VolumeSource {
   double lo_, hi_;
   std::vector<Taps> tx_, ty_, tz_;
   float airEnd_ = 0, tissueStart_ = 0;
+  double tissueSigma_;
   std::vector<float> detail_;                                   ///< one plane's detail
+  std::vector<float> weight_;                                   ///< one plane's tissueWeight
   std::vector<std::pair<int64_t, std::vector<float>>> planes_;  // a few resampled source planes
   std::vector<Octave> octaves_;                                 // empty: no detail
 };

@@ -17,7 +17,8 @@
 namespace afam::cli {
 
 int runEnlarge(int argc, char** argv) {
-  Args args(argc, argv, {"dims", "noise", "tissue-noise", "detail", "detail-beta", "seed", "threads"},
+  Args args(argc, argv,
+            {"dims", "noise", "tissue-noise", "detail", "detail-beta", "seed", "threads"},
             {"progress"});
   const char* usage =
       "afam enlarge IN OUT.raw --dims X,Y,Z [--noise auto|S] [--tissue-noise S] [--detail D "

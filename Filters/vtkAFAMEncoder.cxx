@@ -9,8 +9,8 @@
 
 #include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/format/afam_file.hpp"
-#include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
+#include "afam/encode/pipeline_run.hpp"
 
 #include "vtkDataArray.h"
 #include "vtkDataSetAttributes.h"
@@ -42,33 +42,17 @@
 vtkStandardNewMacro(vtkAFAMEncoder);
 
 vtkAFAMEncoder::vtkAFAMEncoder()
+  : Run(std::make_unique<afam::PipelineRun>())
 {
   this->SetInputArrayToProcess(
     0, 0, 0, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS);
   this->SetValidPointMaskArrayName("vtkValidPointMask");
 }
 
-// A run being encoded, one execution a step.
-struct vtkAFAMEncoder::RunUnderWay
-{
-  std::unique_ptr<afam::RunEncoder> Encoder;
-  std::string Path;
-  bool MissingValueFound = false; // at some step so far (UseMissingValue)
-  std::string ArrayName;          // the array encoded, for that warning
-};
-
 vtkAFAMEncoder::~vtkAFAMEncoder()
 {
-  this->DropRun();
-  this->RemoveModelFile();
+  this->RemoveModelFile(); // a run under way leaves none (PipelineRun)
   this->SetValidPointMaskArrayName(nullptr);
-}
-
-void vtkAFAMEncoder::DropRun()
-{
-  delete this->Run; // the run encoder removes its temporary file
-  this->Run = nullptr;
-  this->NextStep = 0;
 }
 
 int vtkAFAMEncoder::RequestInformation(vtkInformation*,
@@ -78,13 +62,14 @@ int vtkAFAMEncoder::RequestInformation(vtkInformation*,
   // The output keeps the input's time steps (the executive copies them): a run's output
   // describes the step the time asks for.
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  this->InputTimes.clear();
+  std::vector<double> times;
   if (this->EncodeTimeSteps && inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) &&
     inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) > 1)
   {
     const double* t = inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
-    this->InputTimes.assign(t, t + inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()));
+    times.assign(t, t + inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()));
   }
+  this->Run->setTimes(std::move(times)); // other times than the run's drop it
   return 1;
 }
 
@@ -92,22 +77,22 @@ int vtkAFAMEncoder::RequestUpdateExtent(vtkInformation*,
   vtkInformationVector** inputVector,
   vtkInformationVector*)
 {
-  if (this->InputTimes.size() < 2)
+  if (!this->EncodesRun())
   {
     return 1; // the time asked of the output, as the executive passes it up
   }
-  // The step a run under way encodes next; once it is done, the last step it read, so that a new
-  // time on the output does not execute the input again (and the run stays current).
-  const size_t k =
-    this->Run ? this->NextStep : (this->RunEncoded ? this->InputTimes.size() - 1 : 0);
-  inputVector[0]->GetInformationObject(0)->Set(
-    vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(), this->InputTimes[k]);
+  inputVector[0]->GetInformationObject(0)->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
+    this->Run->times()[this->Run->stepToRead()]);
   return 1;
+}
+
+bool vtkAFAMEncoder::EncodesRun() const
+{
+  return this->Run->times().size() > 1;
 }
 
 void vtkAFAMEncoder::RemoveModelFile()
 {
-  this->RunEncoded = false;
   if (!this->ModelFile.empty())
   {
     std::error_code ignored;
@@ -387,10 +372,10 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   this->LastRemoteBytesRead = 0;
   vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
   const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
-  const bool run = this->InputTimes.size() > 1;
+  const bool run = this->EncodesRun();
   if (!run)
   {
-    this->DropRun();
+    this->Run->drop();
     this->RemoveModelFile();
   }
   try
@@ -400,7 +385,7 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
                  : !this->EncodeWhole(input, inputVector, output))
     {
       request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-      this->DropRun();
+      this->Run->drop();
       return 0;
     }
   }
@@ -408,7 +393,7 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   {
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
     output->Initialize();
-    this->DropRun();
+    this->Run->drop();
     this->RemoveModelFile();
     vtkWarningMacro(<< "encoding cancelled");
     return 0;
@@ -417,7 +402,7 @@ int vtkAFAMEncoder::RequestData(vtkInformation* request,
   {
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
     output->Initialize();
-    this->DropRun();
+    this->Run->drop();
     this->RemoveModelFile();
     vtkErrorMacro(<< e.what());
     return 0;
@@ -559,113 +544,129 @@ bool vtkAFAMEncoder::EncodeTimeStep(vtkInformation* request,
   vtkInformationVector* outputVector,
   vtkMultiProcessController* controller)
 {
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  vtkMultiBlockDataSet* output = vtkMultiBlockDataSet::GetData(outputVector, 0);
-  const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
-  const size_t n = this->InputTimes.size();
-  int current = !this->Run && this->RunEncoded && this->RunFilterTime == this->GetMTime() &&
-    this->RunInputPrint == this->InputFingerprint(input, inputVector);
-  if (pieces) // every rank encodes again when one's piece changed
+  if (this->RunIsCurrent(input, inputVector, controller))
   {
-    int all = current;
-    controller->AllReduce(&current, &all, 1, vtkCommunicator::MIN_OP);
-    current = all;
-  }
-  if (current)
-  {
-    // The run is current: the step the output's time asks for (rank 0 holds the file).
-    if (!this->ModelFile.empty())
-    {
-      this->BuildOutput(
-        this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
-    }
+    this->BuildRunOutput(outputVector); // the step the output's time asks for
     return true;
   }
-  const double inputTime = input->GetInformation()->Has(vtkDataObject::DATA_TIME_STEP())
-    ? input->GetInformation()->Get(vtkDataObject::DATA_TIME_STEP())
-    : this->InputTimes[this->NextStep];
-  if (!this->Run)
+  if (!this->Run->underWay() && !this->StartRun(input))
   {
-    // A new run (the input or a setting changed): from the first step, whose range a relative
-    // bound refers to.
-    this->RemoveModelFile();
-    this->NextStep = 0;
-    if (inputTime != this->InputTimes[0])
-    {
-      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
-      return true; // this input is another step's: the next execution gets the first
-    }
-    this->Run = new RunUnderWay;
-    this->Run->Path = NewModelPath();
-    this->Run->Encoder =
-      std::make_unique<afam::RunEncoder>(this->Run->Path, this->MakeOptions(), 16);
-    if (this->UseMissingValue) // the run declares the fill value from its first step on
-    {
-      this->Run->Encoder->expectMissingSamples();
-    }
+    request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+    return true; // this input is another step's: the next execution gets the first
   }
-  const size_t k = this->NextStep;
-  this->Run->Encoder->setProgress( // progress across the steps
-    [this, k, n](double f)
-    {
-      this->UpdateProgress(0.95 * (static_cast<double>(k) + f) / static_cast<double>(n));
-      return !this->CheckAbort();
-    });
-  afam::RunEncoder& encoder = *this->Run->Encoder;
-  const double time = this->InputTimes[k];
-  if (pieces)
+  std::string arrayName;
+  if (!this->AddRunStep(input, inputVector, controller, arrayName))
   {
-    const vtkAFAMPiecesEncoded done = this->EncodePieces(controller,
-      input,
-      inputVector,
-      [&encoder, time](afam::VolumeSource& step, afam::EncodeTeam& team)
-      { return encoder.addStep(step, time, team); });
-    this->Run->MissingValueFound = this->Run->MissingValueFound || done.missingValueFound;
-    this->Run->ArrayName = done.arrayName;
+    return false;
   }
-  else
-  {
-    std::unique_ptr<MarkedInput> marked =
-      this->MarkedSourceOf(input, inputVector, this->UseMissingValue);
-    if (!marked)
-    {
-      return false;
-    }
-    encoder.addStep(marked->Marked->Source(), time);
-    this->Run->MissingValueFound =
-      this->Run->MissingValueFound || !marked->Marked->ValueNeverFound();
-    this->Run->ArrayName = marked->Values->name();
-  }
-  if (++this->NextStep < n)
+  if (!this->Run->complete())
   {
     request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
     return true;
   }
   request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-  if (this->UseMissingValue && !this->Run->MissingValueFound &&
-    controller->GetLocalProcessId() == 0)
+  this->FinishRun(input, inputVector, controller, arrayName);
+  this->BuildRunOutput(outputVector);
+  return true;
+}
+
+bool vtkAFAMEncoder::RunIsCurrent(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiProcessController* controller)
+{
+  const afam::RunOrigin* origin = this->Run->finishedFrom();
+  int current = origin && origin->settings == this->GetMTime() &&
+    origin->input == this->InputFingerprint(input, inputVector);
+  if (controller && controller->GetNumberOfProcesses() > 1)
   {
-    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, this->Run->ArrayName)
-                    << " (at every step)");
+    int all = current; // every rank encodes again when one's piece changed
+    controller->AllReduce(&current, &all, 1, vtkCommunicator::MIN_OP);
+    current = all;
+  }
+  return current != 0;
+}
+
+bool vtkAFAMEncoder::StartRun(vtkImageData* input)
+{
+  // A new run (the input or a setting changed), from the first step.
+  this->RemoveModelFile();
+  vtkInformation* info = input->GetInformation();
+  const double time = info->Has(vtkDataObject::DATA_TIME_STEP())
+    ? info->Get(vtkDataObject::DATA_TIME_STEP())
+    : std::numeric_limits<double>::quiet_NaN(); // not said: taken as the first step
+  if (!this->Run->readyToStart(time))
+  {
+    return false;
+  }
+  const std::string path = NewModelPath();
+  this->Run->start(path, this->MakeOptions());
+  this->Run->setProgress( // fractions of the whole run
+    [this](double f)
+    {
+      this->UpdateProgress(0.95 * f);
+      return !this->CheckAbort();
+    });
+  return true;
+}
+
+bool vtkAFAMEncoder::AddRunStep(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiProcessController* controller,
+  std::string& arrayName)
+{
+  afam::PipelineRun& run = *this->Run;
+  if (controller && controller->GetNumberOfProcesses() > 1)
+  {
+    const vtkAFAMPiecesEncoded done = this->EncodePieces(controller,
+      input,
+      inputVector,
+      [&run](afam::VolumeSource& step, afam::EncodeTeam& team) { return run.addStep(step, team); });
+    run.noteFillValue(done.missingValueFound);
+    arrayName = done.arrayName;
+    return true;
+  }
+  std::unique_ptr<MarkedInput> marked =
+    this->MarkedSourceOf(input, inputVector, this->UseMissingValue);
+  if (!marked)
+  {
+    return false;
+  }
+  run.addStep(marked->Marked->Source());
+  run.noteFillValue(!marked->Marked->ValueNeverFound());
+  arrayName = marked->Values->name();
+  return true;
+}
+
+void vtkAFAMEncoder::FinishRun(vtkImageData* input,
+  vtkInformationVector** inputVector,
+  vtkMultiProcessController* controller,
+  const std::string& arrayName)
+{
+  const bool pieces = controller && controller->GetNumberOfProcesses() > 1;
+  const bool first = !controller || controller->GetLocalProcessId() == 0;
+  if (this->Run->fillValueNeverFound() && first)
+  {
+    vtkWarningMacro(<< vtkAFAMValueNeverFound(this->MissingValue, arrayName) << " (at every step)");
   }
   vtkAFAMControllerTeam team(controller);
   afam::SoloTeam solo;
-  const afam::RunStats stats = encoder.commit(pieces ? static_cast<afam::EncodeTeam&>(team) : solo);
-  if (!pieces || controller->GetLocalProcessId() == 0) // the one file
+  const afam::RunOrigin origin{ this->GetMTime(), this->InputFingerprint(input, inputVector) };
+  this->KeepRunStatistics(
+    this->Run->commit(pieces ? static_cast<afam::EncodeTeam&>(team) : solo, origin));
+  if (first) // the one file
   {
-    this->ModelFile = this->Run->Path;
+    this->ModelFile = this->Run->path();
   }
-  this->DropRun();
-  this->RunEncoded = true;
-  this->KeepRunStatistics(stats);
-  this->RunFilterTime = this->GetMTime();
-  this->RunInputPrint = this->InputFingerprint(input, inputVector);
-  if (!this->ModelFile.empty())
+}
+
+void vtkAFAMEncoder::BuildRunOutput(vtkInformationVector* outputVector)
+{
+  if (!this->ModelFile.empty()) // rank 0 holds the file
   {
-    this->BuildOutput(
-      this->ModelFile, output, vtkAFAMModelTree::StepAtTime(this->InputTimes, outInfo));
+    this->BuildOutput(this->ModelFile,
+      vtkMultiBlockDataSet::GetData(outputVector, 0),
+      vtkAFAMModelTree::StepAtTime(this->Run->times(), outputVector->GetInformationObject(0)));
   }
-  return true;
 }
 
 vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* controller,
@@ -703,7 +704,7 @@ vtkAFAMPiecesEncoded vtkAFAMEncoder::EncodePieces(vtkMultiProcessController* con
     vtkAFAMEncodePieces(controller, input, array, error, whole, marks, encode);
   std::copy(done.pieceExtent, done.pieceExtent + 6, this->LastPieceExtent);
   this->LastRemoteBytesRead = static_cast<double>(done.remoteBytesRead);
-  const bool oneVolume = !this->Run; // a run warns once, after its last step
+  const bool oneVolume = !this->Run->underWay(); // a run warns once, after its last step
   if (marks.UseValue && oneVolume && !done.missingValueFound &&
     controller->GetLocalProcessId() == 0)
   {

@@ -62,6 +62,7 @@ class ArraySource;
 class EncodeTeam;
 struct EncoderOptions;
 struct EncodeStats;
+class PipelineRun;
 struct RunStats;
 class VolumeSource;
 }
@@ -262,18 +263,36 @@ protected:
     vtkImageData* input,
     vtkInformationVector** inputVector,
     const std::function<afam::EncodeStats(afam::VolumeSource&, afam::EncodeTeam&)>& encode);
-  /// One execution of a run's encoding (InputTimes): encodes the input as step NextStep and asks
-  /// for the next (CONTINUE_EXECUTING), or, when the run is done and still current, describes
-  /// the step the output's time asks for. Under MPI (`controller` of several ranks) every rank
-  /// runs it with its piece of each step, the steps encoded by the ranks together and written
-  /// by rank 0, whose output alone holds the run.
+  /// The input has several time steps and EncodeTimeSteps is on: they are encoded as one run.
+  bool EncodesRun() const;
+  /// One execution of a run's encoding (afam::PipelineRun, the state machine): encodes the input
+  /// as the run's next step and asks for the next (CONTINUE_EXECUTING), or, when the run is done
+  /// and still current, describes the step the output's time asks for. Under MPI (`controller`
+  /// of several ranks) every rank runs it with its piece of each step, the steps encoded by the
+  /// ranks together and written by rank 0, whose output alone holds the run.
   bool EncodeTimeStep(vtkInformation* request,
     vtkImageData* input,
     vtkInformationVector** inputVector,
     vtkInformationVector* outputVector,
     vtkMultiProcessController* controller);
-  /// Forgets a run under way (its temporary file goes).
-  void DropRun();
+  /// The finished run was encoded from this input with these settings (on every rank).
+  bool RunIsCurrent(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkMultiProcessController* controller);
+  /// Starts a run when the input is its first step; false when the pipeline must deliver it.
+  bool StartRun(vtkImageData* input);
+  /// Encodes the input as the run's next step; false after reporting what is wrong.
+  bool AddRunStep(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkMultiProcessController* controller,
+    std::string& arrayName);
+  /// After the last step: writes the run (rank 0), keeps its statistics and its origin.
+  void FinishRun(vtkImageData* input,
+    vtkInformationVector** inputVector,
+    vtkMultiProcessController* controller,
+    const std::string& arrayName);
+  /// The output: the finished run's step that the output's time asks for (rank 0).
+  void BuildRunOutput(vtkInformationVector* outputVector);
   /// The chosen array of the input as the encoder reads it (its values in `samples`, which must
   /// outlive it); null after reporting what is wrong.
   std::unique_ptr<afam::ArraySource> SourceOf(vtkImageData* input,
@@ -315,15 +334,9 @@ protected:
   char* ValidPointMaskArrayName = nullptr;
   bool UseMissingValue = false;
   double MissingValue = 0;
-  // A run of the input's time steps: the times, the step the next execution encodes, the encoder
-  // while the run is under way, and what the finished run was encoded from.
-  std::vector<double> InputTimes;
-  size_t NextStep = 0;
-  struct RunUnderWay;
-  RunUnderWay* Run = nullptr;
-  vtkMTimeType RunFilterTime = 0;
-  bool RunEncoded = false;    ///< the run of InputTimes is encoded (on rank 0, in ModelFile)
-  uint32_t RunInputPrint = 0; ///< InputFingerprint of the run's last step
+  /// The run of the input's time steps: its times, the step the next execution encodes, the
+  /// encoder while it is under way, and what the finished run was encoded from.
+  std::unique_ptr<afam::PipelineRun> Run;
   double LastEncodeSeconds = 0, LastMaxRmse = 0, LastMaxError = 0, LastBound = 0,
          LastCompressionRatio = 0;
   std::string LastLevelReport;

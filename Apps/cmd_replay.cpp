@@ -162,7 +162,9 @@ int runReplay(int argc, char** argv) {
         "                         cache_bytes,cache_peak_bytes (resident in the cache at the end\n"
         "                         of the frame / at most during it; never above --cache-bytes),\n"
         "                         gpu_uploads (models the GPU pool took in), on_gpu (0: the\n"
-        "                         frame was cast on the CPU)\n"
+        "                         frame was cast on the CPU), stand_ins, blocks_behind,\n"
+        "                         bytes_behind, ssim (-1 without --ssim), select_ms and wait_ms\n"
+        "                         (of caching_ms: the LOD cut, and the wait for the misses)\n"
         "  --frames N             replay only the first N points of view\n"
         "  --still-out IMG.png    after the path, render its last view once more waiting for\n"
         "                         every block (the still frame; also printed with\n"
@@ -223,7 +225,7 @@ int runReplay(int argc, char** argv) {
     if (!csv) throw IoError("replay: cannot write " + args.str("csv"));
     csv << "pov,caching_ms,render_ms,latency_ms,hits,misses,bytes_read,visible_blocks,"
            "frustum_culled,tf_culled,prefetched_blocks,cache_bytes,cache_peak_bytes,gpu_uploads,"
-           "on_gpu,stand_ins,blocks_behind,bytes_behind,ssim\n";
+           "on_gpu,stand_ins,blocks_behind,bytes_behind,ssim,select_ms,wait_ms\n";
   }
   const bool quiet = args.has("quiet");
   std::vector<double> lat, cach, rend, ssims;
@@ -262,7 +264,7 @@ int runReplay(int argc, char** argv) {
           << st.culled.frustumBlocks << ',' << st.culled.tfBlocks << ',' << st.prefetchedBlocks
           << ',' << st.cacheBytes << ',' << st.cachePeakBytes << ',' << st.cast.modelsUploaded
           << ',' << int(st.cast.onGpu) << ',' << st.standInBlocks << ',' << st.blocksBehind << ','
-          << st.bytesBehind << ',' << ssim << '\n';
+          << st.bytesBehind << ',' << ssim << ',' << st.selectMs << ',' << st.waitMs << '\n';
     if (!quiet)
       std::printf(
           "pov=%zu step=%lld caching_ms=%.3f render_ms=%.3f latency_ms=%.3f hits=%llu "

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include <gtest/gtest.h>
 
+#include <set>
+#include <tuple>
+
 #include <cmath>
 #include <memory>
 #include <string>
@@ -93,15 +96,39 @@ TEST(Renderer, CulledRenderEqualsUnculledRender) {
       o->hasTransferFunction = true;
       o->transferFunction = tf;
     }
+    RenderOptions tfOn = on;
     off.lod.frustumCulling = off.lod.tfCulling = false;
-    Renderer a(file, on), b(file, off);
+    tfOn.lod.frustumCulling = false;
+    Renderer a(file, on), b(file, off), tfOnly(file, tfOn);
     for (const Camera& c : {testCamera(48), Camera::fromPose({1.2, 60, 30}, 48, 48)}) {
       FrameStats sa, sb;
       const ImageRGBA ia = a.renderFrame(c, sa), ib = b.renderFrame(c, sb);
       frustum += sa.culled.frustumBlocks;
       tfCulled += sa.culled.tfBlocks;
       EXPECT_EQ(sb.culled.frustumBlocks + sb.culled.tfBlocks, 0);
-      EXPECT_EQ(sa.slots + sa.culled.frustumBlocks + sa.culled.tfBlocks, sb.slots);
+      // The culled cut is the unculled one less its blocks outside the frustum or the transfer
+      // function (those outside the frustum are not refined: counted at a coarser level).
+      using Key = std::tuple<int, int, int, int>;
+      const auto keys = [](const Selection& sel) {
+        std::set<Key> out;
+        for (const BlockRef& r : sel.visible) out.insert({r.level, r.ijk[0], r.ijk[1], r.ijk[2]});
+        return out;
+      };
+      std::set<Key> kept = keys(a.select(c));
+      const std::set<Key> tfKept = keys(tfOnly.select(c));
+      int64_t dropped = 0;
+      for (const BlockRef& r : b.select(c).visible) {
+        const Key k{r.level, r.ijk[0], r.ijk[1], r.ijk[2]};
+        if (kept.erase(k)) continue;
+        double lo[3], hi[3];
+        blockBox(file->partition(), r.level, r.ijk, lo, hi);
+        EXPECT_TRUE(LodSelector::outsideFrustum(c, lo, hi) || !tfKept.count(k))
+            << "a drawn block was culled: level " << r.level;
+        ++dropped;
+      }
+      EXPECT_TRUE(kept.empty()) << "the culled cut drew a block the unculled one did not";
+      EXPECT_EQ(sa.slots + dropped, sb.slots);
+      EXPECT_GE(dropped, sa.culled.frustumBlocks + sa.culled.tfBlocks);
       EXPECT_LE(sa.culled.visibleBytes, sb.culled.visibleBytes);
       double maxDiff = 0;
       for (size_t i = 0; i < ia.rgba.size(); ++i)

@@ -103,8 +103,10 @@ std::vector<Placement> Renderer::loadModels(const Selection& sel, const Camera& 
     for (const BlockRef& b : missingBlocks) missing.push_back(b.entry);
     loader_->request(missing, LruCache::Purpose::Frame);
   }
+  const auto waitStart = Clock::now();
   loader_->waitFor(missing, deadline);
   waitEnd_ = std::min(Clock::now(), deadline);  // the frame's tail starts here
+  st.waitMs = std::chrono::duration<double, std::milli>(Clock::now() - waitStart).count();
   std::vector<Placement> placed = placeModels(sel, missing, budgeted, st);
   releaseThreadScratch();  // of a model this thread decoded itself
   return placed;

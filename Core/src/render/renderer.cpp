@@ -204,6 +204,7 @@ void Renderer::prepare(const Camera& camera, PreparedFrame& fr, FrameStats& st, 
   file_->checkUnchanged();
   const CacheStats before = cache_->stats();
   const Selection sel = select(camera);
+  st.selectMs = msSince(t0);
   st.culled = sel.counts;
   prepareEmpty(camera, fr);
   const Clock::time_point deadline =

@@ -22,6 +22,25 @@ void blockBox(const Partition& p, int level, Int3 ijk, double lo[3], double hi[3
   }
 }
 
+namespace {
+Vec3 combine(const Vec3& a, double s, const Vec3& b) {
+  return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]};
+}
+/// n, flipped if needed so that n.inside > 0.
+Vec3 toward(Vec3 n, const Vec3& inside) {
+  if (dot(n, inside) < 0)
+    for (double& x : n) x = -x;
+  return n;
+}
+/// Whether block b's box lies outside the frustum (and so does every block inside it).
+bool outsideBox(const FrustumPlanes& frustum, const Partition& p, const BlockRef& b) {
+  double lo[3], hi[3];
+  blockBox(p, b.level, b.ijk, lo, hi);
+  return frustum.outside(lo, hi);
+}
+
+}  // namespace
+
 int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Camera& c) const {
   const int finest = p.levels() - 1;
   if (options_.forceLevel >= 0) return std::min(options_.forceLevel, finest);
@@ -59,6 +78,11 @@ int LodSelector::desiredLevel(const Partition& p, int level, Int3 ijk, const Cam
 }
 
 std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera) const {
+  return cut(p, camera, nullptr);
+}
+
+std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera,
+                                       const FrustumPlanes* prune) const {
   std::vector<BlockRef> out;
   std::vector<BlockRef> stack;
   const Int3 b0 = p.blocksPerAxis(0);
@@ -69,7 +93,8 @@ std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera)
   while (!stack.empty()) {
     const BlockRef b = stack.back();
     stack.pop_back();
-    if (b.level < finest && desiredLevel(p, b.level, b.ijk, camera) > b.level) {
+    if (b.level < finest && !(prune && outsideBox(*prune, p, b)) &&
+        desiredLevel(p, b.level, b.ijk, camera) > b.level) {
       for (const Int3& c : p.children(b.level, b.ijk)) stack.push_back({b.level + 1, c, -1});
     } else {
       out.push_back(b);
@@ -78,25 +103,12 @@ std::vector<BlockRef> LodSelector::cut(const Partition& p, const Camera& camera)
   return out;
 }
 
-namespace {
-Vec3 combine(const Vec3& a, double s, const Vec3& b) {
-  return {a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]};
-}
-/// n, flipped if needed so that n.inside > 0.
-Vec3 toward(Vec3 n, const Vec3& inside) {
-  if (dot(n, inside) < 0)
-    for (double& x : n) x = -x;
-  return n;
-}
-}  // namespace
-
-bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const double hi[3]) {
+FrustumPlanes::FrustumPlanes(const Camera& c) {
   // Five planes with inward normals n through points q: n.(x - q) >= 0 inside. Each side plane is
   // spanned by an edge direction of the frustum and a frame vector, so the normals come from cross
   // products and hold for a mapped (non-orthonormal) frame too. For an orthonormal perspective
   // frame they are forward * tanHalf +- right / up; near: forward.
   const Vec3 f = c.forward, r = c.right, u = c.up, e = c.eye;
-  Vec3 n[5], q[5];
   if (!c.parallel) {
     // left: edge f + (cx - tx) r, spans u; right: f + (cx + tx) r; bottom/top likewise with u.
     n[0] = toward(cross(u, combine(f, c.centerX - c.tanHalfX, r)), combine(f, c.centerX, r));
@@ -123,6 +135,9 @@ bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const doub
   const double fLength = std::sqrt(dot(f, f));
   n[4] = nn;
   q[4] = combine(e, c.nearDistance / fLength, f);
+}
+
+bool FrustumPlanes::outside(const double lo[3], const double hi[3]) const {
   for (int k = 0; k < 5; ++k) {
     // The box corner farthest along the normal (p-vertex); if even it is outside, the box is.
     double s = 0;
@@ -135,6 +150,10 @@ bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const doub
   return false;
 }
 
+bool LodSelector::outsideFrustum(const Camera& c, const double lo[3], const double hi[3]) {
+  return FrustumPlanes(c).outside(lo, hi);
+}
+
 Selection LodSelector::select(const AfamFile& file, const Camera& camera,
                               const std::vector<float>& tfTable, double tfLo, double tfHi,
                               bool drawMissing) const {
@@ -143,16 +162,15 @@ Selection LodSelector::select(const AfamFile& file, const Camera& camera,
   const auto& entries = file.entries();
   const VolumeHeader& h = file.header();
   const double margin0 = 0.01 * std::max(0.0, h.valueMax - h.valueMin);
-  for (BlockRef b : cut(p, camera)) {
+  const FrustumPlanes frustum(camera);
+  for (BlockRef b : cut(p, camera, options_.frustumCulling ? &frustum : nullptr)) {
     b.entry = file.entryIndex(b.level, b.ijk);
     const ModelEntry& e = entries[size_t(b.entry)];
     const int64_t bytes = int64_t(e.size);
     sel.counts.cutBlocks++;
     sel.counts.cutBytes += bytes;
     if (options_.frustumCulling) {
-      double lo[3], hi[3];
-      blockBox(p, b.level, b.ijk, lo, hi);
-      if (outsideFrustum(camera, lo, hi)) {
+      if (outsideBox(frustum, p, b)) {
         sel.counts.frustumBlocks++;
         sel.counts.frustumBytes += bytes;
         continue;

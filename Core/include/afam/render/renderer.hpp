@@ -77,6 +77,9 @@ struct RenderOptions : RendererResources, FrameSettings {};
 
 struct FrameStats {
   double cachingMs = 0, renderMs = 0, latencyMs = 0;
+  /// Of cachingMs: the LOD cut and its culling, and the wait for the frame's misses to load (the
+  /// rest places the models: pins, lookups, slots).
+  double selectMs = 0, waitMs = 0;
   uint64_t hits = 0, misses = 0, bytesRead = 0;  ///< frame lookups and all reads during the frame
   uint64_t prefetchedBlocks = 0,
            prefetchedBytes = 0;  ///< loaded by the prefetch thread during the frame

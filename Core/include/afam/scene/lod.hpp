@@ -13,7 +13,8 @@
 //    a block containing the eye is always refined.
 // Culling, applied to the cut in this order, each rule counting the blocks and bytes it removed:
 //  * frustum: the block's box lies entirely outside one side plane of the view frustum, or
-//    entirely behind the near plane;
+//    entirely behind the near plane (such a block is not refined: the cut's blocks outside the
+//    frustum are counted at the coarsest level that lies outside, not at the policy's level);
 //  * transfer function: the maximum table opacity over the entry's [min, max] widened by a margin
 //    (max(entry maxError, 1% of the value range), because the stored min/max are the model's
 //    values at the samples and a spline may overshoot slightly between them) is zero. The
@@ -71,6 +72,14 @@ struct Selection {
 /// Normalised-frame box of a block ([-1, 1]^3 volume; voxel x maps to -1 + 2 x / (N-1)).
 void blockBox(const Partition& p, int level, Int3 ijk, double lo[3], double hi[3]);
 
+/// The view frustum's five planes (sides and near), computed once for many boxes.
+struct FrustumPlanes {
+  explicit FrustumPlanes(const Camera& camera);
+  /// True when the box lies entirely outside one of the planes.
+  bool outside(const double lo[3], const double hi[3]) const;
+  Vec3 n[5], q[5];  ///< inward normals and points on the planes
+};
+
 class LodSelector {
  public:
   explicit LodSelector(LodOptions options = {}) : options_(options) {}
@@ -81,6 +90,11 @@ class LodSelector {
 
   /// True when the block's box is entirely outside the camera's frustum.
   static bool outsideFrustum(const Camera& camera, const double lo[3], const double hi[3]);
+
+  /// The cut, except that a block outside `prune` (when given) is not refined: it is culled, and
+  /// so would all of its children be.
+  std::vector<BlockRef> cut(const Partition& p, const Camera& camera,
+                            const FrustumPlanes* prune) const;
 
   /// Cut + frustum culling + TF culling + empty blocks against a file's index (no payload is
   /// read). tfTable spans [tfLo, tfHi]; an empty table disables TF culling. drawMissing: missing

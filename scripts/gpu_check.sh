@@ -123,10 +123,16 @@ if [ -x "$dec" ] && [ -x "$afam" ]; then
 fi
 
 # --- GPU encoding (issue 42): afam encode --device cpu against --device gpu on the head made
-# 602x740x632, every core, one run of each (Testing/Benchmarks/encode_gpu.sh; the same bytes).
+# 602x740x632, every core, one run of each (Testing/Benchmarks/encode_gpu.sh; the same bytes), with
+# noise 2.5 and as a real scan.
 if [ -x "$afam" ]; then
   REPS=1 WORK="$e2e/encode" "$root/Testing/Benchmarks/encode_gpu.sh" "$afam" >"$logs/encode_gpu.log" 2>&1
   status "encode --device gpu vs cpu" "$(tail -1 "$logs/encode_gpu.log")"
+  rm -rf "$e2e/encode"
+  # The same size with a real T1 MRI's bytes and blocks (quiet air, noisy tissue, detail).
+  NOISE=2 TISSUE_NOISE=3 DETAIL=12 REPS=1 WORK="$e2e/encode" \
+    "$root/Testing/Benchmarks/encode_gpu.sh" "$afam" >"$logs/encode_gpu_real.log" 2>&1
+  status "  a real scan's bytes" "$(tail -1 "$logs/encode_gpu_real.log")"
   rm -rf "$e2e/encode"
 fi
 

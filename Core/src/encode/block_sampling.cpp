@@ -157,6 +157,35 @@ __attribute__((always_inline)) inline void addFilteredPlane(
   }
 }
 
+/// out[j * nx + i] = the y-then-x filtered plane at block sample (i, j), as addFilteredPlane<false>
+/// sums it before weighting (acc += w * out is then the same sum); rows is scratch.
+__attribute__((always_inline)) inline void filterPlane(const float* plane, int64_t X, int64_t yBase,
+                                                       const BlockTaps& bt,
+                                                       std::vector<double>& rows, double* out) {
+  const AxisTaps &tx = bt.tx, &ty = bt.ty;
+  const size_t width = size_t(bt.x1 - bt.x0 + 1);
+  rows.resize(size_t(bt.ny) * width);
+  for (int j = 0; j < bt.ny; ++j) {
+    double* __restrict h = rows.data() + size_t(j) * width;
+    std::fill_n(h, width, 0.0);
+    for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
+      const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
+      const double wy = ty.weight[k];
+      for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
+    }
+  }
+  for (int j = 0; j < bt.ny; ++j) {
+    const double* h = rows.data() + size_t(j) * width - bt.x0;
+    double* dst = out + size_t(j) * size_t(bt.nx);
+    for (int i = 0; i < bt.nx; ++i) {
+      double v = 0;
+      for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k)
+        v += tx.weight[k] * h[tx.index[k]];
+      dst[i] = v;
+    }
+  }
+}
+
 /// The samples of a filtered z-sample that came out NaN (a missing sample among their taps) again,
 /// from the valid samples alone: their weighted mean where they hold more than half of the
 /// filter's weight, else missing (NaN). Samples with no missing tap keep their values.
@@ -204,7 +233,15 @@ __attribute__((always_inline)) inline void fillBlockChunkBody(
     const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
+  // x taps at consecutive columns (a block's grid samples): rows are copied whole.
+  bool xRun = true;
+  for (size_t i = 1; i < bt.tx.index.size() && xRun; ++i)
+    xRun = bt.tx.index[i] == bt.tx.index[0] + int64_t(i);
   std::vector<double> rows, acc;
+  // The filtered planes of the last z-sample, kept for the next one (neighbouring z-samples share
+  // the planes at their windows' ends): each plane of a chunk is filtered in x and y once.
+  std::vector<int64_t> cachedZ, nextZ;
+  std::vector<std::vector<double>> cached, next;
   const std::function<const float*(size_t)> planeOf = [&](size_t t) {
     const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
     return buf + i * plane;
@@ -217,13 +254,37 @@ __attribute__((always_inline)) inline void fillBlockChunkBody(
       for (int j = 0; j < bt.ny; ++j) {
         const float* src = p + (bt.ty.index[size_t(j)] - yBase) * X;
         float* row = dst + size_t(j) * size_t(bt.nx);
+        if (xRun) {
+          std::copy_n(src + bt.tx.index[0], size_t(bt.nx), row);
+          continue;
+        }
         for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
       }
       continue;
     }
     acc.assign(nxy, 0.0);
-    for (size_t t = t0; t < t1; ++t)
-      addFilteredPlane<false>(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc);
+    nextZ.clear();
+    for (size_t t = t0; t < t1; ++t) {
+      const int64_t z = tz.index[t];
+      size_t c = size_t(std::find(nextZ.begin(), nextZ.end(), z) - nextZ.begin());
+      if (c == nextZ.size()) {  // not yet in this z-sample's planes: kept, or filtered now
+        nextZ.push_back(z);
+        if (next.size() < nextZ.size()) next.emplace_back();
+        const size_t o = size_t(std::find(cachedZ.begin(), cachedZ.end(), z) - cachedZ.begin());
+        if (o < cachedZ.size()) {
+          std::swap(next[c], cached[o]);
+          cachedZ[o] = -1;
+        } else {
+          next[c].resize(nxy);
+          filterPlane(planeOf(t), X, yBase, bt, rows, next[c].data());
+        }
+      }
+      const double w = tz.weight[t];
+      const double* __restrict v = next[c].data();
+      for (size_t q = 0; q < nxy; ++q) acc[q] += w * v[q];
+    }
+    std::swap(cachedZ, nextZ);
+    std::swap(cached, next);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
     refilterMissing(planeOf, X, yBase, tz, t0, t1, bt, dst);
   }
@@ -288,7 +349,14 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
     const auto ys = std::minmax_element(taps[b].ty.index.begin(), taps[b].ty.index.end());
     taps[b].y0 = *ys.first;
     taps[b].y1 = *ys.second;
-    out[b]->resize(size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz));
+    const size_t count = size_t(taps[b].nx) * size_t(taps[b].ny) * size_t(nz);
+    if (out[b]->capacity() < count) {  // every sample is written: nothing to copy over
+      out[b]->clear();
+      // An eighth more: a reused buffer then holds the level's other block sizes (one sample
+      // more an axis), and growing to them fills only the new samples, not a new allocation.
+      out[b]->reserve(count + count / 8);
+    }
+    out[b]->resize(count);
   }
   const int64_t X = part.dims()[0];
   int64_t yBase = taps[0].y0, yEnd = taps[0].y1;  // the rows the blocks read

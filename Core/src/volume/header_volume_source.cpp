@@ -193,8 +193,11 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   const bool swap = header_.bigEndian;
   if (!inflated_.empty())
     return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
-  buffer_.resize(count * es);
-  readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), buffer_.size());
+  if (buffer_.size() < count * es) {
+    buffer_.clear();  // nothing to copy; the read fills what is used
+    buffer_.resize(count * es);
+  }
+  readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), count * es);
   samplesToFloat(header_.type, buffer_.data(), count, out, swap);
 }
 

@@ -134,7 +134,10 @@ void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   if (type_ == SampleType::Float32) {
     dst = reinterpret_cast<unsigned char*>(out);
   } else {
-    buffer_.resize(bytes);
+    if (buffer_.size() < bytes) {
+      buffer_.clear();  // nothing to copy; the pread fills what is read
+      buffer_.resize(bytes);
+    }
     dst = buffer_.data();
   }
   uint64_t done = 0;

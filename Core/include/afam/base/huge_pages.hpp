@@ -8,6 +8,8 @@
 
 #include <cstddef>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #if defined(__linux__)
@@ -57,6 +59,17 @@ class HugePageAllocator {
     ::operator delete(p);
   }
 
+  /// resize() default-initializes (leaves a double or float as it was, no fill): a work buffer is
+  /// written before it is read, and filling it first with zeros cost a pass over fresh pages.
+  template <typename U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+
   template <typename U>
   bool operator==(const HugePageAllocator<U>&) const noexcept {
     return true;
@@ -72,7 +85,8 @@ class HugePageAllocator {
   }
 };
 
-/// A vector whose storage, once large, lies on huge pages (HugePageAllocator).
+/// A vector whose storage, once large, lies on huge pages (HugePageAllocator); resize(n) leaves
+/// new elements of a trivial type uninitialized (resize(n, value) fills them).
 template <typename T>
 using HugePageVector = std::vector<T, HugePageAllocator<T>>;
 

@@ -83,8 +83,8 @@ class HeaderVolumeSource : public VolumeSource {
   VolumeFileHeader header_;
   int fd_ = -1;
   uint64_t rawOffset_ = 0;
-  std::vector<unsigned char> inflated_;  ///< compressed payloads, inflated
-  std::vector<unsigned char> buffer_;    ///< one slab of raw bytes
+  std::vector<unsigned char> inflated_;   ///< compressed payloads, inflated
+  HugePageVector<unsigned char> buffer_;  ///< one slab of raw bytes; only grows, not filled
 };
 
 /// True for the extensions this file reads: .nrrd, .nhdr, .mha, .mhd (any case).

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "afam/base/huge_pages.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/volume/sample_type.hpp"
 
@@ -119,7 +120,7 @@ class RawFileSource : public VolumeSource {
   Index3 dims_;
   SampleType type_;
   std::array<double, 3> origin_, spacing_;
-  std::vector<unsigned char> buffer_;
+  HugePageVector<unsigned char> buffer_;  ///< one slab of raw bytes; only grows, not filled
 };
 
 /// The Marschner-Lobb function sampled on dims over [-1, 1]^3, generated plane by plane.

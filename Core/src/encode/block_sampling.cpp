@@ -110,55 +110,44 @@ struct BlockTaps {
   int64_t y0 = 0, y1 = 0;  ///< the rows of a plane the y taps read
 };
 
-/// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)); rows is scratch. y
-/// first: it runs along whole rows of the columns the block reads (vectorised), and x then filters
-/// only the block's rows. The plane holds rows from yBase on. Masked: NaN samples (missing) are
-/// left out, and `weight` gathers the filter's weight of the valid ones the same way.
-template <bool Masked>
-__attribute__((always_inline)) inline void addFilteredPlane(
-    const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
-    std::vector<double>& rows, std::vector<double>& acc, std::vector<double>* rowWeights = nullptr,
-    std::vector<double>* weight = nullptr) {
+/// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)) over its valid
+/// samples: NaN samples (missing) are left out, and `weight` gathers the filter's weight of the
+/// valid ones the same way; rows and rowWeights are scratch. The plane holds rows from yBase on.
+void addValidFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt,
+                           double w, std::vector<double>& rows, std::vector<double>& rowWeights,
+                           std::vector<double>& acc, std::vector<double>& weight) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const size_t width = size_t(bt.x1 - bt.x0 + 1);
-  rows.resize(size_t(bt.ny) * width);
-  if (Masked) rowWeights->assign(size_t(bt.ny) * width, 0.0);
-  for (int j = 0; j < bt.ny; ++j) {
-    double* __restrict h = rows.data() + size_t(j) * width;
-    std::fill_n(h, width, 0.0);
+  rows.assign(size_t(bt.ny) * width, 0.0);
+  rowWeights.assign(size_t(bt.ny) * width, 0.0);
+  for (int j = 0; j < bt.ny; ++j)
     for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
-      const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
-      const double wy = ty.weight[k];
-      if (!Masked) {
-        for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
-        continue;
-      }
-      double* hw = rowWeights->data() + size_t(j) * width;
+      const float* src = plane + (ty.index[k] - yBase) * X + bt.x0;
+      double* h = rows.data() + size_t(j) * width;
+      double* hw = rowWeights.data() + size_t(j) * width;
       for (size_t c = 0; c < width; ++c)
         if (!std::isnan(src[c])) {
-          h[c] += wy * double(src[c]);
-          hw[c] += wy;
+          h[c] += ty.weight[k] * double(src[c]);
+          hw[c] += ty.weight[k];
         }
     }
-  }
   for (int j = 0; j < bt.ny; ++j) {
     const size_t row = size_t(j) * width;
-    const double* h = rows.data() + row - bt.x0;
-    double* dst = acc.data() + size_t(j) * size_t(bt.nx);
     for (int i = 0; i < bt.nx; ++i) {
       double v = 0, vw = 0;
       for (size_t k = tx.first[size_t(i)]; k < tx.first[size_t(i) + 1]; ++k) {
-        v += tx.weight[k] * h[tx.index[k]];
-        if (Masked) vw += tx.weight[k] * (*rowWeights)[row + size_t(tx.index[k] - bt.x0)];
+        v += tx.weight[k] * rows[row + size_t(tx.index[k] - bt.x0)];
+        vw += tx.weight[k] * rowWeights[row + size_t(tx.index[k] - bt.x0)];
       }
-      dst[i] += w * v;
-      if (Masked) (*weight)[size_t(j) * size_t(bt.nx) + size_t(i)] += w * vw;
+      acc[size_t(j) * size_t(bt.nx) + size_t(i)] += w * v;
+      weight[size_t(j) * size_t(bt.nx) + size_t(i)] += w * vw;
     }
   }
 }
 
-/// out[j * nx + i] = the y-then-x filtered plane at block sample (i, j), as addFilteredPlane<false>
-/// sums it before weighting (acc += w * out is then the same sum); rows is scratch.
+/// out[j * nx + i] = the y-then-x filtered plane at block sample (i, j); rows is scratch. y first:
+/// it runs along whole rows of the columns the block reads (vectorised), and x then filters only
+/// the block's rows. The plane holds rows from yBase on.
 __attribute__((always_inline)) inline void filterPlane(const float* plane, int64_t X, int64_t yBase,
                                                        const BlockTaps& bt,
                                                        std::vector<double>& rows, double* out) {
@@ -195,7 +184,7 @@ void refilterMissing(const std::function<const float*(size_t)>& planeOf, int64_t
   if (std::none_of(dst, dst + nxy, [](float v) { return std::isnan(v); })) return;
   std::vector<double> rows, rowWeights, acc(nxy, 0.0), weight(nxy, 0.0);
   for (size_t t = t0; t < t1; ++t)
-    addFilteredPlane<true>(planeOf(t), X, yBase, bt, tz.weight[t], rows, acc, &rowWeights, &weight);
+    addValidFilteredPlane(planeOf(t), X, yBase, bt, tz.weight[t], rows, rowWeights, acc, weight);
   for (size_t q = 0; q < nxy; ++q)
     if (std::isnan(dst[q]))
       dst[q] = weight[q] > 0.5 ? static_cast<float>(acc[q] / weight[q])

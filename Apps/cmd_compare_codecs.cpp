@@ -144,12 +144,13 @@ struct ZfpTrial {
 };
 
 ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent,
-                  std::vector<float>& decoded) {
+                  std::vector<float>& decoded, int threads = 1) {
   ZfpTrial t;
   t.exponent = exponent;
   decoded.resize(volume.size());
   t.trip = zfpRoundTrip(ZfpMode::FixedAccuracy, std::ldexp(1.0, exponent), volume.data(),
-                        size_t(dims[0]), size_t(dims[1]), size_t(dims[2]), decoded.data());
+                        size_t(dims[0]), size_t(dims[1]), size_t(dims[2]), decoded.data(),
+                        threads);
   t.error.add(decoded.data(), volume.data(), int64_t(volume.size()));
   return t;
 }
@@ -204,8 +205,10 @@ ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, d
 }
 
 /// ZFP tuned to `target` (Adaptive-FAM's reached RMSE, or its bound; `pointwise`: the largest
-/// error), on the same float32 volume.
-CodecRow runZfp(RawFileSource& src, const CodecRow& afam, double target, bool pointwise) {
+/// error), on the same float32 volume: compressed on one thread ("zfp"), and, where Adaptive-FAM
+/// ran on several, again at the same tolerance with ZFP's OpenMP on as many ("zfp-omp").
+std::vector<CodecRow> runZfp(RawFileSource& src, const CodecRow& afam, double target,
+                             bool pointwise) {
   const Index3 d = src.dims();
   std::vector<float> volume(size_t(d[0] * d[1] * d[2]));
   src.readSlab(0, d[2], volume.data());
@@ -225,7 +228,23 @@ CodecRow runZfp(RawFileSource& src, const CodecRow& afam, double target, bool po
                 "accuracy tolerance=2^%d=%.6g tuning_trials=%d tuning_s=%.3f", t.exponent,
                 t.trip.effectiveParameter, trials, tuning);
   r.setting = setting;
-  return r;
+  std::vector<CodecRow> rows{r};
+  if (afam.threads > 1) {
+    std::vector<float> decoded;
+    const ZfpTrial omp = zfpTrial(volume, d, t.exponent, decoded, afam.threads);
+    CodecRow o = r;
+    o.codec = "zfp-omp";
+    o.threads = afam.threads;
+    o.compressedBytes = omp.trip.bytes;
+    o.rmse = omp.error.rmse();
+    o.maxError = omp.error.maxError;
+    o.seconds = omp.trip.compressSeconds;
+    std::snprintf(setting, sizeof setting, "accuracy tolerance=2^%d=%.6g openmp_threads=%d",
+                  t.exponent, omp.trip.effectiveParameter, afam.threads);
+    o.setting = setting;
+    rows.push_back(o);
+  }
+  return rows;
 }
 
 std::string dimsText(const Index3& d) {
@@ -300,6 +319,8 @@ int runCompareCodecs(int argc, char** argv) {
         "                power-of-two tolerances allow; ratio = raw file bytes / ZFP stream "
         "bytes;\n"
         "                seconds = compression time at that tolerance (serial).\n"
+        "  zfp-omp       where adaptive-fam ran on several threads: ZFP at the same tolerance\n"
+        "                compressed with its OpenMP execution on as many threads (seconds).\n"
         "Prints a table; --csv writes one row per (volume, bound, codec).\n\n"
         "  --bounds E,...  relative RMSE bounds, each > 0 (default 1e-2)\n"
         "  --levels, --blocks, --degree, --threads  passed to the encoder (default: its defaults)\n"
@@ -343,8 +364,9 @@ int runCompareCodecs(int argc, char** argv) {
       const CodecRow afam = runAdaptiveFam(*src, options, bound, folder.path());
       rows.push_back(afam);
       const double reached = pointwise ? afam.maxError : afam.rmse;
-      rows.push_back(
-          runZfp(*src, afam, zfpTarget == "reached" ? reached : afam.targetRmse, pointwise));
+      for (CodecRow& z :
+           runZfp(*src, afam, zfpTarget == "reached" ? reached : afam.targetRmse, pointwise))
+        rows.push_back(std::move(z));
     }
   printTable(rows);
   if (args.has("csv")) {

@@ -39,11 +39,12 @@ struct ZfpHandles {
 bool zfpAvailable() { return true; }
 
 ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_t nx, size_t ny,
-                          size_t nz, float* out) {
+                          size_t nz, float* out, int threads) {
   if (!(parameter > 0))
     throw InvalidArgument("zfp: the rate or tolerance must be > 0, not " +
                           std::to_string(parameter));
   if (nx == 0 || ny == 0 || nz == 0) throw InvalidArgument("zfp: empty array");
+  if (threads < 1) throw InvalidArgument("zfp: threads must be >= 1");
   ZfpRoundTrip r;
   ZfpHandles h;
   // zfp_compress only reads the field; its API takes a non-const pointer.
@@ -58,11 +59,15 @@ ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_
   std::vector<unsigned char> buffer(zfp_stream_maximum_size(h.stream, h.field));
   h.bits = stream_open(buffer.data(), buffer.size());
   zfp_stream_set_bit_stream(h.stream, h.bits);
+  if (threads > 1 && !(zfp_stream_set_execution(h.stream, zfp_exec_omp) &&
+                       zfp_stream_set_omp_threads(h.stream, uint(threads))))
+    throw Error("zfp: this libzfp compresses on one thread only (no OpenMP)");
   zfp_stream_rewind(h.stream);
   auto t0 = std::chrono::steady_clock::now();
   r.bytes = zfp_compress(h.stream, h.field);
   r.compressSeconds = secondsSince(t0);
   if (r.bytes == 0) throw Error("zfp_compress failed");
+  zfp_stream_set_execution(h.stream, zfp_exec_serial);
   zfp_stream_rewind(h.stream);
   t0 = std::chrono::steady_clock::now();
   if (!zfp_decompress(h.stream, h.decoded)) throw Error("zfp_decompress failed");
@@ -74,7 +79,7 @@ ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_
 
 bool zfpAvailable() { return false; }
 
-ZfpRoundTrip zfpRoundTrip(ZfpMode, double, const float*, size_t, size_t, size_t, float*) {
+ZfpRoundTrip zfpRoundTrip(ZfpMode, double, const float*, size_t, size_t, size_t, float*, int) {
   throw Error("built without ZFP (install libzfp-dev and configure again)");
 }
 

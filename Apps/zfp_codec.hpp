@@ -24,9 +24,11 @@ struct ZfpRoundTrip {
 bool zfpAvailable();
 
 /// Compresses nx * ny * nz floats (x fastest) into memory and decompresses them into `out`
-/// (same size, may not alias `in`), serially. Throws afam::Error when ZFP is not built in or fails,
-/// afam::InvalidArgument for a parameter <= 0 or an empty array.
+/// (same size, may not alias `in`). threads > 1: compressed with ZFP's OpenMP execution on that
+/// many threads (what a user's ZFP does on every core; ZFP decompresses serially in its variable
+/// rate modes). Throws afam::Error when ZFP is not built in, has no OpenMP for threads > 1, or
+/// fails, afam::InvalidArgument for a parameter <= 0, an empty array or threads < 1.
 ZfpRoundTrip zfpRoundTrip(ZfpMode mode, double parameter, const float* in, size_t nx, size_t ny,
-                          size_t nz, float* out);
+                          size_t nz, float* out, int threads = 1);
 
 }  // namespace afam

@@ -149,8 +149,7 @@ ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent,
   t.exponent = exponent;
   decoded.resize(volume.size());
   t.trip = zfpRoundTrip(ZfpMode::FixedAccuracy, std::ldexp(1.0, exponent), volume.data(),
-                        size_t(dims[0]), size_t(dims[1]), size_t(dims[2]), decoded.data(),
-                        threads);
+                        size_t(dims[0]), size_t(dims[1]), size_t(dims[2]), decoded.data(), threads);
   t.error.add(decoded.data(), volume.data(), int64_t(volume.size()));
   return t;
 }

@@ -301,10 +301,7 @@ PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(d
 
 const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount) {
   const size_t plane = size_t(rowSize_ * yCount);
-  if (buf_.size() < zs.size() * plane) {
-    buf_.clear();  // no copy of the old contents on growth
-    buf_.resize(zs.size() * plane);
-  }
+  growBuffer(buf_, zs.size() * plane);
   float* buf = buf_.data();
   for (size_t i = 0; i < zs.size();) {
     size_t j = i + 1;

@@ -193,10 +193,7 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   const bool swap = header_.bigEndian;
   if (!inflated_.empty())
     return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
-  if (buffer_.size() < count * es) {
-    buffer_.clear();  // nothing to copy; the read fills what is used
-    buffer_.resize(count * es);
-  }
+  growBuffer(buffer_, count * es);  // the read fills what is used
   readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), count * es);
   samplesToFloat(header_.type, buffer_.data(), count, out, swap);
 }

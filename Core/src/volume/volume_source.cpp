@@ -134,10 +134,7 @@ void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   if (type_ == SampleType::Float32) {
     dst = reinterpret_cast<unsigned char*>(out);
   } else {
-    if (buffer_.size() < bytes) {
-      buffer_.clear();  // nothing to copy; the pread fills what is read
-      buffer_.resize(bytes);
-    }
+    growBuffer(buffer_, bytes);  // the pread fills what is read
     dst = buffer_.data();
   }
   uint64_t done = 0;

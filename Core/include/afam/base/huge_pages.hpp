@@ -90,4 +90,13 @@ class HugePageAllocator {
 template <typename T>
 using HugePageVector = std::vector<T, HugePageAllocator<T>>;
 
+/// Grows a work buffer to at least n elements without copying what it held (it is to be
+/// overwritten) and without filling the new ones; a large enough buffer is left as it is.
+template <typename T>
+void growBuffer(HugePageVector<T>& buffer, size_t n) {
+  if (buffer.size() >= n) return;
+  buffer.clear();
+  buffer.resize(n);
+}
+
 }  // namespace afam

@@ -161,22 +161,17 @@ ErrorStats errorOnValidOf(const Model& model, const float* samples, size_t count
     double lane[4] = {0, 0, 0, 0}, most[4] = {0, 0, 0, 0};
     double lo[4] = {es.minValue, es.minValue, es.minValue, es.minValue};
     double hi[4] = {es.maxValue, es.maxValue, es.maxValue, es.maxValue};
+    const auto add = [&](size_t i, size_t l) {  // value i in lane l = i mod 4
+      const double m = double(model(i)), d = m - double(samples[i]);
+      lane[l] += d * d;
+      most[l] = std::max(most[l], std::fabs(d));
+      lo[l] = std::min(lo[l], m);
+      hi[l] = std::max(hi[l], m);
+    };
     size_t i = 0;
     for (; i + 4 <= count; i += 4)
-      for (size_t l = 0; l < 4; ++l) {
-        const double m = double(model(i + l)), d = m - double(samples[i + l]);
-        lane[l] += d * d;
-        most[l] = std::max(most[l], std::fabs(d));
-        lo[l] = std::min(lo[l], m);
-        hi[l] = std::max(hi[l], m);
-      }
-    for (; i < count; ++i) {
-      const double m = double(model(i)), d = m - double(samples[i]);
-      lane[i & 3] += d * d;
-      most[i & 3] = std::max(most[i & 3], std::fabs(d));
-      lo[i & 3] = std::min(lo[i & 3], m);
-      hi[i & 3] = std::max(hi[i & 3], m);
-    }
+      for (size_t l = 0; l < 4; ++l) add(i + l, l);
+    for (; i < count; ++i) add(i, i & 3);
     sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
     for (size_t l = 0; l < 4; ++l) {
       es.maxError = std::max(es.maxError, most[l]);

@@ -20,25 +20,12 @@ namespace afam {
 namespace {
 
 using codec::coarsestSpacing;
+using codec::interpolate;
 using codec::Lattice;
 using codec::lorenzo;
 using codec::roundHalfEven;
 
 constexpr double kMaxCode = 1125899906842624.0;  // 2^50: residual codes beyond are refused
-
-/// Prediction of the point at coordinate c (an odd multiple of s) along one axis of length len,
-/// from the known points at c -+ s and c -+ 3s; the point at coordinate k of that axis is
-/// line[k * stride].
-inline double interpolate(int c, int s, int len, const double* line, int64_t stride) {
-  const double b = line[int64_t(c - s) * stride];
-  if (c + s >= len) return b;
-  const double d = line[int64_t(c + s) * stride];
-  if (c - 3 * s >= 0 && c + 3 * s < len)
-    return (-line[int64_t(c - 3 * s) * stride] + 9 * b + 9 * d -
-            line[int64_t(c + 3 * s) * stride]) /
-           16;
-  return (b + d) / 2;
-}
 
 template <typename Fn>
 void interpolation(const Lattice& L, const double* q, Fn&& fn) {
@@ -360,12 +347,8 @@ bool roundEvery(float* points, size_t count, double q, int64_t* k) {
   const double inverse = 1.0 / q;
   bool ok = true;
   for (size_t i = 0; i < count; ++i) {
-    const double x = double(points[i]) * inverse;
-    const bool inRange = std::fabs(x) < kMaxPointCode;  // false for NaN too
-    const double code = roundHalfEven(inRange ? x : 0.0);
-    const float value = static_cast<float>(code * q);
-    ok &= inRange & (std::fabs(value) <= std::numeric_limits<float>::max());
-    points[i] = value;
+    double code;
+    ok &= roundedPoint(points[i], q, inverse, &points[i], &code);
     if (KeepCodes) k[i] = int64_t(code);
   }
   return ok;

@@ -15,10 +15,12 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/round_half_even.hpp"
 #include "afam/base/thread_scratch.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/format/value_prediction.hpp"
 
 namespace afam::codec {
 
@@ -49,16 +51,8 @@ inline void putVarint(uint64_t u, std::vector<uint8_t>& out) {
 
 inline uint64_t zigzag(int64_t c) { return (uint64_t(c) << 1) ^ uint64_t(c >> 63); }
 
-/// roundHalfEven is exact below this magnitude (2^51).
-constexpr double kRoundExact = 2251799813685248.0;
-
-/// x rounded to the nearest integer, ties to even (nearbyint's result in the default rounding
-/// mode), for |x| < kRoundExact: adding 1.5 * 2^52 leaves no fraction bits, subtracting it gives
-/// the integer back. No libm call and no branch: loops over it vectorize.
-inline double roundHalfEven(double x) {
-  constexpr double kShift = 6755399441055744.0;  // 1.5 * 2^52
-  return (x + kShift) - kShift;
-}
+using afam::kRoundExact;  // round_half_even.hpp
+using afam::roundHalfEven;
 
 /// Appends one zstd frame of `bytes` to out (after what out holds).
 inline void appendZstdFrame(const std::vector<uint8_t>& bytes, int level,
@@ -130,56 +124,6 @@ inline const uint8_t* unpackFrame(const uint8_t* frame, size_t bytes, size_t cap
   return out;
 }
 
-struct Lattice {
-  Int3 n;
-  int64_t index(int x, int y, int z) const { return (int64_t(z) * n[1] + y) * n[0] + x; }
-};
-
-/// Lorenzo's prediction of point i from its seven lower neighbours (strides sx, sy, sz), all inside
-/// the lattice: the sum in its one fixed order.
-template <typename T>
-inline T lorenzoInterior(const T* q, int64_t i, int64_t sx, int64_t sy, int64_t sz) {
-  return q[i - sx] + q[i - sy] + q[i - sz] - q[i - sx - sy] - q[i - sx - sz] - q[i - sy - sz] +
-         q[i - sx - sy - sz];
-}
-
-/// Lorenzo's prediction of a row's first point (no neighbour below in x; one outside reads 0).
-template <typename T>
-inline T lorenzoRowStart(const T* q, int64_t row, int64_t sy, int64_t sz, bool hasY, bool hasZ) {
-  const T b = hasY ? q[row - sy] : T(0), c = hasZ ? q[row - sz] : T(0);
-  const T f = hasY && hasZ ? q[row - sy - sz] : T(0);
-  return T(0) + b + c - T(0) - T(0) - f + T(0);
-}
-
-/// Lorenzo over the row (y, z) of the points whose coordinates are multiples of s, as lorenzo
-/// walks it.
-template <typename T, typename Fn>
-inline void lorenzoRow(const Lattice& L, const T* q, int s, int y, int z, Fn&& fn) {
-  const int64_t sx = s, sy = int64_t(s) * L.n[0], sz = int64_t(s) * L.n[0] * L.n[1];
-  const int64_t row = L.index(0, y, z);
-  const bool hasY = y >= s, hasZ = z >= s;
-  fn(row, lorenzoRowStart(q, row, sy, sz, hasY, hasZ));  // x = 0
-  if (hasY && hasZ) {  // every neighbour inside: the common case, no tests
-    for (int64_t i = row + sx; i < row + L.n[0]; i += sx) fn(i, lorenzoInterior(q, i, sx, sy, sz));
-    return;
-  }
-  for (int64_t i = row + sx; i < row + L.n[0]; i += sx) {
-    const T a = q[i - sx];
-    const T b = hasY ? q[i - sy] : T(0), c = hasZ ? q[i - sz] : T(0);
-    const T d = hasY ? q[i - sx - sy] : T(0), e = hasZ ? q[i - sx - sz] : T(0);
-    fn(i, a + b + c - d - e - T(0) + T(0));
-  }
-}
-
-/// Lorenzo over the points whose coordinates are multiples of s; fn(index, prediction) must leave
-/// q[index] known when it returns. A neighbour outside the lattice reads 0.0; the sum is formed in
-/// one fixed order, so encoder and decoder predict bit for bit alike.
-template <typename T, typename Fn>
-inline void lorenzo(const Lattice& L, const T* q, int s, Fn&& fn) {
-  for (int z = 0; z < L.n[2]; z += s)
-    for (int y = 0; y < L.n[1]; y += s) lorenzoRow(L, q, s, y, z, fn);
-}
-
 /// lorenzo at s = 1 with the interior rows of a plane four at a time, each a point behind the one
 /// before (row y + 1 at x reads row y at x and x - 1, known by then): four independent chains in
 /// flight where fn's work on a point waits for the point before it (a quantization through
@@ -205,14 +149,6 @@ inline void lorenzoFourRows(const Lattice& L, const T* q, Fn&& fn) {
         }
       y += 4;
     }
-}
-
-/// The coarsest lattice spacing S of the interpolation predictor.
-inline int coarsestSpacing(Int3 n) {
-  const int maxn = std::max({n[0], n[1], n[2]});
-  int S = 1;
-  while (2 * S <= maxn - 1) S *= 2;
-  return S;
 }
 
 }  // namespace afam::codec

@@ -359,6 +359,25 @@ void validateSamples(const std::array<int, 3>& n) {
 
 }  // namespace
 
+InterpolationAxis interpolationAxis(int n, int p) {
+  if (n < 1 || p < 0 || p > kMaxDegree || p > n - 1)
+    throw InvalidArgument("afam fit: no interpolation of degree " + std::to_string(p) + " on " +
+                          std::to_string(n) + " samples");
+  AxisSystem s;
+  buildCollocation(s, n, n, p);
+  factorNormal(s);
+  InterpolationAxis a;
+  a.n = n;
+  a.p = p;
+  a.rowFirst = s.rowFirst;
+  a.rowLast = s.rowLast;
+  a.columnOffset.assign(s.columnOffset.begin(), s.columnOffset.end());
+  a.columnWeight = s.columnWeight;
+  a.lower = s.lower;
+  a.invDiag = s.invDiag;
+  return a;
+}
+
 double sumOfSquares(const float* samples, std::array<int, 3> n) {
   return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
 }

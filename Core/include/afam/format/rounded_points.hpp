@@ -17,6 +17,8 @@
 #include <string>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/host_device.hpp"
+#include "afam/base/round_half_even.hpp"
 
 namespace afam {
 
@@ -46,6 +48,20 @@ inline double roundedPointStep(const uint8_t* stored, size_t bytes, const char* 
 /// even (block_codec.cpp, compiled without FMA contraction, so that every build codes alike; a
 /// product, not a quotient, as decoding rounds every point of a block).
 int64_t pointCode(float c, double q);
+/// Point c rounded to step q, as roundPoints rounds every point (`inverse`: 1 / q, computed once
+/// by the caller): k q in binary64 to float32, k = c * inverse rounded to the nearest integer, ties
+/// to even; k into *code. False (and the value of k = 0) when c is not finite or lies
+/// kMaxPointCode steps or more from 0, or when k q is beyond float32. Host and device.
+AFAM_HD bool roundedPoint(float c, double q, double inverse, float* value, double* code) {
+  const double x = double(c) * inverse;
+  const bool inRange = (x < 0 ? -x : x) < kMaxPointCode;  // false for NaN too
+  const double k = roundHalfEven(inRange ? x : 0.0);
+  const float v = static_cast<float>(k * q);
+  *value = v;
+  *code = k;
+  return inRange & ((v < 0 ? -v : v) <= 3.40282346638528859812e+38f);
+}
+
 /// The float a reader keeps for code k.
 inline float pointValue(int64_t k, double q) { return static_cast<float>(double(k) * q); }
 

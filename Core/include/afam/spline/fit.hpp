@@ -39,12 +39,18 @@
 #include "afam/base/errors.hpp"
 #include "afam/base/types.hpp"
 #include "afam/spline/evaluate.hpp"
+#include "afam/spline/interpolation_passes.hpp"
 #include "afam/spline/rmse_range.hpp"
 
 namespace afam {
 
 /// Per-axis degree used for an axis of n samples: min(degree, n-1).
 int effectiveDegree(int degree, int samples);
+
+/// The interpolation system (NCP = n) of an axis of n samples at degree p (effectiveDegree), as
+/// BlockFitter builds and factors it: what interpolation_passes.hpp needs to fit an interpolant
+/// one line at a time (the GPU decoder's tables). Throws NumericError as a fit would.
+InterpolationAxis interpolationAxis(int n, int p);
 
 /// NCP clamped per axis to [p_axis+1, n_axis] for a scalar NCP request.
 std::array<int, 3> clampNcp(int ncp, const std::array<int, 3>& samples,

@@ -10,12 +10,14 @@
 #include <cstring>
 #include <random>
 
+#include "../Core/head_mri.hpp"
 #include "../Core/scratch_dir.hpp"
 #include "afam/cuda/common/gpu_error.hpp"
 #include "afam/cuda/decode/gpu_block_decoder.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"
+#include "afam/volume/enlarged_scan.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 #include "gpu_decode_batch.hpp"
 
@@ -32,6 +34,17 @@ struct Scene {
   bool compact = true;     ///< false: float32 splines
 };
 
+/// `source` encoded with `o` at a relative bound, every coded payload in a lanes frame.
+std::shared_ptr<const AfamFile> encodeInLanes(VolumeSource& source, EncoderOptions o,
+                                              const std::string& name) {
+  o.relativeBound = true;
+  o.entropy = EntropyStage::Lanes;
+  o.threads = 0;
+  const std::string path = afam_test::scratchPath(name + ".afam");
+  encodeVolume(source, o, path);
+  return AfamFile::open(path);
+}
+
 /// Marschner-Lobb on n^3 points, encoded with every coded payload in a lanes frame.
 std::shared_ptr<const AfamFile> encodeLanes(const std::string& name, const Scene& c) {
   const int n = c.n;
@@ -46,12 +59,18 @@ std::shared_ptr<const AfamFile> encodeLanes(const std::string& name, const Scene
   o.blocksPerAxis = c.blocks;
   o.errorBound = c.bound;
   o.compact = c.compact;
-  o.relativeBound = true;
-  o.entropy = EntropyStage::Lanes;
-  o.threads = 0;
-  const std::string path = afam_test::scratchPath(name + ".afam");
-  encodeVolume(source, o, path);
-  return AfamFile::open(path);
+  return encodeInLanes(source, o, name);
+}
+
+/// The repository's head MRI made 96 x 124 x 84 with noise above the bound, encoded at 1e-2 with
+/// lanes frames: its finest blocks are interpolants, their points rounded (rounded_points.hpp).
+std::shared_ptr<const AfamFile> encodeNoisyHead(const std::string& name) {
+  EnlargedScanSource source(afam_test::headMri(), {48, 62, 42}, {96, 124, 84}, 6.0, 1, 0, 255);
+  EncoderOptions o;
+  o.levels = 2;
+  o.blocksPerAxis = 4;
+  o.errorBound = 1e-2;
+  return encodeInLanes(source, o, name);
 }
 
 /// Whether a lanes frame's varints hold a value of more than one byte (the parser's slow path).
@@ -105,12 +124,12 @@ std::vector<uint32_t> decodeOnGpu(const gputest::StoredPayloads& stored,
 }
 
 void expectFileDecodesAsTheCpu(const AfamFile& file, size_t minimumCoded, bool wantLong,
-                               uint64_t sharedLimit = kAllShared) {
+                               uint64_t sharedLimit = kAllShared, size_t minimumRounded = 0) {
   const gputest::StoredPayloads stored = gputest::readStoredPayloads(file);
   const gputest::DecodeBatch batch = gputest::decodableBatch(file, stored);
   std::vector<float> gpu;
   const std::vector<uint32_t> status = decodeOnGpu(stored, batch, sharedLimit, gpu);
-  size_t mismatches = 0, failed = 0, longOnes = 0, kinds[3] = {0, 0, 0};
+  size_t mismatches = 0, failed = 0, longOnes = 0, kinds[5] = {0, 0, 0, 0, 0}, rounded = 0;
   for (size_t k = 0; k < batch.jobs.size(); ++k) {
     ++kinds[int(batch.jobs[k].kind)];
     const size_t i = batch.entries[k];
@@ -121,17 +140,20 @@ void expectFileDecodesAsTheCpu(const AfamFile& file, size_t minimumCoded, bool w
         std::memcmp(cpu.data(), gpu.data() + batch.jobs[k].outputOffset, cpu.size() * 4) != 0;
     if (batch.jobs[k].kind == GpuDecodeKind::IntegerLorenzo)
       longOnes += hasLongVarints(e, stored.of(i));
+    rounded += batch.jobs[k].kind == GpuDecodeKind::Interpolant && batch.jobs[k].pointStep > 0;
   }
   std::printf(
       "[gpu-decode] %s (shared-memory limit %lld): entries %zu, decodable %zu (constant %zu, "
       "float32 %zu, lanes coded %zu, "
-      "with long varints %zu), floats %llu, failed %zu, mismatches %zu\n",
+      "with long varints %zu, interpolants %zu, rounded %zu), floats %llu, failed %zu, "
+      "mismatches %zu\n",
       file.path().c_str(), sharedLimit == kAllShared ? -1ll : (long long)sharedLimit,
-      file.entries().size(), batch.jobs.size(), kinds[0], kinds[1], kinds[2], longOnes,
-      (unsigned long long)batch.outputFloats, failed, mismatches);
+      file.entries().size(), batch.jobs.size(), kinds[0], kinds[1], kinds[2], longOnes, kinds[4],
+      rounded, (unsigned long long)batch.outputFloats, failed, mismatches);
   EXPECT_EQ(failed, 0u);
   EXPECT_EQ(mismatches, 0u);
   EXPECT_GE(batch.coded, minimumCoded);
+  EXPECT_GE(rounded, minimumRounded);
   if (wantLong) {
     EXPECT_GT(longOnes, 0u);
   }
@@ -140,7 +162,7 @@ void expectFileDecodesAsTheCpu(const AfamFile& file, size_t minimumCoded, bool w
 TEST(GpuBlockDecoder, DecodesLanesCodedFilesAsTheCpu) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
-  // Small blocks at three levels, some constant, some interpolants (kept on the CPU); the same
+  // Small blocks at three levels, some constant, some interpolants; the same
   // as float32 splines; blocks of ~48 samples whose payloads span several of the parser's chunks,
   // at a bound tight enough for residuals of several bytes.
   Scene small;
@@ -159,6 +181,55 @@ TEST(GpuBlockDecoder, DecodesLanesCodedFilesAsTheCpu) {
   // The same through global memory, every job and then the larger ones (23k and 37k points).
   expectFileDecodesAsTheCpu(*ml97, 2, true, 0);
   expectFileDecodesAsTheCpu(*ml97, 2, true, 30000);
+}
+
+TEST(GpuBlockDecoder, FitsRoundedInterpolantsAsTheCpu) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  // A noisy scan's finest blocks: interpolants of 25 x 32 x 22 samples whose rounded points must
+  // come out as the CPU's fit and rounding give them, bit for bit; through shared and global
+  // memory.
+  const auto head = encodeNoisyHead("noisy_head");
+  expectFileDecodesAsTheCpu(*head, 10, false, kAllShared, 20);
+  expectFileDecodesAsTheCpu(*head, 10, false, 0, 20);
+}
+
+TEST(GpuBlockDecoder, RefusesAnInterpolantWhoseResidualsPassItsThirtyTwoBits) {
+  std::string why;
+  if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
+  // An interpolant's samples in the double interpolation form at a step so small that its
+  // residuals need more than 32 bits (the encoder never writes one: float32 samples within a
+  // bound stay below 2^31 steps): the CPU decodes it, the GPU's parser refuses it (Varint), which
+  // the GPU caster answers by decoding it on the CPU (gpu_caster.cpp).
+  const Int3 n{9, 8, 7};
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(100, 10);
+  std::vector<float> samples(size_t(n[0] * n[1] * n[2]));
+  for (float& v : samples) v = float(noise(rng));
+  std::vector<uint8_t> payload;
+  std::vector<float> recon;
+  ASSERT_TRUE(encodeValues(samples.data(), n, 1e-8, Predictor::Interpolation,
+                           EntropyCoding{3, EntropyStage::Lanes}, payload, recon));
+  ModelEntry e;
+  e.kind = BlockKind::Interpolant;
+  e.coded = true;
+  e.lanesCoded = payloadIsLanesCoded(payload.data(), payload.size());
+  e.ncp = e.samples = n;
+  e.degree = {2, 2, 2};
+  e.size = uint64_t(samples.size()) * 4;
+  e.storedSize = payload.size();
+  ASSERT_TRUE(e.lanesCoded);
+  ASSERT_TRUE(gpuDecodable(e, payload.data()));
+  const CpuResult cpu = decodeOnCpu(e, payload.data());
+  EXPECT_TRUE(cpu.ok);
+  payload.resize((payload.size() + 3) / 4 * 4 + 4, 0);
+  DeviceBuffer payloads(payload.size()), output(samples.size() * 4);
+  payloads.upload(payload.data(), payload.size());
+  GpuBlockDecoder decoder;
+  const std::vector<uint32_t> status =
+      decoder.decode({gpuDecodeJob(e, payload.data(), 0, 0)}, payloads.data(), output.floats());
+  ASSERT_EQ(status.size(), 1u);
+  EXPECT_EQ(status[0], uint32_t(GpuDecodeStatus::Varint)) << gpuDecodeStatusText(status[0]);
 }
 
 /// A damaged copy of a payload: the stored bytes and the entry that describes them.
@@ -184,7 +255,9 @@ std::vector<Damaged> damagedCopies(const AfamFile& file, const gputest::StoredPa
   std::mt19937 random(7);
   std::vector<size_t> coded;
   for (size_t k = 0; k < batch.jobs.size(); ++k)
-    if (batch.jobs[k].kind == GpuDecodeKind::IntegerLorenzo) coded.push_back(batch.entries[k]);
+    if (batch.jobs[k].kind == GpuDecodeKind::IntegerLorenzo ||
+        batch.jobs[k].kind == GpuDecodeKind::Interpolant)
+      coded.push_back(batch.entries[k]);
   const auto copy = [&](size_t i, const std::string& what) {
     const ModelEntry& e = file.entries()[i];
     Damaged d{e, std::vector<uint8_t>(stored.of(i), stored.of(i) + e.storedSize), what};
@@ -234,10 +307,8 @@ std::vector<Damaged> damagedCopies(const AfamFile& file, const gputest::StoredPa
 }
 
 /// Damaged copies of a file's coded payloads decoded in one batch after its intact jobs.
-void expectDamageRefusedAsOnTheCpu(uint64_t sharedLimit) {
-  Scene scene;
-  scene.flatThird = true;
-  const auto file = encodeLanes("ml65_damaged", scene);
+void expectDamageRefusedAsOnTheCpu(const std::shared_ptr<const AfamFile>& file,
+                                   uint64_t sharedLimit) {
   gputest::StoredPayloads stored = gputest::readStoredPayloads(*file);
   gputest::DecodeBatch batch = gputest::decodableBatch(*file, stored);
   ASSERT_GT(batch.coded, 0u);
@@ -302,8 +373,12 @@ void expectDamageRefusedAsOnTheCpu(uint64_t sharedLimit) {
 TEST(GpuBlockDecoder, DamagedPayloadsAreRefusedWhereTheCpuRefusesThem) {
   std::string why;
   if (!gpuAvailable(&why)) GTEST_SKIP() << "no usable GPU: " << why;
-  expectDamageRefusedAsOnTheCpu(kAllShared);
-  expectDamageRefusedAsOnTheCpu(0);  // the global-memory path
+  Scene scene;
+  scene.flatThird = true;
+  const auto ml65 = encodeLanes("ml65_damaged", scene);
+  expectDamageRefusedAsOnTheCpu(ml65, kAllShared);
+  expectDamageRefusedAsOnTheCpu(ml65, 0);  // the global-memory path
+  expectDamageRefusedAsOnTheCpu(encodeNoisyHead("noisy_head_damaged"), kAllShared);  // interpolants
 }
 
 }  // namespace

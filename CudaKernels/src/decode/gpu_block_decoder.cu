@@ -12,7 +12,10 @@
 
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/block_codec.hpp"
+#include "afam/format/rounded_points.hpp"
+#include "afam/spline/fit.hpp"
 #include "common/cuda_check.hpp"
+#include "decode/gpu_interpolants.hpp"
 
 namespace afam {
 
@@ -49,11 +52,34 @@ __device__ __forceinline__ uint64_t controlPoints(const GpuDecodeJob& j) {
   return uint64_t(uint32_t(j.ncp[0])) * uint32_t(j.ncp[1]) * uint32_t(j.ncp[2]);
 }
 
-/// The coded payload's step and base, checked as decodeValues and decodeInteger check them.
-__device__ uint32_t readCodedHeader(const uint8_t* p, uint64_t bytes, double& step, int64_t& base) {
-  if (bytes < kIntegerCodedHeaderBytes + 1) return code(Status::CodedHeader);
+/// Bytes of a coded job's samples or points: an interpolant's point shift byte follows them.
+__device__ __forceinline__ uint64_t codedBytes(const GpuDecodeJob& j) {
+  const bool rounded = j.kind == GpuDecodeKind::Interpolant && j.pointStep > 0 &&
+                       j.storedBytes >= kRoundedPointsBytes;
+  return rounded ? j.storedBytes - kRoundedPointsBytes : j.storedBytes;
+}
+
+/// Whether a job's values are coded in the double interpolation form (an interpolant's samples):
+/// the Lorenzo kernels only parse its residuals, GpuInterpolants predicts them.
+__device__ __forceinline__ bool doubleForm(const GpuDecodeJob& j) {
+  return j.kind == GpuDecodeKind::Interpolant && j.predictor == uint8_t(Predictor::Interpolation);
+}
+
+/// Bytes before a coded job's frame: the double forms' header, or the integer forms'.
+__device__ __forceinline__ uint64_t headerBytes(const GpuDecodeJob& j) {
+  return doubleForm(j) ? kCodedHeaderBytes : kIntegerCodedHeaderBytes;
+}
+
+/// The coded payload's step and base (0 in a double form), checked as decodeValues and
+/// decodeInteger check them.
+__device__ uint32_t readCodedHeader(const GpuDecodeJob& job, const uint8_t* p, double& step,
+                                    int64_t& base) {
+  const uint64_t bytes = codedBytes(job);
+  if (bytes < headerBytes(job) + 1) return code(Status::CodedHeader);
   step = __longlong_as_double((long long)readU64(p));
   if (!(step > 0) || isinf(step)) return code(Status::CodedHeader);
+  base = 0;
+  if (doubleForm(job)) return code(Status::Ok);  // the host checked its predictor byte
   if (p[8] != uint8_t(Predictor::IntegerLorenzo)) return code(Status::CodedHeader);
   base = int64_t(readU64(p + 9));
   const int64_t limit = int64_t(1) << 52;
@@ -90,12 +116,12 @@ struct FrameShared {
 __device__ void parseCodedFrame(const GpuDecodeJob& job, const uint8_t* stored, FrameShared& s) {
   double step;
   int64_t base;
-  s.status = readCodedHeader(stored, job.storedBytes, step, base);
+  s.status = readCodedHeader(job, stored, step, base);
   if (s.status) return;
   const uint64_t count = controlPoints(job);
-  const uint8_t* frame = stored + kIntegerCodedHeaderBytes;
+  const uint8_t* frame = stored + headerBytes(job);
   const lanes::FrameLayout f =
-      lanes::parseFrame(frame, job.storedBytes - kIntegerCodedHeaderBytes, s.frequency);
+      lanes::parseFrame(frame, codedBytes(job) - headerBytes(job), s.frequency);
   if (f.error) {
     s.status = code(Status::FrameHeader);
     return;
@@ -219,7 +245,7 @@ __global__ void __launch_bounds__(kWarp)
     if (lane == 0) status[c.job] = s.status;
     return;
   }
-  const uint8_t* frame = stored + kIntegerCodedHeaderBytes;
+  const uint8_t* frame = stored + headerBytes(job);
   const bool low = uint32_t(lane) < s.lanes &&
                    lanes::readU32(frame + s.statesAt + 4 * size_t(lane)) < lanes::kLow;
   if (__any_sync(0xffffffffu, low)) {
@@ -397,7 +423,7 @@ __device__ uint32_t finishJob(const GpuDecodeJob& job, const uint8_t* payloads, 
                               float* output) {
   double step = 0;
   int64_t base = 0;
-  (void)readCodedHeader(payloads + job.payloadOffset, job.storedBytes, step, base);
+  (void)readCodedHeader(job, payloads + job.payloadOffset, step, base);
   uint32_t* out = reinterpret_cast<uint32_t*>(output + job.outputOffset);
   return lorenzoToFloats(k ? k : out, out, job.ncp, base, step);
 }
@@ -438,7 +464,7 @@ __global__ void __launch_bounds__(kThreads)
   GlobalSink sink{staged, reinterpret_cast<uint32_t*>(output + job.outputOffset), count};
   uint32_t result =
       parseResiduals<kThreads>(scratch + c.scratchOffset, job.frameSymbols, count, scan, sink);
-  if (result == 0) {
+  if (result == 0 && !doubleForm(job)) {  // a double form's residuals stay for its prediction
     __syncthreads();  // the residuals written by every thread are visible to every thread
     result = finishJob(job, payloads, nullptr, output);
   }
@@ -537,29 +563,76 @@ const char* gpuDecodeStatusText(uint32_t status) {
       return "coded payload decodes to a value beyond float32";
     case Status::NotRun:
       return "was not decoded (the GPU batch failed)";
+    case Status::Interpolation:
+      return "interpolant's points overflow float32 or do not round to its point step";
   }
   return "unknown GPU decoding status";
 }
 
-bool gpuDecodable(const ModelEntry& e, const uint8_t* stored) {
-  if (e.masked || e.residual || e.kind == BlockKind::Empty || e.kind == BlockKind::Interpolant)
+namespace {
+
+/// The decoder's degree of an interpolant (decodeInterpolant's): the largest of its axes', 1 at
+/// least.
+int interpolantDegree(const ModelEntry& e) {
+  return std::max({int(e.degree[0]), int(e.degree[1]), int(e.degree[2]), 1});
+}
+
+/// Bytes of e's coded samples or points (an interpolant's point shift byte after them).
+size_t codedBytesOf(const ModelEntry& e) {
+  return e.kind == BlockKind::Interpolant && e.roundedPoints && e.storedSize >= kRoundedPointsBytes
+             ? e.storedSize - kRoundedPointsBytes
+             : e.storedSize;
+}
+
+/// An interpolant's point step, where the payload's is valid (else the CPU refuses it): false
+/// when it is not.
+bool validPointStep(const ModelEntry& e, const uint8_t* stored, double& q) {
+  q = 0;
+  if (!e.roundedPoints) return true;
+  try {
+    q = roundedPointStep(stored, e.storedSize, "gpu");
+    return true;
+  } catch (const FormatError&) {
     return false;
+  }
+}
+
+/// Where a coded payload's lanes frame starts, for the forms the GPU decodes (0: another form):
+/// after the integer header of IntegerLorenzo, or after the double header of an interpolant's
+/// samples in the interpolation form.
+size_t frameAt(const ModelEntry& e, const uint8_t* stored) {
+  if (codedBytesOf(e) < kIntegerCodedHeaderBytes) return 0;
+  const auto predictor = Predictor(stored[8]);
+  if (e.integerCoded && predictor == Predictor::IntegerLorenzo) return kIntegerCodedHeaderBytes;
+  if (e.kind == BlockKind::Interpolant && !e.integerCoded && predictor == Predictor::Interpolation)
+    return kCodedHeaderBytes;
+  return 0;
+}
+
+}  // namespace
+
+bool gpuDecodable(const ModelEntry& e, const uint8_t* stored) {
+  if (e.masked || e.residual || e.kind == BlockKind::Empty) return false;
   const int64_t count = controlCount(e);
   if (count <= 0 || e.size != uint64_t(count) * 4) return false;
   if (e.kind == BlockKind::Constant) return e.storedSize >= 4;
-  if (!e.coded) return e.storedSize == e.size;
-  // Coded: the integer Lorenzo form in a lanes frame, its flags as the payload says (else the
-  // CPU refuses it, and says why).
-  const size_t head = kIntegerCodedHeaderBytes;
-  return e.integerCoded && e.lanesCoded && e.storedSize > head &&
-         stored[8] == uint8_t(Predictor::IntegerLorenzo) &&
-         lanes::isLanesFrame(stored + head, e.storedSize - head) && count <= 0xffffffffll;
+  if (!e.coded) return e.kind != BlockKind::Interpolant && e.storedSize == e.size;
+  if (e.kind == BlockKind::Interpolant) {
+    double q;
+    if (interpolantDegree(e) > kMaxDegree || !validPointStep(e, stored, q)) return false;
+  }
+  // Coded: the integer Lorenzo form in a lanes frame (an interpolant's samples also the double
+  // interpolation form), its flags as the payload says (else the CPU refuses it, and says why).
+  const size_t coded = codedBytesOf(e), head = frameAt(e, stored);
+  return e.lanesCoded && head > 0 && coded > head &&
+         lanes::isLanesFrame(stored + head, coded - head) && count <= 0xffffffffll;
 }
 
 bool gpuDecodesEntry(const ModelEntry& e) {
   if (e.masked || e.residual) return false;
   return e.kind == BlockKind::Constant ||
-         (e.kind == BlockKind::Spline && e.coded && e.integerCoded && e.lanesCoded);
+         (e.kind == BlockKind::Spline && e.coded && e.integerCoded && e.lanesCoded) ||
+         (e.kind == BlockKind::Interpolant && e.coded && !e.integerCoded && e.lanesCoded);
 }
 
 GpuDecodeJob gpuDecodeJob(const ModelEntry& e, const uint8_t* stored, uint64_t payloadOffset,
@@ -569,12 +642,24 @@ GpuDecodeJob gpuDecodeJob(const ModelEntry& e, const uint8_t* stored, uint64_t p
   j.storedBytes = e.storedSize;
   j.outputOffset = outputOffset;
   for (int a = 0; a < 3; ++a) j.ncp[a] = e.ncp[a];
-  j.kind = e.kind == BlockKind::Constant ? GpuDecodeKind::Constant
-           : e.coded                     ? GpuDecodeKind::IntegerLorenzo
-                                         : GpuDecodeKind::Floats;
-  if (j.kind == GpuDecodeKind::IntegerLorenzo && e.storedSize > kIntegerCodedHeaderBytes)
-    j.frameSymbols = lanes::frameSymbols(stored + kIntegerCodedHeaderBytes,
-                                         e.storedSize - kIntegerCodedHeaderBytes);
+  j.kind = e.kind == BlockKind::Constant      ? GpuDecodeKind::Constant
+           : e.kind == BlockKind::Interpolant ? GpuDecodeKind::Interpolant
+           : e.coded                          ? GpuDecodeKind::IntegerLorenzo
+                                              : GpuDecodeKind::Floats;
+  const size_t coded = codedBytesOf(e), head = e.coded ? frameAt(e, stored) : 0;
+  if (j.kind != GpuDecodeKind::Constant && head > 0 && coded > head) {
+    j.frameSymbols = lanes::frameSymbols(stored + head, coded - head);
+    j.predictor = stored[8];
+  }
+  if (j.kind == GpuDecodeKind::Interpolant) {
+    for (int a = 0; a < 3; ++a)
+      j.degree[a] = uint8_t(effectiveDegree(interpolantDegree(e), e.ncp[a]));
+    double q = 0;
+    if (validPointStep(e, stored, q) && q > 0) {
+      j.pointStep = q;
+      j.pointInverse = 1.0 / q;
+    }
+  }
   return j;
 }
 
@@ -618,7 +703,7 @@ BatchLayout layOut(const std::vector<GpuDecodeJob>& jobs, uint64_t sharedLimit) 
   std::vector<CodedJob> large;
   for (size_t i = 0; i < jobs.size(); ++i) {
     const GpuDecodeJob& j = jobs[i];
-    if (j.kind != GpuDecodeKind::IntegerLorenzo) {
+    if (j.kind != GpuDecodeKind::IntegerLorenzo && j.kind != GpuDecodeKind::Interpolant) {
       b.simple.push_back(uint32_t(i));
       continue;
     }
@@ -628,7 +713,8 @@ BatchLayout layOut(const std::vector<GpuDecodeJob>& jobs, uint64_t sharedLimit) 
     c.scratchOffset = b.scratchBytes;
     c.job = uint32_t(i);
     b.scratchBytes += roundUp(std::min<uint64_t>(j.frameSymbols, 5 * points), kScratchAlign);
-    if (points <= sharedLimit) {
+    if (points <= sharedLimit && !(j.kind == GpuDecodeKind::Interpolant &&
+                                   j.predictor == uint8_t(Predictor::Interpolation))) {
       b.coded.push_back(c);
       b.sharedPoints = std::max(b.sharedPoints, points);
     } else {
@@ -664,6 +750,8 @@ struct GpuBlockDecoder::Impl {
   size_t statusHostCapacity = 0;
   std::vector<uint32_t> result;
   size_t jobCount = 0;
+  GpuInterpolants interpolants;  // the batch's interpolant jobs, fitted after their samples
+  bool hasInterpolants = false;
 
   void release() noexcept {
     if (own) (void)cudaStreamSynchronize(own);
@@ -674,6 +762,7 @@ struct GpuBlockDecoder::Impl {
       if (p) (void)cudaFree(p);
     for (void* p : {static_cast<void*>(staging), static_cast<void*>(statusHost)})
       if (p) (void)cudaFreeHost(p);
+    interpolants.release();
     (void)cudaGetLastError();
   }
 
@@ -769,6 +858,7 @@ struct GpuBlockDecoder::Impl {
                                                                        output, status);
       AFAM_CUDA_CHECK(cudaGetLastError());
     }
+    if (hasInterpolants) interpolants.launch(t.jobs, payloads, output, status, stream);
   }
 };
 
@@ -788,7 +878,9 @@ GpuBlockDecoder::GpuBlockDecoder(int device) : impl_(std::make_unique<Impl>()) {
 GpuBlockDecoder::~GpuBlockDecoder() { impl_->release(); }
 
 void* GpuBlockDecoder::stream() const { return impl_->own; }
-size_t GpuBlockDecoder::scratchBytes() const { return impl_->scratchCapacity; }
+size_t GpuBlockDecoder::scratchBytes() const {
+  return impl_->scratchCapacity + impl_->interpolants.scratchBytes();
+}
 
 void GpuBlockDecoder::setSharedJobLimit(uint64_t controlPoints) {
   impl_->sharedLimit = std::min(controlPoints, impl_->sharedCapacity);
@@ -805,6 +897,7 @@ void GpuBlockDecoder::decodeAsync(const std::vector<GpuDecodeJob>& jobs, const v
   if (jobs.empty()) return;
   const BatchLayout layout = layOut(jobs, d.sharedLimit);
   const Impl::Tables tables = d.upload(jobs, layout, stream);
+  d.hasInterpolants = d.interpolants.upload(jobs, stream);
   d.launch(tables, layout, static_cast<const uint8_t*>(payloads), output, stream);
   AFAM_CUDA_CHECK(cudaMemcpyAsync(d.statusHost, d.status, jobs.size() * sizeof(uint32_t),
                                   cudaMemcpyDeviceToHost, stream));

@@ -83,19 +83,23 @@ namespace {
 /// What the GPU is given of a frame's models: stored payloads it decodes (stored[s].bytes set),
 /// and floats or compact models (host[s]; the pool expands a compact one into its staging memory
 /// when it is not resident); a model in the stored form that the GPU's decoder does not take is
-/// decoded here (NaN and reported in `damaged` where it does not decode).
+/// decoded here (NaN and reported in `damaged` where it does not decode), as are those the GPU
+/// refused before and the CPU decodes (`onHost`, cache keys).
 struct FrameModels {
   std::vector<GpuStoredSlot> stored;
   std::vector<const float*> host;
   std::deque<std::vector<float>> decodedHere;  // stable addresses
 
-  FrameModels(const PreparedFrame& frame, CastResult& result) : host(frame.slotHost) {
+  FrameModels(const PreparedFrame& frame, CastResult& result,
+              const std::unordered_set<uint64_t>& onHost)
+      : host(frame.slotHost) {
     for (size_t s = 0; s < frame.models.size(); ++s) {
       const CachedModel& m = *frame.models[s];
       if (!m.isStored()) continue;
       const ModelEntry& e = *frame.slotEntries[s];
       if (stored.empty()) stored.resize(frame.models.size());
-      if (gpuDecodable(e, m.stored.data())) {
+      const bool refused = s < frame.keys.size() && onHost.count(frame.keys[s]);
+      if (!refused && gpuDecodable(e, m.stored.data())) {
         stored[s] =
             GpuStoredSlot{m.stored.data(), m.stored.size(), gpuDecodeJob(e, m.stored.data(), 0, 0)};
         continue;
@@ -119,12 +123,29 @@ const PoolStats& GpuCaster::poolStats() const { return gpu_->pool().stats(); }
 
 const GpuFrameTimes& GpuCaster::lastTimes() const { return gpu_->lastTimes(); }
 
+namespace {
+
+/// Whether slot s's stored model, refused by the GPU, is one the CPU decodes (an interpolant with
+/// a residual beyond the GPU's 32 bits; the GPU and the CPU refuse damaged payloads alike).
+bool decodesOnHost(const PreparedFrame& frame, size_t s) {
+  if (s >= frame.models.size() || !frame.models[s]->isStored()) return false;
+  std::vector<float> out(frame.slotFloats(s));
+  return frame.writeSlot(s, out.data()).empty();
+}
+
+}  // namespace
+
 void GpuCaster::reportDecodeFailures(const PreparedFrame& frame, CastResult& result) {
   for (const auto& [key, status] : gpu_->pool().takeDecodeFailures())
-    for (size_t s = 0; s < frame.keys.size() && s < frame.entries.size(); ++s)
-      if (frame.keys[s] == key)
-        result.damaged.push_back({frame.entries[s], std::string("payload does not decode (") +
-                                                        gpuDecodeStatusText(status) + ")"});
+    for (size_t s = 0; s < frame.keys.size() && s < frame.entries.size(); ++s) {
+      if (frame.keys[s] != key) continue;
+      if (decodesOnHost(frame, s)) {
+        hostDecodes_.insert(key);  // drawn from the next frame on
+        continue;
+      }
+      result.damaged.push_back({frame.entries[s], std::string("payload does not decode (") +
+                                                      gpuDecodeStatusText(status) + ")"});
+    }
 }
 
 CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targets,
@@ -146,7 +167,7 @@ CastResult GpuCaster::cast(const PreparedFrame& frame, const FrameTargets& targe
     return result;
   }
   // The cached models themselves: the pool copies (or decodes) only those it does not hold yet.
-  const FrameModels models(frame, result);
+  const FrameModels models(frame, result, hostDecodes_);
   const float* const* slotHost =
       models.host.size() == size_t(frame.view.slotCount) ? models.host.data() : nullptr;
   const uint64_t* slotKeys =

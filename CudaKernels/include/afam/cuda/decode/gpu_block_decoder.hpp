@@ -2,8 +2,14 @@
 // GPU decoding of stored micro-model payloads into the float32 control points the ray caster
 // reads, bit for bit what Core's decodeStoredPayload gives: constants, uncoded control points and
 // coded splines in the integer Lorenzo form whose entropy frame is a lanes frame
-// (entropy/lanes_coder.hpp). Other payloads (zstd frames, the interpolation and double predictors,
-// interpolants, masks, residual chains in time) stay with the CPU: gpuDecodable says which.
+// (entropy/lanes_coder.hpp), and interpolants whose samples are coded so or in the double
+// interpolation form with a lanes frame: the samples predicted level by level as the CPU codec
+// does (value_prediction.hpp), the spline through them fitted one line a thread
+// (interpolation_passes.hpp, gpu_interpolants.hpp), its points rounded where the payload says
+// (rounded_points.hpp). Other payloads (zstd frames, splines in the double forms, the integer
+// interpolation form, masks, residual chains in time) stay with the CPU: gpuDecodable says which.
+// An interpolant residual of 2^31 steps or more (never from an 8- or 16-bit scan) is refused on the
+// GPU (Varint) where the CPU, which reads 64-bit residuals, would decode it.
 //
 // A batch of jobs is decoded from one device byte buffer (the payloads, as stored) into one device
 // float buffer, by kernels on one stream: a warp per coded job undoes the lanes frame into device
@@ -33,6 +39,10 @@ enum class GpuDecodeKind : uint8_t {
   Floats = 1,          ///< the float32 control points themselves (4 * ncp product bytes)
   IntegerLorenzo = 2,  ///< coded (block_codec.hpp): integer Lorenzo form, lanes frame
   Compact = 3,  ///< a cached model's compact form (compact_form.hpp): its table, then its codes
+  /// An interpolant (rounded_points.hpp): its samples coded in the integer Lorenzo form or the
+  /// double interpolation form (then the point shift byte when rounded), decoded, and the spline
+  /// of NCP = n through them.
+  Interpolant = 4,
 };
 
 /// One payload to decode (trivially copyable: the batch is uploaded as it is).
@@ -43,8 +53,15 @@ struct GpuDecodeJob {
   int32_t ncp[3] = {0, 0, 0};  ///< control points per axis (x fastest in the output)
   uint32_t frameSymbols = 0;  ///< IntegerLorenzo: the frame's V as the host read it (sizes scratch)
   GpuDecodeKind kind = GpuDecodeKind::Constant;
+  /// Coded: the payload's predictor byte (Predictor): IntegerLorenzo, or for an interpolant's
+  /// samples also Interpolation (the double form, its frame after a 9-byte header).
+  uint8_t predictor = 2;
   uint8_t codeWidth = 0;   ///< Compact: bytes a code (1 or 2)
   uint32_t codeTable = 0;  ///< Compact: floats of the table before the codes
+  /// Interpolant: each axis's degree (fit.hpp's effectiveDegree of the decoder's degree).
+  uint8_t degree[3] = {0, 0, 0};
+  double pointStep = 0;     ///< Interpolant: its points' step q (0: not rounded)
+  double pointInverse = 0;  ///< 1 / q, as roundPoints computes it
 };
 
 /// The job that expands a model kept in compact form `form` (`ncp` control points per axis, the
@@ -55,30 +72,33 @@ GpuDecodeJob gpuCompactJob(CompactForm form, Int3 ncp, uint64_t payloadOffset,
 /// A job's status word after decoding: 0 when it decoded, else what is wrong with its payload.
 enum class GpuDecodeStatus : uint32_t {
   Ok = 0,
-  StoredSize = 1,   ///< stored bytes do not fit the kind and NCP
-  CodedHeader = 2,  ///< short, invalid step, not integer Lorenzo, or invalid base
-  FrameHeader = 3,  ///< lanes frame header or frequencies damaged (lanes::parseFrame)
-  FrameLength = 4,  ///< V beyond 5 bytes a value, or not what the host read
-  FrameState = 5,   ///< a lane's initial state below 2^16
-  FrameWords = 6,   ///< words run out, or some are left, or states do not end at 2^16
-  Varint = 7,       ///< a varint runs past the frame's end or is longer than 32 bits
-  ValueCount = 8,   ///< not exactly one varint per control point
-  Range = 9,        ///< some |k| >= 2^26
-  NotFinite = 10,   ///< some value beyond float32
-  NotRun = 11,      ///< the batch never ran (a CUDA failure; see the exception)
+  StoredSize = 1,      ///< stored bytes do not fit the kind and NCP
+  CodedHeader = 2,     ///< short, invalid step, not integer Lorenzo, or invalid base
+  FrameHeader = 3,     ///< lanes frame header or frequencies damaged (lanes::parseFrame)
+  FrameLength = 4,     ///< V beyond 5 bytes a value, or not what the host read
+  FrameState = 5,      ///< a lane's initial state below 2^16
+  FrameWords = 6,      ///< words run out, or some are left, or states do not end at 2^16
+  Varint = 7,          ///< a varint runs past the frame's end or is longer than 32 bits
+  ValueCount = 8,      ///< not exactly one varint per control point
+  Range = 9,           ///< some |k| >= 2^26
+  NotFinite = 10,      ///< some value beyond float32
+  NotRun = 11,         ///< the batch never ran (a CUDA failure; see the exception)
+  Interpolation = 12,  ///< an interpolant's point beyond float32, or not rounding to its step
 };
 
 /// "decoded", "lanes frame is truncated or damaged", ... (for messages naming the block).
 const char* gpuDecodeStatusText(uint32_t status);
 
 /// Whether GpuBlockDecoder decodes entry e, whose stored bytes (e.storedSize of them) are at
-/// `stored`: constants, uncoded splines and samples, and coded integer Lorenzo payloads with a
-/// lanes frame; never masked models, residuals, interpolants or empty blocks.
+/// `stored`: constants, uncoded splines and samples, coded integer Lorenzo payloads with a lanes
+/// frame, and interpolants coded so (their point step valid); never masked models, residuals or
+/// empty blocks.
 bool gpuDecodable(const ModelEntry& e, const uint8_t* stored);
 
 /// Whether entry e's payload is one gpuDecodable takes, judged from the index alone (before its
-/// bytes are read): a constant, or a coded spline in an integer form with a lanes frame (splines
-/// are coded with Lorenzo); never masked, residual or empty. gpuDecodable still checks the bytes.
+/// bytes are read): a constant, or a coded spline or interpolant in an integer form with a lanes
+/// frame (both coded with Lorenzo); never masked, residual or empty. gpuDecodable still checks the
+/// bytes.
 bool gpuDecodesEntry(const ModelEntry& e);
 
 /// The job of a decodable entry whose stored bytes lie at payloadOffset in the device payload

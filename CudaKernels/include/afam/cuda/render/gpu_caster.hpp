@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <unordered_set>
 
 #include "afam/cuda/decode/gpu_model_pool.hpp"
 #include "afam/cuda/render/gpu_renderer.hpp"
@@ -61,13 +62,17 @@ class GpuCaster : public FrameCaster {
 
  private:
   GpuCaster(std::unique_ptr<GpuRenderer> gpu, int threads);
-  /// The frame's models the GPU's decoder refused (CastResult::damaged).
+  /// The frame's models the GPU's decoder refused (CastResult::damaged); one the CPU decodes (an
+  /// interpolant whose residuals the GPU cannot hold, 2^31 steps or more: hand-made payloads only,
+  /// the encoder writes none) is not damaged: from the next frame on it is decoded on the CPU
+  /// (hostDecodes_).
   void reportDecodeFailures(const PreparedFrame& frame, CastResult& result);
   std::unique_ptr<GpuRenderer> gpu_;
   int threads_;
   std::string description_;
   bool warned_ = false;      ///< a frame too large for the pool was reported
   bool decodeOnGpu_ = true;  ///< AFAM_GPU_DECODE=0 turns it off (benchmarks: the CPU's decoding)
+  std::unordered_set<uint64_t> hostDecodes_;  ///< cache keys of models the CPU decodes for the GPU
   bool failed_ = false;
 };
 

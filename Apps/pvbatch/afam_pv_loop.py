@@ -6,6 +6,7 @@ on the same file, views and image size (scripts/gpu_pv_check.sh):
     pvbatch --no-mpi afam_pv_loop.py --plugin AdaptiveFAM.so (--file F.afam | --raw R.raw
         --value-range-of F.afam) --trajectory T.dat [--size 1024] [--frames N] [--cache-mb 220]
         [--device gpu|cpu|auto] [--cold] [--csv OUT.csv] [--connect PORT]
+        [--miss-budget-ms B [--lod screen|distance]]
 
 --file shows the .afam file with the "Adaptive-FAM Volume" representation set like BenchAFAMRenderLoop
 (Core's preset transfer function over the file's value range, opacity unit 0.01 and sample distance
@@ -18,6 +19,12 @@ done; the medians and 95th percentile are over frames 1..N-1, each Render() plus
 WaitForCompletion. With the Adaptive-FAM representation, each frame's device and image path are read
 back (frames cast on the GPU, frames drawn through CUDA-OpenGL interop). Last line: name=value
 pairs, starting "pv_render_loop".
+--miss-budget-ms B (an .afam file): every frame after the first is an interactive render
+(view.InteractiveRender()) under the representation's Interactive Miss Budget B at full image size
+(no interactive scaling), as a user moving the camera gets them, with the LOD of --lod (default the
+representation's default, screen-space error); each frame's caching time (its wait for misses, the
+budget's subject), stand-ins and blocks behind are read back, and the last line adds the worst
+caching time after the first frame and the stand-ins in all (issue 44).
 --connect PORT (run in pvpython): the same through a pvserver listening on 127.0.0.1:PORT (the
 plugin loaded on both sides, remote rendering always), each Render() timed on the client, the image
 delivered to it included; a frame counts as cast on the GPU (through interop) when every server rank
@@ -48,9 +55,13 @@ def parse_args():
     p.add_argument("--cold", action="store_true")
     p.add_argument("--csv")
     p.add_argument("--connect", type=int, default=0)
+    p.add_argument("--miss-budget-ms", dest="budget", type=float, default=None)
+    p.add_argument("--lod", choices=("screen", "distance"), default=None)
     a = p.parse_args()
     if bool(a.file) == bool(a.raw) or (a.raw and not a.range_of):
         p.error("give --file, or --raw with --value-range-of")
+    if a.budget is not None and (not a.file or a.connect or a.budget < 0):
+        p.error("--miss-budget-ms takes a budget >= 0, with --file and without --connect")
     return a
 
 
@@ -110,7 +121,13 @@ def main():
     afam_demo.apply_tf(display, afam_demo.point_array(source), lo, hi, 0.01 * mean_half)
     if a.file:
         display.AFAMSampleDistance = 0.005 * mean_half
-        display.AFAMLodPolicy = "Distance bands"
+        if a.budget is None or a.lod == "distance":
+            display.AFAMLodPolicy = "Distance bands"
+        elif a.lod == "screen":
+            display.AFAMLodPolicy = "Screen-space error"
+        if a.budget is not None:
+            display.AFAMInteractiveMissBudget = a.budget
+            display.AFAMAutoAdjustImageScale = 0
         display.AFAMCacheBudgetMB = a.cache_mb
         display.AFAMRenderDevice = {"gpu": "GPU", "cpu": "CPU", "auto": "Auto"}[a.device]
 
@@ -122,7 +139,10 @@ def main():
             if a.cold:
                 evict()
         t0 = time.perf_counter()
-        Render(view)
+        if a.budget is not None and i > 0:
+            view.InteractiveRender()
+        else:
+            Render(view)
         window.WaitForCompletion()
         t1 = time.perf_counter()
         row = {"pov": i, "render_ms": 1e3 * (t1 - t0)}
@@ -141,13 +161,14 @@ def main():
             row.update(mapper_ms=1e3 * get("AFAMLastTotalTime"), cast_ms=1e3 * get("AFAMLastRenderTime"),
                        caching_ms=1e3 * get("AFAMLastCachingTime"), gpu=int(get("AFAMLastUsedGpu")),
                        interop=int(get("AFAMLastImageOnDevice")), visible=int(get("AFAMLastVisibleBlocks")),
-                       misses=int(get("AFAMLastCacheMisses")), scale=get("AFAMLastImageScale"))
+                       misses=int(get("AFAMLastCacheMisses")), scale=get("AFAMLastImageScale"),
+                       stand_ins=int(get("AFAMLastStandInBlocks")), behind=int(get("AFAMLastBlocksBehind")))
             if i == 0 and not row["gpu"] and a.device == "gpu":
                 print("afam_pv_loop: the first frame was cast on the CPU: %s" % get("AFAMLastDeviceMessage"))
         rows.append(row)
     if a.csv:
         columns = ["pov", "render_ms", "mapper_ms", "cast_ms", "caching_ms", "gpu", "interop", "visible",
-                   "misses", "scale"]
+                   "misses", "scale", "stand_ins", "behind"]
         with open(a.csv, "w") as f:
             f.write(",".join(columns) + "\n")
             for r in rows:
@@ -167,6 +188,11 @@ def main():
                       median_cast_ms=("%.3f" % statistics.median(r["cast_ms"] for r in rows[1:] or rows)
                                       if not a.connect else "-"),
                       full_scale_frames=sum(1 for r in rows if r["scale"] == 1.0))
+    if a.budget is not None:
+        fields.update(miss_budget_ms=a.budget, lod=a.lod or "screen",
+                      max_caching_after_first_ms="%.3f" % max(r["caching_ms"] for r in rows[1:] or rows),
+                      stand_in_blocks=sum(r["stand_ins"] for r in rows),
+                      p95_over_median="%.2f" % (quantile(timed, 0.95) / med if med > 0 else 0))
     info = window.ReportCapabilities() or ""
     for line in info.splitlines():
         if "renderer string" in line or "version string" in line:

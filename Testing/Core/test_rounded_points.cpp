@@ -12,8 +12,10 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "afam/base/thread_scratch.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/rounded_points.hpp"
 #include "afam/render/renderer.hpp"
@@ -121,6 +123,37 @@ TEST(RoundedPoints, TheCacheKeepsThemInCodesAndDrawsTheSameFrame) {
   const afam_test::CompactAndFloats c = afam_test::drawCompactAndFloats(file, 60, 48);
   EXPECT_EQ(c.compactBlocks, c.floatBlocks);
   EXPECT_LT(2 * c.compactBytes, c.floatBytes) << c.compactBytes << " vs " << c.floatBytes;
+}
+
+TEST(RoundedPoints, DecodingOneForTheCacheHoldsTwoBlocksOfScratch) {
+  // The cache's byte budget counts the decoding scratch (thread_scratch.hpp): a rounded
+  // interpolant's compact form is decoded through its samples (4 bytes a point, then its points in
+  // the same place) and, in the double form, decodeValues' doubles (8 bytes a point, then its codes
+  // in the same place), its frame and stored bytes: about 13.5 bytes a point, where four buffers
+  // took 25.5; the integer forms' two word buffers (8 bytes a point) come beside the codes: 21.5,
+  // where they took 25.5.
+  const auto file = noisyHeadFile();
+  size_t checked = 0, doubleForms = 0;
+  for (size_t i = 0; i < file->entries().size(); ++i) {
+    const ModelEntry& e = file->entries()[i];
+    if (!e.roundedPoints) continue;
+    uint64_t held = 0;
+    std::vector<float> compact;
+    std::thread([&] {  // a thread of its own: only this decoding's scratch
+      const uint64_t before = threadScratchBytes();
+      file->readCompact(int64_t(i), 0.5, compact);
+      held = threadScratchBytes() - before;
+      releaseAllThreadScratch();
+    }).join();
+    const uint64_t points = uint64_t(controlCount(e)), words = e.integerCoded ? 8 : 0;
+    EXPECT_LE(held, (14 + words) * points + 2 * e.storedSize + 4096)
+        << Partition::blockName(e.level, e.block) << (e.integerCoded ? ", integer form" : "");
+    EXPECT_GE(held, (12 + words) * points);
+    ++checked;
+    doubleForms += !e.integerCoded;
+  }
+  EXPECT_GT(checked, 8u);
+  EXPECT_GT(doubleForms, 4u);
 }
 
 TEST(RoundedPoints, ADamagedFlagOrShiftIsRefused) {

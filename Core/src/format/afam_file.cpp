@@ -457,7 +457,9 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 
 /// An interpolant's model into out: its coded samples decoded and the spline of the header's
 /// degree fitted through them, its points rounded when the entry says so (their codes into
-/// `codes` when it is not null). Returns the points' step (0: not rounded).
+/// `codes` when it is not null). Returns the points' step (0: not rounded). `out` may be the
+/// calling thread's ScratchSlot::Samples (where the samples are decoded: written after the fit)
+/// and `codes` its ScratchSlot::Doubles (decodeValues' doubles: written after the decoding).
 double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
                          const std::string& where) {
   thread_local BlockFitter fitter;
@@ -755,9 +757,13 @@ CompactForm AfamFile::readRoundedCompact(const ModelEntry& e, double maxShare,
     uint8_t* stored = threadScratch<uint8_t>(ScratchSlot::Stored, e.storedSize);
     readChecked(e, stored, e.storedSize);
     checkPayloadFlags(e, stored, where);
-    // Into scratch, so that `out` is allocated once, at the size of the form it keeps.
-    float* points = threadScratch<float>(ScratchSlot::Points, count);
-    int64_t* codes = threadScratch<int64_t>(ScratchSlot::PointCodes, count);
+    // Into scratch, so that `out` is allocated once, at the size of the form it keeps: the points
+    // where decodeInterpolant decodes the samples (the fit has read them when the points are
+    // written), their codes where decodeValues keeps its doubles (done with them by then): a thread
+    // decoding an interpolant holds two block-sized buffers, not four (the cache's budget counts
+    // them). The same sizes as decodeInterpolant asks of those slots, so neither moves.
+    float* points = threadScratch<float>(ScratchSlot::Samples, count);
+    int64_t* codes = threadScratch<int64_t>(ScratchSlot::Doubles, count);
     const double q = decodeInterpolant(e, stored, points, codes, where);
     form = packCompact(
         codes, count, maxShare, [q](int64_t k) { return pointValue(k, q); }, out);

@@ -17,13 +17,11 @@ enum class ScratchSlot {
   Words,        ///< integer residuals
   MoreWords,    ///< integers summed from them (interpolation)
   Predictions,  ///< a row's predictions
-  Doubles,      ///< double residuals
+  Doubles,      ///< double residuals (then a rounded interpolant's point codes)
   Stored,       ///< a payload's stored bytes
   ChainStored,  ///< a payload of a chain in time
   Residual,     ///< a chain's decoded residual
-  Samples,      ///< an interpolant's decoded samples
-  Points,       ///< a rounded interpolant's points, before the cache's compact form
-  PointCodes,   ///< their codes
+  Samples,      ///< an interpolant's decoded samples, then its points (readRoundedCompact)
   Count
 };
 

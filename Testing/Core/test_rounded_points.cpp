@@ -144,7 +144,8 @@ TEST(RoundedPoints, DecodingOneForTheCacheHoldsTwoBlocksOfScratch) {
       file->readCompact(int64_t(i), 0.5, compact);
       held = threadScratchBytes() - before;
       releaseAllThreadScratch();
-    }).join();
+    })
+        .join();
     const uint64_t points = uint64_t(controlCount(e)), words = e.integerCoded ? 8 : 0;
     EXPECT_LE(held, (14 + words) * points + 2 * e.storedSize + 4096)
         << Partition::blockName(e.level, e.block) << (e.integerCoded ? ", integer form" : "");

@@ -54,8 +54,9 @@ std::vector<float> randomSamples(Int3 n, std::mt19937& rng, double scale, bool s
   for (int z = 0; z < n[2]; ++z)
     for (int y = 0; y < n[1]; ++y)
       for (int x = 0; x < n[0]; ++x, ++i)
-        s[i] = float(scale * (smooth ? std::sin(0.2 * x + 0.1 * y) * std::cos(0.15 * z) + 0.01 * noise(rng)
-                                     : noise(rng)));
+        s[i] = float(scale *
+                     (smooth ? std::sin(0.2 * x + 0.1 * y) * std::cos(0.15 * z) + 0.01 * noise(rng)
+                             : noise(rng)));
   return s;
 }
 

@@ -107,17 +107,16 @@ __device__ void predictStep(const codec::Lattice& L, int s, int axis, const int3
   const int x0 = axis == 0 ? s : 0, y0 = axis == 1 ? s : 0, z0 = axis == 2 ? s : 0;
   const int sx = axis == 0 ? s2 : s, sy = axis == 0 ? s2 : axis == 1 ? s2 : s, sz = s2;
   const int zs = axis == 2 ? s2 : sz;
-  const int64_t cx = along(L.n[0], x0, sx), cy = along(L.n[1], y0, sy),
-                cz = along(L.n[2], z0, zs);
+  const int64_t cx = along(L.n[0], x0, sx), cy = along(L.n[1], y0, sy), cz = along(L.n[2], z0, zs);
   const int64_t strideY = L.n[0], strideZ = int64_t(L.n[0]) * L.n[1];
   for (int64_t t = threadIdx.x; t < cx * cy * cz; t += kPredictThreads) {
     const int x = x0 + int(t % cx) * sx, y = y0 + int((t / cx) % cy) * sy,
               z = z0 + int(t / (cx * cy)) * zs;
     const int64_t i = L.index(x, y, z);
-    const double pred =
-        axis == 0   ? codec::interpolate(x, s, L.n[0], q + L.index(0, y, z), 1)
-        : axis == 1 ? codec::interpolate(y, s, L.n[1], q + L.index(0, 0, z) + x, strideY)
-                    : codec::interpolate(z, s, L.n[2], q + L.index(0, y, 0) + x, strideZ);
+    const double pred = axis == 0 ? codec::interpolate(x, s, L.n[0], q + L.index(0, y, z), 1)
+                        : axis == 1
+                            ? codec::interpolate(y, s, L.n[1], q + L.index(0, 0, z) + x, strideY)
+                            : codec::interpolate(z, s, L.n[2], q + L.index(0, y, 0) + x, strideZ);
     q[i] = pred + double(codes[base + t]) * step;
   }
 }
@@ -153,9 +152,8 @@ __global__ void __launch_bounds__(kPredictThreads)
   const int S = codec::coarsestSpacing(L.n);
   if (threadIdx.x == 0) {
     int64_t c = 0;
-    codec::lorenzo(L, q, S, [&](int64_t i, double pred) {
-      q[i] = pred + double(codes[c++]) * step;
-    });
+    codec::lorenzo(L, q, S,
+                   [&](int64_t i, double pred) { q[i] = pred + double(codes[c++]) * step; });
   }
   int64_t base = along(L.n[0], 0, S) * along(L.n[1], 0, S) * along(L.n[2], 0, S);
   __syncthreads();

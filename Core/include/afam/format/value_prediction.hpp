@@ -14,9 +14,7 @@ namespace afam::codec {
 
 struct Lattice {
   Int3 n;
-  AFAM_HD int64_t index(int x, int y, int z) const {
-    return (int64_t(z) * n[1] + y) * n[0] + x;
-  }
+  AFAM_HD int64_t index(int x, int y, int z) const { return (int64_t(z) * n[1] + y) * n[0] + x; }
 };
 
 /// Lorenzo's prediction of point i from its seven lower neighbours (strides sx, sy, sz), all inside

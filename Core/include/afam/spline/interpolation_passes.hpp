@@ -84,8 +84,8 @@ AFAM_HD int64_t interpolationLines(InterpolationPass pass, Int3 n) {
   return int64_t(n[0]) * n[1] * n[2] / n[a];
 }
 
-/// out[j] = sum over i from rowFirst[j] to rowLast[j], in order and from 0, of weight * double(in[i])
-/// (A^T along one line; `in` and `out` step by their strides).
+/// out[j] = sum over i from rowFirst[j] to rowLast[j], in order and from 0, of weight *
+/// double(in[i]) (A^T along one line; `in` and `out` step by their strides).
 template <typename In>
 AFAM_HD void projectLine(const InterpolationAxisView& s, const In* in, int64_t inStride,
                          double* out, int64_t outStride) {

@@ -59,15 +59,12 @@ __device__ __forceinline__ uint64_t codedBytes(const GpuDecodeJob& j) {
   return rounded ? j.storedBytes - kRoundedPointsBytes : j.storedBytes;
 }
 
-/// Whether a job's values are coded in the double interpolation form (an interpolant's samples):
-/// the Lorenzo kernels only parse its residuals, GpuInterpolants predicts them.
-__device__ __forceinline__ bool doubleForm(const GpuDecodeJob& j) {
-  return j.kind == GpuDecodeKind::Interpolant && j.predictor == uint8_t(Predictor::Interpolation);
-}
+static_assert(kGpuInterpolationPredictor == uint8_t(Predictor::Interpolation),
+              "the double interpolation form's predictor byte");
 
 /// Bytes before a coded job's frame: the double forms' header, or the integer forms'.
 __device__ __forceinline__ uint64_t headerBytes(const GpuDecodeJob& j) {
-  return doubleForm(j) ? kCodedHeaderBytes : kIntegerCodedHeaderBytes;
+  return gpuJobInDoubleForm(j) ? kCodedHeaderBytes : kIntegerCodedHeaderBytes;
 }
 
 /// The coded payload's step and base (0 in a double form), checked as decodeValues and
@@ -79,7 +76,7 @@ __device__ uint32_t readCodedHeader(const GpuDecodeJob& job, const uint8_t* p, d
   step = __longlong_as_double((long long)readU64(p));
   if (!(step > 0) || isinf(step)) return code(Status::CodedHeader);
   base = 0;
-  if (doubleForm(job)) return code(Status::Ok);  // the host checked its predictor byte
+  if (gpuJobInDoubleForm(job)) return code(Status::Ok);  // the host checked its predictor byte
   if (p[8] != uint8_t(Predictor::IntegerLorenzo)) return code(Status::CodedHeader);
   base = int64_t(readU64(p + 9));
   const int64_t limit = int64_t(1) << 52;
@@ -464,7 +461,8 @@ __global__ void __launch_bounds__(kThreads)
   GlobalSink sink{staged, reinterpret_cast<uint32_t*>(output + job.outputOffset), count};
   uint32_t result =
       parseResiduals<kThreads>(scratch + c.scratchOffset, job.frameSymbols, count, scan, sink);
-  if (result == 0 && !doubleForm(job)) {  // a double form's residuals stay for its prediction
+  if (result == 0 &&
+      !gpuJobInDoubleForm(job)) {  // a double form's residuals stay for its prediction
     __syncthreads();  // the residuals written by every thread are visible to every thread
     result = finishJob(job, payloads, nullptr, output);
   }
@@ -713,8 +711,7 @@ BatchLayout layOut(const std::vector<GpuDecodeJob>& jobs, uint64_t sharedLimit) 
     c.scratchOffset = b.scratchBytes;
     c.job = uint32_t(i);
     b.scratchBytes += roundUp(std::min<uint64_t>(j.frameSymbols, 5 * points), kScratchAlign);
-    if (points <= sharedLimit && !(j.kind == GpuDecodeKind::Interpolant &&
-                                   j.predictor == uint8_t(Predictor::Interpolation))) {
+    if (points <= sharedLimit && !gpuJobInDoubleForm(j)) {
       b.coded.push_back(c);
       b.sharedPoints = std::max(b.sharedPoints, points);
     } else {

@@ -141,7 +141,7 @@ __global__ void __launch_bounds__(kPredictThreads)
                      float* output, double* scratch, uint32_t* status) {
   const GpuInterpolantJob ij = group[blockIdx.x];
   const GpuDecodeJob& job = jobs[ij.job];
-  if (job.predictor != uint8_t(Predictor::Interpolation) || status[ij.job]) return;
+  if (!gpuJobInDoubleForm(job) || status[ij.job]) return;
   const codec::Lattice L{samplesOf(job)};
   const uint64_t count = pointsOf(job);
   double* q = scratch + ij.scratchOffset + count;  // the passes' second buffer, free until then

@@ -29,6 +29,7 @@
 #include <memory>
 #include <vector>
 
+#include "afam/base/host_device.hpp"
 #include "afam/format/afam_file.hpp"
 
 namespace afam {
@@ -63,6 +64,15 @@ struct GpuDecodeJob {
   double pointStep = 0;     ///< Interpolant: its points' step q (0: not rounded)
   double pointInverse = 0;  ///< 1 / q, as roundPoints computes it
 };
+
+/// Whether a job's values are an interpolant's samples in the double interpolation form: the
+/// Lorenzo kernels only parse their residuals (global memory), GpuInterpolants predicts them.
+/// (kGpuInterpolationPredictor: block_codec.hpp's Predictor::Interpolation, which this header does
+/// not include: its name is also the prefetch predictor's.)
+constexpr uint8_t kGpuInterpolationPredictor = 1;
+AFAM_HD bool gpuJobInDoubleForm(const GpuDecodeJob& j) {
+  return j.kind == GpuDecodeKind::Interpolant && j.predictor == kGpuInterpolationPredictor;
+}
 
 /// The job that expands a model kept in compact form `form` (`ncp` control points per axis, the
 /// form's floats at payloadOffset) into float32 points at outputOffset.

@@ -36,7 +36,8 @@ pass() {  # exe, bound arguments..., -- files...
   for f in "$@"; do
     out="$("$exe" encode "$f" "$work/out.afam" "${bound[@]}" --threads "$THREADS")"
     bytes=$((bytes + $(grep -o 'bytes_out=[0-9]*' <<<"$out" | cut -d= -f2)))
-    seconds="$(echo "$seconds + $(grep -o '^seconds=[0-9.]*' <<<"$out" | cut -d= -f2)" | bc -l)"
+    seconds="$(awk -v a="$seconds" -v b="$(grep -o '^seconds=[0-9.]*' <<<"$out" | cut -d= -f2)" \
+      'BEGIN { print a + b }')"
   done
   echo "$bytes $seconds"
 }
@@ -54,7 +55,8 @@ row() {  # label, bound arguments..., -- files...
   mb="$(printf '%s\n' "${tb[@]}" | median)"
   mn="$(printf '%s\n' "${ts[@]}" | median)"
   printf '| %s | %d | %d | %.4f | %.3f | %.3f | %.2fx |\n' "$label" "$bb" "$nb" \
-    "$(echo "$nb / $bb" | bc -l)" "$mb" "$mn" "$(echo "$mb / $mn" | bc -l)"
+    "$(awk -v a="$nb" -v b="$bb" 'BEGIN { print a / b }')" "$mb" "$mn" \
+    "$(awk -v a="$mb" -v b="$mn" 'BEGIN { print a / b }')"
 }
 echo "machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg); threads $THREADS, medians of $REPS"
 echo

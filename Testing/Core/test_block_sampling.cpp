@@ -5,6 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <thread>
 #include <vector>
 
 #include "afam/encode/block_sampling.hpp"
@@ -14,10 +20,12 @@ using namespace afam;
 
 namespace {
 
-/// A source that records the largest read (in floats) and the number of reads.
+/// A source that records the largest read (in floats) and the number of reads (not thread-safe:
+/// no concurrentReads).
 class CountingSource : public ArraySource {
  public:
   using ArraySource::ArraySource;
+  bool concurrentReads() const override { return concurrent; }
   void readRows(int64_t z0, int64_t nz, int64_t y0, int64_t ny, float* out) override {
     largest = std::max(largest, size_t(nz * ny * dims()[0]));
     ++reads;
@@ -25,6 +33,7 @@ class CountingSource : public ArraySource {
   }
   size_t largest = 0;
   int reads = 0;
+  bool concurrent = false;
 };
 
 struct RowCase {
@@ -76,4 +85,88 @@ TEST(BlockSampling, QuarterBudgetChunksHoldAQuarterOfTheRowOrOneSamplesPlanes) {
       }
     }
   }
+}
+
+namespace {
+
+/// A wrapper that counts its reads and the threads they ran on (thread-safe, as a concurrent
+/// source must be).
+class ThreadCountingSource : public WrappingSource {
+ public:
+  using WrappingSource::WrappingSource;
+  void readSlab(int64_t z0, int64_t nz, float* out) override {
+    readRows(z0, nz, 0, dims()[1], out);
+  }
+  void readRows(int64_t z0, int64_t nz, int64_t y0, int64_t ny, float* out) override {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      ++reads;
+      threads.insert(std::this_thread::get_id());
+    }
+    inner_.readRows(z0, nz, y0, ny, out);
+  }
+  std::mutex m_;
+  int reads = 0;
+  std::set<std::thread::id> threads;
+};
+
+/// A loop on `n` threads of its own (as the encoder's sampling pool runs fn).
+BlockLoop threadsLoop(int n) {
+  return [n](int64_t count, const std::function<void(int64_t)>& fn) {
+    std::atomic<int64_t> next{0};
+    std::vector<std::thread> pool;
+    for (int t = 0; t < n; ++t)
+      pool.emplace_back([&] {
+        for (int64_t i = next++; i < count; i = next++) fn(i);
+      });
+    for (std::thread& t : pool) t.join();
+  };
+}
+
+}  // namespace
+
+// A raw file read through a loop: in pieces on several threads, the same floats as read in one
+// call a run of planes; a source without concurrentReads is read on the calling thread as before.
+TEST(BlockSampling, PlanesAreReadInParallelPiecesAsTheSameFloats) {
+  const Index3 dims{700, 400, 40};
+  std::vector<int16_t> raw(size_t(dims[0] * dims[1] * dims[2]));
+  for (size_t i = 0; i < raw.size(); ++i) raw[i] = int16_t((i * 2654435761u) >> 17);
+  const std::string path = ::testing::TempDir() + "planes_700x400x40_int16.raw";
+  {
+    std::ofstream f(path, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(raw.data()), std::streamsize(raw.size() * 2));
+  }
+  RawFileSource file(path, dims, SampleType::Int16);
+  ASSERT_TRUE(file.concurrentReads());
+  std::vector<int64_t> zs{2};  // runs of 1, 17 and 12 planes
+  for (int64_t z = 5; z < 22; ++z) zs.push_back(z);
+  for (int64_t z = 28; z < 40; ++z) zs.push_back(z);
+  const size_t plane = size_t(dims[0]) * 300;  // rows 50..349: 4 planes a piece of 2^20 floats
+  PlaneReader serial(file, dims);
+  const float* a = serial.read(zs, 50, 300);
+  const std::vector<float> expected(a, a + zs.size() * plane);
+  EXPECT_EQ(expected[plane + 7], float(raw[size_t((5 * dims[1] + 50) * dims[0] + 7)]));
+
+  ThreadCountingSource counted(file);
+  PlaneReader parallel(counted, dims);
+  const float* b = parallel.read(zs, 50, 300, threadsLoop(4));
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), b));
+  EXPECT_EQ(counted.reads, 1 + 5 + 3);  // the runs in pieces of at most 4 planes
+  EXPECT_GE(counted.threads.size(), 2u);
+  EXPECT_EQ(parallel.bytesRead(), serial.bytesRead());
+
+  // Not concurrent (state of its own): one read a run, on the calling thread.
+  std::vector<float> v(raw.begin(), raw.end());
+  CountingSource plain(v.data(), dims);
+  PlaneReader own(plain, dims);
+  bool looped = false;
+  const float* c =
+      own.read(zs, 50, 300, [&](int64_t count, const std::function<void(int64_t)>& fn) {
+        looped = true;
+        for (int64_t i = 0; i < count; ++i) fn(i);
+      });
+  EXPECT_FALSE(looped);
+  EXPECT_EQ(plain.reads, 3);
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), c));
+  std::remove(path.c_str());
 }

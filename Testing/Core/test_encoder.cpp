@@ -426,6 +426,29 @@ TEST(Encoder, NonFiniteInputNamesTheBlock) {
   }
 }
 
+// The range pass reads chunks of planes on several threads: the error still names the first
+// infinite sample in z-order, not the one a thread happened to find first.
+TEST(Encoder, NonFiniteInputNamesTheFirstSampleWhateverTheThreads) {
+  const Index3 dims{40, 40, 400};  // 163 planes a chunk of the range pass: three chunks
+  std::vector<float> v(size_t(dims[0] * dims[1] * dims[2]), 1.f);
+  v[size_t((390 * 40 + 7) * 40 + 3)] = std::numeric_limits<float>::infinity();
+  v[size_t((200 * 40 + 9) * 40 + 11)] = -std::numeric_limits<float>::infinity();
+  ArraySource src(v.data(), dims, "bad");
+  for (const int threads : {1, 4}) {
+    InMemoryModels m;
+    EncoderOptions opt;
+    opt.threads = threads;
+    try {
+      encodeVolume(src, opt, m);
+      ADD_FAILURE() << "non-finite samples accepted";
+    } catch (const NumericError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("sample (11, 9, 200)"), std::string::npos) << threads << ": " << w;
+      EXPECT_NE(w.find("-Inf"), std::string::npos) << w;
+    }
+  }
+}
+
 TEST(Encoder, InvalidOptions) {
   std::vector<float> v(27, 1.f);
   ArraySource src(v.data(), {3, 3, 3});

@@ -299,17 +299,42 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
 
 PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
 
-const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount) {
+namespace {
+
+/// Floats a piece of a parallel read holds at most (whole planes, at least one).
+constexpr size_t kPieceFloats = size_t(1) << 20;
+
+/// Runs of consecutive planes of zs as (first index in zs, planes), each at most `most` planes.
+std::vector<std::pair<size_t, size_t>> planeRuns(const std::vector<int64_t>& zs, size_t most) {
+  std::vector<std::pair<size_t, size_t>> runs;
+  for (size_t i = 0; i < zs.size();) {
+    size_t j = i + 1;
+    while (j < zs.size() && j - i < most && zs[j] == zs[j - 1] + 1) ++j;
+    runs.emplace_back(i, j - i);
+    i = j;
+  }
+  return runs;
+}
+
+}  // namespace
+
+const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
+                               const BlockLoop& loop) {
   const size_t plane = size_t(rowSize_ * yCount);
   growBuffer(buf_, zs.size() * plane);
   float* buf = buf_.data();
-  for (size_t i = 0; i < zs.size();) {
-    size_t j = i + 1;
-    while (j < zs.size() && zs[j] == zs[j - 1] + 1) ++j;
-    src_.readRows(zs[i], int64_t(j - i), y0, yCount, buf + i * plane);
-    bytesRead_ += (j - i) * plane * sizeof(float);
-    i = j;
-  }
+  const bool parallel = loop && src_.concurrentReads() && !src_.readsOnCallingThread();
+  const auto runs = planeRuns(
+      zs, parallel ? std::max<size_t>(1, kPieceFloats / std::max<size_t>(plane, 1)) : zs.size());
+  auto readRun = [&](int64_t r) {
+    const auto [i, n] = runs[size_t(r)];
+    src_.readRows(zs[i], int64_t(n), y0, yCount, buf + i * plane);
+  };
+  if (parallel && runs.size() > 1)
+    loop(int64_t(runs.size()), readRun);
+  else
+    for (size_t r = 0; r < runs.size(); ++r) readRun(int64_t(r));
+  bytesRead_ += zs.size() * plane * sizeof(float);
   return buf;
 }
 
@@ -356,7 +381,7 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    const float* buf = planes.read(zs, yBase, yEnd - yBase + 1);
+    const float* buf = planes.read(zs, yBase, yEnd - yBase + 1, loop);
     auto fill = [&](int64_t b) {
       fillBlockChunk(buf, zs, plane, X, yBase, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
     };

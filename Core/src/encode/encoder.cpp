@@ -174,11 +174,35 @@ bool checkSlab(const std::vector<float>& buf, int64_t z, const VolumeSource& sou
   throw NumericError(msg.str());
 }
 
+/// One chunk of planes of the range pass: its valid samples' range, whether one is NaN, and the
+/// error naming its first infinite sample (empty when none).
+struct RangeChunk {
+  float lo = std::numeric_limits<float>::infinity(), hi = -std::numeric_limits<float>::infinity();
+  bool missing = false;
+  std::string infinite;
+};
+
+RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int64_t nz) {
+  thread_local std::vector<float> buf;
+  const Index3 dims = source.dims();
+  buf.resize(size_t(nz * dims[0] * dims[1]));
+  source.readSlab(z, nz, buf.data());
+  RangeChunk c;
+  if (!extendRange(buf.data(), buf.size(), c.lo, c.hi)) try {
+      c.missing = checkSlab(buf, z, source, part);
+    } catch (const NumericError& e) {
+      c.infinite = e.what();
+    }
+  return c;
+}
+
 /// Value range of the valid samples and Inf check in one streaming pass (unless the source knows
-/// its range) over this process's share of the z-planes; the team reduces the shares to the
-/// volume's range. `missing`: whether a sample of the share is NaN (missing).
+/// its range) over this process's share of the z-planes, in chunks of about a megabyte, on
+/// `threads` threads where the source allows concurrentReads; the team reduces the shares to the
+/// volume's range. `missing`: whether a sample of the share is NaN (missing). An infinite sample
+/// stops the encode naming the first in z-order, whatever the threads.
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
-                    EncodeTeam& team, double& vmin, double& vmax, bool& missing) {
+                    EncodeTeam& team, double& vmin, double& vmax, bool& missing, int threads = 1) {
   missing = false;
   if (source.knownRange(vmin, vmax)) {
     missing = source.knownMissing();
@@ -189,17 +213,33 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   const int64_t chunk =
       std::max<int64_t>(1, (int64_t(1) << 18) / std::max<int64_t>(plane, 1));  // ~1 MB
   const WorkShare planes = workShare(dims[2], team.rank(), team.size());
-  std::vector<float> buf;
+  const int64_t count = (planes.end - planes.first + chunk - 1) / chunk;
+  std::vector<RangeChunk> chunks(size_t(std::max<int64_t>(count, 0)));
+  std::atomic<int64_t> done{0};
+  auto scan = [&](int, int64_t c) {
+    const int64_t z = planes.first + c * chunk;
+    chunks[size_t(c)] = scanChunk(source, part, z, std::min(chunk, planes.end - z));
+    ++done;
+  };
+  bool stopped = false;
+  auto report = [&] {
+    stopped = !progress.report(progress.rangeWork() * double(done) / double(count));
+    return !stopped;
+  };
+  if (threads > 1 && source.concurrentReads() && !source.readsOnCallingThread())
+    WorkerPool(threads).run(count, scan, report);
+  else
+    for (int64_t c = 0; c < count && !stopped; ++c) {
+      scan(0, c);
+      report();
+    }
+  if (stopped) throw cancelled();
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (int64_t z = planes.first; z < planes.end; z += chunk) {
-    const int64_t nz = std::min(chunk, planes.end - z);
-    buf.resize(size_t(nz * plane));
-    source.readSlab(z, nz, buf.data());
-    if (!extendRange(buf.data(), buf.size(), lo, hi) && checkSlab(buf, z, source, part))
-      missing = true;
-    if (!progress.report(progress.rangeWork() * double(z + nz - planes.first) /
-                         double(planes.end - planes.first)))
-      throw cancelled();
+  for (const RangeChunk& c : chunks) {
+    if (!c.infinite.empty()) throw NumericError(c.infinite);
+    lo = std::min(lo, c.lo);
+    hi = std::max(hi, c.hi);
+    missing = missing || c.missing;
   }
   vmin = lo;
   vmax = hi;
@@ -665,7 +705,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   EncodeProgress progress(part, opt);
   bool missing = false;
   teamStep(team, [&] {
-    scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing);
+    scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing, threads);
   });
   team.reduceRange(stats.valueMin, stats.valueMax);
   std::vector<uint8_t> anyMissing{uint8_t(missing ? 1 : 0)};

@@ -123,20 +123,15 @@ std::string RawFileSource::name() const {
   return us == std::string::npos || us == 0 ? base : base.substr(0, us);
 }
 
-void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
-  if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2])
-    throw InvalidArgument(path_ + ": planes outside the volume");
-  const int es = sampleTypeSize(type_);
-  const uint64_t count = uint64_t(dims_[0]) * uint64_t(dims_[1]) * uint64_t(zCount);
-  const uint64_t bytes = count * uint64_t(es);
-  const uint64_t offset = uint64_t(z0) * uint64_t(dims_[0]) * uint64_t(dims_[1]) * uint64_t(es);
-  unsigned char* dst;
-  if (type_ == SampleType::Float32) {
-    dst = reinterpret_cast<unsigned char*>(out);
-  } else {
-    growBuffer(buffer_, bytes);  // the pread fills what is read
-    dst = buffer_.data();
-  }
+namespace {
+
+/// Bytes a read of a non-float32 file stages before converting them: a few megabytes, so that
+/// the conversion reads them from cache and each reading thread holds no more.
+constexpr uint64_t kStagingBytes = uint64_t(4) << 20;
+
+}  // namespace
+
+void RawFileSource::readBytes(uint64_t offset, uint64_t bytes, unsigned char* dst) const {
   uint64_t done = 0;
   while (done < bytes) {
     const ssize_t r = ::pread(fd_, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)),
@@ -148,7 +143,27 @@ void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
           (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
     done += uint64_t(r);
   }
-  if (type_ != SampleType::Float32) samplesToFloat(type_, dst, count, out);
+}
+
+void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
+  if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2])
+    throw InvalidArgument(path_ + ": planes outside the volume");
+  const uint64_t es = uint64_t(sampleTypeSize(type_));
+  const uint64_t count = uint64_t(dims_[0]) * uint64_t(dims_[1]) * uint64_t(zCount);
+  const uint64_t offset = uint64_t(z0) * uint64_t(dims_[0]) * uint64_t(dims_[1]) * es;
+  if (type_ == SampleType::Float32) {
+    readBytes(offset, count * es, reinterpret_cast<unsigned char*>(out));
+    return;
+  }
+  // The thread's staging buffer (several threads may read at once: concurrentReads).
+  thread_local std::vector<unsigned char> staged;
+  const uint64_t step = std::max<uint64_t>(1, kStagingBytes / es);  // samples a read
+  if (staged.size() < std::min(count, step) * es) staged.resize(std::min(count, step) * es);
+  for (uint64_t i = 0; i < count; i += step) {
+    const uint64_t n = std::min(step, count - i);
+    readBytes(offset + i * es, n * es, staged.data());
+    samplesToFloat(type_, staged.data(), n, out + i);
+  }
 }
 
 void MarschnerLobbSource::readSlab(int64_t z0, int64_t zCount, float* out) {

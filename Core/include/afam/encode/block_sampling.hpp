@@ -14,15 +14,21 @@
 
 namespace afam {
 
-/// Reads rows of listed z-planes of a source into a buffer, consecutive planes in one readRows
-/// call.
+/// Runs fn(block) for block in [0, count), on several threads when the caller provides them
+/// (the encoder's sampling pool), else in order on the calling thread.
+using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
+
+/// Reads rows of listed z-planes of a source into a buffer: consecutive planes in one readRows
+/// call, or, given a loop and a source that allows concurrentReads, in pieces of a few megabytes
+/// read in parallel (the same floats).
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);
   /// Rows [y0, y0 + yCount) of planes zs (ascending, distinct), plane i at the result
   /// + i * dims[0] * yCount, valid until the next read. The reader's buffer only grows: it is not
   /// allocated, page-faulted or cleared again.
-  const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount);
+  const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
+                    const BlockLoop& loop = {});
   uint64_t bytesRead() const { return bytesRead_; }
   /// The buffer's size: the largest chunk read so far.
   size_t bufferBytes() const { return buf_.size() * sizeof(float); }
@@ -33,10 +39,6 @@ class PlaneReader {
   uint64_t bytesRead_ = 0;
   HugePageVector<float> buf_;
 };
-
-/// Runs fn(block) for block in [0, count), on several threads when the caller provides them
-/// (the encoder's sampling pool), else in order on the calling thread.
-using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
 
 /// How many planes sampleBlockRow reads at once: up to 256 MB (the fewest reads: a process that
 /// holds batches of rows anyway), or at most a quarter of the samples they fill too (a rank of a

@@ -17,7 +17,8 @@
 namespace afam {
 
 /// A scalar volume read by whole z-planes. Implementations: ArraySource, RawFileSource,
-/// MarschnerLobbSource. readSlab is called from one thread at a time.
+/// MarschnerLobbSource. readSlab and readRows are called from one thread at a time, unless the
+/// source says concurrentReads().
 class VolumeSource {
  public:
   virtual ~VolumeSource() = default;
@@ -46,6 +47,10 @@ class VolumeSource {
   /// an MPI library initialised without thread support); the encoder then samples a batch and fits
   /// it in turn, instead of sampling the next batch on a thread of its own meanwhile.
   virtual bool readsOnCallingThread() const { return false; }
+  /// true when readSlab and readRows may run on several threads at once, for disjoint planes
+  /// (the encoder then reads a chunk's planes in parallel: PlaneReader). A source with state of
+  /// its own (a stream, a shared buffer, a counter) keeps the default.
+  virtual bool concurrentReads() const { return false; }
 };
 
 /// Over a caller-owned array of samples of any SampleType (x fastest, in this host's byte order),
@@ -67,6 +72,8 @@ class ArraySource : public VolumeSource {
   /// Converts only the rows asked for.
   void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override;
   int bytesPerVoxel() const override { return sampleTypeSize(type_); }
+  /// The array is only read: yes (a subclass that keeps state of its own says no).
+  bool concurrentReads() const override { return true; }
   SampleType type() const { return type_; }
 
  private:
@@ -88,6 +95,8 @@ class WrappingSource : public VolumeSource {
   std::string name() const override { return inner_.name(); }
   int bytesPerVoxel() const override { return inner_.bytesPerVoxel(); }
   bool readsOnCallingThread() const override { return inner_.readsOnCallingThread(); }
+  /// The inner source's: a wrapper's own work on the samples it reads must be thread-safe.
+  bool concurrentReads() const override { return inner_.concurrentReads(); }
 
  protected:
   VolumeSource& inner_;
@@ -97,7 +106,9 @@ class WrappingSource : public VolumeSource {
 /// float or double); false if it does not match.
 bool parseRawName(const std::string& path, Index3& dims, SampleType& type);
 
-/// Over a raw little-endian file, converted to float32; reads only the planes asked for.
+/// Over a raw little-endian file, converted to float32; reads only the planes asked for, a few
+/// megabytes of bytes at a time (each converted while it is in cache), on any number of threads
+/// at once (pread and a buffer of the thread's).
 class RawFileSource : public VolumeSource {
  public:
   /// Throws IoError if the file cannot be opened, InvalidArgument if its size is not dims * type.
@@ -111,16 +122,20 @@ class RawFileSource : public VolumeSource {
   std::string name() const override;
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   int bytesPerVoxel() const override { return sampleTypeSize(type_); }
+  bool concurrentReads() const override { return true; }
   SampleType type() const { return type_; }
   const std::string& path() const { return path_; }
 
  private:
+  /// `bytes` bytes of the file from `offset` into dst (pread: any thread); IoError naming the byte
+  /// where a read fails or the file ends.
+  void readBytes(uint64_t offset, uint64_t bytes, unsigned char* dst) const;
+
   std::string path_;
   int fd_ = -1;
   Index3 dims_;
   SampleType type_;
   std::array<double, 3> origin_, spacing_;
-  HugePageVector<unsigned char> buffer_;  ///< one slab of raw bytes; only grows, not filled
 };
 
 /// The Marschner-Lobb function sampled on dims over [-1, 1]^3, generated plane by plane.
@@ -130,6 +145,7 @@ class MarschnerLobbSource : public VolumeSource {
   Index3 dims() const override { return dims_; }
   std::string name() const override { return "marschner_lobb"; }
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
+  bool concurrentReads() const override { return true; }
 
  private:
   Index3 dims_;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "afam/base/errors.hpp"
@@ -65,6 +66,20 @@ std::vector<float> samples(VolumeSource& s) {
   const Index3 d = s.dims();
   std::vector<float> v(size_t(d[0] * d[1] * d[2]));
   s.readSlab(0, d[2], v.data());
+  return v;
+}
+
+/// The same samples, each plane read by one of four threads at once (concurrentReads).
+std::vector<float> samplesOnThreads(VolumeSource& s) {
+  const Index3 d = s.dims();
+  const size_t plane = size_t(d[0] * d[1]);
+  std::vector<float> v(plane * size_t(d[2]));
+  std::vector<std::thread> readers;
+  for (int t = 0; t < 4; ++t)
+    readers.emplace_back([&, t] {
+      for (int64_t z = t; z < d[2]; z += 4) s.readSlab(z, 1, v.data() + size_t(z) * plane);
+    });
+  for (std::thread& r : readers) r.join();
   return v;
 }
 
@@ -135,7 +150,10 @@ TEST(VolumeFormats, EveryLayoutReadsTheRawSamples) {
     EXPECT_EQ(src->dims(), (Index3{64, 64, 93}));
     EXPECT_EQ(src->name(), "head");
     EXPECT_EQ(samples(*src), want);
+    ASSERT_TRUE(src->concurrentReads());
+    EXPECT_EQ(samplesOnThreads(*src), want);
   }
+  EXPECT_EQ(samplesOnThreads(reference), want);
   EXPECT_EQ(openHeaderVolume(work("head_attached.nrrd"))->spacing(),
             (std::array<double, 3>{3.2, 3.2, 1.5}));
   EXPECT_EQ(openHeaderVolume(work("head_zlib.mha"))->spacing(),

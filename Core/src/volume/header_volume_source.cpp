@@ -12,6 +12,8 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/volume/volume_formats.hpp"
+
+#include "file_samples.hpp"
 #include "header_text.hpp"
 
 namespace afam {
@@ -46,21 +48,6 @@ int openData(const VolumeFileHeader& h, uint64_t& size) {
   }
   size = uint64_t(st.st_size);
   return fd;
-}
-
-void readFully(int fd, const std::string& path, uint64_t offset, unsigned char* dst,
-               uint64_t bytes) {
-  uint64_t done = 0;
-  while (done < bytes) {
-    const ssize_t r = ::pread(fd, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)),
-                              off_t(offset + done));
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0)
-      throw IoError(
-          path + ": read failed at byte " + std::to_string(offset + done) + ": " +
-          (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
-    done += uint64_t(r);
-  }
 }
 
 /// Where the payload starts: after the header (attached), or after `line skip` lines and
@@ -193,9 +180,7 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   const bool swap = header_.bigEndian;
   if (!inflated_.empty())
     return samplesToFloat(header_.type, inflated_.data() + offset, count, out, swap);
-  growBuffer(buffer_, count * es);  // the read fills what is used
-  readFully(fd_, header_.dataPath, rawOffset_ + offset, buffer_.data(), count * es);
-  samplesToFloat(header_.type, buffer_.data(), count, out, swap);
+  readFileSamples(fd_, header_.dataPath, rawOffset_ + offset, header_.type, count, out, swap);
 }
 
 bool hasVolumeHeaderExtension(const std::string& path) {

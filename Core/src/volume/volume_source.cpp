@@ -13,6 +13,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/volume/marschner_lobb.hpp"
+#include "file_samples.hpp"
 
 namespace afam {
 
@@ -123,47 +124,12 @@ std::string RawFileSource::name() const {
   return us == std::string::npos || us == 0 ? base : base.substr(0, us);
 }
 
-namespace {
-
-/// Bytes a read of a non-float32 file stages before converting them: a few megabytes, so that
-/// the conversion reads them from cache and each reading thread holds no more.
-constexpr uint64_t kStagingBytes = uint64_t(4) << 20;
-
-}  // namespace
-
-void RawFileSource::readBytes(uint64_t offset, uint64_t bytes, unsigned char* dst) const {
-  uint64_t done = 0;
-  while (done < bytes) {
-    const ssize_t r = ::pread(fd_, dst + done, size_t(std::min<uint64_t>(bytes - done, 1u << 30)),
-                              off_t(offset + done));
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0)
-      throw IoError(
-          path_ + ": read failed at byte " + std::to_string(offset + done) + ": " +
-          (r == 0 ? std::string("unexpected end of file") : std::string(std::strerror(errno))));
-    done += uint64_t(r);
-  }
-}
-
 void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2])
     throw InvalidArgument(path_ + ": planes outside the volume");
-  const uint64_t es = uint64_t(sampleTypeSize(type_));
-  const uint64_t count = uint64_t(dims_[0]) * uint64_t(dims_[1]) * uint64_t(zCount);
-  const uint64_t offset = uint64_t(z0) * uint64_t(dims_[0]) * uint64_t(dims_[1]) * es;
-  if (type_ == SampleType::Float32) {
-    readBytes(offset, count * es, reinterpret_cast<unsigned char*>(out));
-    return;
-  }
-  // The thread's staging buffer (several threads may read at once: concurrentReads).
-  thread_local std::vector<unsigned char> staged;
-  const uint64_t step = std::max<uint64_t>(1, kStagingBytes / es);  // samples a read
-  if (staged.size() < std::min(count, step) * es) staged.resize(std::min(count, step) * es);
-  for (uint64_t i = 0; i < count; i += step) {
-    const uint64_t n = std::min(step, count - i);
-    readBytes(offset + i * es, n * es, staged.data());
-    samplesToFloat(type_, staged.data(), n, out + i);
-  }
+  const uint64_t plane = uint64_t(dims_[0]) * uint64_t(dims_[1]);
+  readFileSamples(fd_, path_, uint64_t(z0) * plane * uint64_t(sampleTypeSize(type_)), type_,
+                  plane * uint64_t(zCount), out);
 }
 
 void MarschnerLobbSource::readSlab(int64_t z0, int64_t zCount, float* out) {

@@ -75,6 +75,8 @@ class HeaderVolumeSource : public VolumeSource {
   std::string name() const override;
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   int bytesPerVoxel() const override { return sampleTypeSize(header_.type); }
+  /// Raw payloads are read by offset, compressed ones were inflated whole: any thread.
+  bool concurrentReads() const override { return true; }
   const VolumeFileHeader& header() const { return header_; }
 
  private:
@@ -83,8 +85,7 @@ class HeaderVolumeSource : public VolumeSource {
   VolumeFileHeader header_;
   int fd_ = -1;
   uint64_t rawOffset_ = 0;
-  std::vector<unsigned char> inflated_;   ///< compressed payloads, inflated
-  HugePageVector<unsigned char> buffer_;  ///< one slab of raw bytes; only grows, not filled
+  std::vector<unsigned char> inflated_;  ///< compressed payloads, inflated
 };
 
 /// True for the extensions this file reads: .nrrd, .nhdr, .mha, .mhd (any case).

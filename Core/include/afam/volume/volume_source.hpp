@@ -10,7 +10,6 @@
 #include <utility>
 #include <vector>
 
-#include "afam/base/huge_pages.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/volume/sample_type.hpp"
 
@@ -127,10 +126,6 @@ class RawFileSource : public VolumeSource {
   const std::string& path() const { return path_; }
 
  private:
-  /// `bytes` bytes of the file from `offset` into dst (pread: any thread); IoError naming the byte
-  /// where a read fails or the file ends.
-  void readBytes(uint64_t offset, uint64_t bytes, unsigned char* dst) const;
-
   std::string path_;
   int fd_ = -1;
   Index3 dims_;

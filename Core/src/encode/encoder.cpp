@@ -231,6 +231,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   else
     for (int64_t c = 0; c < count && !stopped; ++c) {
       scan(0, c);
+      if (!chunks[size_t(c)].infinite.empty()) break;  // named below, without reading on
       report();
     }
   if (stopped) throw cancelled();

@@ -71,6 +71,7 @@ class RangedStep : public VolumeSource {
   bool knownMissing() const override { return missing_; }
   int bytesPerVoxel() const override { return s_.bytesPerVoxel(); }
   bool readsOnCallingThread() const override { return s_.readsOnCallingThread(); }
+  bool concurrentReads() const override { return s_.concurrentReads(); }
 
  private:
   VolumeSource& s_;

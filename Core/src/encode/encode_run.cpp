@@ -378,7 +378,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   for (VolumeSource* s : steps) {
     double a, b;
     bool missing = false;
-    volumeValueRange(*s, a, b, &missing);
+    volumeValueRange(*s, a, b, &missing, options.threads);
     ranged.emplace_back(*s, a, b, missing);
     lo = std::min(lo, a);
     hi = std::max(hi, b);

@@ -174,6 +174,11 @@ bool checkSlab(const std::vector<float>& buf, int64_t z, const VolumeSource& sou
   throw NumericError(msg.str());
 }
 
+/// Worker threads for a requested count (0 or less: every core).
+int encoderThreads(int requested) {
+  return std::max(1, requested > 0 ? requested : int(std::thread::hardware_concurrency()));
+}
+
 /// One chunk of planes of the range pass: its valid samples' range, whether one is NaN, and the
 /// error naming its first infinite sample (empty when none).
 struct RangeChunk {
@@ -648,13 +653,14 @@ class LevelEncoder {
 
 }  // namespace
 
-void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing) {
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing,
+                      int threads) {
   const Partition part(source.dims(), 1, 1);
   EncoderOptions opt;
   const EncodeProgress progress(part, opt);
   SoloTeam solo;
   bool found = false;
-  scanValueRange(source, part, progress, solo, vmin, vmax, found);
+  scanValueRange(source, part, progress, solo, vmin, vmax, found, encoderThreads(threads));
   if (missing) *missing = found;
 }
 
@@ -695,8 +701,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   if (resolved.blocksPerAxis == 0) resolved.blocksPerAxis = shape.blocksPerAxis;
   const Partition part(dims, resolved.levels,
                        resolved.blocksPerAxis);  // validates levels, blocks, dims
-  const int threads =
-      std::max(1, opt.threads > 0 ? opt.threads : int(std::thread::hardware_concurrency()));
+  const int threads = encoderThreads(opt.threads);
 
   EncodeStats stats;
   stats.threads = threads;

@@ -122,9 +122,11 @@ struct EncoderOptions {
   std::shared_ptr<LeastSquaresBatch> leastSquares;
 };
 
-/// The value range of a volume's valid samples (one pass unless the source knows it); NumericError
-/// naming the first sample that is infinite. `missing`: whether a sample is NaN (missing).
-void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing = nullptr);
+/// The value range of a volume's valid samples (one pass unless the source knows it, on `threads`
+/// threads where the source allows concurrentReads; 0: all cores); NumericError naming the first
+/// sample that is infinite. `missing`: whether a sample is NaN (missing).
+void volumeValueRange(VolumeSource& source, double& vmin, double& vmax, bool* missing = nullptr,
+                      int threads = 1);
 
 struct LevelStats {
   int64_t blocks = 0;         ///< micro-blocks of the level

@@ -12,7 +12,6 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/volume/volume_formats.hpp"
-
 #include "file_samples.hpp"
 #include "header_text.hpp"
 

@@ -385,6 +385,8 @@ TEST(Encoder, CancellationThrowsAndLeavesNoFile) {
   const std::vector<float> v = mlVolume(64);
   ArraySource src(v.data(), {64, 64, 64});
   EncoderOptions opt;
+  opt.levels = 2;  // 8 blocks, then 64: the third report comes before the last block is fitted
+  opt.blocksPerAxis = 2;
   int calls = 0;
   double last = -1;
   bool monotone = true;
@@ -397,6 +399,8 @@ TEST(Encoder, CancellationThrowsAndLeavesNoFile) {
   EXPECT_THROW(encodeVolume(src, opt, path), Cancelled);
   EXPECT_NE(access(path.c_str(), F_OK), 0);
   EXPECT_TRUE(monotone);
+  EXPECT_EQ(calls, 3);  // nothing reported after the cancel
+  EXPECT_LT(last, 1.0);
   // Without cancelling, progress reaches 1.
   opt.progress = [&](double f) {
     last = f;

@@ -295,6 +295,10 @@ void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t pla
     fillBlockChunkBody(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
 }
 
+/// Pieces a chunk's filtering is split into at least (blocks times z-sample ranges) when it runs
+/// on the sampling threads: enough for a few tens of threads to share a row of few blocks.
+constexpr int64_t kFillPieces = 96;
+
 }  // namespace
 
 PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
@@ -382,13 +386,20 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
     const float* buf = planes.read(zs, yBase, yEnd - yBase + 1, loop);
-    auto fill = [&](int64_t b) {
-      fillBlockChunk(buf, zs, plane, X, yBase, tz, k0, k1, taps[size_t(b)], out[size_t(b)]->data());
+    // Each block's z-samples in pieces, so that a row of few blocks (the coarse levels') still
+    // spreads over the threads: at least kFillPieces pieces a chunk where it has the z-samples.
+    const int64_t nb = int64_t(blocks.size()), span = k1 - k0;
+    const int64_t pieces =
+        loop ? std::min<int64_t>(span, std::max<int64_t>(1, (kFillPieces + nb - 1) / nb)) : 1;
+    auto fill = [&](int64_t p) {
+      const int64_t b = p % nb, piece = p / nb;
+      const int ka = k0 + int(span * piece / pieces), kb = k0 + int(span * (piece + 1) / pieces);
+      fillBlockChunk(buf, zs, plane, X, yBase, tz, ka, kb, taps[size_t(b)], out[size_t(b)]->data());
     };
     if (loop)
-      loop(int64_t(blocks.size()), fill);
+      loop(nb * pieces, fill);
     else
-      for (size_t b = 0; b < blocks.size(); ++b) fill(int64_t(b));
+      for (int64_t b = 0; b < nb; ++b) fill(b);
     k0 = k1;
   }
 }

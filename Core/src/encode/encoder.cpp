@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "afam/base/task_stream.hpp"
 #include "afam/base/worker_pool.hpp"
 #include "afam/search/ncp_search.hpp"
 #include "afam/search/ncp_verdicts.hpp"
@@ -363,6 +364,7 @@ class LevelEncoder {
         fitters_(size_t(threads)),
         pool_(threads),
         samplePool_(threads),
+        askPool_(threads),
         planes_(source, part.dims()) {
     sampleLoop_ = [this](int64_t count, const std::function<void(int64_t)>& fn) {
       samplePool_.run(
@@ -380,18 +382,18 @@ class LevelEncoder {
     double aheadSeconds = 0;  ///< spent asking
   };
 
-  /// Batches of lines of blocks (this process's share): the next batch is sampled (I/O and
-  /// filtering, on the sampling pool) while the fitting pool fits the current one, so reading the
-  /// volume does not leave the fitting threads idle; during the level's last batch the next level's
-  /// first batch is sampled, handed back in `pending` (empty: level l samples its first batch
-  /// itself).
-  LevelStats encodeLevel(int l, std::future<Batch>& pending) {
+  /// Batches of lines of blocks (this process's share) streamed through the fitting pool: the
+  /// next batch is sampled (I/O and filtering, on the sampling pool) while the fitting threads fit
+  /// the ones before, so reading the volume does not leave them idle, and a thread done with its
+  /// blocks of a batch goes on to the next batch's (TaskStream); during the level's last blocks
+  /// the next level's first batch is sampled (carried_).
+  LevelStats encodeLevel(int l) {
     const auto tl = Clock::now();
     LevelStats ls;
     ls.blocks = part_.blockCount(l);
     complexCur_.assign(size_t(ls.blocks), 0);
     const WorkShare lines = share(l);
-    if (!lines.empty()) fitLines(l, lines, pending, ls);
+    if (!lines.empty()) fitLines(l, lines, ls);
     ls.seconds = secondsSince(tl);
     return ls;
   }
@@ -425,69 +427,84 @@ class LevelEncoder {
     return workShare(int64_t(nb[1]) * nb[2], team_.rank(), team_.size());
   }
 
-  void fitLines(int l, const WorkShare& lines, std::future<Batch>& pending, LevelStats& ls) {
+  void fitLines(int l, const WorkShare& lines, LevelStats& ls) {
+    const FitContext ctx{opt_, bound_, l, source_.name()};
+    const int64_t count = (lines.end - lines.first) * part_.blocksPerAxis(l)[0];
+    TaskStream<BlockTask> stream(pool_, count, [&](int w, BlockTask& t) { fitTask(ctx, l, w, t); });
     double levelDone = 0;
-    Batch cur = pending.valid() ? pending.get() : gatherLines(l, lines.first, lines.end);
+    const auto take = [&](BlockTask& t) { handOn(l, t, levelDone, ls); };
+    const auto tick = [&] { return progress_.report(levelDone); };
+    Batch cur = carried_ ? std::move(*carried_) : gatherLines(l, lines.first, lines.end);
+    carried_.reset();
+    int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
     for (;;) {
+      const bool more = cur.endLine < lines.end;
+      // cur is asked ahead and then published on a thread of its own while the next batch is
+      // sampled here, once the batch before cur is fitted: at most two batches of samples at a
+      // time (the one fitted or asked, the one sampled) and the last blocks of a third. Where
+      // batches are asked ahead (their questions take about as long as their sampling), once
+      // the batch before that is fitted: the batch before cur is fitted meanwhile.
+      const int64_t fitted = opt_.leastSquares ? before : first;
+      std::future<void> asking = std::async(std::launch::async, [&] {
+        if (!cur.asked) askAheadOf(l, cur);
+        stream.publish(std::move(cur.tasks));
+      });
+      std::optional<Batch> next;
+      try {
+        if (more) {
+          if (!stream.drain(fitted, take, tick)) throw cancelled();
+          next = gatherLines(l, cur.endLine, lines.end);
+        } else if (l + 1 < part_.levels() && !source_.readsOnCallingThread()) {
+          // The next level's first batch while this level's last blocks are fitted (a source
+          // read on the calling thread alone samples it when its turn comes).
+          const WorkShare nextLines = share(l + 1);
+          if (!nextLines.empty()) carried_ = gatherLines(l + 1, nextLines.first, nextLines.end);
+        }
+      } catch (...) {
+        asking.wait();  // it uses cur and the stream
+        throw;
+      }
+      asking.get();
+      before = first;
+      first = stream.published();
       ls.sampleSeconds += cur.seconds;
-      if (!cur.asked) askAheadOf(l, cur);  // before the next batch's questions take the device
       ls.askedAhead += cur.ahead.requests;
       ls.aheadRounds += cur.ahead.rounds;
       ls.aheadSeconds += cur.aheadSeconds;
       ls.residualSeconds += cur.ahead.residualSeconds;
-      const bool more = cur.endLine < lines.end;
-      std::future<Batch> next;
-      const WorkShare nextLines = more                     ? WorkShare{cur.endLine, lines.end}
-                                  : l + 1 < part_.levels() ? share(l + 1)
-                                                           : WorkShare{};
-      if (!nextLines.empty()) {
-        const int nl = more ? l : l + 1;
-        const auto policy =
-            source_.readsOnCallingThread() ? std::launch::deferred : std::launch::async;
-        // The next batch of this level is asked ahead while this one is fitted; the next level's
-        // first when its turn comes (which of its blocks search depends on this level's).
-        next = std::async(policy, [this, nl, nextLines, more] {
-          Batch b = gatherLines(nl, nextLines.first, nextLines.end);
-          if (more) askAheadOf(nl, b);
-          return b;
-        });
-      }
-      try {
-        fitBatch(l, cur.tasks, levelDone);
-      } catch (...) {
-        settle(next);
-        throw;
-      }
-      for (BlockTask& t : cur.tasks) {
-        complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
-        levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
-        if (team_.size() > 1) {
-          appendFittedBlock(t, outgoing_);
-          continue;
-        }
-        sink_.add(t.entry, t.stored.data());
-        countBlock(t, ds(), ls);
-      }
-      if (!progress_.report(levelDone)) {
-        settle(next);
-        throw cancelled();
-      }
-      if (!more) {
-        pending = std::move(next);
-        break;
-      }
-      cur = next.get();
+      if (!more) break;
+      cur = std::move(*next);
     }
+    if (!stream.drain(count, take, tick)) throw cancelled();
+    ls.fitWaitSeconds = stream.waitSeconds();
+  }
+
+  /// Encodes one block on fitting thread w (askAheadOf said whether it searches).
+  void fitTask(const FitContext& ctx, int l, int w, BlockTask& t) {
+    const BlockExtent e = part_.extent(l, t.ijk);
+    t.entry.level = l;
+    t.entry.block = t.ijk;
+    t.entry.samples = e.samples;
+    if (ds())
+      storeDownsampled(e, t);
+    else
+      encodeBlock(ctx, e, fitters_[size_t(w)], t);
+    buffers_.give(std::move(t.samples));
+  }
+
+  /// A fitted block, in file order: to the sink (a team's first process gathers the others').
+  void handOn(int l, BlockTask& t, double& levelDone, LevelStats& ls) {
+    complexCur_[size_t(part_.linearIndex(l, t.ijk))] = t.complex ? 1 : 0;
+    levelDone += double(t.entry.samples[0]) * t.entry.samples[1] * t.entry.samples[2];
+    if (team_.size() > 1) {
+      appendFittedBlock(t, outgoing_);
+      return;
+    }
+    sink_.add(t.entry, t.stored.data());
+    countBlock(t, ds(), ls);
   }
 
   bool ds() const { return opt_.mode == EncodingMode::Downsampled; }
-
-  /// Before leaving on an error: a batch being sampled on another thread uses members, so it must
-  /// finish first; a deferred one (readsOnCallingThread) has not started and is dropped.
-  static void settle(std::future<Batch>& next) {
-    if (next.valid() && next.wait_for(std::chrono::seconds(0)) != std::future_status::deferred)
-      next.wait();
-  }
 
   /// Whether a block runs the search: asked when its batch is fitted, after the coarser level's
   /// blocks are all known (a batch may be sampled before that).
@@ -554,7 +571,7 @@ class LevelEncoder {
     const auto t0 = Clock::now();
     const FitContext ctx{opt_, bound_, l, source_.name()};
     std::vector<std::optional<AheadBlock>> asked(b.tasks.size());
-    samplePool_.run(
+    askPool_.run(
         int64_t(b.tasks.size()),
         [&](int, int64_t i) {
           BlockTask& t = b.tasks[size_t(i)];
@@ -597,40 +614,6 @@ class LevelEncoder {
   }
 
  private:
-  /// Fits the batch's blocks (askAheadOf said which search).
-  void fitBatch(int l, std::vector<BlockTask>& tasks, double levelDone) {
-    const FitContext ctx{opt_, bound_, l, source_.name()};
-    std::mutex doneMutex;
-    bool cancelRequested = false;
-    double batchDone = 0;
-    pool_.run(
-        int64_t(tasks.size()),
-        [&](int w, int64_t ti) {
-          BlockTask& t = tasks[size_t(ti)];
-          const BlockExtent e = part_.extent(l, t.ijk);
-          t.entry.level = l;
-          t.entry.block = t.ijk;
-          t.entry.samples = e.samples;
-          if (ds())
-            storeDownsampled(e, t);
-          else
-            encodeBlock(ctx, e, fitters_[size_t(w)], t);
-          buffers_.give(std::move(t.samples));
-          std::lock_guard<std::mutex> lock(doneMutex);
-          batchDone += double(e.samples[0]) * e.samples[1] * e.samples[2];
-        },
-        [&]() {
-          double v;
-          {
-            std::lock_guard<std::mutex> lock(doneMutex);
-            v = batchDone;
-          }
-          if (!progress_.report(levelDone + v)) cancelRequested = true;
-          return !cancelRequested;
-        });
-    if (cancelRequested) throw cancelled();
-  }
-
   VolumeSource& source_;
   const EncoderOptions& opt_;
   const Partition& part_;
@@ -645,9 +628,11 @@ class LevelEncoder {
   std::string aheadFailure_;
   WorkerPool pool_;
   WorkerPool samplePool_;  ///< filters the blocks of a row in parallel, beside the fitting pool
+  WorkerPool askPool_;     ///< prepares a batch's questions, beside the sampling of the next
   BlockLoop sampleLoop_;
   PlaneReader planes_;
   SampleBuffers buffers_;
+  std::optional<Batch> carried_;  ///< the next level's first batch, sampled (not asked)
   std::vector<uint8_t> complexPrev_, complexCur_;
 };
 
@@ -733,11 +718,9 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
 
   const auto tFit0 = Clock::now();
   LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team);
-  std::future<LevelEncoder::Batch>
-      pending;  // a level's first batch, sampled during the previous level
   for (int l = 0; l < part.levels(); ++l) {
     LevelStats ls;
-    teamStep(team, [&] { ls = levels.encodeLevel(l, pending); });
+    teamStep(team, [&] { ls = levels.encodeLevel(l); });
     teamStep(team, [&] { levels.finishLevel(l, ls); });
     stats.levels.push_back(ls);
     progress.finishLevel(l);

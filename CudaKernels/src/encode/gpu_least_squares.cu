@@ -9,6 +9,8 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "afam/cuda/common/gpu_error.hpp"
@@ -171,9 +173,7 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
     AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));  // the staging buffer's last copy is done
     staging_.reserve(bytes);
     samples_.reserve(bytes);
-    for (size_t b = 0; b < samples.size(); ++b)
-      std::copy(samples[b], samples[b] + (offsets_[b + 1] - offsets_[b]),
-                staging_.as<float>() + offsets_[b]);
+    stage(samples);
     AFAM_CUDA_CHECK(
         cudaMemcpyAsync(samples_.data, staging_.data, bytes, cudaMemcpyHostToDevice, stream_));
   }
@@ -187,6 +187,29 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
   uint64_t prepare(const std::vector<LsqRequest>& requests, std::vector<LsqJob>& jobs,
                    std::vector<size_t>& taken, std::vector<size_t>& onCpu);
 
+  /// Copies the blocks' samples into the staging buffer, on a few threads: one thread's copy of a
+  /// batch (about 100 MB) held the batch's asking for longer than its residuals.
+  void stage(const std::vector<const float*>& samples) {
+    const size_t threads = std::min<size_t>(
+        samples.size(),
+        std::clamp<size_t>(std::thread::hardware_concurrency(), 1, kStagingThreads));
+    auto copy = [&](size_t part) {
+      for (size_t b = samples.size() * part / threads; b < samples.size() * (part + 1) / threads;
+           ++b)
+        std::copy(samples[b], samples[b] + (offsets_[b + 1] - offsets_[b]),
+                  staging_.as<float>() + offsets_[b]);
+    };
+    std::vector<std::thread> others;
+    for (size_t part = 1; part < threads; ++part) try {
+        others.emplace_back(copy, part);
+      } catch (const std::system_error&) {  // no thread to be had: this one copies the part
+        copy(part);
+      }
+    if (threads > 0) copy(0);
+    for (std::thread& t : others) t.join();
+  }
+
+  static constexpr size_t kStagingThreads = 8;
   int device_ = 0, degree_ = 2;
   std::string name_;
   uint64_t sharedLimit_ = 0;

@@ -145,6 +145,9 @@ struct LevelStats {
   double seconds = 0;
   double sampleSeconds =
       0;  ///< time spent sampling the volume (overlaps fitting after the first batch)
+  /// Seconds the fitting threads together waited for sampled blocks (sampling slower than fitting,
+  /// or a level's first batch).
+  double fitWaitSeconds = 0;
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
   /// EncoderOptions::leastSquares: residuals asked ahead of the searches, in how many rounds; the
   /// seconds spent asking (on the sampling thread, beside the fitting of the batch before, but for

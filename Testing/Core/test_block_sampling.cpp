@@ -110,6 +110,21 @@ class ThreadCountingSource : public WrappingSource {
   std::set<std::thread::id> threads;
 };
 
+/// The same, passing on the inner source's samples as stored.
+class StoredCountingSource : public ThreadCountingSource {
+ public:
+  using ThreadCountingSource::ThreadCountingSource;
+  std::optional<SampleType> storedType() const override { return inner_.storedType(); }
+  void readStoredRows(int64_t z0, int64_t nz, int64_t y0, int64_t ny, void* out) override {
+    {
+      std::lock_guard<std::mutex> lock(m_);
+      ++reads;
+      threads.insert(std::this_thread::get_id());
+    }
+    inner_.readStoredRows(z0, nz, y0, ny, out);
+  }
+};
+
 /// A loop on `n` threads of its own (as the encoder's sampling pool runs fn).
 BlockLoop threadsLoop(int n) {
   return [n](int64_t count, const std::function<void(int64_t)>& fn) {
@@ -125,9 +140,10 @@ BlockLoop threadsLoop(int n) {
 
 }  // namespace
 
-// A raw file read through a loop: in pieces on several threads, the same floats as read in one
-// call a run of planes; a source without concurrentReads is read on the calling thread as before.
-TEST(BlockSampling, PlanesAreReadInParallelPiecesAsTheSameFloats) {
+// A raw file read through a loop: in pieces on several threads, the same samples as read in one
+// call a run of planes, as stored (int16) where the source gives them so, else floats; a source
+// without concurrentReads is read on the calling thread as before.
+TEST(BlockSampling, PlanesAreReadInParallelPiecesAsTheSameSamples) {
   const Index3 dims{700, 400, 40};
   std::vector<int16_t> raw(size_t(dims[0] * dims[1] * dims[2]));
   for (size_t i = 0; i < raw.size(); ++i) raw[i] = int16_t((i * 2654435761u) >> 17);
@@ -138,35 +154,56 @@ TEST(BlockSampling, PlanesAreReadInParallelPiecesAsTheSameFloats) {
   }
   RawFileSource file(path, dims, SampleType::Int16);
   ASSERT_TRUE(file.concurrentReads());
+  ASSERT_EQ(file.storedType(), SampleType::Int16);
   std::vector<int64_t> zs{2};  // runs of 1, 17 and 12 planes
   for (int64_t z = 5; z < 22; ++z) zs.push_back(z);
   for (int64_t z = 28; z < 40; ++z) zs.push_back(z);
-  const size_t plane = size_t(dims[0]) * 300;  // rows 50..349: 4 planes a piece of 2^20 floats
+  const size_t plane = size_t(dims[0]) * 300;  // rows 50..349: 4 planes a piece of 2^20 samples
   PlaneReader serial(file, dims);
-  const float* a = serial.read(zs, 50, 300);
-  const std::vector<float> expected(a, a + zs.size() * plane);
-  EXPECT_EQ(expected[plane + 7], float(raw[size_t((5 * dims[1] + 50) * dims[0] + 7)]));
+  const PlaneChunk a = serial.read(zs, 50, 300);
+  ASSERT_EQ(a.type, SampleType::Int16);
+  const auto* as = static_cast<const int16_t*>(a.samples);
+  const std::vector<int16_t> expected(as, as + zs.size() * plane);
+  size_t wrong = 0;
+  for (size_t i = 0; i < zs.size(); ++i)
+    for (size_t k = 0; k < plane; ++k)
+      wrong += expected[i * plane + k] != raw[size_t(zs[i] * dims[1] + 50) * size_t(dims[0]) + k];
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(serial.bytesRead(), zs.size() * plane * 2);
 
+  StoredCountingSource stored(file);
+  PlaneReader parallelStored(stored, dims);
+  const PlaneChunk b = parallelStored.read(zs, 50, 300, threadsLoop(4));
+  ASSERT_EQ(b.type, SampleType::Int16);
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), static_cast<const int16_t*>(b.samples)));
+  EXPECT_EQ(stored.reads, 1 + 5 + 3);  // the runs in pieces of at most 4 planes
+  EXPECT_GE(stored.threads.size(), 2u);
+
+  // A wrapper that does not say how its samples are stored: floats, in the same pieces.
   ThreadCountingSource counted(file);
   PlaneReader parallel(counted, dims);
-  const float* b = parallel.read(zs, 50, 300, threadsLoop(4));
-  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), b));
-  EXPECT_EQ(counted.reads, 1 + 5 + 3);  // the runs in pieces of at most 4 planes
+  const PlaneChunk c = parallel.read(zs, 50, 300, threadsLoop(4));
+  ASSERT_EQ(c.type, SampleType::Float32);
+  const auto* cf = static_cast<const float*>(c.samples);
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), cf,
+                         [](int16_t e, float f) { return float(e) == f; }));
+  EXPECT_EQ(counted.reads, 1 + 5 + 3);
   EXPECT_GE(counted.threads.size(), 2u);
-  EXPECT_EQ(parallel.bytesRead(), serial.bytesRead());
+  EXPECT_EQ(parallel.bytesRead(), 2 * serial.bytesRead());  // floats, of 2-byte samples
 
   // Not concurrent (state of its own): one read a run, on the calling thread.
   std::vector<float> v(raw.begin(), raw.end());
   CountingSource plain(v.data(), dims);
   PlaneReader own(plain, dims);
   bool looped = false;
-  const float* c =
+  const PlaneChunk d =
       own.read(zs, 50, 300, [&](int64_t count, const std::function<void(int64_t)>& fn) {
         looped = true;
         for (int64_t i = 0; i < count; ++i) fn(i);
       });
   EXPECT_FALSE(looped);
   EXPECT_EQ(plain.reads, 3);
-  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), c));
+  EXPECT_TRUE(std::equal(expected.begin(), expected.end(), static_cast<const float*>(d.samples),
+                         [](int16_t e, float f) { return float(e) == f; }));
   std::remove(path.c_str());
 }

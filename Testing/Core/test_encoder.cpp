@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <random>
 #include <string>
@@ -379,6 +380,54 @@ TEST(Encoder, ThreadCountDoesNotChangeTheResult) {
   opt.threads = 3;
   const InMemoryModels b = encode(v, {49, 49, 49}, opt);
   EXPECT_EQ(a.payloads, b.payloads);
+}
+
+// A raw file of 1- and 2-byte integers is sampled from its samples as stored (the planes are not
+// made floats first): the same models as its floats give, at every level (box-filtered coarse
+// levels, the finest level's grid samples), with and without ghosts (ds).
+TEST(Encoder, SamplesReadAsStoredEncodeAsTheirFloats) {
+  const Index3 dims{45, 38, 41};
+  const std::vector<float> ml = mlVolume(45);
+  for (const SampleType type : {SampleType::UInt8, SampleType::Int16}) {
+    std::vector<float> floats(size_t(dims[0] * dims[1] * dims[2]));
+    std::vector<unsigned char> bytes(floats.size() * size_t(sampleTypeSize(type)));
+    for (size_t i = 0; i < floats.size(); ++i) {
+      const size_t x = i % 45, y = (i / 45) % 38, z = i / (45 * 38);
+      const double v = ml[(z * 45 + y) * 45 + x];
+      if (type == SampleType::UInt8) {
+        bytes[i] = uint8_t(std::lround(255 * v));
+        floats[i] = bytes[i];
+      } else {
+        const auto w = int16_t(std::lround(30000 * v - 12000));
+        std::memcpy(bytes.data() + 2 * i, &w, 2);
+        floats[i] = w;
+      }
+    }
+    const std::string path = tmpPath("stored.raw");
+    {
+      std::ofstream f(path, std::ios::binary);
+      f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    }
+    for (const EncodingMode mode : {EncodingMode::Adaptive, EncodingMode::Downsampled}) {
+      SCOPED_TRACE(testing::Message() << sampleTypeName(type) << " mode " << int(mode));
+      EncoderOptions opt;
+      opt.levels = 3;
+      opt.blocksPerAxis = 4;
+      opt.mode = mode;
+      opt.threads = 3;
+      RawFileSource file(path, dims, type);
+      ASSERT_EQ(file.storedType(), type);
+      InMemoryModels fromFile;
+      const EncodeStats stats = encodeVolume(file, opt, fromFile);
+      const InMemoryModels fromFloats = encode(floats, dims, opt);
+      const Partition part(dims, opt.levels, opt.blocksPerAxis);
+      EXPECT_EQ(stats.blocks, part.blockCount(0) + part.blockCount(1) + part.blockCount(2));
+      EXPECT_GE(part.blockCount(2), 8);
+      EXPECT_EQ(fromFile.payloads, fromFloats.payloads);
+      EXPECT_GT(fromFile.payloads.size(), 1u);
+    }
+    std::remove(path.c_str());
+  }
 }
 
 TEST(Encoder, CancellationThrowsAndLeavesNoFile) {

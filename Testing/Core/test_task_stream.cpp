@@ -96,7 +96,7 @@ TEST(TaskStream, TasksPublishedInBatchesAreHandedOnInOrderAsTheyAreDone) {
   ASSERT_TRUE(stream.drain(kCount, take, tick));
   ASSERT_EQ(int64_t(handed.size()), kCount);
   for (int64_t i = 0; i < kCount; ++i) EXPECT_EQ(handed[size_t(i)], i * i);
-  EXPECT_GT(mostAtOnce.load(), 1);  // the pool's threads worked side by side
+  EXPECT_GT(mostAtOnce.load(), 1);           // the pool's threads worked side by side
   EXPECT_THROW(stream.publish({1}), Error);  // more than the stream holds
 }
 
@@ -106,13 +106,17 @@ TEST(TaskStream, ThreadsWaitForTasksNotYetPublishedAndTheWaitIsCounted) {
   std::this_thread::sleep_for(std::chrono::milliseconds(150));  // both threads wait for tasks
   stream.publish({10, 20});
   std::vector<int> got;
-  ASSERT_TRUE(stream.drain(2, [&](int& v) { got.push_back(v); }, kNoTick));
+  ASSERT_TRUE(stream.drain(
+      2, [&](int& v) { got.push_back(v); }, kNoTick));
   EXPECT_EQ(got, (std::vector<int>{11, 21}));
   // Two threads waited about 150 ms each, less their start-up (slow under a sanitizer).
   EXPECT_GE(stream.waitSeconds(), 0.1);
-  EXPECT_THROW(stream.drain(3, [](int&) {}, kNoTick), Error);  // task 2 is not published
+  EXPECT_THROW(stream.drain(
+                   3, [](int&) {}, kNoTick),
+               Error);  // task 2 is not published
   stream.publish({30, 40});
-  ASSERT_TRUE(stream.drain(4, [&](int& v) { got.push_back(v); }, kNoTick));
+  ASSERT_TRUE(stream.drain(
+      4, [&](int& v) { got.push_back(v); }, kNoTick));
   EXPECT_EQ(got, (std::vector<int>{11, 21, 31, 41}));
 }
 
@@ -127,7 +131,8 @@ TEST(TaskStream, ATaskErrorReachesTheDrainAndTheStreamStopsCleanly) {
     stream.publish(std::move(tasks));  // the other 50 never come: waiting threads must leave
     int handed = 0;
     try {
-      stream.drain(50, [&](int&) { ++handed; }, kNoTick);
+      stream.drain(
+          50, [&](int&) { ++handed; }, kNoTick);
       ADD_FAILURE() << "the task's error was not rethrown";
     } catch (const std::runtime_error& e) {
       EXPECT_STREQ(e.what(), "task 13 failed");
@@ -136,11 +141,14 @@ TEST(TaskStream, ATaskErrorReachesTheDrainAndTheStreamStopsCleanly) {
   }
   // A stream left early (the caller's own error, tasks never published) stops without hanging,
   // and the pool serves the next stream.
-  { TaskStream<int> idle(pool, 10, [](int, int&) {}); }
+  {
+    TaskStream<int> idle(pool, 10, [](int, int&) {});
+  }
   TaskStream<int> next(pool, 3, [](int, int& v) { v *= 2; });
   next.publish({1, 2, 3});
   int sum = 0;
-  ASSERT_TRUE(next.drain(3, [&](int& v) { sum += v; }, kNoTick));
+  ASSERT_TRUE(next.drain(
+      3, [&](int& v) { sum += v; }, kNoTick));
   EXPECT_EQ(sum, 12);
 }
 
@@ -152,7 +160,8 @@ TEST(TaskStream, ATickThatSaysStopEndsTheDrain) {
   });
   stream.publish({1, 2});
   int ticks = 0;
-  EXPECT_FALSE(stream.drain(2, [](int&) {}, [&] { return ++ticks < 3; }));
+  EXPECT_FALSE(stream.drain(
+      2, [](int&) {}, [&] { return ++ticks < 3; }));
   EXPECT_EQ(ticks, 3);
   release = true;  // the tasks under way finish; the destructor waits for them
 }

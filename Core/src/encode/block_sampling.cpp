@@ -5,8 +5,10 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <string>
 
 #include "afam/base/cpu_features.hpp"
+#include "afam/base/errors.hpp"
 
 namespace afam {
 
@@ -113,8 +115,9 @@ struct BlockTaps {
 /// acc[j * nx + i] += w * (the y-then-x filtered plane at block sample (i, j)) over its valid
 /// samples: NaN samples (missing) are left out, and `weight` gathers the filter's weight of the
 /// valid ones the same way; rows and rowWeights are scratch. The plane holds rows from yBase on.
-void addValidFilteredPlane(const float* plane, int64_t X, int64_t yBase, const BlockTaps& bt,
-                           double w, std::vector<double>& rows, std::vector<double>& rowWeights,
+template <typename T>
+void addValidFilteredPlane(const T* plane, int64_t X, int64_t yBase, const BlockTaps& bt, double w,
+                           std::vector<double>& rows, std::vector<double>& rowWeights,
                            std::vector<double>& acc, std::vector<double>& weight) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
   const size_t width = size_t(bt.x1 - bt.x0 + 1);
@@ -122,11 +125,11 @@ void addValidFilteredPlane(const float* plane, int64_t X, int64_t yBase, const B
   rowWeights.assign(size_t(bt.ny) * width, 0.0);
   for (int j = 0; j < bt.ny; ++j)
     for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
-      const float* src = plane + (ty.index[k] - yBase) * X + bt.x0;
+      const T* src = plane + (ty.index[k] - yBase) * X + bt.x0;
       double* h = rows.data() + size_t(j) * width;
       double* hw = rowWeights.data() + size_t(j) * width;
       for (size_t c = 0; c < width; ++c)
-        if (!std::isnan(src[c])) {
+        if (!std::isnan(double(src[c]))) {
           h[c] += ty.weight[k] * double(src[c]);
           hw[c] += ty.weight[k];
         }
@@ -148,7 +151,8 @@ void addValidFilteredPlane(const float* plane, int64_t X, int64_t yBase, const B
 /// out[j * nx + i] = the y-then-x filtered plane at block sample (i, j); rows is scratch. y first:
 /// it runs along whole rows of the columns the block reads (vectorised), and x then filters only
 /// the block's rows. The plane holds rows from yBase on.
-__attribute__((always_inline)) inline void filterPlane(const float* plane, int64_t X, int64_t yBase,
+template <typename T>
+__attribute__((always_inline)) inline void filterPlane(const T* plane, int64_t X, int64_t yBase,
                                                        const BlockTaps& bt,
                                                        std::vector<double>& rows, double* out) {
   const AxisTaps &tx = bt.tx, &ty = bt.ty;
@@ -158,7 +162,7 @@ __attribute__((always_inline)) inline void filterPlane(const float* plane, int64
     double* __restrict h = rows.data() + size_t(j) * width;
     std::fill_n(h, width, 0.0);
     for (size_t k = ty.first[size_t(j)]; k < ty.first[size_t(j) + 1]; ++k) {
-      const float* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
+      const T* __restrict src = plane + (ty.index[k] - yBase) * X + bt.x0;
       const double wy = ty.weight[k];
       for (size_t c = 0; c < width; ++c) h[c] += wy * double(src[c]);
     }
@@ -178,7 +182,8 @@ __attribute__((always_inline)) inline void filterPlane(const float* plane, int64
 /// The samples of a filtered z-sample that came out NaN (a missing sample among their taps) again,
 /// from the valid samples alone: their weighted mean where they hold more than half of the
 /// filter's weight, else missing (NaN). Samples with no missing tap keep their values.
-void refilterMissing(const std::function<const float*(size_t)>& planeOf, int64_t X, int64_t yBase,
+template <typename T>
+void refilterMissing(const std::function<const T*(size_t)>& planeOf, int64_t X, int64_t yBase,
                      const AxisTaps& tz, size_t t0, size_t t1, const BlockTaps& bt, float* dst) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   if (std::none_of(dst, dst + nxy, [](float v) { return std::isnan(v); })) return;
@@ -217,8 +222,9 @@ size_t chunkPlaneBudget(size_t plane, const std::vector<std::vector<float>*>& ou
 
 /// Fills z-samples [k0, k1) of one block from a chunk's planes (zs[i] at buf + i * plane, rows from
 /// yBase on).
+template <typename T>
 __attribute__((always_inline)) inline void fillBlockChunkBody(
-    const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X, int64_t yBase,
+    const T* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X, int64_t yBase,
     const AxisTaps& tz, int k0, int k1, const BlockTaps& bt, float* out) {
   const size_t nxy = size_t(bt.nx) * size_t(bt.ny);
   const bool unitXY = bt.tx.unit && bt.ty.unit;
@@ -231,7 +237,7 @@ __attribute__((always_inline)) inline void fillBlockChunkBody(
   // the planes at their windows' ends): each plane of a chunk is filtered in x and y once.
   std::vector<int64_t> cachedZ, nextZ;
   std::vector<std::vector<double>> cached, next;
-  const std::function<const float*(size_t)> planeOf = [&](size_t t) {
+  const std::function<const T*(size_t)> planeOf = [&](size_t t) {
     const size_t i = size_t(std::lower_bound(zs.begin(), zs.end(), tz.index[t]) - zs.begin());
     return buf + i * plane;
   };
@@ -239,15 +245,16 @@ __attribute__((always_inline)) inline void fillBlockChunkBody(
     float* dst = out + size_t(k) * nxy;
     const size_t t0 = tz.first[size_t(k)], t1 = tz.first[size_t(k) + 1];
     if (unitXY && t1 == t0 + 1 && tz.weight[t0] == 1.0) {  // grid samples: a copy
-      const float* p = planeOf(t0);
+      const T* p = planeOf(t0);
       for (int j = 0; j < bt.ny; ++j) {
-        const float* src = p + (bt.ty.index[size_t(j)] - yBase) * X;
-        float* row = dst + size_t(j) * size_t(bt.nx);
+        const T* __restrict src = p + (bt.ty.index[size_t(j)] - yBase) * X;
+        float* __restrict row = dst + size_t(j) * size_t(bt.nx);
         if (xRun) {
-          std::copy_n(src + bt.tx.index[0], size_t(bt.nx), row);
+          src += bt.tx.index[0];
+          for (int i = 0; i < bt.nx; ++i) row[i] = static_cast<float>(src[i]);
           continue;
         }
-        for (int i = 0; i < bt.nx; ++i) row[i] = src[bt.tx.index[size_t(i)]];
+        for (int i = 0; i < bt.nx; ++i) row[i] = static_cast<float>(src[bt.tx.index[size_t(i)]]);
       }
       continue;
     }
@@ -275,24 +282,50 @@ __attribute__((always_inline)) inline void fillBlockChunkBody(
     std::swap(cachedZ, nextZ);
     std::swap(cached, next);
     for (size_t q = 0; q < nxy; ++q) dst[q] = static_cast<float>(acc[q]);
-    refilterMissing(planeOf, X, yBase, tz, t0, t1, bt, dst);
+    refilterMissing<T>(planeOf, X, yBase, tz, t0, t1, bt, dst);
   }
 }
 
 // The filtering compiled also for AVX2 (its float-to-double rows convert in one instruction there)
 // and chosen at run time; no FMA, so the same samples.
-AFAM_TARGET_AVX2 void fillBlockChunkAvx2(const float* buf, const std::vector<int64_t>& zs,
-                                         size_t plane, int64_t X, int64_t yBase, const AxisTaps& tz,
-                                         int k0, int k1, const BlockTaps& bt, float* out) {
+template <typename T>
+AFAM_TARGET_AVX2 void fillBlockChunkAvx2(const T* buf, const std::vector<int64_t>& zs, size_t plane,
+                                         int64_t X, int64_t yBase, const AxisTaps& tz, int k0,
+                                         int k1, const BlockTaps& bt, float* out) {
   fillBlockChunkBody(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
 }
-void fillBlockChunk(const float* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
-                    int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt,
-                    float* out) {
+template <typename T>
+void fillBlockChunkOf(const T* buf, const std::vector<int64_t>& zs, size_t plane, int64_t X,
+                      int64_t yBase, const AxisTaps& tz, int k0, int k1, const BlockTaps& bt,
+                      float* out) {
   if (cpuHasAvx2())
     fillBlockChunkAvx2(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
   else
     fillBlockChunkBody(buf, zs, plane, X, yBase, tz, k0, k1, bt, out);
+}
+/// fillBlockChunk for a chunk in any of the types PlaneReader gives.
+void fillBlockChunk(const PlaneChunk& chunk, const std::vector<int64_t>& zs, size_t plane,
+                    int64_t X, int64_t yBase, const AxisTaps& tz, int k0, int k1,
+                    const BlockTaps& bt, float* out) {
+  const auto fill = [&](auto* typed) {  // typed: a null pointer of the chunk's sample type
+    fillBlockChunkOf(static_cast<decltype(typed)>(chunk.samples), zs, plane, X, yBase, tz, k0, k1,
+                     bt, out);
+  };
+  switch (chunk.type) {
+    case SampleType::Int8:
+      return fill(static_cast<const int8_t*>(nullptr));
+    case SampleType::UInt8:
+      return fill(static_cast<const uint8_t*>(nullptr));
+    case SampleType::Int16:
+      return fill(static_cast<const int16_t*>(nullptr));
+    case SampleType::UInt16:
+      return fill(static_cast<const uint16_t*>(nullptr));
+    case SampleType::Float32:
+      return fill(static_cast<const float*>(nullptr));
+    default:
+      throw Error("fillBlockChunk: planes of " + std::string(sampleTypeName(chunk.type)) +
+                  " samples (a source's storedType is 1- or 2-byte integers)");
+  }
 }
 
 /// Pieces a chunk's filtering is split into at least (blocks times z-sample ranges) when it runs
@@ -322,24 +355,30 @@ std::vector<std::pair<size_t, size_t>> planeRuns(const std::vector<int64_t>& zs,
 
 }  // namespace
 
-const float* PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
-                               const BlockLoop& loop) {
+PlaneChunk PlaneReader::read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
+                             const BlockLoop& loop) {
   const size_t plane = size_t(rowSize_ * yCount);
-  growBuffer(buf_, zs.size() * plane);
-  float* buf = buf_.data();
+  const std::optional<SampleType> stored = src_.storedType();
+  const size_t bytes = stored ? size_t(sampleTypeSize(*stored)) : sizeof(float);
+  growBuffer(buf_, (zs.size() * plane * bytes + sizeof(float) - 1) / sizeof(float));
+  auto* buf = reinterpret_cast<unsigned char*>(buf_.data());
   const bool parallel = loop && src_.concurrentReads() && !src_.readsOnCallingThread();
   const auto runs = planeRuns(
       zs, parallel ? std::max<size_t>(1, kPieceFloats / std::max<size_t>(plane, 1)) : zs.size());
   auto readRun = [&](int64_t r) {
     const auto [i, n] = runs[size_t(r)];
-    src_.readRows(zs[i], int64_t(n), y0, yCount, buf + i * plane);
+    unsigned char* dst = buf + i * plane * bytes;
+    if (stored)
+      src_.readStoredRows(zs[i], int64_t(n), y0, yCount, dst);
+    else
+      src_.readRows(zs[i], int64_t(n), y0, yCount, reinterpret_cast<float*>(dst));
   };
   if (parallel && runs.size() > 1)
     loop(int64_t(runs.size()), readRun);
   else
     for (size_t r = 0; r < runs.size(); ++r) readRun(int64_t(r));
-  bytesRead_ += zs.size() * plane * sizeof(float);
-  return buf;
+  bytesRead_ += zs.size() * plane * bytes;
+  return PlaneChunk{buf, stored ? *stored : SampleType::Float32};
 }
 
 void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
@@ -385,7 +424,7 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
     int k1 = k0 + 1;  // the chunk grows while its planes fit the budget (at least one z-sample)
     while (k1 < nz && chunkPlanes(tz, k0, k1 + 1).size() <= maxPlanes) ++k1;
     const std::vector<int64_t> zs = chunkPlanes(tz, k0, k1);
-    const float* buf = planes.read(zs, yBase, yEnd - yBase + 1, loop);
+    const PlaneChunk buf = planes.read(zs, yBase, yEnd - yBase + 1, loop);
     // Each block's z-samples in pieces, so that a row of few blocks (the coarse levels') still
     // spreads over the threads: at least kFillPieces pieces a chunk where it has the z-samples.
     const int64_t nb = int64_t(blocks.size()), span = k1 - k0;

@@ -67,8 +67,8 @@ class TaskStream {
 
   /// Hands the done tasks on, in order, to `take` until the first `upTo` have been (waiting for
   /// them, published ones only). Calls `tick` after handing tasks on (at most every 10 ms, and
-  /// always after the last of a drain) and about every 100 ms while it waits; false when tick returned false. Rethrows what a task
-  /// threw.
+  /// always after the last of a drain) and about every 100 ms while it waits; false when tick
+  /// returned false. Rethrows what a task threw.
   bool drain(int64_t upTo, const std::function<void(Task&)>& take,
              const std::function<bool()>& tick) {
     if (upTo > published_.load())

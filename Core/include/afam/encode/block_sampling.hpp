@@ -21,14 +21,22 @@ using BlockLoop = std::function<void(int64_t count, const std::function<void(int
 /// Reads rows of listed z-planes of a source into a buffer: consecutive planes in one readRows
 /// call, or, given a loop and a source that allows concurrentReads, in pieces of a few megabytes
 /// read in parallel (the same floats).
+/// Planes read by PlaneReader: their samples as floats, or as the source stores them
+/// (VolumeSource::storedType: 1- and 2-byte integers, each sample's float its plain conversion).
+struct PlaneChunk {
+  const void* samples = nullptr;
+  SampleType type = SampleType::Float32;
+};
+
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);
-  /// Rows [y0, y0 + yCount) of planes zs (ascending, distinct), plane i at the result
-  /// + i * dims[0] * yCount, valid until the next read. The reader's buffer only grows: it is not
+  /// Rows [y0, y0 + yCount) of planes zs (ascending, distinct), plane i at the result's samples
+  /// + i * dims[0] * yCount samples, valid until the next read; as the source stores them where
+  /// it can say so (storedType), else floats. The reader's buffer only grows: it is not
   /// allocated, page-faulted or cleared again.
-  const float* read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
-                    const BlockLoop& loop = {});
+  PlaneChunk read(const std::vector<int64_t>& zs, int64_t y0, int64_t yCount,
+                  const BlockLoop& loop = {});
   uint64_t bytesRead() const { return bytesRead_; }
   /// The buffer's size: the largest chunk read so far.
   size_t bufferBytes() const { return buf_.size() * sizeof(float); }

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,6 +31,14 @@ class VolumeSource {
   /// Rows y0 .. y0+yCount-1 of the same planes: dims[0] * yCount * zCount floats. The default
   /// reads whole planes (readSlab) and keeps the rows; a source that can read fewer overrides it.
   virtual void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out);
+  /// The type in which readStoredRows gives the samples as stored, where the source can and the
+  /// float readRows gives for a sample is float(stored sample) (a plain conversion: no byte swap,
+  /// no missing value, no scaling); none (the default) where not. The encoder then reads 1- or
+  /// 2-byte samples without making floats of them first.
+  virtual std::optional<SampleType> storedType() const { return std::nullopt; }
+  /// readRows' samples as stored (storedType()): dims[0] * yCount * zCount of them. The default
+  /// throws: only a source with a storedType() has them.
+  virtual void readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, void* out);
   /// If the source knows its value range without a pass over the data, it says so here; else
   /// the encoder computes it (and checks for NaN/Inf) in one streaming pass.
   virtual bool knownRange(double& lo, double& hi) const {
@@ -122,6 +131,9 @@ class RawFileSource : public VolumeSource {
   void readSlab(int64_t z0, int64_t zCount, float* out) override;
   int bytesPerVoxel() const override { return sampleTypeSize(type_); }
   bool concurrentReads() const override { return true; }
+  /// Its samples as stored where they are integers of 1 or 2 bytes.
+  std::optional<SampleType> storedType() const override;
+  void readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, void* out) override;
   SampleType type() const { return type_; }
   const std::string& path() const { return path_; }
 

@@ -52,4 +52,36 @@ void readFileSamples(int fd, const std::string& path, uint64_t offset, SampleTyp
   }
 }
 
+bool givenAsStored(SampleType type) {
+  return type == SampleType::Int8 || type == SampleType::UInt8 || type == SampleType::Int16 ||
+         type == SampleType::UInt16;
+}
+
+StoredRows storedRows(const Index3& dims, int es, int64_t z0, int64_t zCount, int64_t y0,
+                      int64_t yCount, const std::string& what) {
+  if (z0 < 0 || zCount < 0 || z0 + zCount > dims[2] || y0 < 0 || yCount < 0 ||
+      y0 + yCount > dims[1])
+    throw InvalidArgument(what + ": planes [" + std::to_string(z0) + ", " +
+                          std::to_string(z0 + zCount) + "), rows [" + std::to_string(y0) + ", " +
+                          std::to_string(y0 + yCount) + ") outside the volume");
+  const uint64_t row = uint64_t(dims[0]) * uint64_t(es), plane = row * uint64_t(dims[1]);
+  if (yCount == dims[1]) return {uint64_t(z0) * plane, plane * uint64_t(zCount), 0, 1};
+  return {uint64_t(z0) * plane + uint64_t(y0) * row, row * uint64_t(yCount), plane, zCount};
+}
+
+void readStoredFileRows(int fd, const std::string& path, uint64_t base, const StoredRows& rows,
+                        void* out) {
+  auto* dst = static_cast<unsigned char*>(out);
+  for (int64_t z = 0; z < rows.planes; ++z)
+    readFully(fd, path, base + rows.first + uint64_t(z) * rows.stride, dst + uint64_t(z) * rows.run,
+              rows.run);
+}
+
+void copyStoredRows(const unsigned char* volume, const StoredRows& rows, void* out) {
+  auto* dst = static_cast<unsigned char*>(out);
+  for (int64_t z = 0; z < rows.planes; ++z)
+    std::memcpy(dst + uint64_t(z) * rows.run, volume + rows.first + uint64_t(z) * rows.stride,
+                rows.run);
+}
+
 }  // namespace afam

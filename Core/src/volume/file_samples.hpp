@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "afam/format/partition.hpp"
 #include "afam/volume/sample_type.hpp"
 
 namespace afam {
@@ -20,5 +21,26 @@ void readFully(int fd, const std::string& path, uint64_t offset, unsigned char* 
 /// converted while they are in cache. float32 in this host's order is read straight into out.
 void readFileSamples(int fd, const std::string& path, uint64_t offset, SampleType type,
                      uint64_t count, float* out, bool swapBytes = false);
+
+/// The types a source gives the encoder as stored (VolumeSource::storedType): integers of 1 or 2
+/// bytes, whose planes as floats would take 2 to 4 times the bytes.
+bool givenAsStored(SampleType type);
+
+/// Where rows [y0, y0 + yCount) of planes [z0, z0 + zCount) of a volume of `dims` samples of `es`
+/// bytes lie: one run of bytes a plane (all of it for whole planes). Throws InvalidArgument
+/// naming `what` for rows or planes outside the volume.
+struct StoredRows {
+  uint64_t first = 0;   ///< the first plane's first byte
+  uint64_t run = 0;     ///< bytes a plane
+  uint64_t stride = 0;  ///< from a plane's run to the next plane's
+  int64_t planes = 0;   ///< runs (1 for whole planes: one run of them all)
+};
+StoredRows storedRows(const Index3& dims, int es, int64_t z0, int64_t zCount, int64_t y0,
+                      int64_t yCount, const std::string& what);
+/// Those rows' bytes from `fd` (from byte `base`) into out, one pread a run.
+void readStoredFileRows(int fd, const std::string& path, uint64_t base, const StoredRows& rows,
+                        void* out);
+/// Those rows' bytes from a volume in memory into out.
+void copyStoredRows(const unsigned char* volume, const StoredRows& rows, void* out);
 
 }  // namespace afam

@@ -182,6 +182,21 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
   readFileSamples(fd_, header_.dataPath, rawOffset_ + offset, header_.type, count, out, swap);
 }
 
+std::optional<SampleType> HeaderVolumeSource::storedType() const {
+  const bool swapped = header_.bigEndian && sampleTypeSize(header_.type) > 1;
+  if (givenAsStored(header_.type) && !swapped) return header_.type;
+  return std::nullopt;
+}
+
+void HeaderVolumeSource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
+                                        void* out) {
+  if (!storedType()) return VolumeSource::readStoredRows(z0, zCount, y0, yCount, out);  // throws
+  const StoredRows rows = storedRows(header_.dims, sampleTypeSize(header_.type), z0, zCount, y0,
+                                     yCount, header_.headerPath);
+  if (!inflated_.empty()) return copyStoredRows(inflated_.data(), rows, out);
+  readStoredFileRows(fd_, header_.dataPath, rawOffset_, rows, out);
+}
+
 bool hasVolumeHeaderExtension(const std::string& path) {
   const size_t dot = path.find_last_of('.');
   if (dot == std::string::npos) return false;

@@ -129,32 +129,27 @@ void VolumeSource::readStoredRows(int64_t, int64_t, int64_t, int64_t, void*) {
 }
 
 std::optional<SampleType> RawFileSource::storedType() const {
-  switch (type_) {
-    case SampleType::Int8:
-    case SampleType::UInt8:
-    case SampleType::Int16:
-    case SampleType::UInt16:
-      return type_;
-    default:
-      return std::nullopt;  // 4- and 8-byte samples: read as floats
-  }
+  if (givenAsStored(type_)) return type_;
+  return std::nullopt;
 }
 
 void RawFileSource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
                                    void* out) {
-  if (z0 < 0 || zCount < 0 || z0 + zCount > dims_[2] || y0 < 0 || yCount < 0 ||
-      y0 + yCount > dims_[1])
-    throw InvalidArgument(path_ + ": planes or rows outside the volume");
-  const uint64_t es = uint64_t(sampleTypeSize(type_)), row = uint64_t(dims_[0]) * es;
-  const uint64_t plane = row * uint64_t(dims_[1]), rows = row * uint64_t(yCount);
-  auto* dst = static_cast<unsigned char*>(out);
-  if (yCount == dims_[1]) {  // whole planes: one run of bytes
-    readFully(fd_, path_, uint64_t(z0) * plane, dst, plane * uint64_t(zCount));
-    return;
-  }
-  for (int64_t z = 0; z < zCount; ++z)
-    readFully(fd_, path_, uint64_t(z0 + z) * plane + uint64_t(y0) * row, dst + uint64_t(z) * rows,
-              rows);
+  if (!storedType()) return VolumeSource::readStoredRows(z0, zCount, y0, yCount, out);  // throws
+  readStoredFileRows(fd_, path_, 0,
+                     storedRows(dims_, sampleTypeSize(type_), z0, zCount, y0, yCount, path_), out);
+}
+
+std::optional<SampleType> ArraySource::storedType() const {
+  if (givenAsStored(type_)) return type_;
+  return std::nullopt;
+}
+
+void ArraySource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
+                                 void* out) {
+  if (!storedType()) return VolumeSource::readStoredRows(z0, zCount, y0, yCount, out);  // throws
+  copyStoredRows(
+      data_, storedRows(dims_, sampleTypeSize(type_), z0, zCount, y0, yCount, "ArraySource"), out);
 }
 
 void RawFileSource::readSlab(int64_t z0, int64_t zCount, float* out) {

@@ -77,6 +77,9 @@ class HeaderVolumeSource : public VolumeSource {
   int bytesPerVoxel() const override { return sampleTypeSize(header_.type); }
   /// Raw payloads are read by offset, compressed ones were inflated whole: any thread.
   bool concurrentReads() const override { return true; }
+  /// Its samples as stored where they are integers of 1 or 2 bytes in this host's byte order.
+  std::optional<SampleType> storedType() const override;
+  void readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, void* out) override;
   const VolumeFileHeader& header() const { return header_; }
 
  private:

@@ -82,6 +82,10 @@ class ArraySource : public VolumeSource {
   int bytesPerVoxel() const override { return sampleTypeSize(type_); }
   /// The array is only read: yes (a subclass that keeps state of its own says no).
   bool concurrentReads() const override { return true; }
+  /// Its samples as stored where they are integers of 1 or 2 bytes (a subclass whose readRows
+  /// changes samples says none).
+  std::optional<SampleType> storedType() const override;
+  void readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, void* out) override;
   SampleType type() const { return type_; }
 
  private:

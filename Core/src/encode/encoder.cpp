@@ -561,7 +561,7 @@ class LevelEncoder {
 
   /// Which of the batch's blocks search; with EncoderOptions::leastSquares, their searches asked
   /// ahead (the blocks with finite samples), the verdicts in the tasks. A run's steps search at
-  /// bounds that depend on the step before: not asked. Uses the sampling pool.
+  /// bounds that depend on the step before: not asked. Uses the asking pool.
   void askAheadOf(int l, Batch& b) {
     b.asked = true;
     for (BlockTask& t : b.tasks) t.search = searches(l, t.ijk);

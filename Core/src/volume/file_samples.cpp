@@ -52,9 +52,11 @@ void readFileSamples(int fd, const std::string& path, uint64_t offset, SampleTyp
   }
 }
 
-bool givenAsStored(SampleType type) {
-  return type == SampleType::Int8 || type == SampleType::UInt8 || type == SampleType::Int16 ||
-         type == SampleType::UInt16;
+std::optional<SampleType> storedAs(SampleType type) {
+  if (type == SampleType::Int8 || type == SampleType::UInt8 || type == SampleType::Int16 ||
+      type == SampleType::UInt16)
+    return type;
+  return std::nullopt;
 }
 
 StoredRows storedRows(const Index3& dims, int es, int64_t z0, int64_t zCount, int64_t y0,

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "afam/format/partition.hpp"
@@ -22,19 +23,20 @@ void readFully(int fd, const std::string& path, uint64_t offset, unsigned char* 
 void readFileSamples(int fd, const std::string& path, uint64_t offset, SampleType type,
                      uint64_t count, float* out, bool swapBytes = false);
 
-/// The types a source gives the encoder as stored (VolumeSource::storedType): integers of 1 or 2
-/// bytes, whose planes as floats would take 2 to 4 times the bytes.
-bool givenAsStored(SampleType type);
+/// The storedType of a source whose samples are of `type` in this host's order: the type where
+/// it is an integer of 1 or 2 bytes (whose planes as floats would take 2 to 4 times the bytes),
+/// else none.
+std::optional<SampleType> storedAs(SampleType type);
 
 /// Where rows [y0, y0 + yCount) of planes [z0, z0 + zCount) of a volume of `dims` samples of `es`
-/// bytes lie: one run of bytes a plane (all of it for whole planes). Throws InvalidArgument
-/// naming `what` for rows or planes outside the volume.
+/// bytes lie: one run of bytes a plane (all of it for whole planes).
 struct StoredRows {
   uint64_t first = 0;   ///< the first plane's first byte
   uint64_t run = 0;     ///< bytes a plane
   uint64_t stride = 0;  ///< from a plane's run to the next plane's
   int64_t planes = 0;   ///< runs (1 for whole planes: one run of them all)
 };
+/// Throws InvalidArgument naming `what` for rows or planes outside the volume.
 StoredRows storedRows(const Index3& dims, int es, int64_t z0, int64_t zCount, int64_t y0,
                       int64_t yCount, const std::string& what);
 /// Those rows' bytes from `fd` (from byte `base`) into out, one pread a run.

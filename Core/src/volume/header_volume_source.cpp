@@ -183,9 +183,8 @@ void HeaderVolumeSource::readSlab(int64_t z0, int64_t zCount, float* out) {
 }
 
 std::optional<SampleType> HeaderVolumeSource::storedType() const {
-  const bool swapped = header_.bigEndian && sampleTypeSize(header_.type) > 1;
-  if (givenAsStored(header_.type) && !swapped) return header_.type;
-  return std::nullopt;
+  if (header_.bigEndian && sampleTypeSize(header_.type) > 1) return std::nullopt;  // swapped
+  return storedAs(header_.type);
 }
 
 void HeaderVolumeSource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,

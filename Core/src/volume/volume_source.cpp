@@ -128,10 +128,7 @@ void VolumeSource::readStoredRows(int64_t, int64_t, int64_t, int64_t, void*) {
   throw Error(name() + ": no samples as stored to read (storedType() is none)");
 }
 
-std::optional<SampleType> RawFileSource::storedType() const {
-  if (givenAsStored(type_)) return type_;
-  return std::nullopt;
-}
+std::optional<SampleType> RawFileSource::storedType() const { return storedAs(type_); }
 
 void RawFileSource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
                                    void* out) {
@@ -140,10 +137,7 @@ void RawFileSource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64
                      storedRows(dims_, sampleTypeSize(type_), z0, zCount, y0, yCount, path_), out);
 }
 
-std::optional<SampleType> ArraySource::storedType() const {
-  if (givenAsStored(type_)) return type_;
-  return std::nullopt;
-}
+std::optional<SampleType> ArraySource::storedType() const { return storedAs(type_); }
 
 void ArraySource::readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount,
                                  void* out) {

@@ -18,9 +18,6 @@ namespace afam {
 /// (the encoder's sampling pool), else in order on the calling thread.
 using BlockLoop = std::function<void(int64_t count, const std::function<void(int64_t)>& fn)>;
 
-/// Reads rows of listed z-planes of a source into a buffer: consecutive planes in one readRows
-/// call, or, given a loop and a source that allows concurrentReads, in pieces of a few megabytes
-/// read in parallel (the same floats).
 /// Planes read by PlaneReader: their samples as floats, or as the source stores them
 /// (VolumeSource::storedType: 1- and 2-byte integers, each sample's float its plain conversion).
 struct PlaneChunk {
@@ -28,6 +25,9 @@ struct PlaneChunk {
   SampleType type = SampleType::Float32;
 };
 
+/// Reads rows of listed z-planes of a source into a buffer: consecutive planes in one read call,
+/// or, given a loop and a source that allows concurrentReads, in pieces of a few megabytes read
+/// in parallel (the same samples).
 class PlaneReader {
  public:
   PlaneReader(VolumeSource& src, Index3 dims);

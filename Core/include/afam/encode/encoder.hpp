@@ -150,8 +150,8 @@ struct LevelStats {
   double fitWaitSeconds = 0;
   std::vector<int64_t> ncpHistogram;  ///< [k] = blocks with max-axis NCP == k
   /// EncoderOptions::leastSquares: residuals asked ahead of the searches, in how many rounds; the
-  /// seconds spent asking (on the sampling thread, beside the fitting of the batch before, but for
-  /// a level's first batch) and of them waiting for the residuals.
+  /// seconds spent asking (on a thread of its own, beside the fitting of the batches before and
+  /// the sampling of the next) and of them waiting for the residuals.
   int64_t askedAhead = 0, aheadRounds = 0;
   double aheadSeconds = 0, residualSeconds = 0;
 };

@@ -15,7 +15,7 @@ generator=()
 if command -v ninja >/dev/null 2>&1; then generator=(-G Ninja); fi
 
 # Tests that run more than one thread (regex over ctest names); kept in one place.
-tsan_tests='^(Cache|BlockLoader|Prefetch|Encoder|EncodeTeam|EncodeRun|RunTeam|ResidualCoding|StepSharing|GrayScott|Raycast|Renderer|Limits|Fault|TemporaryFile|NcpVerdicts|RankRenderers|BlockSampling|TaskStream|WorkerPool|PipelineRun)\.|^VolumeFormats\.EveryLayout|ConcurrentReads|^afam_cli_roundtrip$'
+tsan_tests='^(Cache|BlockLoader|Prefetch|Encoder|EncodeTeam|EncodeRun|RunTeam|ResidualCoding|StepSharing|GrayScott|Raycast|Renderer|Limits|Fault|TemporaryFile|NcpVerdicts|RankRenderers|BlockSampling|TaskStream|WorkerPool|PipelineRun|SlotCache)\.|^VolumeFormats\.EveryLayout|ConcurrentReads|^afam_cli_roundtrip$'
 # Left out of TSan: the two fast-vs-exhaustive search comparisons. They run the same worker pool
 # as the other encoder tests but take 12 CPU minutes under TSan; ASan+UBSan runs them.
 tsan_skip='FastEqualsExhaustive'

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "afam/base/errors.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/format/afam_file.hpp"
+#include "afam/format/block_codec.hpp"
 #include "afam/format/run_writer.hpp"
 #include "afam/spline/fit.hpp"
 
@@ -134,6 +136,100 @@ TEST(RunFile, EveryStepReadsItsModelsWithReferencesResolved) {
     }
   }
   EXPECT_NE(openError(path, 3).find("step 3 of a run of 3 steps"), std::string::npos);
+  std::remove(path.c_str());
+}
+
+/// The writer keeps each model it decodes for the next steps (RunWriter::kDecodedModelBytes): a
+/// block that refers back keeps its owner's model, one stored anew gives its new model, never the
+/// one kept for it before. Each block is asked twice per step (the second answer from the kept
+/// model).
+TEST(RunFile, ThePreviousModelFollowsEachStepsPayloadWhileKeptDecoded) {
+  const VolumeHeader h = gridHeader();
+  const std::string path = scratch("previous.afam");
+  RunWriter w(path, h, 3, 1.0);
+  const Partition& p = w.partition();
+  const auto expectPrevious = [&](auto&& owner) {
+    for (int64_t i = 0; i < p.blockCount(1); ++i)
+      for (int ask = 0; ask < 2; ++ask) {
+        ModelEntry e;
+        std::vector<float> control;
+        ASSERT_TRUE(w.previousModel(1, p.blockFromLinear(1, i), e, control));
+        ASSERT_FALSE(control.empty());
+        const int s = owner(i);
+        EXPECT_EQ(control[0], float(10 * s + i)) << "block " << i << ", ask " << ask;
+        EXPECT_EQ(e.ownerStep, s) << "block " << i;
+      }
+  };
+  writeStep(w, h, 0, [](int, int64_t) { return false; });
+  expectPrevious([](int64_t) { return 0; });
+  writeStep(w, h, 1, [](int level, int64_t i) { return level == 1 && i % 2 == 1; });
+  expectPrevious([](int64_t i) { return i % 2 == 1 ? 0 : 1; });
+  writeStep(w, h, 2, [](int level, int64_t i) { return level == 1 && (i == 1 || i == 2); });
+  expectPrevious([](int64_t i) { return i == 1 ? 0 : i == 2 ? 1 : 2; });
+  std::remove(path.c_str());
+}
+
+/// A block coded in residuals step after step: the writer's model of the step before (decoded
+/// from the model it kept and the newest residual) is, float for float, what a reader decodes
+/// from the whole chain.
+TEST(RunFile, APreviousModelOfResidualsIsTheReadersChain) {
+  const VolumeHeader h = gridHeader();
+  const std::string path = scratch("residuals.afam");
+  RunWriter w(path, h, 8, 1.0);
+  const Partition& p = w.partition();
+  const Int3 b{0, 0, 0};
+  const int64_t slot = p.blockCount(0);  // block 0 of level 1
+  ModelEntry samples;
+  samples.level = 1;
+  samples.block = b;
+  samples.samples = samples.ncp = p.extent(1, b).samples;
+  samples.kind = BlockKind::Samples;
+  samples.degree = {1, 1, 1};
+  samples.coded = true;
+  const size_t count = size_t(samples.ncp[0]) * size_t(samples.ncp[1]) * size_t(samples.ncp[2]);
+  std::vector<std::vector<float>> asked;  // previousModel after each step
+  constexpr int kSteps = 5;
+  for (int s = 0; s < kSteps; ++s) {
+    w.beginStep(s);
+    for (int level = 0; level < h.levels; ++level)
+      for (int64_t i = 0; i < p.blockCount(level); ++i) {
+        const Int3 ijk = p.blockFromLinear(level, i);
+        if (level == 1 && i == 0) continue;
+        ModelEntry m = constantModel(p, h.degree, level, ijk, float(i));
+        if (s > 0) {
+          w.addReference(m);
+        } else {
+          w.addStored(m, &m.minValue);
+        }
+      }
+    std::vector<float> values(count), reconstructed;
+    for (size_t i = 0; i < count; ++i)  // step 0 the model, then small changes to it
+      values[i] =
+          s == 0 ? float(std::sin(0.37 * double(i))) : 0.01f * float(std::cos(double(i * s)));
+    std::vector<uint8_t> bytes;
+    ASSERT_TRUE(encodeValues(values.data(), samples.ncp, 1e-3, Predictor::IntegerLorenzo,
+                             EntropyCoding{}, bytes, reconstructed));
+    samples.storedSize = bytes.size();
+    if (s == 0) {
+      w.addStored(samples, bytes.data());
+    } else {
+      w.addResidual(samples, bytes.data());
+    }
+    w.endStep(0, 1);
+    for (int ask = 0; ask < 2; ++ask) {  // the second from the model kept
+      ModelEntry e;
+      std::vector<float> control;
+      ASSERT_TRUE(w.previousModel(1, b, e, control));
+      if (ask == 0) asked.push_back(control);
+      EXPECT_EQ(control, asked.back()) << "step " << s;
+    }
+  }
+  w.commit();
+  for (int s = 0; s < kSteps; ++s) {
+    auto f = AfamFile::open(path, s);
+    EXPECT_EQ(f->chain(slot).size(), s == 0 ? 0u : size_t(s + 1)) << "step " << s;
+    EXPECT_EQ(f->readPayload(slot), asked[size_t(s)]) << "step " << s;
+  }
   std::remove(path.c_str());
 }
 

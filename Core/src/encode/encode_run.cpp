@@ -371,6 +371,10 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   }
   if (run.keyInterval < 1)
     throw InvalidArgument("encode: key interval " + std::to_string(run.keyInterval) + " < 1");
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   std::vector<RangedStep> ranged;  // each step's range, read once
   ranged.reserve(steps.size());
@@ -384,13 +388,19 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
     hi = std::max(hi, b);
     anyMissing = anyMissing || missing;
   }
+  const double rangeSeconds = since(t0);
   EncoderOptions runOptions = options;
   runOptions.firstStepHeadroom =
       firstStepHeadroomByTrial(ranged, times, options, run, lo, hi, anyMissing, path);
+  const double trialSeconds = since(t0) - rangeSeconds;
   RunEncoder encoder(path, runOptions, run.keyInterval, lo, hi);
   if (anyMissing) encoder.expectMissingSamples();
   for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(ranged[k], times[k]);
-  return encoder.commit();
+  RunStats stats = encoder.commit();
+  stats.rangeSeconds = rangeSeconds;
+  stats.trialSeconds = trialSeconds;
+  stats.seconds = since(t0);
+  return stats;
 }
 
 RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& options,

@@ -339,6 +339,7 @@ void RunWriter::beginStep(double time) {
         path_ + ": step time " + std::to_string(time) + " does not follow " +
         (rows_.empty() ? std::string("(none)") : std::to_string(rows_.back().time)));
   const size_t E = static_cast<size_t>(partition_.totalBlockCount());
+  if (decoded_.slots() != E) decoded_.reset(E, kDecodedModelBytes);
   current_.assign(E, ModelEntry{});
   currentChains_.assign(E, {});
   depth_.assign(E, 0);
@@ -452,16 +453,25 @@ bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
   ModelEntry probe;
   probe.level = level;
   probe.block = block;
-  entry = previous_.at(slotOf(probe));
+  const size_t slot = slotOf(probe);
+  entry = previous_.at(slot);
+  // A payload's offset names its model: a reference keeps its owner's, a residual has its own.
+  if (decoded_.find(slot, entry.offset, control)) return true;
   control.resize(entry.size / sizeof(float));
-  if (entry.residual) {
-    decodeChain(fd_, tmpPath_, entry, previousChains_.at(slotOf(probe)), nullptr, control.data());
-    return true;
+  if (entry.residual) {  // from the model before its newest residual where that one is kept
+    const std::vector<PayloadPart>& chain = previousChains_.at(slot);
+    thread_local std::vector<float> before;
+    const bool kept = chain.size() >= 2 &&
+                      decoded_.find(slot, chain[chain.size() - 2].offset, before) &&
+                      before.size() == control.size();
+    decodeChain(fd_, tmpPath_, entry, chain, kept ? before.data() : nullptr, control.data());
+  } else {
+    std::vector<uint8_t> stored(entry.storedSize);
+    preadAll(fd_, stored.data(), stored.size(), entry.offset, tmpPath_, "a previous payload");
+    decodeStoredPayload(entry, stored.data(), control.data(),
+                        path_ + ": " + Partition::blockName(level, block));
   }
-  std::vector<uint8_t> stored(entry.storedSize);
-  preadAll(fd_, stored.data(), stored.size(), entry.offset, tmpPath_, "a previous payload");
-  decodeStoredPayload(entry, stored.data(), control.data(),
-                      path_ + ": " + Partition::blockName(level, block));
+  decoded_.put(slot, entry.offset, control);
   return true;
 }
 

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "afam/base/slot_cache.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/run_layout.hpp"
 
@@ -68,8 +69,13 @@ class RunWriter {
   /// and the block's chain of references stays shorter than the key interval).
   bool canReference(int level, Int3 block) const;
   /// The step before's model of a block: its entry (the owner's payload fields) and decoded
-  /// control points. Thread-safe; false at the first step.
+  /// control points. Thread-safe; false at the first step. Each model decoded is kept (up to
+  /// kDecodedModelBytes in all) while the block's payload stays the same, so a block that refers
+  /// to the step before for many steps is decoded once.
   bool previousModel(int level, Int3 block, ModelEntry& entry, std::vector<float>& control) const;
+  /// At most this many bytes of decoded models are kept between steps (a 512^3 float32 run's
+  /// models take up to about 550 MB).
+  static constexpr size_t kDecodedModelBytes = size_t(2) << 30;
 
  private:
   RunWriter() = default;
@@ -94,6 +100,7 @@ class RunWriter {
   std::vector<std::vector<PayloadPart>> currentChains_, previousChains_;  ///< of residuals
   std::vector<uint8_t> present_;
   uint64_t end_ = 0, payloadSum_ = 0, committedSize_ = 0;
+  mutable SlotCache decoded_;  ///< the step before's models, decoded, by slot (previousModel)
   mutable std::mutex mutex_;
 };
 

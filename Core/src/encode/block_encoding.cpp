@@ -475,20 +475,12 @@ bool denseFrame(BoundKind kind, size_t frameBytes, size_t values) {
          double(frameBytes) * 8 >= kDenseFrameBits * double(values);
 }
 
-/// The kept candidate's entropy frame coded at the file's level (it was compared at the trial
-/// level): the same values, so the same error. A lanes frame that lanesFrameSure keeps is left
-/// as it is (zstd at the file's level would rarely beat it by the 2% it must), and so is a dense
-/// frame (denseFrame).
+/// The kept candidate's entropy frame coded at the file's level (codeAtFileLevel).
 void finalFrame(const FitContext& c, Candidate& best) {
-  if (best.kind == BlockKind::Constant || c.opt.entropy == EntropyStage::Lanes) return;
-  const size_t head = codedHeaderBytes(best.bytes.data(), best.bytes.size());
+  if (best.kind == BlockKind::Constant) return;
   const size_t tail = best.roundedPoints ? kRoundedPointsBytes : 0;
   const size_t values = size_t(best.ncp[0]) * size_t(best.ncp[1]) * size_t(best.ncp[2]);
-  const size_t frameBytes = best.bytes.size() - head - tail;
-  if (c.opt.entropy == EntropyStage::Auto && lanesFrameSure(best.frames, frameBytes, values))
-    return;
-  if (denseFrame(c.opt.boundKind, frameBytes, values)) return;
-  recodeFrame(best.bytes, head, tail, values, entropyCoding(c.opt), best.frames);
+  codeAtFileLevel(c.opt, best.bytes, tail, values, best.frames);
 }
 
 /// A block whose spline needs more than kNoiseShare of its samples per axis to meet the bound
@@ -599,6 +591,16 @@ void encodeCompact(const FitContext& c, const BlockExtent& e, BlockFitter& fitte
 }
 
 }  // namespace
+
+void codeAtFileLevel(const EncoderOptions& opt, std::vector<uint8_t>& payload, size_t tail,
+                     size_t values, FrameSizes trial) {
+  if (opt.entropy == EntropyStage::Lanes) return;
+  const size_t head = codedHeaderBytes(payload.data(), payload.size());
+  const size_t frameBytes = payload.size() - head - tail;
+  if (opt.entropy == EntropyStage::Auto && lanesFrameSure(trial, frameBytes, values)) return;
+  if (denseFrame(opt.boundKind, frameBytes, values)) return;
+  recodeFrame(payload, head, tail, values, entropyCoding(opt), trial);
+}
 
 double searchBound(const EncoderOptions& opt, double bound) {
   return opt.compact && bounded(opt.mode) ? kFitShare * bound : bound;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
+#include "afam/format/block_codec.hpp"
 #include "afam/spline/fit.hpp"
 
 namespace afam {
@@ -98,6 +99,14 @@ constexpr int kTrialZstdLevel = 1;
 inline EntropyCoding trialCoding(const EncoderOptions& opt) {
   return EntropyCoding{kTrialZstdLevel, opt.entropy};
 }
+
+/// A coded payload's entropy frame, coded at the trial level (`trial`: its frames' sizes; `tail`:
+/// bytes after the frame; `values`: the values it codes), coded again at the file's level: the
+/// same values, so the same error. A lanes frame that lanesFrameSure keeps is left as it is (zstd
+/// at the file's level would rarely beat it by the 2% it must), and so is a dense frame (the
+/// codes of noise: denseFrame in block_encoding.cpp).
+void codeAtFileLevel(const EncoderOptions& opt, std::vector<uint8_t>& payload, size_t tail,
+                     size_t values, FrameSizes trial);
 
 /// The quantization step of ladder factor k for an error budget: factors of the step whose
 /// rounding alone would spend the budget, 2 sqrt(3) x budget for an RMSE (uniform rounding's RMSE

@@ -100,7 +100,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   const int best = largestPassingStep(passes);
   if (best < 0 || kept.step != ladderStep(kind, budget, kStepFactors[best])) return false;
   std::vector<uint8_t> bytes;
-  encodeQuantized(kept, entropyCoding(c.opt), bytes);
+  codeAtFileLevel(c.opt, bytes, 0, delta.size(), encodeQuantized(kept, trialCoding(c.opt), bytes));
   if (bytes.size() >= t.stored.size()) return false;
   const FitResult decoded = applyResidual(
       before, model, bytes, c.sourceName + " " + Partition::blockName(c.level, t.ijk));

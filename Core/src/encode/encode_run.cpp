@@ -331,7 +331,9 @@ std::function<bool(int, Int3)> firstStepHeadroomByTrial(std::vector<RangedStep>&
                                                         const std::vector<double>& times,
                                                         const EncoderOptions& options,
                                                         const RunOptions& run, double lo, double hi,
-                                                        bool missing, const std::string& path) {
+                                                        bool missing, const std::string& path,
+                                                        int64_t& chosenBlocks) {
+  chosenBlocks = 0;
   if (steps.size() < 2 || run.keyInterval < 2 || !(options.runCodedShare < 1) ||
       !bounded(options.mode) || !options.compact)
     return {};
@@ -345,6 +347,7 @@ std::function<bool(int, Int3)> firstStepHeadroomByTrial(std::vector<RangedStep>&
     const auto it = a.find(block);
     if (it != a.end() && bytes < it->second) chosen->insert(block);
   }
+  chosenBlocks = int64_t(chosen->size());
   return [chosen](int level, Int3 block) { return chosen->count({level, block}) != 0; };
 }
 
@@ -389,9 +392,10 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
     anyMissing = anyMissing || missing;
   }
   const double rangeSeconds = since(t0);
+  int64_t headroomBlocks = 0;
   EncoderOptions runOptions = options;
-  runOptions.firstStepHeadroom =
-      firstStepHeadroomByTrial(ranged, times, options, run, lo, hi, anyMissing, path);
+  runOptions.firstStepHeadroom = firstStepHeadroomByTrial(ranged, times, options, run, lo, hi,
+                                                          anyMissing, path, headroomBlocks);
   const double trialSeconds = since(t0) - rangeSeconds;
   RunEncoder encoder(path, runOptions, run.keyInterval, lo, hi);
   if (anyMissing) encoder.expectMissingSamples();
@@ -399,6 +403,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   RunStats stats = encoder.commit();
   stats.rangeSeconds = rangeSeconds;
   stats.trialSeconds = trialSeconds;
+  stats.headroomBlocks = headroomBlocks;
   stats.seconds = since(t0);
   return stats;
 }

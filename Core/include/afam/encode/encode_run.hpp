@@ -37,9 +37,10 @@ struct RunStats {
   /// masks; a reference stores none).
   std::map<std::pair<int, Int3>, uint64_t> blockBytes;
   uint64_t bytesOut = 0;
-  double seconds = 0;       ///< the whole run (encodeRun: its range and trial included)
-  double rangeSeconds = 0;  ///< encodeRun: reading every step's value range
-  double trialSeconds = 0;  ///< encodeRun: the first step's headroom trial
+  double seconds = 0;          ///< the whole run (encodeRun: its range and trial included)
+  double rangeSeconds = 0;     ///< encodeRun: reading every step's value range
+  double trialSeconds = 0;     ///< encodeRun: the first step's headroom trial
+  int64_t headroomBlocks = 0;  ///< encodeRun: the first step's blocks the trial gave headroom
 };
 
 /// Encodes `steps` (at least one; every one of the first's dims, origin and spacing) into `path`,

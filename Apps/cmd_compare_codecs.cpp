@@ -4,6 +4,8 @@
 // Adaptive-FAM (all levels stored) next to ZFP in fixed-accuracy mode tuned to the RMSE that
 // Adaptive-FAM reached, per raw volume and relative RMSE bound: compression ratio against the raw
 // file, RMSE and max error on the finest level (the measure of `afam verify --against`), time.
+// The tolerance search runs on every thread (the volume in slabs of whole ZFP blocks); the rows
+// are ZFP's own runs at the tolerance found, on one thread and with its OpenMP.
 #include <stdlib.h>
 
 #include <chrono>
@@ -12,6 +14,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
@@ -154,53 +157,81 @@ ZfpTrial zfpTrial(const std::vector<float>& volume, Index3 dims, int exponent,
   return t;
 }
 
+/// The error ZFP at tolerance 2^exponent leaves on the volume, the volume cut into `threads` slabs
+/// of whole ZFP blocks (4 planes) along z, each compressed and decompressed serially on a thread of
+/// its own: ZFP codes each 4x4x4 block alone, so every sample decodes as in one stream of the
+/// whole volume (ZFP's OpenMP compresses that way, and its variable-rate streams decompress on one
+/// thread only). For the tolerance search on volumes of billions of samples.
+ErrorAccumulator zfpSlabsError(const std::vector<float>& volume, Index3 dims, int exponent,
+                               int threads) {
+  const int64_t plane = dims[0] * dims[1];
+  const int64_t blocks = (dims[2] + 3) / 4;
+  const int64_t slabs = std::max<int64_t>(1, std::min<int64_t>(threads, blocks));
+  std::vector<ErrorAccumulator> errors(static_cast<size_t>(slabs));
+  std::vector<std::string> failures(static_cast<size_t>(slabs));
+  std::vector<std::thread> workers;
+  for (int64_t k = 0; k < slabs; ++k)
+    workers.emplace_back([&, k] {
+      const int64_t z0 = 4 * (blocks * k / slabs),
+                    z1 = std::min(dims[2], 4 * (blocks * (k + 1) / slabs));
+      try {
+        std::vector<float> decoded(size_t((z1 - z0) * plane));
+        const float* in = volume.data() + z0 * plane;
+        zfpRoundTrip(ZfpMode::FixedAccuracy, std::ldexp(1.0, exponent), in, size_t(dims[0]),
+                     size_t(dims[1]), size_t(z1 - z0), decoded.data());
+        errors[size_t(k)].add(decoded.data(), in, (z1 - z0) * plane);
+      } catch (const std::exception& e) {
+        failures[size_t(k)] = e.what();
+      }
+    });
+  for (std::thread& w : workers) w.join();
+  ErrorAccumulator all;
+  for (int64_t k = 0; k < slabs; ++k) {
+    if (!failures[size_t(k)].empty()) throw Error(failures[size_t(k)]);
+    all.sumSquares += errors[size_t(k)].sumSquares;
+    all.maxError = std::max(all.maxError, errors[size_t(k)].maxError);
+    all.count += errors[size_t(k)].count;
+  }
+  return all;
+}
+
 /// Bisection on the tolerance for the largest one whose RMSE (or, `pointwise`, largest error) is
 /// <= target. ZFP's fixed-accuracy mode applies the power of two at or below the tolerance asked
 /// for, so the search runs over that exponent: from a passing exponent (2^e <= target bounds every
 /// error by target) and a failing one found by doubling steps upwards, down to two neighbours; the
 /// passing one is returned.
-ZfpTrial tuneZfp(const std::vector<float>& volume, Index3 dims, double target, double valueRange,
-                 bool pointwise, int& trials) {
+int tuneZfp(const std::vector<float>& volume, Index3 dims, double target, double valueRange,
+            bool pointwise, int threads, int& trials) {
   if (!(target > 0))
     throw Error("Adaptive-FAM reached an error of 0: there is no ZFP tolerance to tune to it");
-  const auto within = [&](const ZfpTrial& t) {
-    return (pointwise ? t.error.maxError : t.error.rmse()) <= target;
+  const auto within = [&](int exponent) {
+    ++trials;
+    const ErrorAccumulator e = zfpSlabsError(volume, dims, exponent, threads);
+    return (pointwise ? e.maxError : e.rmse()) <= target;  // ZFP's bound is on the max error
   };
-  std::vector<float> decoded;
+  trials = 0;
   int lo = int(std::floor(std::log2(target)));
-  ZfpTrial best = zfpTrial(volume, dims, lo, decoded);
-  trials = 1;
-  for (int k = 0; !within(best); ++k, ++trials) {  // ZFP's bound is on the max error
+  for (int k = 0; !within(lo); ++k) {
     if (k == 64)
       throw Error("ZFP does not reach RMSE " + std::to_string(target) + " at tolerance 2^" +
                   std::to_string(lo));
-    best = zfpTrial(volume, dims, --lo, decoded);
+    --lo;
   }
   // Above 2^(top) every tolerance is larger than the whole value range: ZFP keeps next to nothing.
   const int top = int(std::ceil(std::log2(std::max(valueRange, target)))) + 2;
   int hi = lo, step = 1;
   while (hi < top) {
     hi = std::min(lo + step, top);
-    ZfpTrial t = zfpTrial(volume, dims, hi, decoded);
-    ++trials;
-    if (!within(t)) break;
-    best = t;
+    if (!within(hi)) break;
     lo = hi;
     step *= 2;
   }
-  if (lo == hi) return best;  // passes up to `top`
+  if (lo == hi) return lo;  // passes up to `top`
   while (hi - lo > 1) {
     const int mid = lo + (hi - lo) / 2;
-    ZfpTrial t = zfpTrial(volume, dims, mid, decoded);
-    ++trials;
-    if (within(t)) {
-      best = t;
-      lo = mid;
-    } else {
-      hi = mid;
-    }
+    (within(mid) ? lo : hi) = mid;
   }
-  return best;
+  return lo;
 }
 
 /// ZFP tuned to `target` (Adaptive-FAM's reached RMSE, or its bound; `pointwise`: the largest
@@ -213,8 +244,10 @@ std::vector<CodecRow> runZfp(RawFileSource& src, const CodecRow& afam, double ta
   src.readSlab(0, d[2], volume.data());
   int trials = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  const ZfpTrial t = tuneZfp(volume, d, target, afam.valueRange, pointwise, trials);
+  const int exponent = tuneZfp(volume, d, target, afam.valueRange, pointwise, afam.threads, trials);
   const double tuning = secondsSince(t0);
+  std::vector<float> decoded;
+  const ZfpTrial t = zfpTrial(volume, d, exponent, decoded);
   CodecRow r = baseRow(src, afam.bound, "zfp");
   r.compressedBytes = t.trip.bytes;
   r.rmse = t.error.rmse();
@@ -229,7 +262,6 @@ std::vector<CodecRow> runZfp(RawFileSource& src, const CodecRow& afam, double ta
   r.setting = setting;
   std::vector<CodecRow> rows{r};
   if (afam.threads > 1) {
-    std::vector<float> decoded;
     const ZfpTrial omp = zfpTrial(volume, d, t.exponent, decoded, afam.threads);
     CodecRow o = r;
     o.codec = "zfp-omp";

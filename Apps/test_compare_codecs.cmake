@@ -110,6 +110,18 @@ foreach (bound 0.01 0.001)
   math(EXPR k "${k} + 1")
 endforeach ()
 
+# The tolerance search runs in slabs on every thread: on one thread (one slab) it finds the same
+# tolerance at 1e-3 as on two (the last row pair above).
+run_ok(out ${AFAM} compare-codecs ${vol} --bounds 1e-3 --levels 2 --blocks 4 --threads 1 --csv one.csv --work tmp)
+file(STRINGS "${WORK}/one.csv" one_lines)
+list(GET one_lines 2 one_zfp)
+if (NOT one_zfp MATCHES ",zfp,.*tolerance=2\\^(-?[0-9]+)=")
+  message(FATAL_ERROR "zfp row tuned on one thread: ${one_zfp}")
+endif ()
+if (NOT c_setting MATCHES "tolerance=2\\^${CMAKE_MATCH_1}=")
+  message(FATAL_ERROR "zfp tuned on one thread: ${one_zfp}; on two: ${c_setting}")
+endif ()
+
 # --max-error: both codecs held to the same largest error (bound x range), every sample within it.
 run_ok(out ${AFAM} compare-codecs ${vol} --bounds 1e-2 ${opts} --max-error --csv point.csv --work tmp)
 file(STRINGS "${WORK}/point.csv" lines)

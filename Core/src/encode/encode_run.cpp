@@ -63,6 +63,10 @@ class RangedStep : public VolumeSource {
   void readRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, float* out) override {
     s_.readRows(z0, zCount, y0, yCount, out);
   }
+  std::optional<SampleType> storedType() const override { return s_.storedType(); }
+  void readStoredRows(int64_t z0, int64_t zCount, int64_t y0, int64_t yCount, void* out) override {
+    s_.readStoredRows(z0, zCount, y0, yCount, out);
+  }
   bool knownRange(double& lo, double& hi) const override {
     lo = lo_;
     hi = hi_;

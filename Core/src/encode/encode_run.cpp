@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/seconds_since.hpp"
 #include "afam/format/run_writer.hpp"
 #include "block_encoding.hpp"
 #include "step_records.hpp"
@@ -309,8 +310,7 @@ RunStats RunEncoder::commit(EncodeTeam& team) {
     s.previous.reset();
     s.writer.reset();
   }
-  s.stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
+  s.stats.seconds = secondsSince(s.start);
   return s.stats;
 }
 
@@ -379,9 +379,6 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   if (run.keyInterval < 1)
     throw InvalidArgument("encode: key interval " + std::to_string(run.keyInterval) + " < 1");
   const auto t0 = std::chrono::steady_clock::now();
-  const auto since = [](std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  };
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   std::vector<RangedStep> ranged;  // each step's range, read once
   ranged.reserve(steps.size());
@@ -395,12 +392,12 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
     hi = std::max(hi, b);
     anyMissing = anyMissing || missing;
   }
-  const double rangeSeconds = since(t0);
+  const double rangeSeconds = secondsSince(t0);
   int64_t headroomBlocks = 0;
   EncoderOptions runOptions = options;
   runOptions.firstStepHeadroom = firstStepHeadroomByTrial(ranged, times, options, run, lo, hi,
                                                           anyMissing, path, headroomBlocks);
-  const double trialSeconds = since(t0) - rangeSeconds;
+  const double trialSeconds = secondsSince(t0) - rangeSeconds;
   RunEncoder encoder(path, runOptions, run.keyInterval, lo, hi);
   if (anyMissing) encoder.expectMissingSamples();
   for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(ranged[k], times[k]);
@@ -408,7 +405,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   stats.rangeSeconds = rangeSeconds;
   stats.trialSeconds = trialSeconds;
   stats.headroomBlocks = headroomBlocks;
-  stats.seconds = since(t0);
+  stats.seconds = secondsSince(t0);
   return stats;
 }
 
@@ -453,7 +450,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   stats.references.push_back(sink.references);
   stats.residuals.push_back(sink.residuals);
   stats.bytesOut = writer->commit();
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stats.seconds = secondsSince(t0);
   return stats;
 }
 

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "afam/base/seconds_since.hpp"
 #include "afam/base/task_stream.hpp"
 #include "afam/base/worker_pool.hpp"
 #include "afam/search/ncp_search.hpp"
@@ -32,10 +33,6 @@ double processCpuSeconds() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
-
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // afam compare-codecs IN.raw... [--bounds E,...] [--csv OUT] [--levels L] [--blocks B] [--degree P]
-//                     [--threads T] [--work DIR]
+//                     [--threads T] [--work DIR] [--device auto|gpu|cpu]
 // Adaptive-FAM (all levels stored) next to ZFP in fixed-accuracy mode tuned to the RMSE that
 // Adaptive-FAM reached, per raw volume and relative RMSE bound: compression ratio against the raw
 // file, RMSE and max error on the finest level (the measure of `afam verify --against`), time.
@@ -8,6 +8,7 @@
 // are ZFP's own runs at the tolerance found, on one thread and with its OpenMP.
 #include <stdlib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +22,7 @@
 #include "afam/format/afam_file.hpp"
 #include "cli.hpp"
 #include "commands.hpp"
+#include "encode_device.hpp"
 #include "level_error.hpp"
 #include "zfp_codec.hpp"
 
@@ -117,7 +119,7 @@ CodecRow baseRow(const RawFileSource& src, double bound, const char* codec) {
 }
 
 CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound,
-                        const fs::path& folder) {
+                        const std::string& device, const fs::path& folder) {
   options.errorBound = bound;
   options.relativeBound = true;  // the bound kind (RMSE or pointwise) is the caller's
   const fs::path out = folder / (fs::path(src.path()).stem().string() + ".afam");
@@ -134,7 +136,7 @@ CodecRow runAdaptiveFam(RawFileSource& src, EncoderOptions options, double bound
   r.threads = s.threads;
   r.setting = "levels=" + std::to_string(options.levels) +
               " blocks=" + std::to_string(options.blocksPerAxis) +
-              " degree=" + std::to_string(options.degree);
+              " degree=" + std::to_string(options.degree) + " device=" + device;
   fs::remove(out);
   return r;
 }
@@ -325,19 +327,22 @@ EncoderOptions encoderOptions(const Args& args) {
 }  // namespace
 
 int runCompareCodecs(int argc, char** argv) {
-  Args args(argc, argv,
-            {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target"},
-            {"max-error"});
+  Args args(
+      argc, argv,
+      {"bounds", "csv", "levels", "blocks", "degree", "threads", "work", "zfp-target", "device"},
+      {"max-error"});
   const char* usage =
       "afam compare-codecs IN.raw... [--bounds E1,E2,...] [--csv OUT.csv] [--levels L] [--blocks "
       "B]\n"
-      "       [--degree P] [--threads T] [--work DIR] [--zfp-target reached|bound] [--max-error]";
+      "       [--degree P] [--threads T] [--work DIR] [--zfp-target reached|bound] [--max-error]\n"
+      "       [--device auto|gpu|cpu]";
   if (args.help()) {
     std::printf(
         "usage: %s\n\n"
         "For each raw volume (name_XxYxZ_type.raw) and each relative RMSE bound E:\n"
-        "  adaptive-fam  `afam encode IN OUT --error-bound E --relative` (all levels stored) into "
-        "a\n"
+        "  adaptive-fam  `afam encode IN OUT --error-bound E --relative --device D` (all levels\n"
+        "                stored; the setting says where it asked) into a"
+        "\n"
         "                temporary folder, removed afterwards; ratio = raw file bytes / .afam "
         "bytes;\n"
         "                rmse and max_error of the finest level against IN, as `afam verify "
@@ -355,6 +360,7 @@ int runCompareCodecs(int argc, char** argv) {
         "Prints a table; --csv writes one row per (volume, bound, codec).\n\n"
         "  --bounds E,...  relative RMSE bounds, each > 0 (default 1e-2)\n"
         "  --levels, --blocks, --degree, --threads  passed to the encoder (default: its defaults)\n"
+        "%s"
         "  --work DIR      where the temporary folder goes (default: the system's temporary "
         "folder)\n"
         "  --zfp-target T  reached (default): ZFP's RMSE <= the RMSE adaptive-fam reached; bound: "
@@ -367,13 +373,15 @@ int runCompareCodecs(int argc, char** argv) {
         "min)\n"
         "                  (--zfp-target bound is then the default; target_rmse is that largest "
         "error)\n",
-        usage);
+        usage, encodeDeviceHelp());
     return 0;
   }
   if (args.positional().empty())
     throw InvalidArgument("no raw volume given (afam compare-codecs --help)");
   const std::vector<double> bounds = parseBounds(args.str("bounds", "1e-2"));
   EncoderOptions options = encoderOptions(args);
+  std::string device = useEncodeDevice(options, args.str("device", "auto"));
+  std::replace(device.begin(), device.end(), ',', ';');  // the CSV's setting is one cell
   const bool pointwise = args.has("max-error");
   if (pointwise) options.boundKind = BoundKind::MaxError;
   // Pointwise: both codecs held to the same largest error E * (max - min), as a user asks for it.
@@ -392,7 +400,7 @@ int runCompareCodecs(int argc, char** argv) {
   std::vector<CodecRow> rows;
   for (auto& src : sources)
     for (double bound : bounds) {
-      const CodecRow afam = runAdaptiveFam(*src, options, bound, folder.path());
+      const CodecRow afam = runAdaptiveFam(*src, options, bound, device, folder.path());
       rows.push_back(afam);
       const double reached = pointwise ? afam.maxError : afam.rmse;
       for (CodecRow& z :

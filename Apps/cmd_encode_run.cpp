@@ -80,12 +80,13 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
   }
   std::printf(
       "steps=%zu key_interval=%d bound=%.6g%s value_range=[%.6g, %.6g] seconds=%.3f "
-      "range_seconds=%.3f trial_seconds=%.3f headroom_blocks=%lld\n"
+      "range_seconds=%.3f trial_seconds=%.3f headroom_blocks=%lld first_step_taken=%lld\n"
       "bytes_in=%llu bytes_out=%llu ratio=%.2f payload_bytes=%llu\n",
       steps.size(), run.keyInterval, s.bound, opt.relativeBound ? " (relative to the run)" : "",
       s.valueMin, s.valueMax, s.seconds, s.rangeSeconds, s.trialSeconds,
-      (long long)s.headroomBlocks, (unsigned long long)bytesIn, (unsigned long long)s.bytesOut,
-      double(bytesIn) / double(s.bytesOut), (unsigned long long)payload);
+      (long long)s.headroomBlocks, (long long)s.firstStepTaken, (unsigned long long)bytesIn,
+      (unsigned long long)s.bytesOut, double(bytesIn) / double(s.bytesOut),
+      (unsigned long long)payload);
   return 0;
 }
 

@@ -112,8 +112,12 @@ endforeach ()
 
 # The tolerance search runs in slabs on every thread: on one thread (one slab) it finds the same
 # tolerance at 1e-3 as on two (the last row pair above).
-run_ok(out ${AFAM} compare-codecs ${vol} --bounds 1e-3 --levels 2 --blocks 4 --threads 1 --csv one.csv --work tmp)
+run_ok(out ${AFAM} compare-codecs ${vol} --bounds 1e-3 --levels 2 --blocks 4 --threads 1 --csv one.csv --work tmp --device cpu)
 file(STRINGS "${WORK}/one.csv" one_lines)
+list(GET one_lines 1 one_afam)
+if (NOT one_afam MATCHES ",adaptive-fam,.*levels=2 blocks=4 degree=[0-9]+ device=cpu$")
+  message(FATAL_ERROR "the adaptive-fam row does not say where it asked (--device cpu): ${one_afam}")
+endif ()
 list(GET one_lines 2 one_zfp)
 if (NOT one_zfp MATCHES ",zfp,.*tolerance=2\\^(-?[0-9]+)=")
   message(FATAL_ERROR "zfp row tuned on one thread: ${one_zfp}")
@@ -154,7 +158,8 @@ foreach (case
     "no raw volume given"
     "levels and blocks per axis must be >= 1;${vol};--levels;-1"
     "nowhere/out.csv: its folder does not exist;${vol};--csv;nowhere/out.csv"
-    "--zfp-target must be reached or bound;${vol};--zfp-target;half")
+    "--zfp-target must be reached or bound;${vol};--zfp-target;half"
+    "--device must be auto, gpu or cpu, not 'tpu';${vol};--device;tpu")
   list(GET case 0 pattern)
   list(REMOVE_AT case 0)
   run_fails("${pattern}" ${AFAM} compare-codecs --csv bad.csv --work tmp ${case})

@@ -17,6 +17,7 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/encode/encode_run.hpp"
+#include "afam/encode/first_step_blocks.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/render/level_decode.hpp"
 #include "moving_blob.hpp"
@@ -221,6 +222,51 @@ TEST(ResidualCoding, TheFirstStepGetsHeadroomByTrialWhereTheStepsAfterBuildOnIt)
     EXPECT_LE(trial.bytesOut, std::min(toTheBound, everywhere))
         << "to the bound " << toTheBound << " B, everywhere " << everywhere << " B";
   }
+}
+
+TEST(ResidualCoding, TheRunTakesTheTrialsFirstStepBlocksAndWritesTheSameBytes) {
+  // encodeRun's trial encodes the first step with and without headroom; the run then encodes it
+  // with a mixture. A block is taken from the trial where its bound and search (its parent's
+  // complex flag, here sometimes another than in either trial) are the trial's: the file is the
+  // one the run writes fitting every block again.
+  const std::vector<std::vector<float>> steps = {afam_test::movingBlob(kDims, 0, 0.25),
+                                                 afam_test::movingBlob(kDims, 1, 0.25)};
+  afam_test::InMemoryRun series(kDims, steps);
+  EncoderOptions opt = afam_test::runTestOptions(4);  // 73 blocks, 8 fitted again
+  opt.levels = 3;
+  const auto mixture = [](int level, Int3 b) { return (level + b[0] + b[1] + b[2]) % 2 == 1; };
+  const std::string path = scratch("taken.afam");
+  const RunStats whole = encodeRun(series.steps, opt, RunOptions{}, path);
+  auto blocks = std::make_shared<FirstStepBlocks>();
+  const auto encode = [&](std::function<bool(int, Int3)> headroom, bool commit) {
+    EncoderOptions o = opt;
+    o.firstStepHeadroom = std::move(headroom);
+    o.firstStepBlocks = blocks;
+    RunEncoder encoder(path, o, 16, whole.valueMin, whole.valueMax);
+    for (size_t k = 0; k < steps.size(); ++k) encoder.addStep(*series.steps[k], double(k));
+    return commit ? encoder.commit() : encoder.stepStats();
+  };
+  const auto bytesOf = [&] {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
+  const RunStats fitted = encode(mixture, true);  // nothing kept yet: every block fitted
+  const std::string expected = bytesOf();
+  const int64_t firstBlocks = fitted.steps[0].blocks;
+  ASSERT_EQ(blocks->kept(), firstBlocks) << "its first step kept while keeping";
+  blocks = std::make_shared<FirstStepBlocks>();
+  encode(nullptr, false);                         // the trial: to the bound
+  encode([](int, Int3) { return true; }, false);  // and with headroom everywhere
+  EXPECT_EQ(blocks->kept(), 2 * firstBlocks) << "each block in each trial";
+  blocks->startTaking();
+  const RunStats taken = encode(mixture, true);
+  EXPECT_EQ(bytesOf(), expected) << "the same file, byte for byte";
+  EXPECT_EQ(taken.bytesOut, fitted.bytesOut);
+  EXPECT_GT(blocks->taken(), firstBlocks / 2) << "most blocks taken";
+  EXPECT_LT(blocks->taken(), firstBlocks) << "a block whose parent's flag differs is fitted";
+  EXPECT_LT(taken.steps[0].fits, fitted.steps[0].fits);
+  EXPECT_GT(whole.firstStepTaken, 0) << "encodeRun takes the trial's blocks";
+  std::remove(path.c_str());
 }
 
 TEST(ResidualCoding, AStepAtATimeEncodesTheRunEncodeRunWrites) {

@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include "afam/encode/first_step_blocks.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/block_mask.hpp"
@@ -779,9 +780,14 @@ void checkAsRead(const FitContext& c, const BlockExtent& e, BlockTask& t) {
   setError(t, es);
 }
 
-}  // namespace
+/// A run's first step: whether the block is coded with runCodedShare's headroom
+/// (EncoderOptions::firstStepHeadroom).
+bool firstStepHeadroom(const FitContext& c, Int3 ijk) {
+  return c.opt.runStep && !c.opt.previous && c.opt.firstStepHeadroom &&
+         c.opt.firstStepHeadroom(c.level, ijk);
+}
 
-void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+void encodeBlockAnew(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
     const bool hasMissing =
         std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); });
@@ -799,10 +805,9 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
     // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
     // block moved little since the step before, and at a key step (the model the next steps
     // refer to); at the first step, where the caller found that it pays (firstStepHeadroom).
-    const bool first = c.opt.runStep && !c.opt.previous && c.opt.firstStepHeadroom &&
-                       c.opt.firstStepHeadroom(c.level, t.ijk);
-    const bool headroom = first || (c.opt.runStep && before &&
-                                    (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound));
+    const bool headroom =
+        firstStepHeadroom(c, t.ijk) ||
+        (c.opt.runStep && before && (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound));
     const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
                            c.sourceName};
     if (inTime && keeps(c.opt.boundKind, moved, c.bound)) {
@@ -835,6 +840,19 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
   }
   for (int a = 0; a < 3; ++a)
     if (e.samples[a] > 1 && e.samples[a] <= c.opt.degree) t.reducedDegree = true;
+}
+
+}  // namespace
+
+void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
+  // A run's first step encoded again (FirstStepBlocks): a block of the same samples, bound and
+  // search is the same model, taken instead of fitted.
+  FirstStepBlocks* const memo =
+      c.opt.runStep && !c.opt.previous ? c.opt.firstStepBlocks.get() : nullptr;
+  const double bound = firstStepHeadroom(c, t.ijk) ? c.bound * c.opt.runCodedShare : c.bound;
+  if (memo && memo->take(c.level, bound, t)) return;
+  encodeBlockAnew(c, e, fitter, t);
+  if (memo) memo->keep(c.level, bound, t);
 }
 
 }  // namespace afam

@@ -12,11 +12,73 @@
 
 #include "afam/base/errors.hpp"
 #include "afam/base/seconds_since.hpp"
+#include "afam/encode/first_step_blocks.hpp"
 #include "afam/format/run_writer.hpp"
 #include "block_encoding.hpp"
 #include "step_records.hpp"
 
 namespace afam {
+
+FirstStepBlocks::FirstStepBlocks() = default;
+FirstStepBlocks::~FirstStepBlocks() = default;
+
+void FirstStepBlocks::startTaking() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  taking_ = true;
+}
+
+int64_t FirstStepBlocks::kept() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return kept_;
+}
+
+int64_t FirstStepBlocks::taken() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return taken_;
+}
+
+namespace {
+
+/// What encodeBlock decided for a block (not its samples or its search's questions).
+void copyOutcome(const BlockTask& from, BlockTask& to) {
+  to.mask = from.mask;
+  to.entry = from.entry;
+  to.stored = from.stored;
+  to.ncpStar = from.ncpStar;
+  to.complex = from.complex;
+  to.refit = from.refit;
+  to.exact = from.exact;
+  to.reducedDegree = from.reducedDegree;
+  to.rmse = from.rmse;
+  to.maxError = from.maxError;
+}
+
+}  // namespace
+
+void FirstStepBlocks::keep(int level, double bound, const BlockTask& t) {
+  auto kept = std::make_unique<BlockTask>();
+  copyOutcome(t, *kept);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (taking_) return;
+  const Key key{level, t.ijk[0], t.ijk[1], t.ijk[2], bound, t.search};
+  if (blocks_.emplace(key, std::move(kept)).second) ++kept_;
+}
+
+bool FirstStepBlocks::take(int level, double bound, BlockTask& t) {
+  std::unique_ptr<BlockTask> kept;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!taking_) return false;
+    const auto it = blocks_.find(Key{level, t.ijk[0], t.ijk[1], t.ijk[2], bound, t.search});
+    if (it == blocks_.end()) return false;
+    kept = std::move(it->second);
+    blocks_.erase(it);
+    ++taken_;
+  }
+  copyOutcome(*kept, t);
+  t.fits = 0;  // none this time
+  return true;
+}
 
 namespace {
 
@@ -341,7 +403,7 @@ std::function<bool(int, Int3)> firstStepHeadroomByTrial(std::vector<RangedStep>&
   if (steps.size() < 2 || run.keyInterval < 2 || !(options.runCodedShare < 1) ||
       !bounded(options.mode) || !options.compact)
     return {};
-  EncoderOptions with = options, without = options;
+  EncoderOptions with = options, without = options;  // both keep their first step's blocks
   with.firstStepHeadroom = [](int, Int3) { return true; };
   without.progress = with.progress = nullptr;
   const auto a = trialBlockBytes(steps, times, without, run, lo, hi, missing, path);
@@ -395,8 +457,12 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   const double rangeSeconds = secondsSince(t0);
   int64_t headroomBlocks = 0;
   EncoderOptions runOptions = options;
-  runOptions.firstStepHeadroom = firstStepHeadroomByTrial(ranged, times, options, run, lo, hi,
+  // The trial's blocks of the first step, kept for the run's (each block's outcome and payload:
+  // at most the first step's stored bytes twice).
+  runOptions.firstStepBlocks = std::make_shared<FirstStepBlocks>();
+  runOptions.firstStepHeadroom = firstStepHeadroomByTrial(ranged, times, runOptions, run, lo, hi,
                                                           anyMissing, path, headroomBlocks);
+  runOptions.firstStepBlocks->startTaking();
   const double trialSeconds = secondsSince(t0) - rangeSeconds;
   RunEncoder encoder(path, runOptions, run.keyInterval, lo, hi);
   if (anyMissing) encoder.expectMissingSamples();
@@ -405,6 +471,7 @@ RunStats encodeRun(const std::vector<VolumeSource*>& steps, const EncoderOptions
   stats.rangeSeconds = rangeSeconds;
   stats.trialSeconds = trialSeconds;
   stats.headroomBlocks = headroomBlocks;
+  stats.firstStepTaken = runOptions.firstStepBlocks->taken();
   stats.seconds = secondsSince(t0);
   return stats;
 }

@@ -41,6 +41,9 @@ struct RunStats {
   double rangeSeconds = 0;     ///< encodeRun: reading every step's value range
   double trialSeconds = 0;     ///< encodeRun: the first step's headroom trial
   int64_t headroomBlocks = 0;  ///< encodeRun: the first step's blocks the trial gave headroom
+  /// encodeRun: the first step's blocks taken from the trial's encodes (FirstStepBlocks), not
+  /// fitted again
+  int64_t firstStepTaken = 0;
 };
 
 /// Encodes `steps` (at least one; every one of the first's dims, origin and spacing) into `path`,

@@ -49,6 +49,8 @@
 
 namespace afam {
 
+class FirstStepBlocks;  // first_step_blocks.hpp
+
 /// The models of the step before, for coding a run of steps in time (encode_run.hpp): a block
 /// whose model there still meets the bound on its new samples is stored as a reference to it.
 class PreviousStep {
@@ -109,6 +111,9 @@ struct EncoderOptions {
   /// (encode_run.hpp); a run given one step at a time cannot know, so its first step is coded to
   /// the bound.
   std::function<bool(int level, Int3 block)> firstStepHeadroom;
+  /// A run's first step: its blocks kept while encodeRun's trial encodes it, taken when the run
+  /// encodes it again (first_step_blocks.hpp); null: every block fitted.
+  std::shared_ptr<FirstStepBlocks> firstStepBlocks;
   /// The source's samples equal to missingValue were turned into NaN before they reached the
   /// encoder (MissingValueSource): the file records the value as what marked them. NaN samples
   /// are always missing: the bound holds on the others, and a reader gives NaN back.

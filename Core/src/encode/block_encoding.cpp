@@ -853,10 +853,11 @@ void encodeBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter,
   // search is the same model, taken instead of fitted.
   FirstStepBlocks* const memo =
       c.opt.runStep && !c.opt.previous ? c.opt.firstStepBlocks.get() : nullptr;
+  if (!memo) return encodeBlockAnew(c, e, fitter, t);
   const double bound = firstStepHeadroom(c, t.ijk) ? c.bound * c.opt.runCodedShare : c.bound;
-  if (memo && memo->take(c.level, bound, t)) return;
+  if (memo->take(c.level, bound, t)) return;
   encodeBlockAnew(c, e, fitter, t);
-  if (memo) memo->keep(c.level, bound, t);
+  memo->keep(c.level, bound, t);
 }
 
 }  // namespace afam

@@ -56,10 +56,13 @@ void copyOutcome(const BlockTask& from, BlockTask& to) {
 }  // namespace
 
 void FirstStepBlocks::keep(int level, double bound, const BlockTask& t) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (taking_) return;  // the run's blocks that were not taken: nothing to copy
+  }
   auto kept = std::make_unique<BlockTask>();
   copyOutcome(t, *kept);
   std::lock_guard<std::mutex> lock(mutex_);
-  if (taking_) return;
   const Key key{level, t.ijk[0], t.ijk[1], t.ijk[2], bound, t.search};
   if (blocks_.emplace(key, std::move(kept)).second) ++kept_;
 }

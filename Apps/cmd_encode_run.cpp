@@ -73,10 +73,10 @@ int encodeRunCommand(const Args& args, const EncoderOptions& opt) {
     payload += st.payloadBytes;
     std::printf(
         "step=%zu time=%.9g input=%s blocks=%lld references=%lld residuals=%lld "
-        "payload_bytes=%llu max_block_rmse=%.6g seconds=%.3f\n",
+        "decoded_before=%lld payload_bytes=%llu max_block_rmse=%.6g seconds=%.3f\n",
         k, run.times.empty() ? double(k) : run.times[k], pos[k].c_str(), (long long)st.blocks,
-        (long long)s.references[k], (long long)s.residuals[k], (unsigned long long)st.payloadBytes,
-        st.maxRmse, st.seconds);
+        (long long)s.references[k], (long long)s.residuals[k], (long long)s.decodedBefore[k],
+        (unsigned long long)st.payloadBytes, st.maxRmse, st.seconds);
   }
   std::printf(
       "steps=%zu key_interval=%d bound=%.6g%s value_range=[%.6g, %.6g] seconds=%.3f "

@@ -14,11 +14,12 @@ run_ok(out ${AFAM} enlarge ${src} b_64x80x56_uint8.raw --dims 64,80,56 --seed 2)
 # that the step appended below, a scan of other noise, needs a residual.
 run_ok(out ${AFAM} encode a_64x80x56_uint8.raw a_64x80x56_uint8.raw b_64x80x56_uint8.raw run.afam
        --error-bound 1e-2 --relative --times 0,0.5,1.5 --key-interval 4 --coded-share 1)
-if (NOT out MATCHES "step=1 time=0.5 input=a_64x80x56_uint8.raw blocks=([0-9]+) references=([0-9]+) residuals=0 payload_bytes=0 ")
+if (NOT out MATCHES "step=1 time=0.5 input=a_64x80x56_uint8.raw blocks=([0-9]+) references=([0-9]+) residuals=0 decoded_before=([0-9]+) payload_bytes=0 ")
   message(FATAL_ERROR "the repeated step was not stored as references: ${out}")
 endif ()
-if (NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2)
-  message(FATAL_ERROR "step 1: ${CMAKE_MATCH_2} references of ${CMAKE_MATCH_1} blocks")
+if (NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_2 OR NOT CMAKE_MATCH_1 EQUAL CMAKE_MATCH_3)
+  message(FATAL_ERROR "step 1: ${CMAKE_MATCH_2} references of ${CMAKE_MATCH_1} blocks, "
+                      "${CMAKE_MATCH_3} models of the step before decoded")
 endif ()
 if (NOT out MATCHES "steps=3 key_interval=4 bound=2.55 \\(relative to the run\\)")
   message(FATAL_ERROR "run summary: ${out}")

@@ -132,3 +132,31 @@ TEST(EncodeRun, UnrelatedStepsStoreEveryBlockAndBadRunsAreRefused) {
   EXPECT_THROW(encodeRun(steps, opt, backwards, path), InvalidArgument);
   EXPECT_NE(::access(path.c_str(), F_OK), 0) << "nothing written";
 }
+
+// A block that refers to the same model for several steps is measured against that model's
+// decoded samples kept from the step after it was written: decoded once, not at every step.
+TEST(EncodeRun, AModelReferredToForManyStepsIsDecodedOnce) {
+  afam_test::InMemoryRun series(
+      kDims, {evolving(0), evolving(0), evolving(0), evolving(1), evolving(1), evolving(1)});
+  RunOptions run;
+  run.keyInterval = 16;
+  const std::string path = scratch("kept.afam");
+  const RunStats st = encodeRun(series.steps, afam_test::runTestOptions(4), run, path);
+  ASSERT_EQ(st.decodedBefore.size(), 6u);
+  const int64_t blocks = st.steps[0].blocks;
+  EXPECT_EQ(st.decodedBefore[0], 0) << "no step before";
+  EXPECT_EQ(st.decodedBefore[1], blocks) << "every model of the first step, once";
+  EXPECT_EQ(st.references[1], blocks);
+  EXPECT_EQ(st.references[2], blocks);
+  EXPECT_EQ(st.decodedBefore[2], 0) << "the same models as at step 1: kept";
+  const int64_t changed = blocks - st.references[3];
+  EXPECT_GT(changed, 0) << "the blob moved at step 3";
+  EXPECT_LT(changed, blocks);
+  EXPECT_EQ(st.decodedBefore[3], 0) << "the unchanged blocks' models kept since step 1";
+  EXPECT_EQ(st.decodedBefore[4], changed) << "the models written at step 3, each once";
+  EXPECT_EQ(st.references[4], blocks);
+  EXPECT_EQ(st.decodedBefore[5], 0);
+  for (int64_t s = 0; s < 6; ++s)
+    EXPECT_LE(decodedRmse(path, s, series.data[size_t(s)]), st.bound) << "step " << s;
+  std::remove(path.c_str());
+}

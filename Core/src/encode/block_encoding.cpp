@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 
+#include "afam/base/any_nan.hpp"
 #include "afam/encode/first_step_blocks.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_decode.hpp"
@@ -144,6 +145,17 @@ double rmseAround(const std::vector<float>& s, double m) {
   return std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
 }
 
+/// The mean of all the samples, summed in four lanes (vectorised).
+double meanOf(const std::vector<float>& s) {
+  double lane[4] = {0, 0, 0, 0};
+  size_t i = 0;
+  for (; i + 4 <= s.size(); i += 4)
+    for (size_t l = 0; l < 4; ++l) lane[l] += double(s[i + l]);
+  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
+  for (; i < s.size(); ++i) sum += double(s[i]);
+  return sum / double(std::max<size_t>(s.size(), 1));
+}
+
 /// Whether no constant can keep the bound, by a floor under every constant's error: half the
 /// samples' range (the worst error of their middle), or their RMSE around their mean (where every
 /// sample is valid). Clear of rounding by a margin: a block near the bound is measured.
@@ -159,14 +171,16 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
     if (noConstantFits(0.5 * (range.maxValue - range.minValue), bound, 0)) return false;
     c = float(0.5 * (range.minValue + range.maxValue));
   } else {  // the mean: the smallest RMSE
-    double mean = 0;
-    size_t used = 0;
-    for (size_t i = 0; i < s.size(); ++i)
-      if (!valid || ((valid[i >> 5] >> (i & 31)) & 1u) != 0) {
-        mean += double(s[i]);
-        ++used;
-      }
-    mean /= double(used);
+    double mean = valid ? 0 : meanOf(s);
+    if (valid) {
+      size_t used = 0;
+      for (size_t i = 0; i < s.size(); ++i)
+        if (((valid[i >> 5] >> (i & 31)) & 1u) != 0) {
+          mean += double(s[i]);
+          ++used;
+        }
+      mean /= double(used);
+    }
     if (!valid && noConstantFits(rmseAround(s, mean), bound, mean)) return false;
     c = float(mean);
   }
@@ -748,13 +762,21 @@ ErrorStats errorAsRead(const FitContext& c, const BlockTask& t) {
   return errorAsDecoded(m, points.data(), t);
 }
 
-/// The step before's model (`previous`, its decoded points `model`) measured on this step's samples
-/// as a reader decodes it: the error of the block if it refers to that model.
-ErrorStats movedError(const ModelEntry& previous, const FitResult& model, const BlockExtent& e,
+/// The step before's model (`previous`) measured on this step's samples as a reader decodes it
+/// (errorAsDecoded, on the values the step before keeps): the error of the block if it refers to
+/// that model. Blocks with missing samples are not coded in time.
+ErrorStats movedError(const FitContext& c, const ModelEntry& previous, const BlockExtent& e,
                       const BlockTask& t) {
   ModelEntry m = previous;
   m.samples = e.samples;
-  return errorAsDecoded(m, model.control.data(), t);
+  ErrorStats es;
+  c.opt.previous->values(c.level, t.ijk, m, [&](const float* values, size_t count) {
+    if (count != t.samples.size())
+      throw FormatError("the step before's model has " + std::to_string(count) + " samples, not " +
+                        std::to_string(t.samples.size()));
+    es = errorOnValid(values, t.samples.data(), count, nullptr);
+  });
+  return es;
 }
 
 /// Checks the stored block through the reader's decoding (errorAsRead) and keeps that error in
@@ -793,19 +815,16 @@ bool firstStepHeadroom(const FitContext& c, Int3 ijk) {
 
 void encodeBlockAnew(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
-    const bool hasMissing =
-        std::any_of(t.samples.begin(), t.samples.end(), [](float v) { return std::isnan(v); });
-    if (hasMissing && !prepareMissing(c, e, t)) return;
+    if (anyNaN(t.samples.data(), t.samples.size()) && !prepareMissing(c, e, t)) return;
     const MaskScope scope(fitter, t);
     // A run's step: the block's model at the step before, and how far the block moved from it.
     // Masked blocks are coded on their own (their models are never shared in time).
     ModelEntry previous;
-    FitResult model;
     bool mayRefer = false;
     const bool before = c.opt.previous && bounded(c.opt.mode) && t.mask.empty() &&
-                        c.opt.previous->model(c.level, t.ijk, previous, model, mayRefer);
+                        c.opt.previous->entry(c.level, t.ijk, previous, mayRefer);
     const bool inTime = before && mayRefer;
-    const ErrorStats moved = inTime ? movedError(previous, model, e, t) : ErrorStats{};
+    const ErrorStats moved = inTime ? movedError(c, previous, e, t) : ErrorStats{};
     // A run's coded blocks leave part of the bound to the steps after (runCodedShare) where the
     // block moved little since the step before, and at a key step (the model the next steps
     // refer to); at the first step, where the caller found that it pays (firstStepHeadroom).
@@ -818,7 +837,11 @@ void encodeBlockAnew(const FitContext& c, const BlockExtent& e, BlockFitter& fit
       referPrevious(previous, moved, t);  // the step before's model, unchanged
     } else if (c.opt.compact && bounded(c.opt.mode)) {
       encodeCompact(coded, e, fitter, t);
-      if (inTime) codeResidualIfSmaller(coded, e, fitter, previous, model, t);
+      if (inTime) {
+        FitResult model;  // the step before's control points, which the residual codes against
+        c.opt.previous->control(c.level, t.ijk, previous, model);
+        codeResidualIfSmaller(coded, e, fitter, previous, model, t);
+      }
     } else {
       FitResult fr;
       fitBlock(c, e, fitter, searchBound(c.opt, c.bound), t, fr);

@@ -3,16 +3,21 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "afam/base/errors.hpp"
+#include "afam/base/huge_pages.hpp"
 #include "afam/base/seconds_since.hpp"
 #include "afam/encode/first_step_blocks.hpp"
+#include "afam/format/block_decode.hpp"
 #include "afam/format/run_writer.hpp"
 #include "block_encoding.hpp"
 #include "step_records.hpp"
@@ -218,23 +223,91 @@ class StepSink : public ModelSink {
   std::map<std::pair<int, Int3>, uint64_t>* blockBytes_;
 };
 
-/// The step before's models, read back from the run being written.
-class WrittenStep : public PreviousStep {
+/// Each block's model as decoded on its samples, kept while the block keeps the model: one buffer
+/// on huge pages (the first touch of ~600 MB in 4 KB pages cost a 512^3 run's first step 1.4 s on a
+/// VM), a block's place in it fixed by its slot; the blocks beyond kBytes (in slot order) are not
+/// kept. A slot is used by one thread at a time (PreviousStep).
+class DecodedValues {
  public:
-  explicit WrittenStep(const RunWriter& writer) : writer_(writer) {}
-  bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
-             bool& mayRefer) const override {
-    if (writer_.stepsDone() == 0) return false;
-    mayRefer = writer_.canReference(level, block);
-    if (!mayRefer) return true;  // a key step for this block: nothing to decode
-    if (!writer_.previousModel(level, block, entry, model.control)) return false;
-    model.ncp = entry.ncp;
-    model.degree = entry.degree;
-    return true;
+  /// At most this many bytes of decoded samples are kept (a 512^3 float32 run's blocks hold about
+  /// 600 MB); a block beyond it is decoded and evaluated at every step.
+  static constexpr size_t kBytes = size_t(2) << 30;
+
+  explicit DecodedValues(const Partition& part) {
+    for (int l = 0; l < part.levels(); ++l)
+      for (int64_t b = 0; b < part.blockCount(l); ++b) {
+        const Int3 n = part.extent(l, part.blockFromLinear(l, b)).samples;
+        const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+        const size_t first = slots_.empty() ? 0 : slots_.back().first + slots_.back().count;
+        slots_.push_back({first, (first + count) * sizeof(float) <= kBytes ? count : 0});
+      }
+    // Mapped, not touched: a page is faulted in when a block is first kept there.
+    if (!slots_.empty()) buffer_.resize(slots_.back().first + slots_.back().count);
+  }
+  /// The slot's values when they were kept for `key`, else nullptr.
+  const float* find(size_t slot, uint64_t key) const {
+    const Slot& s = slots_.at(slot);
+    return s.held && s.key == key ? buffer_.data() + s.first : nullptr;
+  }
+  /// Keeps `values` (the block's sample count of them) for `key` where the slot has room.
+  void put(size_t slot, uint64_t key, const std::vector<float>& values) {
+    Slot& s = slots_.at(slot);
+    s.held = false;
+    if (s.count == 0 || values.size() != s.count) return;
+    std::copy(values.begin(), values.end(), buffer_.begin() + std::ptrdiff_t(s.first));
+    s.key = key;
+    s.held = true;
   }
 
  private:
+  struct Slot {
+    size_t first = 0, count = 0;  ///< where in the buffer, how many (0: not kept)
+    uint64_t key = 0;
+    bool held = false;
+  };
+  std::vector<Slot> slots_;
+  HugePageVector<float> buffer_;
+};
+
+/// The step before's models, read back from the run being written; each block's model as decoded
+/// on its samples kept while the block keeps it (PreviousStep::values, DecodedValues).
+class WrittenStep : public PreviousStep {
+ public:
+  explicit WrittenStep(const RunWriter& writer) : writer_(writer), values_(writer.partition()) {}
+  bool entry(int level, Int3 block, ModelEntry& entry, bool& mayRefer) const override {
+    if (writer_.stepsDone() == 0) return false;
+    mayRefer = writer_.canReference(level, block);
+    return !mayRefer || writer_.previousEntry(level, block, entry);
+  }
+  void control(int level, Int3 block, const ModelEntry& entry, FitResult& model) const override {
+    ModelEntry owner;
+    if (!writer_.previousModel(level, block, owner, model.control) || owner.offset != entry.offset)
+      throw InvalidArgument("encode: " + Partition::blockName(level, block) +
+                            " has no model at the step before to code against");
+    model.ncp = entry.ncp;
+    model.degree = entry.degree;
+  }
+  void values(int level, Int3 block, const ModelEntry& entry,
+              const std::function<void(const float*, size_t)>& use) const override {
+    // A payload's offset names its model (a reference keeps its owner's).
+    const size_t slot = writer_.modelSlot(level, block);
+    const size_t count = size_t(entry.samples[0]) * entry.samples[1] * entry.samples[2];
+    if (const float* kept = values_.find(slot, entry.offset)) return use(kept, count);
+    thread_local FitResult model;
+    thread_local std::vector<float> decoded;
+    control(level, block, entry, model);
+    decodeBlockSamples(entry, model.control.data(), EncodingMode::Adaptive, decoded);
+    decodedCount_.fetch_add(1, std::memory_order_relaxed);
+    values_.put(slot, entry.offset, decoded);
+    use(decoded.data(), decoded.size());
+  }
+  /// Blocks whose model values() decoded since the last call (not kept).
+  int64_t takeDecodedCount() { return decodedCount_.exchange(0, std::memory_order_relaxed); }
+
+ private:
   const RunWriter& writer_;
+  mutable DecodedValues values_;
+  mutable std::atomic<int64_t> decodedCount_{0};
 };
 
 }  // namespace
@@ -343,6 +416,7 @@ EncodeStats RunEncoder::addStep(VolumeSource& step, double time, EncodeTeam& tea
   s.stats.steps.push_back(stats);
   s.stats.references.push_back(sink.references);
   s.stats.residuals.push_back(sink.residuals);
+  s.stats.decodedBefore.push_back(s.previous ? s.previous->takeDecodedCount() : 0);
   if (!s.previous) s.previous = std::make_unique<WrittenStep>(*s.writer);
   return s.stats.steps.back();
 }
@@ -519,6 +593,7 @@ RunStats appendStep(VolumeSource& step, double time, const EncoderOptions& optio
   sink.end();
   stats.references.push_back(sink.references);
   stats.residuals.push_back(sink.residuals);
+  stats.decodedBefore.push_back(previous.takeDecodedCount());
   stats.bytesOut = writer->commit();
   stats.seconds = secondsSince(t0);
   return stats;

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "afam/base/any_nan.hpp"
 #include "afam/base/seconds_since.hpp"
 #include "afam/base/task_stream.hpp"
 #include "afam/base/worker_pool.hpp"
@@ -573,9 +574,7 @@ class LevelEncoder {
         [&](int, int64_t i) {
           BlockTask& t = b.tasks[size_t(i)];
           t.verdicts = NcpVerdicts{};
-          if (!t.search || std::any_of(t.samples.begin(), t.samples.end(),
-                                       [](float v) { return std::isnan(v); }))
-            return;
+          if (!t.search || anyNaN(t.samples.data(), t.samples.size())) return;
           const BlockExtent e = part_.extent(l, t.ijk);
           AheadBlock a;
           a.samples = t.samples.data();

@@ -384,10 +384,7 @@ void RunWriter::addStored(const ModelEntry& in, const void* stored) {
 }
 
 bool RunWriter::canReference(int level, Int3 block) const {
-  ModelEntry probe;
-  probe.level = level;
-  probe.block = block;
-  const size_t slot = slotOf(probe);
+  const size_t slot = modelSlot(level, block);
   return !previous_.empty() && previousDepth_[slot] + 1 < keyInterval_ && !previous_[slot].masked &&
          previous_[slot].kind != BlockKind::Empty;
 }
@@ -447,13 +444,23 @@ void RunWriter::addResidual(const ModelEntry& in, const void* stored) {
   depth_[slot] = previousDepth_[slot] + 1;
 }
 
-bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
-                              std::vector<float>& control) const {
-  if (previous_.empty()) return false;
+size_t RunWriter::modelSlot(int level, Int3 block) const {
   ModelEntry probe;
   probe.level = level;
   probe.block = block;
-  const size_t slot = slotOf(probe);
+  return slotOf(probe);
+}
+
+bool RunWriter::previousEntry(int level, Int3 block, ModelEntry& entry) const {
+  if (previous_.empty()) return false;
+  entry = previous_.at(modelSlot(level, block));
+  return true;
+}
+
+bool RunWriter::previousModel(int level, Int3 block, ModelEntry& entry,
+                              std::vector<float>& control) const {
+  if (previous_.empty()) return false;
+  const size_t slot = modelSlot(level, block);
   entry = previous_.at(slot);
   // A payload's offset names its model: a reference keeps its owner's, a residual has its own.
   if (decoded_.find(slot, entry.offset, control)) return true;

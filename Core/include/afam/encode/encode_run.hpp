@@ -29,8 +29,12 @@ struct RunOptions {
 
 struct RunStats {
   std::vector<EncodeStats> steps;
-  std::vector<int64_t> references;    ///< per step, blocks stored as references
-  std::vector<int64_t> residuals;     ///< per step, blocks stored as residuals on the step before
+  std::vector<int64_t> references;  ///< per step, blocks stored as references
+  std::vector<int64_t> residuals;   ///< per step, blocks stored as residuals on the step before
+  /// Per step, blocks whose model at the step before was decoded and evaluated on their samples to
+  /// measure them; the others' were kept from the step before (a block that keeps its model for
+  /// many steps is decoded once, the step after the model was written).
+  std::vector<int64_t> decodedBefore;
   double valueMin = 0, valueMax = 0;  ///< of the whole run
   double bound = 0;                   ///< absolute RMSE bound every block meets
   /// Bytes stored for each block (level, block) over the steps so far (payloads, residuals and

@@ -53,15 +53,22 @@ class FirstStepBlocks;  // first_step_blocks.hpp
 
 /// The models of the step before, for coding a run of steps in time (encode_run.hpp): a block
 /// whose model there still meets the bound on its new samples is stored as a reference to it.
+/// Called from the encoder's worker threads, each block from one thread at a time.
 class PreviousStep {
  public:
   virtual ~PreviousStep() = default;
   /// Whether there is a step before; then `mayRefer` says whether the block may refer to its model
-  /// (false at the block's key step: the key interval), and only when it may are `entry` and
-  /// `model` filled with that model (its entry and decoded control points). Called from the
-  /// encoder's worker threads.
-  virtual bool model(int level, Int3 block, ModelEntry& entry, FitResult& model,
-                     bool& mayRefer) const = 0;
+  /// (false at the block's key step: the key interval), and only when it may is `entry` filled
+  /// with that model's entry (the owner's payload fields). Nothing is decoded.
+  virtual bool entry(int level, Int3 block, ModelEntry& entry, bool& mayRefer) const = 0;
+  /// That model's decoded control points (`entry` from entry()).
+  virtual void control(int level, Int3 block, const ModelEntry& entry, FitResult& model) const = 0;
+  /// Runs use(values, count) on that model decoded on the block's samples (decodeBlockSamples of
+  /// its control points; `entry` from entry() with the block's samples): kept from one step to the
+  /// next while the block keeps the model, so that a block referring to it for many steps is
+  /// decoded and evaluated once.
+  virtual void values(int level, Int3 block, const ModelEntry& entry,
+                      const std::function<void(const float*, size_t)>& use) const = 0;
 };
 
 /// A run's block whose model at the step before misses its new samples by more than this many

@@ -73,6 +73,11 @@ class RunWriter {
   /// kDecodedModelBytes in all) while the block's payload stays the same, so a block that refers
   /// to the step before for many steps is decoded once.
   bool previousModel(int level, Int3 block, ModelEntry& entry, std::vector<float>& control) const;
+  /// previousModel's entry alone (nothing decoded); false at the first step.
+  bool previousEntry(int level, Int3 block, ModelEntry& entry) const;
+  /// The block's slot, in [0, partition().totalBlockCount()): levels coarse to fine, blocks in
+  /// the level's linear order. Throws InvalidArgument for a block outside the partition.
+  size_t modelSlot(int level, Int3 block) const;
   /// At most this many bytes of decoded models are kept between steps (a 512^3 float32 run's
   /// models take up to about 550 MB).
   static constexpr size_t kDecodedModelBytes = size_t(2) << 30;

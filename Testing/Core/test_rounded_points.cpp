@@ -95,7 +95,9 @@ TEST(RoundedPoints, ANoisyScansInterpolantsAreRoundedWithinTheBound) {
         blockSamples(volume, dims, file->partition().extent(e.level, e.block));
     const ErrorStats err = fitter.error(s.data(), e.samples, model);
     EXPECT_LE(err.rmse, bound) << Partition::blockName(e.level, e.block);
-    EXPECT_NEAR(err.rmse, e.rmse, 1e-3 * bound);  // the index tells the rounded model's error
+    // The index tells the rounded model's error as a reader decodes it (kept in float32), which
+    // the encoder measured on these bytes' decoding without decoding the stored payload again.
+    EXPECT_NEAR(err.rmse, e.rmse, 1e-5 * bound);
   }
   ASSERT_GE(interpolants, 32);
   EXPECT_GE(rounded, interpolants * 3 / 4) << rounded << " of " << interpolants;

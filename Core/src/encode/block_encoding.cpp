@@ -115,6 +115,7 @@ void storeFloat(FitResult& fr, bool exact, BlockTask& t) {
   m.ncp = fr.ncp;
   m.degree = fr.degree;
   setError(t, fr.error);
+  t.measuredAsRead = false;
   t.stored = bytesOf(fr.control);
   m.storedSize = t.stored.size();
 }
@@ -129,6 +130,8 @@ struct Candidate {
   std::vector<uint8_t> bytes;
   bool roundedPoints = false;  ///< an interpolant whose bytes end with its points' shift
   FrameSizes frames;           ///< the entropy frames formed when it was coded (recodeFrame)
+  /// `error` is of the model a reader decodes from `bytes` (BlockTask::measuredAsRead).
+  bool measuredAsRead = false;
 };
 
 /// The RMSE of the value m on all the samples, summed in four lanes (vectorised).
@@ -388,6 +391,9 @@ bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n
   c.error = fitter.error(s.data(), n, model);
   if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
+  // The error of these bytes' decoding; with rounded points, of their rounding (roundedPoint, as
+  // the reader rounds them) to the step the appended shift gives.
+  c.measuredAsRead = true;
   if (!valid) roundInterpolantPoints(s, n, bound, kind, fitter, model, c);
   return true;
 }
@@ -469,6 +475,7 @@ void storeCandidate(Candidate& c, BlockTask& t) {
   m.ncp = c.ncp;
   m.degree = c.degree;
   setError(t, c.error);
+  t.measuredAsRead = c.measuredAsRead;
   t.stored = std::move(c.bytes);
   m.storedSize = t.stored.size();
 }
@@ -495,6 +502,8 @@ void finalFrame(const FitContext& c, Candidate& best) {
   if (best.kind == BlockKind::Constant) return;
   const size_t tail = best.roundedPoints ? kRoundedPointsBytes : 0;
   const size_t values = size_t(best.ncp[0]) * size_t(best.ncp[1]) * size_t(best.ncp[2]);
+  // Coded again, the frame holds the same symbols (recodeFrame checks): a measured interpolant's
+  // error stays the error of what a reader decodes.
   codeAtFileLevel(c.opt, best.bytes, tail, values, best.frames);
 }
 
@@ -784,7 +793,7 @@ ErrorStats movedError(const FitContext& c, const ModelEntry& previous, const Blo
 /// as its float samples (the exact model), and if even that fails the encode stops naming it.
 void checkAsRead(const FitContext& c, const BlockExtent& e, BlockTask& t) {
   if (!bounded(c.opt.mode) || t.entry.reference || t.entry.residual ||
-      t.entry.kind == BlockKind::Empty)
+      t.entry.kind == BlockKind::Empty || (t.measuredAsRead && t.mask.empty()))
     return;
   ErrorStats es;
   bool decodes = true;

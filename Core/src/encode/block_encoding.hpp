@@ -43,6 +43,9 @@ struct BlockTask {
   std::optional<std::array<double, 3>> roughness;
   double rmse = 0,
          maxError = 0;  ///< of the stored model on the block's samples (the entry keeps floats)
+  /// rmse and maxError were measured on the model a reader decodes from `stored`, as stored (an
+  /// interpolant checked on the decoding of these very bytes): checkAsRead need not decode it.
+  bool measuredAsRead = false;
 };
 
 /// The RMSE bound a searched block's fits must keep: kFitShare of the bound where the points are

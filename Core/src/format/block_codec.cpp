@@ -269,6 +269,13 @@ void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t
     codec::appendEntropyFrame(varints, coding, out);
   }
   out.insert(out.end(), payload.end() - std::ptrdiff_t(tail), payload.end());
+  // The new frame holds the very symbols (lossless coders; checked, for the encoder measures a
+  // kept interpolant on its trial frame's decoding and does not decode the payload again).
+  size_t again = 0;
+  const uint8_t* back = codec::unpackFrame(out.data() + head, out.size() - head - tail, values * 10,
+                                           0, "recode", again);
+  if (again != got || std::memcmp(back, varints.data(), got) != 0)
+    throw codec::badPayload("recode", "does not decode to the frame it was coded from");
   payload = std::move(out);
 }
 

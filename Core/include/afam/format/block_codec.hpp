@@ -139,7 +139,8 @@ bool lanesFrameSure(FrameSizes trial, size_t frameBytes, size_t values);
 /// coded at a fast zstd level and gives only the one it keeps the slow level's frame. The payload
 /// decodes to the same values. `trial`: the frames formed when it was first coded (encodeQuantized
 /// with the same stage), where known: a lanes frame is then not formed again to be compared (the
-/// same bytes). Throws FormatError when the frame does not decode.
+/// same bytes). Throws FormatError when the frame does not decode, or the new frame does not
+/// decode to the same symbols (checked).
 void recodeFrame(std::vector<uint8_t>& payload, size_t head, size_t tail, size_t values,
                  EntropyCoding coding, FrameSizes trial = {});
 

@@ -148,8 +148,19 @@ double rmseAround(const std::vector<float>& s, double m) {
   return std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
 }
 
-/// The mean of all the samples, summed in four lanes (vectorised).
-double meanOf(const std::vector<float>& s) {
+/// The mean of the valid samples (every sample where `valid` is null: summed in four lanes,
+/// vectorised).
+double meanOf(const std::vector<float>& s, const uint32_t* valid) {
+  if (valid) {
+    double sum = 0;
+    size_t used = 0;
+    for (size_t i = 0; i < s.size(); ++i)
+      if (((valid[i >> 5] >> (i & 31)) & 1u) != 0) {
+        sum += double(s[i]);
+        ++used;
+      }
+    return sum / double(used);
+  }
   double lane[4] = {0, 0, 0, 0};
   size_t i = 0;
   for (; i + 4 <= s.size(); i += 4)
@@ -174,16 +185,7 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
     if (noConstantFits(0.5 * (range.maxValue - range.minValue), bound, 0)) return false;
     c = float(0.5 * (range.minValue + range.maxValue));
   } else {  // the mean: the smallest RMSE
-    double mean = valid ? 0 : meanOf(s);
-    if (valid) {
-      size_t used = 0;
-      for (size_t i = 0; i < s.size(); ++i)
-        if (((valid[i >> 5] >> (i & 31)) & 1u) != 0) {
-          mean += double(s[i]);
-          ++used;
-        }
-      mean /= double(used);
-    }
+    const double mean = meanOf(s, valid);
     if (!valid && noConstantFits(rmseAround(s, mean), bound, mean)) return false;
     c = float(mean);
   }

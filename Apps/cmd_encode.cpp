@@ -82,8 +82,9 @@ int runEncode(int argc, char** argv) {
         "  --blocks B        blocks per axis at the finest level (default: about 64 samples a "
         "block, the paper's 16 at 1024^3)\n"
         "  --degree P        B-spline degree (default 2)\n"
-        "  --mode M          adaptive (default), inlevel (search every block), fixed (NCP = n or\n"
-        "                    --ncp), ds (downsampled raw blocks with a ghost layer)\n"
+        "  --mode M          adaptive (default) or inlevel (every block searched; the two encode\n"
+        "                    alike), fixed (NCP = n or --ncp), ds (downsampled raw blocks with a\n"
+        "                    ghost layer)\n"
         "  --ncp K           NCP per axis for --mode fixed (default n)\n"
         "  --threads T       worker threads (default: all cores)\n"
         "%s"
@@ -189,14 +190,13 @@ int runEncode(int argc, char** argv) {
   for (size_t l = 0; l < s.levels.size(); ++l) {
     const LevelStats& ls = s.levels[l];
     std::printf(
-        "level %zu: blocks=%lld searched=%lld complex=%lld refits=%lld exact=%lld fits=%lld "
+        "level %zu: blocks=%lld searched=%lld complex=%lld exact=%lld fits=%lld "
         "bytes=%llu "
         "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f "
         "fit_wait_seconds=%.3f ahead_seconds=%.3f residual_seconds=%.3f ncp:",
-        l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex,
-        (long long)ls.refits, (long long)ls.exact, (long long)ls.fits,
-        (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound, ls.seconds,
-        ls.sampleSeconds, ls.fitWaitSeconds, ls.aheadSeconds, ls.residualSeconds);
+        l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.exact,
+        (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound,
+        ls.seconds, ls.sampleSeconds, ls.fitWaitSeconds, ls.aheadSeconds, ls.residualSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

@@ -123,7 +123,7 @@ TEST(EncodeTeam, ThreeMembersGiveTheModelsOfOneProcess) {
   const Index3 dims{41, 37, 45};  // awkward sizes: rows of unequal sample counts
   std::vector<float> v = mlVolume(dims);
   for (size_t i = 0; i < v.size(); ++i)
-    if (i % 41 < 20) v[i] = 0.25f;  // a flat half: simple blocks whose children skip the search
+    if (i % 41 < 20) v[i] = 0.25f;  // a flat half: constant blocks beside searched ones
   const EncoderOptions opt = relativeBound(3, 5, 2e-3);
   EncodeStats alone;
   const InMemoryModels want = encodeAlone(v, dims, opt, alone);
@@ -134,9 +134,13 @@ TEST(EncodeTeam, ThreeMembersGiveTheModelsOfOneProcess) {
   EXPECT_EQ(team[0].stats.payloadBytes, alone.payloadBytes);
   EXPECT_EQ(team[0].stats.fits, alone.fits);
   EXPECT_EQ(team[0].stats.maxRmse, alone.maxRmse);
-  EXPECT_GT(alone.levels[1].searched, 0);
-  EXPECT_LT(alone.levels[2].searched, alone.levels[2].blocks);  // cross-level reuse took place
-  EXPECT_EQ(team[0].stats.levels[2].searched, alone.levels[2].searched);
+  for (size_t l = 0; l < alone.levels.size(); ++l) {
+    EXPECT_EQ(team[0].stats.levels[l].searched, alone.levels[l].searched) << "level " << l;
+    EXPECT_EQ(team[0].stats.levels[l].complex, alone.levels[l].complex) << "level " << l;
+    EXPECT_EQ(team[0].stats.levels[l].payloadBytes, alone.levels[l].payloadBytes) << "level " << l;
+  }
+  EXPECT_GT(alone.levels[2].complex, 0);
+  EXPECT_LT(alone.levels[2].complex, alone.levels[2].blocks);
   EXPECT_TRUE(team[1].models.entries.empty() || team[1].models.entries[0].storedSize == 0);
 }
 

@@ -55,10 +55,9 @@ void exactModel(const BlockExtent& e, const BlockTask& t, FitResult& fr) {
   fr.error = compare([&t](size_t i) { return t.samples[i]; }, t.samples, validOf(t));
 }
 
-/// Fits one block to `bound`: the searched NCP*, or the mode's NCP without a search. In bounded
-/// modes the error is then checked on the block's own samples: a block that skipped the search
-/// (cross-level reuse) and misses the bound is searched, and one that misses it even at NCP = n is
-/// the exact model (t.exact).
+/// Fits one block to `bound`: the searched NCP* (every block of a bounded mode searches), or the
+/// fixed mode's NCP without a search. In bounded modes the error is then checked on the block's
+/// own samples: one that misses the bound even at NCP = n is the exact model (t.exact).
 void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, double bound,
               BlockTask& t, FitResult& fr) {
   Int3 degs{};
@@ -84,10 +83,7 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   if (t.search) {
     search();
   } else {
-    const Int3 ncp =
-        c.opt.mode == EncodingMode::Fixed
-            ? (c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples)
-            : clampNcp(lo, e.samples, degs);
+    const Int3 ncp = c.opt.fixedNcp > 0 ? clampNcp(c.opt.fixedNcp, e.samples, degs) : e.samples;
     fitter.fitInto(t.samples.data(), e.samples, ncp, c.opt.degree, true, fr);
     ++t.fits;
     t.ncpStar = std::max({ncp[0], ncp[1], ncp[2]});
@@ -95,12 +91,6 @@ void fitBlock(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, do
   if (!bounded(c.opt.mode)) return;
   if (!fr.errorMeasured) fitter.measure(t.samples.data(), e.samples, fr);
   if (keeps(kind, fr.error, bound)) return;
-  if (!t.search) {
-    t.search = true;
-    t.refit = true;
-    search();
-    if (keeps(kind, fr.error, bound)) return;
-  }
   exactModel(e, t, fr);
   t.exact = true;
   t.complex = true;

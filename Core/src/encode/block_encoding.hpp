@@ -33,8 +33,7 @@ struct BlockTask {
   int ncpStar = 0;
   int64_t fits = 0;
   bool complex = false;
-  bool refit = false;  ///< skipped the search by cross-level reuse, missed the bound, searched
-  bool exact = false;  ///< stored as its samples (no NCP met the bound)
+  bool exact = false;          ///< stored as its samples (no NCP met the bound)
   bool reducedDegree = false;  ///< an axis has fewer samples than the degree needs
   /// Answers to its search's questions given ahead (EncoderOptions::leastSquares), at the bound
   /// searchBound gives; none: every question is a fit.

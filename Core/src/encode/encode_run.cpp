@@ -51,7 +51,6 @@ void copyOutcome(const BlockTask& from, BlockTask& to) {
   to.stored = from.stored;
   to.ncpStar = from.ncpStar;
   to.complex = from.complex;
-  to.refit = from.refit;
   to.exact = from.exact;
   to.reducedDegree = from.reducedDegree;
   to.rmse = from.rmse;

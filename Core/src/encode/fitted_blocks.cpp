@@ -16,7 +16,7 @@ struct FittedBlockRecord {
   int64_t fits;
   double rmse, maxError;
   int32_t ncpStar;
-  uint8_t search, complex, refit, exact, reducedDegree;
+  uint8_t search, complex, exact, reducedDegree;
 };
 static_assert(std::is_trivially_copyable<FittedBlockRecord>::value, "records are copied as bytes");
 
@@ -31,7 +31,6 @@ void appendFittedBlock(const BlockTask& t, std::vector<uint8_t>& out) {
   r.ncpStar = t.ncpStar;
   r.search = t.search;
   r.complex = t.complex;
-  r.refit = t.refit;
   r.exact = t.exact;
   r.reducedDegree = t.reducedDegree;
   const size_t at = out.size();
@@ -57,7 +56,6 @@ void readFittedBlocks(const std::vector<uint8_t>& in, std::vector<BlockTask>& ou
     t.ncpStar = r.ncpStar;
     t.search = r.search != 0;
     t.complex = r.complex != 0;
-    t.refit = r.refit != 0;
     t.exact = r.exact != 0;
     t.reducedDegree = r.reducedDegree != 0;
     t.stored.assign(in.begin() + std::ptrdiff_t(at),

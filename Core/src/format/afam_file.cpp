@@ -462,7 +462,7 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 /// and `codes` its ScratchSlot::Doubles (decodeValues' doubles: written after the decoding).
 double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
                          const std::string& where) {
-  thread_local BlockFitter fitter;
+  BlockFitter& fitter = threadFitter();
   thread_local FitResult fit;
   const size_t count = size_t(controlCount(e));
   const size_t coded = e.storedSize - (e.roundedPoints ? kRoundedPointsBytes : 0);

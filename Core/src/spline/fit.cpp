@@ -220,11 +220,14 @@ AFAM_FIT_INLINE void multiplyFactorTransposeRows(const AxisSystem& s, double* x,
   }
 }
 
-/// Makes v hold at least n values, growing only (by half at least, so that a search's growing
-/// shapes map few new buffers): a buffer reused across shapes is not filled or copied again.
-void grow(HugePageVector<double>& v, size_t n) {
+/// Makes v hold at least n values, growing only: by half at least, and at once to `block` (the
+/// block's sample count, which no pass of its fits and evaluations exceeds), so that a search's
+/// growing shapes map no new buffer. Pages of a buffer are faulted in (and zeroed) where a pass
+/// first writes them: mapping more than a pass uses costs nothing. A buffer reused across shapes
+/// is not filled or copied again.
+void grow(HugePageVector<double>& v, size_t n, size_t block) {
   if (v.size() >= n) return;
-  const size_t size = std::max(n, v.size() + v.size() / 2);
+  const size_t size = std::max({n, block, v.size() + v.size() / 2});
   v.clear();  // nothing to copy
   v.resize(size);
 }
@@ -387,7 +390,9 @@ constexpr RmseRange kUndecided{0.0, std::numeric_limits<double>::infinity()};
 
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  HugePageVector<double> bufZ, bufY, bufT, bufB, bufC, bufX, bufEY, plane;
+  // A solve's passes (bufZ, bufY, bufT, bufB, bufC) and an evaluation's (bufT, bufC, bufY, bufZ,
+  // plane) share the buffers: a thread touches one set of block-sized pages.
+  HugePageVector<double> bufZ, bufY, bufT, bufB, bufC, plane;
   const std::vector<uint32_t>* valid = nullptr;  ///< setMask
   std::vector<float> grid;                       ///< the model on the grid, for masked errors
 
@@ -530,31 +535,32 @@ float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
   const size_t nx = size_t(n[0]), ny = size_t(n[1]);
   const size_t mx = size_t(ax.ncp), my = size_t(ay.ncp), mz = size_t(az.ncp);
   const size_t planeSize = nx * ny, lines = my * mz, slab = mx * my;
+  const size_t block = planeSize * size_t(n[2]);
   constexpr size_t kChunk = 256;  // columns per chunk, so that a chunk's rows stay in cache
 
   // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
   // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
-  grow(bufZ, planeSize * mz);
+  grow(bufZ, planeSize * mz, block);
   for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
     applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
                        std::min(kChunk, planeSize - c0));
-  grow(bufY, nx * lines);
+  grow(bufY, nx * lines, block);
   for (size_t k = 0; k < mz; ++k)
     applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
-  grow(bufT, nx * lines);
+  grow(bufT, nx * lines, block);
   transpose(bufY.data(), lines, nx, bufT.data());
-  grow(bufB, mx * lines);
+  grow(bufB, mx * lines, block);
   for (size_t c0 = 0; c0 < lines; c0 += kChunk)
     applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines,
                        std::min(kChunk, lines - c0));
 
   // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
   // then z and y on the control-point layout (x fastest) in bufC.
-  grow(bufT, mx * lines);
+  grow(bufT, mx * lines, block);
   std::copy_n(bufB.data(), mx * lines, bufT.data());
   for (size_t c0 = 0; c0 < lines; c0 += kChunk)
     solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
-  grow(bufC, mx * lines);
+  grow(bufC, mx * lines, block);
   transpose(bufT.data(), mx, lines, bufC.data());
   for (size_t c0 = 0; c0 < slab; c0 += kChunk)
     solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
@@ -602,11 +608,12 @@ double BlockFitter::Impl::changeEnergyPasses(const Axes& axes, const FitResult& 
   const AxisSystem &ax = *axes.x, &ay = *axes.y, &az = *axes.z;
   const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
   const size_t slab = mx * my, lines = my * mz;
-  grow(bufC, mx * lines);
+  const size_t block = size_t(ax.n) * size_t(ay.n) * size_t(az.n);
+  grow(bufC, mx * lines, block);
   for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
   multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
   for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
-  grow(bufT, mx * lines);
+  grow(bufT, mx * lines, block);
   transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
   multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
   return sumSquares(bufT.data(), mx * lines);
@@ -701,29 +708,29 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
   const AxisSystem &ax = *axes.x, &ay = *axes.y, &az = *axes.z;
   const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
   const size_t mx = size_t(model.ncp[0]), my = size_t(model.ncp[1]), mz = size_t(model.ncp[2]);
-  const size_t planeSize = nx * ny;
+  const size_t planeSize = nx * ny, block = planeSize * nz;
 
   // x: control lines -> sample lines, transposed (line index fastest) so that lines are the
   // vectors.
   const size_t lines = my * mz;
-  grow(bufT, mx * lines);
+  grow(bufT, mx * lines, block);
   transpose(model.control.data(), lines, mx, bufT.data());
-  grow(bufC, nx * lines);
+  grow(bufC, nx * lines, block);
   evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
-  grow(bufX, nx * lines);
-  transpose(bufC.data(), nx, lines, bufX.data());
+  grow(bufY, nx * lines, block);
+  transpose(bufC.data(), nx, lines, bufY.data());
   // y: per z-slab, x-rows.
-  grow(bufEY, planeSize * mz);
+  grow(bufZ, planeSize * mz, block);
   for (size_t k = 0; k < mz; ++k)
-    evaluateRows(ay, bufX.data() + k * nx * my, nx, bufEY.data() + k * planeSize, nx, nx, nullptr);
+    evaluateRows(ay, bufY.data() + k * nx * my, nx, bufZ.data() + k * planeSize, nx, nx, nullptr);
   // z: whole planes; either written out or reduced against the samples plane by plane.
   if (gridOut) {
-    grow(plane, planeSize);
-    evaluateRows(az, bufEY.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
+    grow(plane, planeSize, 0);
+    evaluateRows(az, bufZ.data(), planeSize, gridOut, planeSize, planeSize, plane.data());
     return;
   }
   const int w = az.p + 1;
-  grow(plane, planeSize);
+  grow(plane, planeSize, 0);
   // Four lanes as two pairs of doubles (GCC/Clang vector types: the reduction is vectorised);
   // lane l takes the values c = l mod 4, reduced in lane order at the end.
   using Pair = double __attribute__((vector_size(16)));
@@ -736,12 +743,12 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
     const size_t f = size_t(az.first[i]);
     double* __restrict v = plane.data();
     {
-      const double* __restrict src = bufEY.data() + f * planeSize;
+      const double* __restrict src = bufZ.data() + f * planeSize;
       const double a = wi[0];
       for (size_t c = 0; c < planeSize; ++c) v[c] = a * src[c];
     }
     for (int r = 1; r < w; ++r) {
-      const double* __restrict src = bufEY.data() + (f + size_t(r)) * planeSize;
+      const double* __restrict src = bufZ.data() + (f + size_t(r)) * planeSize;
       const double a = wi[r];
       for (size_t c = 0; c < planeSize; ++c) v[c] += a * src[c];
     }
@@ -807,9 +814,13 @@ void BlockFitter::evaluateOnGrid(const FitResult& model, std::array<int, 3> n,
   impl_->evaluate(model, n, nullptr, nullptr, out.data());
 }
 
-void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out) {
+BlockFitter& threadFitter() {
   thread_local BlockFitter fitter;
-  fitter.evaluateOnGrid(model, n, out);
+  return fitter;
+}
+
+void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out) {
+  threadFitter().evaluateOnGrid(model, n, out);
 }
 
 std::vector<double> collocationMatrix(int n, int ncp, int degree) {

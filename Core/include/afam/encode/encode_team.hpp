@@ -4,12 +4,12 @@
 // Each process fits a contiguous share (workShare) of every level's lines of blocks (the blocks
 // (0..Bx-1, j, k) of one j and k, numbered k * By + j), so the blocks of one level, concatenated in
 // rank order, are in the file's order; a process reads only the rows of the planes its lines need.
-// Per level the processes merge the per-block flags the next level's cross-level reuse needs
-// (mergeFlags) and hand their fitted models to the first process (gatherToFirst), which alone
-// writes the file; a run of steps (encode_run.hpp) then shares each step's models with every
-// process (broadcastFromFirst), which codes its blocks of the next step against them. The global
-// value range comes from a reduction (reduceRange). Any exception on any process reaches every
-// process at the next collective step (agreeOnError), so none waits for a process that has stopped.
+// The processes hand their fitted models of every level to the first process (gatherToFirst), which
+// alone writes the file, level by level; a run of steps (encode_run.hpp) then shares each step's
+// models with every process (broadcastFromFirst), which codes its blocks of the next step against
+// them. The global value range comes from a reduction (reduceRange). Any exception on any process
+// reaches every process at the next collective step (agreeOnError), so none waits for a process
+// that has stopped.
 //
 // Every call but rank() / size() is collective: all processes call it, in the same order. Core
 // knows no MPI: the ParaView filter implements this over its vtkMultiProcessController; SoloTeam

@@ -144,7 +144,6 @@ struct LevelStats {
   int64_t blocks = 0;         ///< micro-blocks of the level
   int64_t searched = 0;       ///< blocks that ran the in-level search
   int64_t complex = 0;        ///< blocks with NCP* > p+1
-  int64_t refits = 0;         ///< blocks whose cross-level reuse missed the bound and were searched
   int64_t exact = 0;          ///< blocks no NCP could fit within the bound, stored as their samples
   int64_t reducedDegree = 0;  ///< blocks with an axis of 2..degree samples (degree lowered there)
   int64_t fits = 0;           ///< fits performed at this level

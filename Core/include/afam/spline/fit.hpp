@@ -208,7 +208,15 @@ ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
 double sumOfSquares(const float* samples, std::array<int, 3> n);
 
 /// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
-/// Convenience wrapper over a thread-local BlockFitter.
+/// The calling thread's fitter, kept for the thread's life: the encoder's fitting threads, the
+/// decoding of interpolants (decodeInterpolant) and evaluateOnGrid share it, so that a thread
+/// faults in one set of block-sized work buffers, not one per use (a small volume's encode was
+/// a third page zeroing when each held its own). Whoever holds it across a call that may use it
+/// again (setMask, the last solve's energy) keeps no state the other call changes: the decoding's
+/// fits measure nothing.
+BlockFitter& threadFitter();
+
+/// Convenience wrapper over threadFitter().
 void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
 /// The n x ncp collocation matrix of one axis (row-major: entry (i, j) is control point j's basis

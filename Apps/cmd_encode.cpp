@@ -193,10 +193,12 @@ int runEncode(int argc, char** argv) {
         "level %zu: blocks=%lld searched=%lld complex=%lld exact=%lld fits=%lld "
         "bytes=%llu "
         "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f "
-        "fit_wait_seconds=%.3f ahead_seconds=%.3f residual_seconds=%.3f ncp:",
+        "fit_wait_seconds=%.3f ahead_seconds=%.3f ahead_prep_seconds=%.3f upload_seconds=%.3f "
+        "residual_seconds=%.3f ncp:",
         l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.exact,
         (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound,
-        ls.seconds, ls.sampleSeconds, ls.fitWaitSeconds, ls.aheadSeconds, ls.residualSeconds);
+        ls.seconds, ls.sampleSeconds, ls.fitWaitSeconds, ls.aheadSeconds, ls.aheadPrepSeconds,
+        ls.uploadSeconds, ls.residualSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

@@ -376,6 +376,7 @@ class LevelEncoder {
     double seconds = 0;   ///< spent sampling it
     AheadStats ahead;
     double aheadSeconds = 0;  ///< spent asking
+    double prepSeconds = 0;   ///< of it, preparing the questions on the CPU
   };
 
   /// Every level's lines of blocks (this process's share), coarse to fine, streamed through the
@@ -448,6 +449,8 @@ class LevelEncoder {
       ls.aheadRounds += cur.ahead.rounds;
       ls.aheadSeconds += cur.aheadSeconds;
       ls.residualSeconds += cur.ahead.residualSeconds;
+      ls.aheadPrepSeconds += cur.prepSeconds;
+      ls.uploadSeconds += cur.ahead.uploadSeconds;
       if (!more) break;
       cur = std::move(*next);
       l = nl;
@@ -620,6 +623,7 @@ class LevelEncoder {
           asked[size_t(i)] = a;
         },
         [] { return true; });
+    b.prepSeconds = secondsSince(t0);
     std::vector<AheadBlock> blocks;
     for (std::optional<AheadBlock>& a : asked)
       if (a) blocks.push_back(*a);

@@ -66,7 +66,10 @@ AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blo
     b.out->bound = settings.bound;
     b.out->known.clear();
   }
+  const auto tUpload = std::chrono::steady_clock::now();
   batch.setBlocks(samples, shapes, settings.degree);
+  stats.uploadSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - tUpload).count();
   std::vector<std::optional<std::array<double, 3>>> rough;
   for (const AheadBlock& b : blocks) rough.push_back(b.rough);
   std::vector<uint8_t> open(blocks.size(), 1);

@@ -165,6 +165,9 @@ struct LevelStats {
   /// the sampling of the next) and of them waiting for the residuals.
   int64_t askedAhead = 0, aheadRounds = 0;
   double aheadSeconds = 0, residualSeconds = 0;
+  /// Of aheadSeconds: the blocks' questions prepared on the CPU (their roughness, the noise probe),
+  /// and their samples handed to the device (LeastSquaresBatch::setBlocks).
+  double aheadPrepSeconds = 0, uploadSeconds = 0;
 };
 
 struct EncodeStats {

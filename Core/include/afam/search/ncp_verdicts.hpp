@@ -42,6 +42,7 @@ struct AheadBlock {
 /// What asking ahead took.
 struct AheadStats {
   int64_t requests = 0, rounds = 0, unsure = 0;
+  double uploadSeconds = 0;    ///< handing the batch's samples over (LeastSquaresBatch::setBlocks)
   double residualSeconds = 0;  ///< waiting for the batch's residuals
 };
 

@@ -372,8 +372,9 @@ class LevelEncoder {
   /// Lines of blocks of one level, sampled.
   struct Batch {
     std::vector<BlockTask> tasks;
-    int64_t endLine = 0;  ///< the first line not in this batch
-    double seconds = 0;   ///< spent sampling it
+    int64_t endLine = 0;                ///< the first line not in this batch
+    double seconds = 0;                 ///< spent sampling it
+    std::vector<AheadBlock> questions;  ///< its searches to ask ahead (prepareAhead)
     AheadStats ahead;
     double aheadSeconds = 0;  ///< spent asking
     double prepSeconds = 0;   ///< of it, preparing the questions on the CPU
@@ -408,6 +409,7 @@ class LevelEncoder {
     while (l < levels && lines[size_t(l)].empty()) ++l;
     if (l == levels) return stats;
     Batch cur = gatherLines(l, lines[size_t(l)].first, lines[size_t(l)].end);
+    prepareAhead(l, cur);
     int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
     for (;;) {
       // The batch after cur: the rest of cur's level, else the next level with lines here.
@@ -423,10 +425,11 @@ class LevelEncoder {
       // sampled here, once the batch before cur is fitted: at most two batches of samples at a
       // time (the one fitted or asked, the one sampled) and the last blocks of a third. Where
       // batches are asked ahead (their questions take about as long as their sampling), once
-      // the batch before that is fitted: the batch before cur is fitted meanwhile.
+      // the batch before that is fitted: the batch before cur is fitted meanwhile; the next
+      // batch's questions are prepared here too, while the device answers cur's.
       const int64_t fitted = opt_.leastSquares ? before : first;
       std::future<void> asking = std::async(std::launch::async, [&] {
-        askAheadOf(l, cur);
+        askAheadOf(cur);
         stream.publish(std::move(cur.tasks));
       });
       std::optional<Batch> next;
@@ -435,6 +438,7 @@ class LevelEncoder {
           if (!stream.drain(fitted, take, tick)) throw cancelled();
           if (nl != l) clock.started(nl);
           next = gatherLines(nl, from, lines[size_t(nl)].end);
+          prepareAhead(nl, *next);
         }
       } catch (...) {
         asking.wait();  // it uses cur and the stream
@@ -595,14 +599,19 @@ class LevelEncoder {
     return batch;
   }
 
-  /// Which of the batch's blocks search; with EncoderOptions::leastSquares, their searches asked
-  /// ahead (the blocks with finite samples), the verdicts in the tasks. A run's steps search at
-  /// bounds that depend on the step before: not asked. Uses the asking pool.
-  void askAheadOf(int l, Batch& b) {
+  /// Whether a batch's searches are asked ahead (EncoderOptions::leastSquares): under an RMSE
+  /// bound, not in a run's steps (their bounds depend on the step before), and not after a failure.
+  bool asksAhead() const {
+    return opt_.leastSquares && bounded(opt_.mode) && opt_.boundKind == BoundKind::Rmse &&
+           !opt_.runStep && !aheadFailed_;
+  }
+
+  /// Which of the batch's blocks search, and where asked ahead, their questions (the blocks with
+  /// finite samples, their roughness and noise probe): on the asking pool, beside the device's
+  /// answers to the batch before.
+  void prepareAhead(int l, Batch& b) {
     for (BlockTask& t : b.tasks) t.search = searches();
-    if (!opt_.leastSquares || !bounded(opt_.mode) || opt_.boundKind != BoundKind::Rmse ||
-        opt_.runStep || aheadFailed_)
-      return;
+    if (!asksAhead()) return;
     const auto t0 = Clock::now();
     const FitContext ctx{opt_, bound_, l, source_.name()};
     std::vector<std::optional<AheadBlock>> asked(b.tasks.size());
@@ -614,7 +623,7 @@ class LevelEncoder {
           if (!t.search || anyNaN(t.samples.data(), t.samples.size())) return;
           const BlockExtent e = part_.extent(l, t.ijk);
           AheadBlock a;
-          a.samples = t.samples.data();
+          a.samples = t.samples.data();  // the tasks' storage stays put until they are published
           a.n = e.samples;
           a.out = &t.verdicts;
           t.roughness = axisRoughness(t.samples.data(), e.samples);
@@ -623,21 +632,25 @@ class LevelEncoder {
           asked[size_t(i)] = a;
         },
         [] { return true; });
-    b.prepSeconds = secondsSince(t0);
-    std::vector<AheadBlock> blocks;
     for (std::optional<AheadBlock>& a : asked)
-      if (a) blocks.push_back(*a);
-    if (blocks.empty()) return;
+      if (a) b.questions.push_back(*a);
+    b.prepSeconds = secondsSince(t0);
+  }
+
+  /// The batch's prepared questions asked of the device, their verdicts in the tasks.
+  void askAheadOf(Batch& b) {
+    if (b.questions.empty() || !asksAhead()) return;
+    const auto t0 = Clock::now();
     const SearchSettings settings{opt_.degree, searchBound(opt_, bound_), opt_.search,
                                   opt_.fastWindow, opt_.perAxisNcp};
     try {
-      b.ahead = askAhead(*opt_.leastSquares, blocks, settings);
+      b.ahead = askAhead(*opt_.leastSquares, b.questions, settings);
     } catch (const std::exception& e) {  // asking ahead only spares fits: the rest is fitted
       std::lock_guard<std::mutex> lock(aheadMutex_);
       aheadFailure_ = e.what();
       aheadFailed_ = true;
     }
-    b.aheadSeconds = secondsSince(t0);
+    b.aheadSeconds = b.prepSeconds + secondsSince(t0);
   }
 
  public:

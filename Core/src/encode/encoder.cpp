@@ -412,14 +412,7 @@ class LevelEncoder {
     prepareAhead(l, cur);
     int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
     for (;;) {
-      // The batch after cur: the rest of cur's level, else the next level with lines here.
-      int nl = l;
-      int64_t from = cur.endLine;
-      if (from >= lines[size_t(l)].end) {
-        do ++nl;
-        while (nl < levels && lines[size_t(nl)].empty());
-        if (nl < levels) from = lines[size_t(nl)].first;
-      }
+      const auto [nl, from] = batchAfter(l, cur.endLine, lines);
       const bool more = nl < levels;
       // cur is asked ahead and then published on a thread of its own while the next batch is
       // sampled here, once the batch before cur is fitted: at most two batches of samples at a
@@ -447,20 +440,34 @@ class LevelEncoder {
       asking.get();
       before = first;
       first = stream.published();
-      LevelStats& ls = stats[size_t(l)];
-      ls.sampleSeconds += cur.seconds;
-      ls.askedAhead += cur.ahead.requests;
-      ls.aheadRounds += cur.ahead.rounds;
-      ls.aheadSeconds += cur.aheadSeconds;
-      ls.residualSeconds += cur.ahead.residualSeconds;
-      ls.aheadPrepSeconds += cur.prepSeconds;
-      ls.uploadSeconds += cur.ahead.uploadSeconds;
+      countBatch(cur, stats[size_t(l)]);
       if (!more) break;
       cur = std::move(*next);
       l = nl;
     }
     if (!stream.drain(count, take, tick)) throw cancelled();
     return stats;
+  }
+
+  /// Where the batch after one of level l that ended before line endLine starts: the rest of
+  /// level l, else the next level with lines here; (levels, 0) when none is left.
+  static std::pair<int, int64_t> batchAfter(int l, int64_t endLine,
+                                            const std::vector<WorkShare>& lines) {
+    if (endLine < lines[size_t(l)].end) return {l, endLine};
+    do ++l;
+    while (l < int(lines.size()) && lines[size_t(l)].empty());
+    return {l, l < int(lines.size()) ? lines[size_t(l)].first : 0};
+  }
+
+  /// A batch's sampling and asking, in its level's statistics.
+  static void countBatch(const Batch& b, LevelStats& ls) {
+    ls.sampleSeconds += b.seconds;
+    ls.askedAhead += b.ahead.requests;
+    ls.aheadRounds += b.ahead.rounds;
+    ls.aheadSeconds += b.aheadSeconds;
+    ls.residualSeconds += b.ahead.residualSeconds;
+    ls.aheadPrepSeconds += b.prepSeconds;
+    ls.uploadSeconds += b.ahead.uploadSeconds;
   }
 
   /// After every process has run encodeLevels: the models of a team reach the first process's

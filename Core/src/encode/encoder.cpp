@@ -399,16 +399,15 @@ class LevelEncoder {
       lines.push_back(share(l));
       count += (lines.back().end - lines.back().first) * part_.blocksPerAxis(l)[0];
     }
-    TaskStream<BlockTask> stream(pool_, count, [&](int, BlockTask& t) {
-      fitTask(ctx[size_t(t.entry.level)], t.entry.level, t);
-    });
+    TaskStream<BlockTask> stream(
+        pool_, count, [&](int, BlockTask& t) { fitTask(ctx[size_t(t.entry.level)], t); });
     LevelClock clock(part_, lines, stream, stats);
     const auto take = [&](BlockTask& t) { handOn(t, clock, stats); };
     const auto tick = [&] { return progress_.report(clock.samplesDone()); };
-    int l = 0;
-    while (l < levels && lines[size_t(l)].empty()) ++l;
+    auto [l, start] = lines[0].empty() ? batchAfter(0, lines[0].end, lines)
+                                       : std::pair<int, int64_t>{0, lines[0].first};
     if (l == levels) return stats;
-    Batch cur = gatherLines(l, lines[size_t(l)].first, lines[size_t(l)].end);
+    Batch cur = gatherLines(l, start, lines[size_t(l)].end);
     prepareAhead(l, cur);
     int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
     for (;;) {
@@ -526,10 +525,10 @@ class LevelEncoder {
     double samples_ = 0, waitedBefore_ = 0;
   };
 
-  /// Encodes one block on a fitting thread (askAheadOf said whether it searches).
-  void fitTask(const FitContext& ctx, int l, BlockTask& t) {
-    const BlockExtent e = part_.extent(l, t.ijk);
-    t.entry.level = l;
+  /// Encodes one block of level ctx.level on a fitting thread (prepareAhead said whether it
+  /// searches).
+  void fitTask(const FitContext& ctx, BlockTask& t) {
+    const BlockExtent e = part_.extent(ctx.level, t.ijk);
     t.entry.block = t.ijk;
     t.entry.samples = e.samples;
     if (ds())
@@ -675,7 +674,7 @@ class LevelEncoder {
   EncodeProgress& progress_;
   ModelSink& sink_;
   EncodeTeam& team_;
-  std::vector<uint8_t> outgoing_;  ///< a team's records of this level's fitted blocks
+  std::vector<uint8_t> outgoing_;  ///< a team's records of its fitted blocks, every level's
   int threads_;                    ///< fitting threads (each fits with its threadFitter())
   std::atomic<bool> aheadFailed_{false};
   std::mutex aheadMutex_;

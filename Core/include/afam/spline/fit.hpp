@@ -207,7 +207,6 @@ ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
 /// Sum of the squared samples of an n0 x n1 x n2 block, in double.
 double sumOfSquares(const float* samples, std::array<int, 3> n);
 
-/// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized).
 /// The calling thread's fitter, kept for the thread's life: the encoder's fitting threads, the
 /// decoding of interpolants (decodeInterpolant) and evaluateOnGrid share it, so that a thread
 /// faults in one set of block-sized work buffers, not one per use (a small volume's encode was
@@ -216,7 +215,8 @@ double sumOfSquares(const float* samples, std::array<int, 3> n);
 /// fits measure nothing.
 BlockFitter& threadFitter();
 
-/// Convenience wrapper over threadFitter().
+/// Separable evaluation of the model on its n0 x n1 x n2 uniform sample grid (out resized), by
+/// threadFitter().
 void evaluateOnGrid(const FitResult& model, std::array<int, 3> n, std::vector<float>& out);
 
 /// The n x ncp collocation matrix of one axis (row-major: entry (i, j) is control point j's basis

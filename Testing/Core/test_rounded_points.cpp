@@ -7,10 +7,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -199,4 +202,28 @@ TEST(RoundedPoints, ADamagedFlagOrShiftIsRefused) {
   EXPECT_NE(w.find("point step"), std::string::npos) << w;
   EXPECT_NE(w.find(Partition::blockName(e.level, e.block)), std::string::npos) << w;
   std::remove(bad.c_str());
+}
+
+TEST(RoundedPoints, TheSpanOfTheirCodesIsThatOfRoundPointsCodes) {
+  // roundPointsSpan (the encoder's trial of a step) rounds as roundPoints does and gives the span
+  // of the codes roundPoints writes; a point it cannot round fails both.
+  std::mt19937 rng(11);
+  std::normal_distribution<float> value(40.f, 300.f);
+  for (const double q : {0.5, 0.0625, 3.0}) {
+    std::vector<float> a(10007);
+    for (float& v : a) v = value(rng);
+    std::vector<float> b = a;
+    std::vector<int64_t> k(a.size());
+    ASSERT_TRUE(roundPoints(a.data(), a.size(), q, k.data()));
+    uint64_t span = 0;
+    ASSERT_TRUE(roundPointsSpan(b.data(), b.size(), q, span));
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << q;
+    const auto [lo, hi] = std::minmax_element(k.begin(), k.end());
+    EXPECT_EQ(span, uint64_t(*hi - *lo)) << q;
+    EXPECT_GT(span, uint64_t(1000 / q)) << q;  // ~+-4 sigma of 300 in steps of q
+  }
+  std::vector<float> bad = {1.f, std::numeric_limits<float>::quiet_NaN(), 2.f};
+  uint64_t span = 7;
+  EXPECT_FALSE(roundPointsSpan(bad.data(), bad.size(), 0.5, span));
+  EXPECT_EQ(span, 0u);
 }

@@ -14,12 +14,18 @@ TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
   const uint64_t before = threadScratchBytes();
   ASSERT_EQ(before, 0u);  // no other thread holds any
   auto* small = threadScratch<uint8_t>(ScratchSlot::Frame, 1000);
-  auto* large = threadScratch<float>(ScratchSlot::Residual, 300000);  // 1.2 MB: mapped
+  auto* large = threadScratch<float>(ScratchSlot::Residual, 300000);  // 1.2 MB: on huge pages
   std::memset(small, 7, 1000);
   large[299999] = 2.5f;
   EXPECT_EQ(reinterpret_cast<uintptr_t>(small) % 64, 0u);
-  EXPECT_GE(threadScratchBytes() - before, 1000u + 1200000u);
-  EXPECT_LT(threadScratchBytes() - before, 1000u + 1200000u + 2 * 65536u);
+  // What each holds: the small slot in 64-byte lines, the large one in whole huge pages.
+  EXPECT_EQ(threadScratchBytes() - before, 1024u + kHugePageBytes);
+#if defined(__linux__)
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(large) % kHugePageBytes, 0u);
+#endif
+  // A slot between 64 kB and 1 MB is mapped in ordinary pages.
+  threadScratch<uint8_t>(ScratchSlot::Stored, 100000);
+  EXPECT_EQ(threadScratchBytes() - before, 1024u + kHugePageBytes + 102400u);
   // Asking again for no more returns the same memory, contents kept.
   EXPECT_EQ(threadScratch<uint8_t>(ScratchSlot::Frame, 10), small);
   EXPECT_EQ(small[999], 7);
@@ -32,7 +38,7 @@ TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
   });  // freed when the thread ends
   other.join();
   EXPECT_GE(during, threadScratchBytes() + 1000u);
-  releaseThreadScratch();  // the large slot goes, the small one stays
+  releaseThreadScratch();  // the large slots go, the small one stays
   EXPECT_EQ(threadScratchBytes() - before, 1024u);
   EXPECT_EQ(threadScratch<uint8_t>(ScratchSlot::Frame, 10), small);
   releaseAllThreadScratch();  // the small one too

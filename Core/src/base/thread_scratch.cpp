@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "afam/base/thread_scratch.hpp"
 
+#include "afam/base/huge_pages.hpp"
+
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -24,7 +26,12 @@ size_t pageRounded(size_t bytes) {
   return (bytes + page - 1) / page * page;
 }
 
+size_t hugePageRounded(size_t bytes) {
+  return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+}
+
 void* allocate(size_t bytes) {
+  if (bytes >= kHugePageMinBytes) return mapHugePages(bytes);  // one fault a 2 MB, not 512
   if (bytes >= kMapAtLeast) {
     void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) throw std::bad_alloc();
@@ -37,7 +44,9 @@ void* allocate(size_t bytes) {
 
 void deallocate(void* p, size_t bytes) {
   if (!p) return;
-  if (bytes >= kMapAtLeast)
+  if (bytes >= kHugePageMinBytes)
+    unmapHugePages(p, bytes);
+  else if (bytes >= kMapAtLeast)
     munmap(p, bytes);
   else
     std::free(p);
@@ -69,8 +78,9 @@ void* threadScratch(ScratchSlot slot, size_t bytes) {
   Slots& m = mine();
   const size_t s = size_t(slot);
   if (m.bytes[s] < bytes || !m.data[s]) {
-    const size_t size =
-        bytes >= kMapAtLeast ? pageRounded(bytes) : (std::max<size_t>(bytes, 1) + 63) / 64 * 64;
+    const size_t size = bytes >= kHugePageMinBytes ? hugePageRounded(bytes)
+                        : bytes >= kMapAtLeast     ? pageRounded(bytes)
+                                                   : (std::max<size_t>(bytes, 1) + 63) / 64 * 64;
     void* p = allocate(size);
     deallocate(m.data[s], m.bytes[s]);
     held.fetch_add(size, std::memory_order_relaxed);

@@ -222,7 +222,7 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
       lattice = false;
       return false;
     }
-    q.control.swap(trial.reconstructed);
+    q.control.assign(trial.reconstructed.begin(), trial.reconstructed.end());
     if (kind == BoundKind::MaxError) {
       q.errorMeasured = false;
       fitter.measure(s.data(), n, q);
@@ -299,18 +299,16 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
       bound, kRoundingGrowth * (kind == BoundKind::MaxError ? c.error.maxError : c.error.rmse));
   // The thread's buffers, kept between blocks (a block's worth of fresh pages is costly).
   thread_local FitResult rounded;
-  thread_local std::vector<int64_t> k;
   rounded.ncp = model.ncp;
   rounded.degree = model.degree;
-  k.resize(model.control.size());
   bool spanFits = true;
   auto passes = [&](int j, ErrorStats& e) {
     const double q = std::ldexp(step, -j);
     rounded.control = model.control;
-    if (!roundPoints(rounded.control.data(), rounded.control.size(), q, k.data()))
+    uint64_t span;
+    if (!roundPointsSpan(rounded.control.data(), rounded.control.size(), q, span))
       return spanFits = false;
-    const auto [lo, hi] = std::minmax_element(k.begin(), k.end());
-    if (uint64_t(*hi - *lo) >= kMaxCompactSpan) return spanFits = false;  // smaller steps span more
+    if (span >= kMaxCompactSpan) return spanFits = false;  // smaller steps span more
     e = fitter.error(s.data(), n, rounded);
     return keeps(kind, e, allowed);
   };
@@ -341,7 +339,7 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
       lattice = false;
       return false;
     }
-    const std::vector<float>& recon = trial.reconstructed;
+    const HugePageVector<float>& recon = trial.reconstructed;
     if (!keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound))
       return false;
     std::swap(trial, kept);

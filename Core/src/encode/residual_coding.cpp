@@ -37,7 +37,7 @@ FitResult applyResidual(const ModelEntry& before, const FitResult& model,
 }
 
 /// RMSE and largest error of (base + q) against the samples.
-ErrorStats errorOfSum(const std::vector<float>& base, const std::vector<float>& q,
+ErrorStats errorOfSum(const std::vector<float>& base, const HugePageVector<float>& q,
                       const std::vector<float>& s) {
   ErrorStats es;
   double sum = 0;
@@ -80,7 +80,7 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
   }
   const Predictor form = onSamples ? Predictor::IntegerInterpolation : Predictor::IntegerLorenzo;
   FitResult trial = model;
-  auto keepsBound = [&](const std::vector<float>& q) {
+  auto keepsBound = [&](const HugePageVector<float>& q) {
     if (onSamples) return keeps(kind, errorOfSum(values, q, s), c.bound);
     for (size_t i = 0; i < q.size(); ++i) trial.control[i] = model.control[i] + q[i];
     trial.errorMeasured = false;
@@ -88,8 +88,9 @@ bool codeResidualIfSmaller(const FitContext& c, const BlockExtent& e, BlockFitte
     fitter.measure(s.data(), n, trial);
     return keeps(kind, trial.error, c.bound);
   };
-  // The trial step's quantization, and the last passing step's: the one coded.
-  QuantizedValues quantized, kept;
+  // The trial step's quantization, and the last passing step's: the one coded (the thread's
+  // buffers, kept between blocks).
+  thread_local QuantizedValues quantized, kept;
   auto passes = [&](double k) {
     if (!quantizeValues(delta.data(), model.ncp, ladderStep(kind, budget, k), form, quantized) ||
         !keepsBound(quantized.reconstructed))

@@ -77,7 +77,7 @@ inline double codeOf(double value, double pred, double step, bool isFree, int64_
 /// (lorenzoFourRows: each value waits for its prediction, a chain of dependent divisions), its
 /// codes stored at their values' places, which is its visiting order.
 bool predictQuantize(const float* values, Int3 n, double step, Predictor predictor,
-                     std::vector<int64_t>& codes, std::vector<float>& reconstructed,
+                     HugePageVector<int64_t>& codes, HugePageVector<float>& reconstructed,
                      FreeValues free) {
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
   // The thread's buffer, not cleared: every value a prediction reads is written first (as in
@@ -117,7 +117,7 @@ bool predictQuantize(const float* values, Int3 n, double step, Predictor predict
 
 Predictor choosePredictorForm(const float* values, size_t count, double step, Predictor family) {
   int64_t base;
-  thread_local std::vector<int32_t> k;
+  thread_local HugePageVector<int32_t> k;
   if (!(step > 0) || !std::isfinite(step) || !codec::integerQuantize(values, count, step, base, k))
     return family;
   return family == Predictor::Lorenzo ? Predictor::IntegerLorenzo : Predictor::IntegerInterpolation;
@@ -125,9 +125,9 @@ Predictor choosePredictorForm(const float* values, size_t count, double step, Pr
 
 namespace {
 /// The residual codes of q: an integer form's are formed from its k when first asked.
-const std::vector<int64_t>& codesOf(QuantizedValues& q) {
+const HugePageVector<int64_t>& codesOf(QuantizedValues& q) {
   if (!q.hasCodes) {
-    thread_local std::vector<int32_t> r;
+    thread_local HugePageVector<int32_t> r;
     codec::integerResiduals(q.predictor, q.n, q.k, r);
     q.codes.assign(r.begin(), r.end());
     q.hasCodes = true;
@@ -150,7 +150,7 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
   if (!codec::integerQuantize(values, count, step, q.base, q.k)) return false;
   if (free.valid && predictor == Predictor::IntegerInterpolation) {
     // A free value may take its prediction, which changes its k: the predictor's order decides.
-    thread_local std::vector<int32_t> r;
+    thread_local HugePageVector<int32_t> r;
     codec::integerResiduals(predictor, n, q.k, r, free);
     q.codes.assign(r.begin(), r.end());
     q.hasCodes = true;
@@ -164,13 +164,13 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
                     std::vector<float>& reconstructed, FreeValues free) {
   thread_local QuantizedValues q;
   if (!quantizeValues(values, n, step, predictor, q, free)) return false;
-  reconstructed.swap(q.reconstructed);
+  reconstructed.assign(q.reconstructed.begin(), q.reconstructed.end());
   return true;
 }
 
 namespace {
 /// Order-0 entropy of the codes, in bits: a histogram where they span few values, else sorted.
-double orderZeroBits(const std::vector<int64_t>& codes) {
+double orderZeroBits(const HugePageVector<int64_t>& codes) {
   if (codes.empty()) return 0;
   const auto [lo, hi] = std::minmax_element(codes.begin(), codes.end());
   const double total = double(codes.size());
@@ -213,7 +213,7 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
 }
 
 FrameSizes encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out) {
-  const std::vector<int64_t>& codes = codesOf(q);
+  const HugePageVector<int64_t>& codes = codesOf(q);
   thread_local std::vector<uint8_t> varints;
   varints.clear();
   varints.reserve(codes.size() + codes.size() / 4);
@@ -235,7 +235,7 @@ bool encodeValues(const float* values, Int3 n, double step, Predictor predictor,
   thread_local QuantizedValues q;
   if (!quantizeValues(values, n, step, predictor, q, free)) return false;
   encodeQuantized(q, coding, out);
-  reconstructed.swap(q.reconstructed);
+  reconstructed.assign(q.reconstructed.begin(), q.reconstructed.end());
   return true;
 }
 
@@ -364,6 +364,21 @@ bool roundEvery(float* points, size_t count, double q, int64_t* k) {
 
 bool roundPoints(float* points, size_t count, double q, int64_t* k) {
   return k ? roundEvery<true>(points, count, q, k) : roundEvery<false>(points, count, q, nullptr);
+}
+
+bool roundPointsSpan(float* points, size_t count, double q, uint64_t& span) {
+  const double inverse = 1.0 / q;
+  bool ok = true;
+  // The codes' extremes as doubles (whole numbers below 2^53: exact), in a loop that vectorizes.
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t i = 0; i < count; ++i) {
+    double code;
+    ok &= roundedPoint(points[i], q, inverse, &points[i], &code);
+    lo = code < lo ? code : lo;
+    hi = code > hi ? code : hi;
+  }
+  span = ok && count > 0 ? uint64_t(int64_t(hi) - int64_t(lo)) : 0;
+  return ok;
 }
 
 int64_t pointCode(float c, double q) {

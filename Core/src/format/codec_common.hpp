@@ -18,28 +18,15 @@
 #include "afam/base/round_half_even.hpp"
 #include "afam/base/thread_scratch.hpp"
 #include "afam/entropy/lanes_coder.hpp"
+#include "afam/entropy/zstd_contexts.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/format/value_prediction.hpp"
 
 namespace afam::codec {
 
-struct CCtxDeleter {
-  void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
-};
-struct DCtxDeleter {
-  void operator()(ZSTD_DCtx* c) const { ZSTD_freeDCtx(c); }
-};
-
-inline ZSTD_CCtx* threadCCtx() {
-  thread_local std::unique_ptr<ZSTD_CCtx, CCtxDeleter> ctx(ZSTD_createCCtx());
-  return ctx.get();
-}
-
-inline ZSTD_DCtx* threadDCtx() {
-  thread_local std::unique_ptr<ZSTD_DCtx, DCtxDeleter> ctx(ZSTD_createDCtx());
-  return ctx.get();
-}
+using afam::threadCCtx;  // zstd_contexts.hpp
+using afam::threadDCtx;
 
 inline void putVarint(uint64_t u, std::vector<uint8_t>& out) {
   while (u >= 0x80) {

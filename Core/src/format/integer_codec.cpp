@@ -285,7 +285,7 @@ void valueRange(const float* values, size_t count, float& lo, float& hi) {
 }  // namespace
 
 bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
-                     std::vector<int32_t>& k) {
+                     HugePageVector<int32_t>& k) {
   if (count == 0) return false;
   float lo, hi;
   valueRange(values, count, lo, hi);
@@ -308,8 +308,8 @@ bool integerQuantize(const float* values, size_t count, double step, int64_t& ba
   return ok;
 }
 
-void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,
-                      FreeValues free) {
+void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k,
+                      HugePageVector<int32_t>& residuals, FreeValues free) {
   residuals.resize(k.size());
   Word* r = reinterpret_cast<Word*>(residuals.data());
   if (p == Predictor::IntegerLorenzo) {

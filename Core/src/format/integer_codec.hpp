@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "afam/base/huge_pages.hpp"
 #include "afam/format/block_codec.hpp"
 
 namespace afam::codec {
@@ -16,7 +17,7 @@ namespace afam::codec {
 /// Quantizes every value on its own: k = round(value / step) - base, base the middle of the
 /// values in steps. False when a value is not finite or some |k| >= 2^26.
 bool integerQuantize(const float* values, size_t count, double step, int64_t& base,
-                     std::vector<int32_t>& k);
+                     HugePageVector<int32_t>& k);
 
 /// What a reader reconstructs from k: float((base + k) * step); base + k is formed as
 /// double(base) + double(k), exact as both lie below 2^53 (and vectorizable).
@@ -27,12 +28,8 @@ inline float integerValue(int64_t base, int32_t k, double step) {
 /// The residuals of k under an integer predictor, in the predictor's visiting order. With free
 /// values (block_codec.hpp's FreeValues; interpolation only), a free point whose prediction lies
 /// within free.slack of its k takes the prediction as its k, and its residual is 0.
-void integerResiduals(Predictor p, Int3 n, std::vector<int32_t>& k, std::vector<int32_t>& residuals,
-                      FreeValues free = {});
-
-/// Codes the values of an integer predictor: header, then the residuals' zstd frame.
-void packInteger(Predictor p, double step, int64_t base, const std::vector<int32_t>& residuals,
-                 int zstdLevel, std::vector<uint8_t>& out);
+void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k,
+                      HugePageVector<int32_t>& residuals, FreeValues free = {});
 
 /// Decodes an integer-form payload (data[8] names an integer predictor) into out.
 void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);

@@ -385,14 +385,24 @@ double sumOfSquares(const float* samples, std::array<int, 3> n) {
   return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
 }
 
+/// Lines of an x pass handled together (BlockFitter::Impl::lineTiles): a tile of 64 lines of up to
+/// 130 values is 66 kB of doubles each way, in L2. Block-wide transposes instead (three passes
+/// over the block's doubles, strides of powers of two) made a 64^3 fit and error at NCP 64 1.2-1.7x
+/// slower (bench_fit's BM_FitBanded, fastest of 15 runs; 16-line tiles were in between).
+constexpr size_t kLineTile = 64;
+
 /// A range that decides nothing: the error is measured.
 constexpr RmseRange kUndecided{0.0, std::numeric_limits<double>::infinity()};
 
 struct BlockFitter::Impl {
   std::vector<std::unique_ptr<AxisSystem>> cache;
-  // A solve's passes (bufZ, bufY, bufT, bufB, bufC) and an evaluation's (bufT, bufC, bufY, bufZ,
-  // plane) share the buffers: a thread touches one set of block-sized pages.
-  HugePageVector<double> bufZ, bufY, bufT, bufB, bufC, plane;
+  // Two block-sized buffers for every pass: a solve's z pass into bufZ, its y pass into bufY, its
+  // x pass (lineTiles) b into bufZ (x index slowest) and c into bufY (x fastest, in place), kept
+  // there for energy(); an evaluation's x pass into bufY and y pass into bufZ. A thread touches two
+  // block-sized sets of pages (each fresh page costs a fault and its clearing).
+  HugePageVector<double> bufZ, bufY, plane;
+  // The x passes' tiles of kLineTile lines (lineTiles): transposed in cache, not block-wide.
+  std::vector<double> tileIn, tileOut;
   const std::vector<uint32_t>* valid = nullptr;  ///< setMask
   std::vector<float> grid;                       ///< the model on the grid, for masked errors
 
@@ -401,6 +411,23 @@ struct BlockFitter::Impl {
   /// pointed to (a segfault once an NCP search had used 64 shapes).
   void trimCache() {
     if (cache.size() + 3 > 64) cache.clear();  // encoders use a handful of shapes
+  }
+
+  /// A pass along x over `lines` lines of `from` values each (x fastest, src) into lines of `to`
+  /// values each (x fastest, dst), kLineTile lines at a time: each tile transposed into tileIn (x
+  /// index slowest, the lines the vectors), pass(l0, t, tileIn, tileOut) writes tileOut in that
+  /// layout, which is transposed into dst. Each value's sums are those of a block-wide transpose.
+  template <typename In, typename Pass>
+  AFAM_FIT_INLINE void lineTiles(size_t lines, size_t from, size_t to, const In* src, Pass&& pass,
+                                 double* dst) {
+    tileIn.resize(from * kLineTile);
+    tileOut.resize(to * kLineTile);
+    for (size_t l0 = 0; l0 < lines; l0 += kLineTile) {
+      const size_t t = std::min(kLineTile, lines - l0);
+      transpose(src + l0 * from, t, from, tileIn.data());
+      pass(l0, t, tileIn.data(), tileOut.data());
+      transpose(tileOut.data(), to, t, dst + l0 * to);
+    }
   }
 
   const AxisSystem& axis(int n, int ncp, int p, bool needFactor) {
@@ -427,7 +454,7 @@ struct BlockFitter::Impl {
   Axes prepareFit(const float* samples, const std::array<int, 3>& n, const std::array<int, 3>& ncp,
                   int degree, bool checkSamples = true);
 
-  /// The least-squares solve: b = A^T d in bufB (x index slowest), the double solution c in bufC
+  /// The least-squares solve: b = A^T d in bufZ (x index slowest), the double solution c in bufY
   /// (x fastest) and its float32 control points in `out`; returns max |control point|.
   double solve(const Axes& a, const float* samples, const std::array<int, 3>& n, FitResult& out) {
     float largest;
@@ -538,8 +565,8 @@ float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
   const size_t block = planeSize * size_t(n[2]);
   constexpr size_t kChunk = 256;  // columns per chunk, so that a chunk's rows stay in cache
 
-  // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (the
-  // x-lines transposed, line index fastest, so that they are the vectors): bufB, x index slowest.
+  // b = A^T d, along z (whole xy-planes are the vectors), then y (per z-slab, x-rows), then x (in
+  // tiles of x-lines transposed, line index fastest, so that they are the vectors).
   grow(bufZ, planeSize * mz, block);
   for (size_t c0 = 0; c0 < planeSize; c0 += kChunk)
     applyTransposeRows(az, samples + c0, planeSize, bufZ.data() + c0, planeSize,
@@ -547,24 +574,23 @@ float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
   grow(bufY, nx * lines, block);
   for (size_t k = 0; k < mz; ++k)
     applyTransposeRows(ay, bufZ.data() + k * planeSize, nx, bufY.data() + k * nx * my, nx, nx);
-  grow(bufT, nx * lines, block);
-  transpose(bufY.data(), lines, nx, bufT.data());
-  grow(bufB, mx * lines, block);
-  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
-    applyTransposeRows(ax, bufT.data() + c0, lines, bufB.data() + c0, lines,
-                       std::min(kChunk, lines - c0));
+  // Then x and x's solve, kLineTile lines at a time: a tile of bufY transposed (x slowest), its b
+  // kept in bufZ (x index slowest, for energy(); the y pass has read bufZ), solved, and transposed
+  // back into bufY in place (a tile's mx values a line land below the lines still to be read).
+  lineTiles(
+      lines, nx, mx, bufY.data(),
+      [&](size_t l0, size_t t, double* in, double* b) {
+        applyTransposeRows(ax, in, t, b, t, t);
+        for (size_t j = 0; j < mx; ++j) std::copy_n(b + j * t, t, bufZ.data() + j * lines + l0);
+        solveRows(ax, b, t, t);
+      },
+      bufY.data());
 
-  // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x on bufB's layout,
-  // then z and y on the control-point layout (x fastest) in bufC.
-  grow(bufT, mx * lines, block);
-  std::copy_n(bufB.data(), mx * lines, bufT.data());
-  for (size_t c0 = 0; c0 < lines; c0 += kChunk)
-    solveRows(ax, bufT.data() + c0, lines, std::min(kChunk, lines - c0));
-  grow(bufC, mx * lines, block);
-  transpose(bufT.data(), mx, lines, bufC.data());
+  // (Nz (x) Ny (x) Nx) c = b, one axis at a time on the mx my mz coefficients: x above, then z
+  // and y on the control-point layout (x fastest) in bufY.
   for (size_t c0 = 0; c0 < slab; c0 += kChunk)
-    solveRows(az, bufC.data() + c0, slab, std::min(kChunk, slab - c0));
-  for (size_t k = 0; k < mz; ++k) solveRows(ay, bufC.data() + k * slab, mx, mx);
+    solveRows(az, bufY.data() + c0, slab, std::min(kChunk, slab - c0));
+  for (size_t k = 0; k < mz; ++k) solveRows(ay, bufY.data() + k * slab, mx, mx);
 
   out.ncp = {ax.ncp, ay.ncp, az.ncp};
   out.degree = {ax.p, ay.p, az.p};
@@ -572,7 +598,7 @@ float BlockFitter::Impl::solvePasses(const Axes& a, const float* samples,
   // Eight lanes of |control point| maxima (max is exact in any order; NaN ignored as std::max
   // does).
   float* __restrict control = out.control.data();
-  const double* __restrict c = bufC.data();
+  const double* __restrict c = bufY.data();
   using Eight = float __attribute__((vector_size(32)));
   Eight most = {0, 0, 0, 0, 0, 0, 0, 0};
   const size_t count = mx * lines;
@@ -597,8 +623,8 @@ double BlockFitter::Impl::energyPass(const std::array<int, 3>& ncp) const {
   const size_t mx = size_t(ncp[0]), lines = size_t(ncp[1]) * size_t(ncp[2]);
   double lane[4] = {0, 0, 0, 0};
   for (size_t j = 0; j < mx; ++j) {
-    const double* __restrict b = bufB.data() + j * lines;
-    for (size_t l = 0; l < lines; ++l) lane[l % 4] += b[l] * bufC[l * mx + j];
+    const double* __restrict b = bufZ.data() + j * lines;
+    for (size_t l = 0; l < lines; ++l) lane[l % 4] += b[l] * bufY[l * mx + j];
   }
   return (lane[0] + lane[1]) + (lane[2] + lane[3]);
 }
@@ -609,14 +635,14 @@ double BlockFitter::Impl::changeEnergyPasses(const Axes& axes, const FitResult& 
   const size_t mx = size_t(a.ncp[0]), my = size_t(a.ncp[1]), mz = size_t(a.ncp[2]);
   const size_t slab = mx * my, lines = my * mz;
   const size_t block = size_t(ax.n) * size_t(ay.n) * size_t(az.n);
-  grow(bufC, mx * lines, block);
-  for (size_t i = 0; i < mx * lines; ++i) bufC[i] = double(a.control[i]) - double(b.control[i]);
-  multiplyFactorTransposeRows(az, bufC.data(), slab, slab);
-  for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufC.data() + k * slab, mx, mx);
-  grow(bufT, mx * lines, block);
-  transpose(bufC.data(), lines, mx, bufT.data());  // x index slowest: the x-lines are the vectors
-  multiplyFactorTransposeRows(ax, bufT.data(), lines, lines);
-  return sumSquares(bufT.data(), mx * lines);
+  grow(bufY, mx * lines, block);
+  for (size_t i = 0; i < mx * lines; ++i) bufY[i] = double(a.control[i]) - double(b.control[i]);
+  multiplyFactorTransposeRows(az, bufY.data(), slab, slab);
+  for (size_t k = 0; k < mz; ++k) multiplyFactorTransposeRows(ay, bufY.data() + k * slab, mx, mx);
+  grow(bufZ, mx * lines, block);
+  transpose(bufY.data(), lines, mx, bufZ.data());  // x index slowest: the x-lines are the vectors
+  multiplyFactorTransposeRows(ax, bufZ.data(), lines, lines);
+  return sumSquares(bufZ.data(), mx * lines);
 }
 
 void BlockFitter::fitInto(const float* samples, std::array<int, 3> n, std::array<int, 3> ncp,
@@ -713,12 +739,13 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
   // x: control lines -> sample lines, transposed (line index fastest) so that lines are the
   // vectors.
   const size_t lines = my * mz;
-  grow(bufT, mx * lines, block);
-  transpose(model.control.data(), lines, mx, bufT.data());
-  grow(bufC, nx * lines, block);
-  evaluateRows(ax, bufT.data(), lines, bufC.data(), lines, lines, nullptr);
   grow(bufY, nx * lines, block);
-  transpose(bufC.data(), nx, lines, bufY.data());
+  lineTiles(
+      lines, mx, nx, model.control.data(),
+      [&](size_t, size_t t, double* in, double* out) {
+        evaluateRows(ax, in, t, out, t, t, nullptr);
+      },
+      bufY.data());
   // y: per z-slab, x-rows.
   grow(bufZ, planeSize * mz, block);
   for (size_t k = 0; k < mz; ++k)

@@ -12,14 +12,16 @@
 #include <utility>
 #include <vector>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 namespace afam {
 
 constexpr size_t kHugePageBytes = size_t(2) << 20;
 constexpr size_t kHugePageMinBytes = size_t(1) << 20;  ///< smaller: operator new
+
+/// `bytes` (rounded up to whole huge pages) mapped on their own, 2 MB aligned and marked for huge
+/// pages where the system has them (else ordinary pages); std::bad_alloc when none are left.
+void* mapHugePages(size_t bytes);
+/// Gives back what mapHugePages(bytes) mapped at p.
+void unmapHugePages(void* p, size_t bytes) noexcept;
 
 template <typename T>
 class HugePageAllocator {
@@ -31,32 +33,15 @@ class HugePageAllocator {
 
   T* allocate(size_t n) {
     const size_t bytes = n * sizeof(T);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (bytes >= kHugePageMinBytes) {
-      // Map one huge page more, keep the aligned part, give the ends back.
-      const size_t size = roundUp(bytes), mapped = size + kHugePageBytes;
-      void* p = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      if (p == MAP_FAILED) throw std::bad_alloc();
-      char* base = static_cast<char*>(p);
-      char* aligned = reinterpret_cast<char*>(roundUp(reinterpret_cast<size_t>(base)));
-      if (aligned > base) munmap(base, size_t(aligned - base));
-      const size_t tail = size_t(base + mapped - (aligned + size));
-      if (tail > 0) munmap(aligned + size, tail);
-      madvise(aligned, size, MADV_HUGEPAGE);  // advice: without it the buffer still works
-      return reinterpret_cast<T*>(aligned);
-    }
-#endif
+    if (bytes >= kHugePageMinBytes) return static_cast<T*>(mapHugePages(bytes));
     return static_cast<T*>(::operator new(bytes));
   }
 
   void deallocate(T* p, size_t n) noexcept {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    if (n * sizeof(T) >= kHugePageMinBytes) {
-      munmap(p, roundUp(n * sizeof(T)));
-      return;
-    }
-#endif
-    ::operator delete(p);
+    if (n * sizeof(T) >= kHugePageMinBytes)
+      unmapHugePages(p, n * sizeof(T));
+    else
+      ::operator delete(p);
   }
 
   /// resize() default-initializes (leaves a double or float as it was, no fill): a work buffer is
@@ -77,11 +62,6 @@ class HugePageAllocator {
   template <typename U>
   bool operator!=(const HugePageAllocator<U>&) const noexcept {
     return false;
-  }
-
- private:
-  static size_t roundUp(size_t bytes) {
-    return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   }
 };
 

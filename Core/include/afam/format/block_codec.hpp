@@ -47,6 +47,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "afam/base/huge_pages.hpp"
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/entropy/lanes_coder.hpp"
 #include "afam/format/compact_form.hpp"
@@ -161,11 +162,11 @@ struct QuantizedValues {
   Int3 n{};
   double step = 0;
   Predictor predictor = Predictor::Lorenzo;
-  int64_t base = 0;            ///< the integer forms' base
-  std::vector<int32_t> k;      ///< the integer forms' values in steps (less base)
-  std::vector<int64_t> codes;  ///< the residual codes encodeValues stores, once hasCodes
-  bool hasCodes = false;       ///< the integer forms' residuals are formed when first asked
-  std::vector<float> reconstructed;
+  int64_t base = 0;               ///< the integer forms' base
+  HugePageVector<int32_t> k;      ///< the integer forms' values in steps (less base)
+  HugePageVector<int64_t> codes;  ///< the residual codes encodeValues stores, once hasCodes
+  bool hasCodes = false;          ///< the integer forms' residuals are formed when first asked
+  HugePageVector<float> reconstructed;  ///< the values as decoded
 };
 
 /// quantizeValues, keeping the quantization in q (q.reconstructed the values as decoded).

@@ -70,4 +70,7 @@ inline float pointValue(int64_t k, double q) { return static_cast<float>(double(
 /// finite or lies kMaxPointCode steps or more from 0, or rounds to a value beyond float32.
 bool roundPoints(float* points, size_t count, double q, int64_t* k);
 
+/// roundPoints keeping only the span of the codes (largest less smallest; 0 where it fails).
+bool roundPointsSpan(float* points, size_t count, double q, uint64_t& span);
+
 }  // namespace afam

@@ -10,7 +10,9 @@
 namespace afam {
 
 namespace {
-size_t roundUp(size_t bytes) { return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes; }
+size_t roundUp(size_t bytes) {
+  return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+}
 }  // namespace
 
 void* mapHugePages(size_t bytes) {

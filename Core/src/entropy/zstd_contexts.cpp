@@ -22,7 +22,8 @@ void* allocateFor(void*, size_t bytes) {
   const size_t total = bytes + kHeader;
   void* p = nullptr;
   try {
-    p = total >= kHugePageMinBytes ? mapHugePages(total) : std::aligned_alloc(64, (total + 63) / 64 * 64);
+    p = total >= kHugePageMinBytes ? mapHugePages(total)
+                                   : std::aligned_alloc(64, (total + 63) / 64 * 64);
   } catch (const std::bad_alloc&) {
     return nullptr;  // zstd reports the failure
   }

@@ -127,9 +127,9 @@ namespace {
 /// The residual codes of q: an integer form's are formed from its k when first asked.
 const HugePageVector<int64_t>& codesOf(QuantizedValues& q) {
   if (!q.hasCodes) {
-    thread_local HugePageVector<int32_t> r;
+    int32_t* r = threadScratch<int32_t>(ScratchSlot::Words, q.k.size());  // the decoder's slot
     codec::integerResiduals(q.predictor, q.n, q.k, r);
-    q.codes.assign(r.begin(), r.end());
+    q.codes.assign(r, r + q.k.size());
     q.hasCodes = true;
   }
   return q.codes;
@@ -150,9 +150,9 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
   if (!codec::integerQuantize(values, count, step, q.base, q.k)) return false;
   if (free.valid && predictor == Predictor::IntegerInterpolation) {
     // A free value may take its prediction, which changes its k: the predictor's order decides.
-    thread_local HugePageVector<int32_t> r;
+    int32_t* r = threadScratch<int32_t>(ScratchSlot::Words, count);
     codec::integerResiduals(predictor, n, q.k, r, free);
-    q.codes.assign(r.begin(), r.end());
+    q.codes.assign(r, r + count);
     q.hasCodes = true;
   }
   q.reconstructed.resize(count);

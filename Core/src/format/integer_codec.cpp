@@ -308,10 +308,9 @@ bool integerQuantize(const float* values, size_t count, double step, int64_t& ba
   return ok;
 }
 
-void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k,
-                      HugePageVector<int32_t>& residuals, FreeValues free) {
-  residuals.resize(k.size());
-  Word* r = reinterpret_cast<Word*>(residuals.data());
+void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k, int32_t* residuals,
+                      FreeValues free) {
+  Word* r = reinterpret_cast<Word*>(residuals);
   if (p == Predictor::IntegerLorenzo) {
     std::memcpy(r, k.data(), k.size() * sizeof(Word));
     lorenzoDifferences(n, r);

@@ -27,9 +27,10 @@ inline float integerValue(int64_t base, int32_t k, double step) {
 
 /// The residuals of k under an integer predictor, in the predictor's visiting order. With free
 /// values (block_codec.hpp's FreeValues; interpolation only), a free point whose prediction lies
-/// within free.slack of its k takes the prediction as its k, and its residual is 0.
-void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k,
-                      HugePageVector<int32_t>& residuals, FreeValues free = {});
+/// within free.slack of its k takes the prediction as its k, and its residual is 0. `residuals`
+/// holds k.size() values.
+void integerResiduals(Predictor p, Int3 n, HugePageVector<int32_t>& k, int32_t* residuals,
+                      FreeValues free = {});
 
 /// Decodes an integer-form payload (data[8] names an integer predictor) into out.
 void decodeInteger(const uint8_t* data, size_t bytes, Int3 n, float* out, const char* where);

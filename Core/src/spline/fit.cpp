@@ -387,8 +387,10 @@ double sumOfSquares(const float* samples, std::array<int, 3> n) {
 
 /// Lines of an x pass handled together (BlockFitter::Impl::lineTiles): a tile of 64 lines of up to
 /// 130 values is 66 kB of doubles each way, in L2. Block-wide transposes instead (three passes
-/// over the block's doubles, strides of powers of two) made a 64^3 fit and error at NCP 64 1.2-1.7x
-/// slower (bench_fit's BM_FitBanded, fastest of 15 runs; 16-line tiles were in between).
+/// over the block's doubles, strides of powers of two): a 64^3 fit and error (bench_fit's
+/// BM_FitBanded, H200 machine's host, fastest of 7) 1.5x slower at NCP 64 (4.79-5.10 against
+/// 3.24-3.39 ms), 1.1x at NCP 32, within noise at NCP 8 and 16; an in-cache whole tile where the
+/// lines fit in 512 kB gained nothing at NCP 16 and lost the NCP 32 gain.
 constexpr size_t kLineTile = 64;
 
 /// A range that decides nothing: the error is measured.

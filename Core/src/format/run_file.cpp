@@ -256,7 +256,9 @@ RunWriter::~RunWriter() {
   if (appending_) {  // the file keeps its committed steps; what this writer added is cut off
     // Only a writer that holds the lock and knows the committed size cuts anything.
     if (fd_ >= 0 && !committed_ && committedSize_ > 0)
-      (void)::ftruncate(fd_, static_cast<off_t>(committedSize_));
+      if (::ftruncate(fd_, static_cast<off_t>(committedSize_)) != 0) {
+        // Nothing to report from a destructor: the lock goes with the descriptor below.
+      }
     if (fd_ >= 0) ::close(fd_);
     return;
   }

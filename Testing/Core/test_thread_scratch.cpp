@@ -26,6 +26,9 @@ TEST(ThreadScratch, SlotsKeepTheirContentsAndAreCountedUntilReleased) {
   // A slot between 64 kB and 1 MB is mapped in ordinary pages.
   threadScratch<uint8_t>(ScratchSlot::Stored, 100000);
   EXPECT_EQ(threadScratchBytes() - before, 1024u + kHugePageBytes + 102400u);
+  // One whose pages come to 1 MB is mapped, and counted, as a huge page.
+  threadScratch<uint8_t>(ScratchSlot::ChainStored, (size_t(1) << 20) - 100);
+  EXPECT_EQ(threadScratchBytes() - before, 1024u + 2 * kHugePageBytes + 102400u);
   // Asking again for no more returns the same memory, contents kept.
   EXPECT_EQ(threadScratch<uint8_t>(ScratchSlot::Frame, 10), small);
   EXPECT_EQ(small[999], 7);

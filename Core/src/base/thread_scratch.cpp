@@ -78,9 +78,9 @@ void* threadScratch(ScratchSlot slot, size_t bytes) {
   Slots& m = mine();
   const size_t s = size_t(slot);
   if (m.bytes[s] < bytes || !m.data[s]) {
-    const size_t size = bytes >= kHugePageMinBytes ? hugePageRounded(bytes)
-                        : bytes >= kMapAtLeast     ? pageRounded(bytes)
-                                                   : (std::max<size_t>(bytes, 1) + 63) / 64 * 64;
+    size_t size =
+        bytes >= kMapAtLeast ? pageRounded(bytes) : (std::max<size_t>(bytes, 1) + 63) / 64 * 64;
+    if (size >= kHugePageMinBytes) size = hugePageRounded(size);  // what allocate() maps
     void* p = allocate(size);
     deallocate(m.data[s], m.bytes[s]);
     held.fetch_add(size, std::memory_order_relaxed);

@@ -204,9 +204,9 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
           ? bound - fr.error.maxError
           : std::sqrt(std::max(0.0, bound * bound - fr.error.rmse * fr.error.rmse));
   if (!(budget > 0)) return false;
-  // The trial step's model (its points swapped in from the quantization: the thread's buffers
-  // pass between q, trial and kept, and no block's worth is allocated), and the last passing
-  // step's error (measured only near the bound).
+  // The trial step's model (its points copied from the quantization into the thread's q, which
+  // keeps its buffer between blocks), and the last passing step's error (measured only near the
+  // bound).
   thread_local FitResult q;
   q.ncp = fr.ncp;
   q.degree = fr.degree;

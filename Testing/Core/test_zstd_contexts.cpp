@@ -60,8 +60,8 @@ TEST(ZstdContexts, LargeTablesGiveZstdsOwnBytesOnEveryThread) {
     const std::vector<uint8_t> z12 = compressWith(c, big, 12);
     EXPECT_EQ(z12, want12);
     std::vector<uint8_t> back(big.size());
-    const size_t got = ZSTD_decompressDCtx(threadDCtx(), back.data(), back.size(), z12.data(),
-                                           z12.size());
+    const size_t got =
+        ZSTD_decompressDCtx(threadDCtx(), back.data(), back.size(), z12.data(), z12.size());
     EXPECT_FALSE(ZSTD_isError(got)) << ZSTD_getErrorName(got);
     EXPECT_EQ(got, big.size());
     EXPECT_EQ(back, big);

@@ -26,10 +26,6 @@ size_t pageRounded(size_t bytes) {
   return (bytes + page - 1) / page * page;
 }
 
-size_t hugePageRounded(size_t bytes) {
-  return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
-}
-
 void* allocate(size_t bytes) {
   if (bytes >= kHugePageMinBytes) return mapHugePages(bytes);  // one fault a 2 MB, not 512
   if (bytes >= kMapAtLeast) {

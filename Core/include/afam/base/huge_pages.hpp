@@ -17,6 +17,11 @@ namespace afam {
 constexpr size_t kHugePageBytes = size_t(2) << 20;
 constexpr size_t kHugePageMinBytes = size_t(1) << 20;  ///< smaller: operator new
 
+/// `bytes` rounded up to whole huge pages: what mapHugePages maps for them.
+constexpr size_t hugePageRounded(size_t bytes) {
+  return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+}
+
 /// `bytes` (rounded up to whole huge pages) mapped on their own, 2 MB aligned and marked for huge
 /// pages where the system has them (else ordinary pages); std::bad_alloc when none are left.
 void* mapHugePages(size_t bytes);

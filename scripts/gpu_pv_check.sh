@@ -406,22 +406,37 @@ if part bench; then
     size="${AFAM_PV_SIZES:-512 1024}"; size="${size##* }"
     {
       echo
-      echo "| pvbatch ranks | Render() ms (median / p95) | fps | first image ms | median / 1 rank's |"
-      echo "|---|---|---|---|---|"
+      echo "| pvbatch ranks | Render() ms (median / p95) | fps | first image ms | median / 1 rank's | rank 0 mapper / cast ms | slowest rank's mapper ms | GPU / interop frames |"
+      echo "|---|---|---|---|---|---|---|---|"
     } >>"$table"
     one=""
-    for ranks in $AFAM_PV_BATCH_RANKS; do
+    : >"$work/rank_logs.md"
+    # An entry N runs N ranks; N:gpu0 the same with every rank's CUDA on GPU 0 (AFAM_CUDA_DEVICE=0).
+    # Each rank logs ParaView's rendering scopes (IceT's times among them) to its own file, and
+    # nvidia-smi is asked midway which processes each GPU holds (OpenGL "G", CUDA "C").
+    for entry in $AFAM_PV_BATCH_RANKS; do
+      ranks="${entry%%:*}"; tag="${entry//:/_}"
+      envs=(PARAVIEW_LOG_RENDERING_VERBOSITY=INFO)
+      [ "$entry" = "${ranks}:gpu0" ] && envs+=(AFAM_CUDA_DEVICE=0)
       launch=("$pv/pvbatch3.11" --no-mpi)
       [ "$ranks" = 1 ] || launch=("$work/mpirun" -np "$ranks" --oversubscribe "$pv/pvbatch3.11")
-      timeout 300 "${launch[@]}" "$root/Apps/pvbatch/afam_pv_loop.py" --plugin "$plugin" --file "$file" \
+      rm -f "$work/pvlog${tag}_$size".*
+      (sleep 25; nvidia-smi >"$work/smi_${tag}.txt" 2>&1) &
+      env "${envs[@]}" timeout 300 "${launch[@]}" "--log=$work/pvlog${tag}_$size,INFO" \
+        "$root/Apps/pvbatch/afam_pv_loop.py" --plugin "$plugin" --file "$file" \
         --trajectory "$traj" --size "$size" --frames "$nframes" --cache-mb "$cache_mb" \
-        --csv "$work/pvbatch${ranks}_$size.csv" >"$work/pvbatch${ranks}_$size.log" 2>&1 ||
-        { failed=1; tail -n 5 "$work/pvbatch${ranks}_$size.log"; }
-      c=$(grep "^pv_render_loop" "$work/pvbatch${ranks}_$size.log" | tail -1)
-      m=$(value median_render_ms "$c"); [ "$ranks" = 1 ] && one="$m"
-      echo "| $ranks | $m / $(value p95_render_ms "$c") | $(value fps "$c") | $(value first_image_ms "$c") | $(awk -v a="$m" -v b="$one" 'BEGIN { if (a > 0 && b > 0) printf "%.2f", a / b; else print "?" }') |" >>"$table"
+        --csv "$work/pvbatch${tag}_$size.csv" >"$work/pvbatch${tag}_$size.log" 2>&1 ||
+        { failed=1; tail -n 5 "$work/pvbatch${tag}_$size.log"; }
+      wait
+      c=$(grep "^pv_render_loop" "$work/pvbatch${tag}_$size.log" | tail -1)
+      m=$(value median_render_ms "$c"); [ "$entry" = 1 ] && one="$m"
+      echo "| $entry | $m / $(value p95_render_ms "$c") | $(value fps "$c") | $(value first_image_ms "$c") | $(awk -v a="$m" -v b="$one" 'BEGIN { if (a > 0 && b > 0) printf "%.2f", a / b; else print "?" }') | $(value median_mapper_ms "$c") / $(value median_cast_ms "$c") | $(value median_slowest_mapper_ms "$c") | $(value gpu_frames "$c") / $(value interop_frames "$c") |" >>"$table"
+      python3 "$root/scripts/pv_rank_logs.py" "$work/pvlog${tag}_$size" "$entry" >>"$work/rank_logs.md" 2>&1
+      grep -E "^\|.*(pvbatch|MiB)" "$work/smi_${tag}.txt" | sed "s/^/[smi $entry] /" >>"$work/rank_logs.md"
+      grep -h "GPU\|device" "$work/pvbatch${tag}_$size.log" | grep -iv "^gl:" | sort -u | head -n 6 | sed "s/^/[log $entry] /" >>"$work/rank_logs.md"
     done
     echo "$what at ${size}^2, warm, $nframes views, cache and GPU pool ${cache_mb} MB a rank; $(nvidia-smi -L | wc -l) GPU(s)" >>"$table"
+    cat "$work/rank_logs.md" >>"$table"
   fi
   # ParaView's own Volume representation (its GPU ray caster on this OpenGL) on the raw samples.
   if [ -f "$raw" ] && [ "${AFAM_PV_RAW:-1}" = 1 ]; then

@@ -17,8 +17,9 @@ Camera::fromPose (afam_demo.pose_camera). --cold evicts the file from the page c
 frame. Frame 0 is the first image: timed from the reader's creation (and from Show) to its Render()
 done; the medians and 95th percentile are over frames 1..N-1, each Render() plus the window's
 WaitForCompletion. With the Adaptive-FAM representation, each frame's device and image path are read
-back (frames cast on the GPU, frames drawn through CUDA-OpenGL interop). Last line: name=value
-pairs, starting "pv_render_loop".
+back (frames cast on the GPU, frames drawn through CUDA-OpenGL interop). Under mpirun (pvbatch of
+several ranks, each drawing its box) the mapper time of the slowest rank is read back too
+(afam_client.frame_statistics). Last line: name=value pairs, starting "pv_render_loop".
 --miss-budget-ms B (an .afam file): every frame after the first is an interactive render
 (view.InteractiveRender()) under the representation's Interactive Miss Budget B at full image size
 (no interactive scaling), as a user moving the camera gets them, with the LOD of --lod (default the
@@ -85,6 +86,8 @@ def main():
     view = scene.view
     window = view.GetRenderWindow()
     source_path = a.file or a.raw
+    from paraview import servermanager
+    ranks = 1 if a.connect else servermanager.vtkProcessModule.GetProcessModule().GetNumberOfLocalPartitions()
 
     def evict():
         fd = os.open(source_path, os.O_RDONLY)
@@ -163,12 +166,17 @@ def main():
                        interop=int(get("AFAMLastImageOnDevice")), visible=int(get("AFAMLastVisibleBlocks")),
                        misses=int(get("AFAMLastCacheMisses")), scale=get("AFAMLastImageScale"),
                        stand_ins=int(get("AFAMLastStandInBlocks")), behind=int(get("AFAMLastBlocksBehind")))
+            if ranks > 1:  # pvbatch under mpirun: the slowest rank's mapper, and who drew
+                st = afam_client.frame_statistics(display)
+                row.update(slowest_mapper_ms=1e3 * st["MaxTotalTime"], drawing=int(st["RanksDrawingBlocks"]),
+                           max_read=int(st["MaxBytesRead"]), total_read=int(st["TotalBytesRead"]))
             if i == 0 and not row["gpu"] and a.device == "gpu":
                 print("afam_pv_loop: the first frame was cast on the CPU: %s" % get("AFAMLastDeviceMessage"))
         rows.append(row)
     if a.csv:
         columns = ["pov", "render_ms", "mapper_ms", "cast_ms", "caching_ms", "gpu", "interop", "visible",
-                   "misses", "scale", "stand_ins", "behind"]
+                   "misses", "scale", "stand_ins", "behind", "slowest_mapper_ms", "drawing", "max_read",
+                   "total_read"]
         with open(a.csv, "w") as f:
             f.write(",".join(columns) + "\n")
             for r in rows:
@@ -188,6 +196,10 @@ def main():
                       median_cast_ms=("%.3f" % statistics.median(r["cast_ms"] for r in rows[1:] or rows)
                                       if not a.connect else "-"),
                       full_scale_frames=sum(1 for r in rows if r["scale"] == 1.0))
+    if a.file and ranks > 1:
+        fields.update(ranks=ranks, median_slowest_mapper_ms="%.3f" % statistics.median(
+                          r["slowest_mapper_ms"] for r in rows[1:] or rows),
+                      min_ranks_drawing=min(r["drawing"] for r in rows))
     if a.budget is not None:
         fields.update(miss_budget_ms=a.budget, lod=a.lod or "screen",
                       max_caching_after_first_ms="%.3f" % max(r["caching_ms"] for r in rows[1:] or rows),

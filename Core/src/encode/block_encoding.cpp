@@ -122,6 +122,9 @@ struct Candidate {
   FrameSizes frames;           ///< the entropy frames formed when it was coded (recodeFrame)
   /// `error` is of the model a reader decodes from `bytes` (BlockTask::measuredAsRead).
   bool measuredAsRead = false;
+  /// A coded interpolant's samples as `bytes` decode (its ladder's kept quantization, valid until
+  /// that form's next ladder on the thread: codeSamplesInForm), for checkInterpolant.
+  const HugePageVector<float>* decoded = nullptr;
 };
 
 /// The RMSE of the value m on all the samples, summed in four lanes (vectorised).
@@ -287,11 +290,11 @@ constexpr double kRoundingGrowth = 1.01;
 constexpr int kFirstShift = 2, kLastShift = 10;
 
 /// Rounds a coded interpolant's points (rounded_points.hpp) with the largest step q = step / 2^j
-/// whose rounded model stays within the bound and within kRoundingGrowth of the model's error
-/// (RMSE, or the largest error for a pointwise bound) and whose codes span at most 65,536 steps
-/// (a cache keeps it in 1 or 2 bytes a point): j appended to the payload, the rounded model's
-/// error kept. The candidate as it is when no shift does.
-void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, BoundKind kind,
+/// whose rounded model stays within the bound and within kRoundingGrowth of c.error (RMSE, or
+/// the largest error for a pointwise bound) and whose codes span at most 65,536 steps (a cache
+/// keeps it in 1 or 2 bytes a point): j appended to the payload, the rounded model's error kept.
+/// Returns false, the candidate as it is, when no shift does.
+bool roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, BoundKind kind,
                             BlockFitter& fitter, const FitResult& model, Candidate& c) {
   double step = 0;
   std::memcpy(&step, c.bytes.data(), sizeof step);  // the coded samples' step, as a reader reads it
@@ -317,10 +320,11 @@ void roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
   for (int j = kFirstShift; j >= 0 && passes(j, e); --j) best = j, kept = e;
   for (int j = kFirstShift + 1; best < 0 && spanFits && j <= kLastShift; ++j)
     if (passes(j, e)) best = j, kept = e;
-  if (best < 0) return;
+  if (best < 0) return false;
   c.bytes.push_back(uint8_t(best));
   c.error = kept;
   c.roundedPoints = true;
+  return true;
 }
 
 /// The samples, predicted with interpolation in the given form and coded, as an Interpolant: the
@@ -330,18 +334,22 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
                        Int3 n, int degree, double bound, BoundKind kind, EntropyCoding coding,
                        double beat, Predictor form, Candidate& out, int& rung) {
   const FreeValues free{valid, holeSlack};
-  // The trial step's quantization, and the last passing step's: the one estimated and coded (kept
-  // between calls: no allocation a block).
-  thread_local QuantizedValues trial, kept;
+  // The trial step's quantization, and the last passing step's: the one estimated and coded, a
+  // form's own (checkInterpolant reads both forms' after both are coded); kept between calls, no
+  // allocation a block.
+  thread_local QuantizedValues trial, keptInteger, keptDouble;
+  QuantizedValues& kept = isIntegerForm(form) ? keptInteger : keptDouble;
   bool lattice = true;
+  ErrorStats passed;
   auto passes = [&](double k) {
     if (!quantizeValues(s.data(), n, ladderStep(kind, bound, k), form, trial, free)) {
       lattice = false;
       return false;
     }
     const HugePageVector<float>& recon = trial.reconstructed;
-    if (!keeps(kind, compare([&recon](size_t i) { return recon[i]; }, s, valid), bound))
-      return false;
+    const ErrorStats e = compare([&recon](size_t i) { return recon[i]; }, s, valid);
+    if (!keeps(kind, e, bound)) return false;
+    passed = e;
     std::swap(trial, kept);
     return true;
   };
@@ -355,6 +363,8 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   c.ncp = n;
   for (int a = 0; a < 3; ++a) c.degree[a] = effectiveDegree(degree, n[a]);
   c.frames = encodeQuantized(kept, coding, c.bytes);
+  c.error = passed;  // of the decoded samples; the interpolant's own is measured by the check
+  c.decoded = &kept.reconstructed;
   out = std::move(c);
   return true;
 }
@@ -377,14 +387,24 @@ bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n
   model.ncp = n;
   model.degree = c.degree;
   model.control.resize(s.size());
-  decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
+  if (c.decoded)  // the samples the bytes decode to, held: their points without decoding them
+    interpolantPoints(probe, c.decoded->data(), model.control.data(), "interpolant");
+  else
+    decodeStoredPayload(probe, c.bytes.data(), model.control.data(), "interpolant");
+  c.decoded = nullptr;
+  // The error of these bytes' decoding, as the reader decodes them; with rounded points, of
+  // their rounding (roundedPoint, as the reader rounds them) to the step the appended shift gives.
+  // The points are rounded within kRoundingGrowth of the decoded samples' error (c.error, from the
+  // ladder: the interpolant reproduces them at the samples up to float rounding); the interpolant
+  // unrounded is measured only where no rounding keeps that.
+  if (!valid && roundInterpolantPoints(s, n, bound, kind, fitter, model, c)) {
+    c.measuredAsRead = true;
+    return true;
+  }
   c.error = fitter.error(s.data(), n, model);
   if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
-  // The error of these bytes' decoding; with rounded points, of their rounding (roundedPoint, as
-  // the reader rounds them) to the step the appended shift gives.
   c.measuredAsRead = true;
-  if (!valid) roundInterpolantPoints(s, n, bound, kind, fitter, model, c);
   return true;
 }
 

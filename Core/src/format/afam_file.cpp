@@ -460,21 +460,25 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 /// `codes` when it is not null). Returns the points' step (0: not rounded). `out` may be the
 /// calling thread's ScratchSlot::Samples (where the samples are decoded: written after the fit)
 /// and `codes` its ScratchSlot::Doubles (decodeValues' doubles: written after the decoding).
+void interpolantPoints(const ModelEntry& e, const float* samples, float* out,
+                       const std::string& where) {
+  thread_local FitResult fit;
+  try {
+    threadFitter().fitInto(samples, e.ncp, e.ncp,
+                           std::max({e.degree[0], e.degree[1], e.degree[2], 1}), false, fit);
+  } catch (const Error& ex) {
+    throw FormatError(where + ": interpolant does not decode: " + ex.what());
+  }
+  std::memcpy(out, fit.control.data(), size_t(controlCount(e)) * sizeof(float));
+}
+
 double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
                          const std::string& where) {
-  BlockFitter& fitter = threadFitter();
-  thread_local FitResult fit;
   const size_t count = size_t(controlCount(e));
   const size_t coded = e.storedSize - (e.roundedPoints ? kRoundedPointsBytes : 0);
   float* samples = threadScratch<float>(ScratchSlot::Samples, count);
   decodeValues(stored, coded, e.ncp, samples, where.c_str());
-  try {
-    fitter.fitInto(samples, e.ncp, e.ncp, std::max({e.degree[0], e.degree[1], e.degree[2], 1}),
-                   false, fit);
-  } catch (const Error& ex) {
-    throw FormatError(where + ": interpolant does not decode: " + ex.what());
-  }
-  std::memcpy(out, fit.control.data(), count * sizeof(float));
+  interpolantPoints(e, samples, out, where);
   if (!e.roundedPoints) return 0;
   const double q = roundedPointStep(stored, e.storedSize, where.c_str());
   if (!roundPoints(out, count, q, codes))

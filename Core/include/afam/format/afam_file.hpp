@@ -163,6 +163,13 @@ inline bool storedAsDecoded(const ModelEntry& e) {
 /// (entry.size bytes). Throws FormatError naming `where` if the bytes do not decode.
 void decodeStoredPayload(const ModelEntry& entry, const uint8_t* stored, float* out,
                          const std::string& where);
+
+/// An interpolant's points (entry.size bytes into out) from its samples as decoded, before any
+/// rounding: the spline of the entry's degree through them, as decodeStoredPayload fits it. An
+/// encoder that holds a candidate's decoded samples (its quantization's reconstruction, which
+/// decodeValues reproduces bit for bit) takes its points here without decoding its bytes.
+void interpolantPoints(const ModelEntry& entry, const float* samples, float* out,
+                       const std::string& where);
 // For B-spline modes the payload is ncp.x*ncp.y*ncp.z float32 control points, x fastest.
 // For Downsampled (DS) the payload is (samples+2) per axis float32 raw samples with a one-voxel
 // ghost layer (clamped at the volume edge), x fastest, and ncp holds samples+2, degree holds 1.

@@ -76,43 +76,51 @@ int largestPassingStepFrom(int hint, Passes&& passes) {
 /// and the rung still be measured (largestPassingStepGuided).
 constexpr double kGuidedMargin = 1.05;
 
+/// The largest of `factors` (n of them, descending) whose measure passes (measure(factor) <=
+/// limit), for a measure that grows about in proportion to the factor, starting at factors[hint]
+/// (0 <= hint < n): the factor measured next is the largest whose measure, scaled from the last one
+/// measured, keeps the limit within kGuidedMargin, between the largest factor known to fail and
+/// the smallest known to pass; the search stops where no factor between them is predicted to.
+/// The walk's answer (largestPassingStepFrom) wherever the measure is that close to proportional
+/// from one factor to the next. The last call that passed is the answer's; -1 when none passes.
+/// A measure that is not finite and positive (a factor that cannot be used) says nothing of the
+/// next: the search then walks towards the smaller factors.
+template <typename Measure>
+int largestPassingGuided(const double* factors, int n, int hint, double limit, Measure&& measure) {
+  int fail = -1, pass = n;  // [fail] fails, [pass] passes (-1, n: none known)
+  int last = hint;
+  double lastMeasure = measure(factors[hint]);
+  (lastMeasure <= limit ? pass : fail) = hint;
+  while (pass - fail > 1) {
+    const bool proportional = lastMeasure > 0 && std::isfinite(lastMeasure);
+    int next = -1;
+    for (int r = fail + 1; r < pass && next < 0; ++r)
+      if (!proportional || lastMeasure * factors[r] / factors[last] <= kGuidedMargin * limit)
+        next = r;
+    if (next < 0) {
+      if (pass < n) break;  // every factor between is predicted to fail: the smallest passing
+      next = fail + 1;      // none passes yet: walk towards the smaller factors
+    }
+    last = next;
+    lastMeasure = measure(factors[next]);
+    (lastMeasure <= limit ? pass : fail) = next;
+  }
+  return pass < n ? pass : -1;
+}
+
 /// largestPassingStepFrom for a measure that grows about in proportion to the step, the RMSE of
 /// samples rounded to it: step / sqrt(12) for noise, less on smooth or integer samples, and from
 /// one rung to the next proportional within a few percent (the corpus's integer forms at 1e-2:
-/// 1.41, 1.61, 1.98, 2.28, 2.81 at factors 1, 1.15, 1.4, 1.7, 2.1). After the hint, the rung
-/// measured next is the largest step whose measure, scaled from the last one measured, keeps the
-/// limit within kGuidedMargin, between the largest step known to fail and the smallest known to
-/// pass; the search stops where no rung between them is predicted to. The walk's answer wherever
-/// the measure is that close to proportional, in two evaluations where the walk from factor 1 took
-/// up to five. `measure(factor)`: the test's measure, passing where it is <= limit (infinity
-/// where the step cannot be used); the last call that passed is the answer's. hint < 0: the
-/// bisection.
+/// 1.41, 1.61, 1.98, 2.28, 2.81 at factors 1, 1.15, 1.4, 1.7, 2.1): largestPassingGuided over the
+/// ladder from the hint, in two or three evaluations where the walk from factor 1 took up to
+/// five. `measure(factor)`: the test's measure, passing where it is <= limit (infinity where the
+/// step cannot be used). hint < 0: the bisection.
 template <typename Measure>
 int largestPassingStepGuided(int hint, double limit, Measure&& measure) {
   const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
   if (hint < 0 || hint >= n)
     return largestPassingStep([&](double f) { return measure(f) <= limit; });
-  int fail = -1, pass = n;  // [fail] fails, [pass] passes (-1, n: none known)
-  int last = hint;
-  double lastMeasure = measure(kStepFactors[hint]);
-  (lastMeasure <= limit ? pass : fail) = hint;
-  while (pass - fail > 1) {
-    // The largest step between them that the last measure, scaled, predicts within the margin.
-    const bool proportional = lastMeasure > 0 && std::isfinite(lastMeasure);
-    int next = -1;
-    for (int r = fail + 1; r < pass && next < 0; ++r)
-      if (!proportional ||
-          lastMeasure * kStepFactors[r] / kStepFactors[last] <= kGuidedMargin * limit)
-        next = r;
-    if (next < 0) {
-      if (pass < n) break;  // every step between is predicted to fail: the smallest passing
-      next = fail + 1;      // none passes yet: walk towards the smaller steps
-    }
-    last = next;
-    lastMeasure = measure(kStepFactors[next]);
-    (lastMeasure <= limit ? pass : fail) = next;
-  }
-  return pass < n ? pass : -1;
+  return largestPassingGuided(kStepFactors, n, hint, limit, measure);
 }
 
 }  // namespace afam

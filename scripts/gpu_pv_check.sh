@@ -421,7 +421,7 @@ if part bench; then
       launch=("$pv/pvbatch3.11" --no-mpi)
       [ "$ranks" = 1 ] || launch=("$work/mpirun" -np "$ranks" --oversubscribe "$pv/pvbatch3.11")
       rm -f "$work/pvlog${tag}_$size".*
-      (sleep 25; nvidia-smi >"$work/smi_${tag}.txt" 2>&1) &
+      (for t in $(seq 15); do sleep 2; nvidia-smi; done >"$work/smi_${tag}.txt" 2>&1) &
       env "${envs[@]}" timeout 300 "${launch[@]}" "--log=$work/pvlog${tag}_$size,INFO" \
         "$root/Apps/pvbatch/afam_pv_loop.py" --plugin "$plugin" --file "$file" \
         --trajectory "$traj" --size "$size" --frames "$nframes" --cache-mb "$cache_mb" \
@@ -431,8 +431,9 @@ if part bench; then
       c=$(grep "^pv_render_loop" "$work/pvbatch${tag}_$size.log" | tail -1)
       m=$(value median_render_ms "$c"); [ "$entry" = 1 ] && one="$m"
       echo "| $entry | $m / $(value p95_render_ms "$c") | $(value fps "$c") | $(value first_image_ms "$c") | $(awk -v a="$m" -v b="$one" 'BEGIN { if (a > 0 && b > 0) printf "%.2f", a / b; else print "?" }') | $(value median_mapper_ms "$c") / $(value median_cast_ms "$c") | $(value median_slowest_mapper_ms "$c") | $(value gpu_frames "$c") / $(value interop_frames "$c") |" >>"$table"
-      python3 "$root/scripts/pv_rank_logs.py" "$work/pvlog${tag}_$size" "$entry" >>"$work/rank_logs.md" 2>&1
-      grep -E "^\|.*(pvbatch|MiB)" "$work/smi_${tag}.txt" | sed "s/^/[smi $entry] /" >>"$work/rank_logs.md"
+      env -u PYTHONHOME -u PYTHONPATH python3 "$root/scripts/pv_rank_logs.py" "$work/pvlog${tag}_$size" "$entry" \
+        >>"$work/rank_logs.md" 2>&1
+      grep -E "pvbatch" "$work/smi_${tag}.txt" | sort | uniq -c | sed "s/^/[smi $entry] /" >>"$work/rank_logs.md"
       grep -h "GPU\|device" "$work/pvbatch${tag}_$size.log" | grep -iv "^gl:" | sort -u | head -n 6 | sed "s/^/[log $entry] /" >>"$work/rank_logs.md"
     done
     echo "$what at ${size}^2, warm, $nframes views, cache and GPU pool ${cache_mb} MB a rank; $(nvidia-smi -L | wc -l) GPU(s)" >>"$table"

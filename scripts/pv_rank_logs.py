@@ -50,7 +50,8 @@ def main():
     print("|%s---|---|---|---|---|---|---|---|" % ("---|" if label else ""))
     for p in files:
         frames, m = rank_medians(p)
-        rank = p.rsplit(".", 1)[1] if p.rsplit(".", 1)[1].isdigit() else "0"
+        tail = p.rsplit(".", 1)[-1]
+        rank = tail if p != prefix and tail.isdigit() else "0"
         print("| %s%s | %d | %s |" % (label + " | " if label else "", rank, frames,
                                      " | ".join("%.1f" % m[k] for k, _ in FIELDS)))
 

@@ -415,7 +415,8 @@ bool codeSamplesInForm(const std::vector<float>& s, const uint32_t* valid, int64
   rung = best;
   if (best < 0 || !lattice) return false;
   if (kept.step != ladderStep(kind, bound, kStepFactors[best])) return false;
-  if (estimateQuantizedBytes(kept) > beat) return false;  // cannot win: spare the coding
+  // Cannot win (where there is something to beat): spare the coding.
+  if (std::isfinite(beat) && estimateQuantizedBytes(kept) > beat) return false;
   Candidate c;
   c.kind = BlockKind::Interpolant;
   c.ncp = n;

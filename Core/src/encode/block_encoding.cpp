@@ -286,9 +286,9 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
 /// same bytes (equal-error comparisons with other codecs see the same file) rather than spend the
 /// bound's headroom on memory.
 constexpr double kRoundingGrowth = 1.01;
-/// Shifts j (q = the samples' step / 2^j), 0 to kLastShift. Under a pointwise bound they are tried
-/// from kFirstShift towards larger steps while they pass, else towards smaller ones. Measured on
-/// noisy scans, j = 2 passes most.
+/// Shifts j (q = the samples' step / 2^j), 0 to kLastShift. Under a pointwise bound, and where the
+/// bound leaves rounding little room (kGuidedRoom), they are tried from kFirstShift towards larger
+/// steps while they pass, else towards smaller ones. Measured on noisy scans, j = 2 passes most.
 constexpr int kFirstShift = 2, kLastShift = 10;
 /// Under an RMSE bound, rounding the points to q adds about kRoundingGain q^2 / 12 to the squared
 /// error (uniform rounding of each point, the sum of its squared basis weights at the samples):
@@ -296,6 +296,12 @@ constexpr int kFirstShift = 2, kLastShift = 10;
 /// the largest step this predicts within the allowance; the search then goes by the measured gain
 /// (largestPassingGuided over q^2), one evaluation where the walk from kFirstShift took two.
 constexpr double kRoundingGain = 0.21;
+/// The guided search only where the allowance leaves rounding at least this share of the squared
+/// error (the bound at least 0.5% above it; kRoundingGrowth leaves 2%): closer to the bound, what
+/// rounding adds is within the noise of its correlation with the samples' own rounding (a test
+/// field's blocks at 0.99991 of the bound measured more at shift 6 than at 7, and the walk from
+/// kFirstShift found 3 or 4 passing, codes of 1 or 2 bytes where 7 spans four times more).
+constexpr double kGuidedRoom = 0.01;
 /// The squares of the shifts' steps relative to the samples' step, 4^-j, largest first.
 constexpr std::array<double, kLastShift + 1> shiftFactors() {
   std::array<double, kLastShift + 1> f{};
@@ -333,10 +339,10 @@ bool roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
   };
   int best = -1;
   ErrorStats kept, e;
-  if (kind == BoundKind::Rmse) {
+  const double e0 = c.error.rmse, room = allowed * allowed - e0 * e0;
+  if (kind == BoundKind::Rmse && room >= kGuidedRoom * e0 * e0) {
     // The measure: what the rounding adds to the squared error, against what the allowance leaves
     // (passing exactly where keeps does).
-    const double e0 = c.error.rmse, room = allowed * allowed - e0 * e0;
     const double never = std::numeric_limits<double>::infinity();
     auto added = [&](double factor) {
       const int j = int(std::lround(-std::log2(factor) / 2));

@@ -281,6 +281,19 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }
 
+/// A model's error on the samples for a bound of `kind`, as a reader measures it: under a
+/// pointwise bound on the float32 values a reader evaluates (evaluateOnGrid, decodeBlockSamples'
+/// evaluation), where the fitter's own evaluation (BlockFitter::error, its sums fused) may differ
+/// in the last bits that decide the bound (the bound sweep's pointwise bounds at 1e-5 found
+/// interpolants 0.01-0.1% over it as read); under an RMSE the fitter's, which agrees far below it.
+ErrorStats errorForBound(BlockFitter& fitter, BoundKind kind, const std::vector<float>& s, Int3 n,
+                         const FitResult& model, const uint32_t* valid) {
+  if (kind != BoundKind::MaxError) return fitter.error(s.data(), n, model);
+  thread_local std::vector<float> grid;  // kept between blocks, as its pages
+  fitter.evaluateOnGrid(model, n, grid);
+  return errorOnValid(grid.data(), s.data(), grid.size(), valid);
+}
+
 /// How much an interpolant's rounded points may add to its error: 1% (the rounding's own
 /// error, about 0.14 of the model's in quadrature), so that files keep the quality they had at the
 /// same bytes (equal-error comparisons with other codecs see the same file) rather than spend the
@@ -334,7 +347,7 @@ bool roundInterpolantPoints(const std::vector<float>& s, Int3 n, double bound, B
     if (!roundPointsSpan(rounded.control.data(), rounded.control.size(), q, span))
       return spanFits = false;
     if (span >= kMaxCompactSpan) return spanFits = false;  // smaller steps span more
-    e = fitter.error(s.data(), n, rounded);
+    e = errorForBound(fitter, kind, s, n, rounded, nullptr);
     return keeps(kind, e, allowed);
   };
   int best = -1;
@@ -487,19 +500,14 @@ bool checkInterpolant(const std::vector<float>& s, const uint32_t* valid, Int3 n
   // The points are rounded within kRoundingGrowth of the decoded samples' error (c.error, from the
   // ladder: the interpolant reproduces them at the samples up to float rounding); the interpolant
   // unrounded is measured only where no rounding keeps that.
-  // The fitter evaluates the model in its own order of operations, the reader in float32 as
-  // decodeBlockSamples does: their RMSE agree to far below a bound, their largest errors not (the
-  // bound sweep's pointwise bounds at 1e-5 found interpolants 0.01-0.1% over it as read), so under
-  // a pointwise bound checkAsRead measures the kept candidate again as the reader decodes it.
-  const bool asRead = kind != BoundKind::MaxError;
   if (!valid && roundInterpolantPoints(s, n, bound, kind, fitter, model, c)) {
-    c.measuredAsRead = asRead;
+    c.measuredAsRead = true;
     return true;
   }
-  c.error = fitter.error(s.data(), n, model);
+  c.error = errorForBound(fitter, kind, s, n, model, valid);
   if (!keeps(kind, c.error, bound))
     return false;  // float rounding of the interpolant: leave it to the others
-  c.measuredAsRead = asRead;
+  c.measuredAsRead = true;
   return true;
 }
 

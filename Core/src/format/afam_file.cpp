@@ -455,11 +455,6 @@ void checkPayloadFlags(const ModelEntry& e, const uint8_t* stored, const std::st
 }
 }  // namespace
 
-/// An interpolant's model into out: its coded samples decoded and the spline of the header's
-/// degree fitted through them, its points rounded when the entry says so (their codes into
-/// `codes` when it is not null). Returns the points' step (0: not rounded). `out` may be the
-/// calling thread's ScratchSlot::Samples (where the samples are decoded: written after the fit)
-/// and `codes` its ScratchSlot::Doubles (decodeValues' doubles: written after the decoding).
 void interpolantPoints(const ModelEntry& e, const float* samples, float* out,
                        const std::string& where) {
   thread_local FitResult fit;
@@ -472,6 +467,11 @@ void interpolantPoints(const ModelEntry& e, const float* samples, float* out,
   std::memcpy(out, fit.control.data(), size_t(controlCount(e)) * sizeof(float));
 }
 
+/// An interpolant's model into out: its coded samples decoded and the spline of the header's
+/// degree fitted through them, its points rounded when the entry says so (their codes into
+/// `codes` when it is not null). Returns the points' step (0: not rounded). `out` may be the
+/// calling thread's ScratchSlot::Samples (where the samples are decoded: written after the fit)
+/// and `codes` its ScratchSlot::Doubles (decodeValues' doubles: written after the decoding).
 double decodeInterpolant(const ModelEntry& e, const uint8_t* stored, float* out, int64_t* codes,
                          const std::string& where) {
   const size_t count = size_t(controlCount(e));

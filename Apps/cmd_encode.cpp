@@ -180,6 +180,9 @@ int runEncode(int argc, char** argv) {
       "fits=%lld blocks=%lld asked_ahead=%lld device=\"%s\"\n",
       s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
       (long long)s.fits, (long long)s.blocks, (long long)s.askedAhead, device.c_str());
+  if (!s.levelSampler.empty())
+    std::printf("coarse_levels_filtered_by=\"%s\" load_seconds=%.3f\n", s.levelSampler.c_str(),
+                s.loadSeconds);
   std::printf(
       "bytes_in=%llu bytes_out=%llu ratio=%.2f ratio_float32=%.2f paper_layout_bytes=%llu\n",
       (unsigned long long)s.bytesIn, (unsigned long long)s.bytesOut,

@@ -8,6 +8,7 @@
 #include "vtkAFAMModelTree.h"
 
 #include "afam/cuda/encode/make_gpu_least_squares.hpp"
+#include "afam/cuda/encode/make_gpu_level_sampler.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/encode/pipeline_run.hpp"
@@ -214,6 +215,10 @@ afam::EncoderOptions vtkAFAMEncoder::MakeOptions()
           vtkWarningMacro("Device GPU: " << why << "; encoding on the CPU");
         }
       });
+  }
+  if (options.leastSquares)
+  {
+    options.levelSampler = afam::makeGpuLevelSampler([](const std::string&) {});
   }
   this->LastDevice =
     options.leastSquares ? "gpu " + options.leastSquares->description() : std::string("cpu");

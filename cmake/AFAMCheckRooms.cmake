@@ -16,7 +16,7 @@ if (NOT AFAM_ROOMS_OF)
 endif ()
 # Bottom to top: a room may include the rooms before it in this list.
 if (AFAM_ROOMS_OF STREQUAL "Core")
-  set(_rooms base entropy spline format volume search encode scene predict render ranks eval)
+  set(_rooms base entropy spline format volume sampling search encode scene predict render ranks eval)
   set(_tops include/afam src)
   set(_public "afam/")
 elseif (AFAM_ROOMS_OF STREQUAL "CudaKernels")

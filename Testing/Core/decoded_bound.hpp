@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/compact_form.hpp"

@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 
 using namespace afam;

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"

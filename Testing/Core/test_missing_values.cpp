@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"

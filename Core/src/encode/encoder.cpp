@@ -186,11 +186,52 @@ struct RangeChunk {
   std::string infinite;
 };
 
-RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int64_t nz) {
+/// Where the range scan loads the volume's copy (EncoderOptions::levelSampler): as the source
+/// stores its samples, or as floats; the seconds the loads took, summed over the scan's threads.
+/// A load that fails (a GPU out of order) stops the loads, not the scan: the coarse levels are
+/// then filtered on the CPU, and `failure` says why.
+struct SlabLoad {
+  LevelSampler* sampler = nullptr;
+  std::optional<SampleType> stored;
+  std::atomic<int64_t> nanoseconds{0};
+  std::atomic<bool> failed{false};
+  std::mutex mutex;
+  std::string failure;
+  void put(int64_t z, int64_t nz, const void* samples) {
+    if (failed) return;
+    const auto t0 = Clock::now();
+    try {
+      sampler->load(z, nz, samples);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!failed.exchange(true)) failure = e.what();
+    }
+    nanoseconds += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
+  }
+};
+
+/// Reads planes [z, z + nz) into buf as floats, handing them to `load` (where given) as it holds
+/// them.
+void readScanSlab(VolumeSource& source, int64_t z, int64_t nz, std::vector<float>& buf,
+                  SlabLoad* load) {
+  if (!load || !load->stored) {
+    source.readSlab(z, nz, buf.data());
+    if (load) load->put(z, nz, buf.data());
+    return;
+  }
+  thread_local std::vector<unsigned char> stored;
+  stored.resize(buf.size() * size_t(sampleTypeSize(*load->stored)));
+  source.readStoredRows(z, nz, 0, source.dims()[1], stored.data());
+  load->put(z, nz, stored.data());
+  samplesToFloat(*load->stored, stored.data(), buf.size(), buf.data());
+}
+
+RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int64_t nz,
+                     SlabLoad* load) {
   thread_local std::vector<float> buf;
   const Index3 dims = source.dims();
   buf.resize(size_t(nz * dims[0] * dims[1]));
-  source.readSlab(z, nz, buf.data());
+  readScanSlab(source, z, nz, buf, load);
   RangeChunk c;
   if (!extendRange(buf.data(), buf.size(), c.lo, c.hi)) try {
       c.missing = checkSlab(buf, z, source, part);
@@ -201,14 +242,20 @@ RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int
 }
 
 /// Value range of the valid samples and Inf check in one streaming pass (unless the source knows
-/// its range) over this process's share of the z-planes, in chunks of about a megabyte, on
-/// `threads` threads where the source allows concurrentReads; the team reduces the shares to the
-/// volume's range. `missing`: whether a sample of the share is NaN (missing). An infinite sample
-/// stops the encode naming the first in z-order, whatever the threads.
+/// its range and nothing is loaded) over this process's share of the z-planes, in chunks of about
+/// a megabyte, on `threads` threads where the source allows concurrentReads; the team reduces the
+/// shares to the volume's range. `missing`: whether a sample of the share is NaN (missing). An
+/// infinite sample stops the encode naming the first in z-order, whatever the threads. `load`:
+/// every plane read is handed to it (the whole volume: one process).
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
-                    EncodeTeam& team, double& vmin, double& vmax, bool& missing, int threads = 1) {
+                    EncodeTeam& team, double& vmin, double& vmax, bool& missing, int threads = 1,
+                    SlabLoad* load = nullptr) {
   missing = false;
-  if (source.knownRange(vmin, vmax)) {
+  double knownMin = 0, knownMax = 0;
+  const bool known = source.knownRange(knownMin, knownMax);
+  if (known && !load) {
+    vmin = knownMin;
+    vmax = knownMax;
     missing = source.knownMissing();
     return;
   }
@@ -222,7 +269,7 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
   std::atomic<int64_t> done{0};
   auto scan = [&](int, int64_t c) {
     const int64_t z = planes.first + c * chunk;
-    chunks[size_t(c)] = scanChunk(source, part, z, std::min(chunk, planes.end - z));
+    chunks[size_t(c)] = scanChunk(source, part, z, std::min(chunk, planes.end - z), load);
     ++done;
   };
   bool stopped = false;
@@ -246,8 +293,9 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
     hi = std::max(hi, c.hi);
     missing = missing || c.missing;
   }
-  vmin = lo;
-  vmax = hi;
+  vmin = known ? knownMin : lo;
+  vmax = known ? knownMax : hi;
+  if (known) missing = source.knownMissing();
 }
 
 /// A volume with missing samples: at least one valid sample, and a spline mode (DS draws its
@@ -350,7 +398,8 @@ class SampleBuffers {
 class LevelEncoder {
  public:
   LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound,
-               int threads, EncodeProgress& progress, ModelSink& sink, EncodeTeam& team)
+               int threads, EncodeProgress& progress, ModelSink& sink, EncodeTeam& team,
+               LevelSampler* sampler)
       : source_(source),
         opt_(opt),
         part_(part),
@@ -358,6 +407,7 @@ class LevelEncoder {
         progress_(progress),
         sink_(sink),
         team_(team),
+        sampler_(sampler),
         threads_(threads),
         pool_(threads),
         samplePool_(threads),
@@ -595,8 +645,9 @@ class LevelEncoder {
         tasks[first + r].samples = buffers_.take();
         outs[r] = &tasks[first + r].samples;
       }
-      sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_,
-                     member ? ChunkBudget::QuarterOfSamples : ChunkBudget::Large);
+      if (!sampleFromCopy(l, row, outs))
+        sampleBlockRow(part_, planes_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_,
+                       member ? ChunkBudget::QuarterOfSamples : ChunkBudget::Large);
       for (size_t r = 0; r < row.size(); ++r) floats += tasks[first + r].samples.size();
       line += j1 - j0;
     }
@@ -605,6 +656,26 @@ class LevelEncoder {
     return batch;
   }
 
+  /// A coarse level's row filtered by the level sampler, where one holds the volume; false where
+  /// none does, or it failed (this row and the rest then read and filtered on the CPU).
+  bool sampleFromCopy(int l, const std::vector<Int3>& row, std::vector<std::vector<float>*>& outs) {
+    if (!sampler_ || part_.stride(l) == 1) return false;
+    try {
+      sampler_->sampleRow(part_, l, row, ds(), levelSampling(opt_.mode), outs, sampleLoop_);
+      return true;
+    } catch (const std::exception& e) {
+      samplerFailure_ = e.what();
+      sampler_->release();
+      sampler_ = nullptr;
+      return false;
+    }
+  }
+
+ public:
+  /// Why the level sampler stopped part way (the rows after it read on the CPU); empty if not.
+  const std::string& samplerFailure() const { return samplerFailure_; }
+
+ private:
   /// Whether a batch's searches are asked ahead (EncoderOptions::leastSquares): under an RMSE
   /// bound, not in a run's steps (their bounds depend on the step before), and not after a failure.
   bool asksAhead() const {
@@ -674,6 +745,8 @@ class LevelEncoder {
   EncodeProgress& progress_;
   ModelSink& sink_;
   EncodeTeam& team_;
+  LevelSampler* sampler_;          ///< filters the coarse levels (null: sampleBlockRow)
+  std::string samplerFailure_;
   std::vector<uint8_t> outgoing_;  ///< a team's records of its fitted blocks, every level's
   int threads_;                    ///< fitting threads (each fits with its threadFitter())
   std::atomic<bool> aheadFailed_{false};
@@ -717,6 +790,29 @@ void refuseBlocksNoAxisHolds(const Index3& dims, int blocksPerAxis) {
 }
 }  // namespace
 
+namespace {
+/// The level sampler this encode loads and uses, reserved for the volume (stats.levelSampler says
+/// which, or why not), or null: spline modes with a level coarser than the volume, one process
+/// (a team's process scans only its share of the planes).
+LevelSampler* reserveLevelSampler(const EncoderOptions& opt, const VolumeSource& source,
+                                  const Partition& part, const EncodeTeam& team,
+                                  EncodeStats& stats) {
+  LevelSampler* sampler = opt.levelSampler.get();
+  if (!sampler || team.size() > 1 || levelSampling(opt.mode) != LevelSampling::Box ||
+      part.levels() < 2)
+    return nullptr;
+  const std::optional<SampleType> stored = source.storedType();
+  const SampleType type = stored && levelSamplerHolds(*stored) ? *stored : SampleType::Float32;
+  std::string why;
+  if (!sampler->reserve(source.dims(), type, why)) {
+    stats.levelSampler = "not used: " + why;
+    return nullptr;
+  }
+  stats.levelSampler = sampler->description();
+  return sampler;
+}
+}  // namespace
+
 EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelSink& sink) {
   SoloTeam solo;
   return encodeVolume(source, opt, sink, solo);
@@ -746,9 +842,27 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
 
   EncodeProgress progress(part, opt);
   bool missing = false;
+  SlabLoad load;
+  load.sampler = reserveLevelSampler(opt, source, part, team, stats);
+  const struct Release {  // the volume's copy, however the encode ends
+    LevelSampler* sampler;
+    ~Release() {
+      if (sampler) sampler->release();
+    }
+  } release{load.sampler};
+  if (load.sampler && source.storedType() && levelSamplerHolds(*source.storedType()))
+    load.stored = source.storedType();
   teamStep(team, [&] {
-    scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing, threads);
+    scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing, threads,
+                   load.sampler ? &load : nullptr);
   });
+  stats.loadSeconds = 1e-9 * double(load.nanoseconds.load());
+  if (load.sampler && (missing || load.failed)) {  // its filter has no rule for missing samples
+    load.sampler->release();
+    load.sampler = nullptr;
+    stats.levelSampler = "not used: " + (load.failed ? load.failure
+                                                     : std::string("the volume has missing samples"));
+  }
   team.reduceRange(stats.valueMin, stats.valueMax);
   std::vector<uint8_t> anyMissing{uint8_t(missing ? 1 : 0)};
   team.mergeFlags(anyMissing);
@@ -768,7 +882,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 
   const auto tFit0 = Clock::now();
-  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team);
+  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team, load.sampler);
   teamStep(team, [&] { stats.levels = levels.encodeLevels(); });
   teamStep(team, [&] { levels.finishLevels(stats.levels); });
   for (int l = 0; l < part.levels(); ++l) {
@@ -777,6 +891,8 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   }
   stats.fitSeconds = secondsSince(tFit0);
   stats.aheadFailure = levels.aheadFailure();
+  if (!levels.samplerFailure().empty())
+    stats.levelSampler += "; failed, the rest filtered on the CPU: " + levels.samplerFailure();
   stats.bytesOut = fileBytes(uint64_t(stats.blocks), stats.payloadBytes);
   stats.seconds = secondsSince(t0);
   stats.cpuSeconds = processCpuSeconds() - cpu0;

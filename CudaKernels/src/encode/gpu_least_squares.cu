@@ -18,10 +18,13 @@
 #include "afam/ranks/device_selection.hpp"
 #include "afam/search/least_squares_order.hpp"
 #include "common/cuda_check.hpp"
+#include "common/growing_array.hpp"
 
 namespace afam {
 
 namespace {
+
+using cuda_detail::GrowingArray;
 
 /// One request on the device: offsets into the batch's buffers.
 struct LsqJob {
@@ -119,31 +122,6 @@ __global__ void __launch_bounds__(kLsqLanes)
   const double energy = treeSumShared(lanes, part);
   if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);
 }
-
-/// Device memory (or pinned host memory) that grows to the largest request seen and frees itself.
-struct GrowingArray {
-  explicit GrowingArray(bool pinnedHost = false) : pinned(pinnedHost) {}
-  ~GrowingArray() { release(); }
-  void release() {
-    (void)(pinned ? cudaFreeHost(data) : cudaFree(data));
-    data = nullptr;
-    bytes = 0;
-  }
-  void reserve(size_t want) {
-    if (want <= bytes) return;
-    release();
-    const size_t size = std::max<size_t>(want, 1);
-    AFAM_CUDA_CHECK(pinned ? cudaMallocHost(&data, size) : cudaMalloc(&data, size));
-    bytes = want;
-  }
-  template <typename T>
-  T* as() const {
-    return static_cast<T*>(data);
-  }
-  bool pinned = false;
-  void* data = nullptr;
-  size_t bytes = 0;
-};
 
 class GpuLeastSquaresBatch final : public LeastSquaresBatch {
  public:

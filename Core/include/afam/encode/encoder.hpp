@@ -36,8 +36,9 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encode_team.hpp"
+#include "afam/sampling/level_sampler.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/format/afam_file.hpp"
@@ -132,6 +133,12 @@ struct EncoderOptions {
   /// about once a block and find the same NCPs. Null: every question is a fit. Should it throw, the
   /// encode goes on fitting (EncodeStats::aheadFailure says why).
   std::shared_ptr<LeastSquaresBatch> leastSquares;
+  /// Spline modes, one process: a copy of the volume, loaded as the encode scans its range, that
+  /// filters the coarse levels' blocks (level_sampler.hpp: the GPU's, or the CPU reference) in
+  /// place of a read and a filtering of the volume for each. Unused where it cannot hold the
+  /// volume, or the volume has missing samples (EncodeStats::levelSampler says which). The same
+  /// file either way. Null: every level read and filtered on the CPU.
+  std::shared_ptr<LevelSampler> levelSampler;
 };
 
 /// The value range of a volume's valid samples (one pass unless the source knows it, on `threads`
@@ -177,6 +184,10 @@ struct EncodeStats {
   /// Why asking ahead stopped (a GPU that failed or ran out of memory): the blocks after it were
   /// searched by fitting, the same file. Empty when it did not.
   std::string aheadFailure;
+  /// EncoderOptions::levelSampler: what filtered the coarse levels ("cpu", or the GPU's name), or
+  /// why it did not (empty without one); the seconds its loads took on the scan's threads.
+  std::string levelSampler;
+  double loadSeconds = 0;
   int64_t blocks = 0;
   int64_t inputVoxels = 0;
   uint64_t bytesIn = 0;   ///< raw volume size as float32 (dims product * 4)

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "afam/encode/block_sampling.hpp"
+#include "afam/sampling/block_sampling.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -333,6 +333,39 @@ void fillBlockChunk(const PlaneChunk& chunk, const std::vector<int64_t>& zs, siz
 constexpr int64_t kFillPieces = 96;
 
 }  // namespace
+
+namespace {
+
+/// Appends an axis' taps to a row's; returns where its entries of `first` start.
+uint64_t appendTaps(const AxisTaps& t, RowTaps& row) {
+  const uint64_t at = row.first.size(), base = row.index.size();
+  for (size_t f : t.first) row.first.push_back(base + f);
+  row.index.insert(row.index.end(), t.index.begin(), t.index.end());
+  row.weight.insert(row.weight.end(), t.weight.begin(), t.weight.end());
+  return at;
+}
+
+}  // namespace
+
+RowTaps rowTaps(const Partition& part, int level, const std::vector<Int3>& blocks, bool ghost,
+                LevelSampling sampling) {
+  RowTaps row;
+  if (blocks.empty()) return row;
+  const int g = ghost ? 1 : 0;
+  const BlockExtent ez = part.extent(level, blocks[0]);
+  row.z = appendTaps(axisTaps(part, ez, level, 2, ghost, sampling), row);
+  row.nz = ez.samples[2] + 2 * g;
+  for (const Int3& b : blocks) {
+    const BlockExtent e = part.extent(level, b);
+    RowTaps::Block rb;
+    rb.x = appendTaps(axisTaps(part, e, level, 0, ghost, sampling), row);
+    rb.y = appendTaps(axisTaps(part, e, level, 1, ghost, sampling), row);
+    rb.nx = e.samples[0] + 2 * g;
+    rb.ny = e.samples[1] + 2 * g;
+    row.blocks.push_back(rb);
+  }
+  return row;
+}
 
 PlaneReader::PlaneReader(VolumeSource& src, Index3 dims) : src_(src), rowSize_(dims[0]) {}
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "afam/base/huge_pages.hpp"
+#include "afam/sampling/level_filter.hpp"
 #include "afam/format/partition.hpp"
 #include "afam/volume/volume_source.hpp"
 
@@ -67,6 +68,31 @@ void sampleBlockRow(const Partition& part, PlaneReader& planes, int level,
                     const std::vector<Int3>& blocks, bool ghost, LevelSampling sampling,
                     std::vector<std::vector<float>*>& out, const BlockLoop& loop = {},
                     ChunkBudget budget = ChunkBudget::Large);
+
+/// The taps sampleBlockRow filters the blocks of one z-row of a level with, flattened for
+/// filteredSample (level_filter.hpp): each axis' taps are its entries of `first` (samples + 1 of
+/// them, from `at`), which say where its samples' taps lie in index and weight.
+struct RowTaps {
+  struct Block {
+    uint64_t x = 0, y = 0;  ///< where the block's x and y taps start in `first`
+    int nx = 0, ny = 0;     ///< its samples along x and y (ghosts included)
+  };
+  std::vector<int64_t> index;
+  std::vector<double> weight;
+  std::vector<uint64_t> first;
+  std::vector<Block> blocks;  ///< in the order of the blocks asked for
+  uint64_t z = 0;             ///< where the row's z taps (one for every block) start in `first`
+  int nz = 0;                 ///< the row's samples along z
+  AxisTapsView view(uint64_t at) const { return {index.data(), weight.data(), first.data() + at}; }
+  /// Samples of block b (nx * ny * nz).
+  size_t samples(size_t b) const {
+    return size_t(blocks[b].nx) * size_t(blocks[b].ny) * size_t(nz);
+  }
+};
+
+/// sampleBlockRow's taps of `blocks` (all in one z-row of the level).
+RowTaps rowTaps(const Partition& part, int level, const std::vector<Int3>& blocks, bool ghost,
+                LevelSampling sampling);
 
 /// Extracts micro-block samples of (level, ijk) from a full in-memory volume (x fastest), with the
 /// Partition's sampling rule (linear interpolation at fractional positions). ghost adds one sample

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "afam/sampling/block_sampling.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/format/compact_form.hpp"
+#include "afam/sampling/block_sampling.hpp"
 
 namespace afam_test {
 

@@ -12,13 +12,13 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/block_decode.hpp"
 #include "afam/render/level_decode.hpp"
 #include "afam/render/raycast.hpp"
 #include "afam/render/renderer.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 #include "afam/volume/masked_volumes.hpp"
 #include "render_test_util.hpp"

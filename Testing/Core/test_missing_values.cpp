@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encode_run.hpp"
 #include "afam/encode/encoder.hpp"
 #include "afam/format/afam_file.hpp"
@@ -21,6 +20,7 @@
 #include "afam/format/block_mask.hpp"
 #include "afam/format/step_extract.hpp"
 #include "afam/render/level_decode.hpp"
+#include "afam/sampling/block_sampling.hpp"
 #include "afam/volume/masked_volumes.hpp"
 #include "afam/volume/missing_value_source.hpp"
 #include "moving_blob.hpp"

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "afam/sampling/level_sampler.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/sampling/level_sampler.hpp"
 #include "afam/volume/marschner_lobb.hpp"
 
 namespace afam_test {
@@ -80,9 +80,9 @@ inline size_t compareRowsWithTheSampling(afam::LevelSampler& s, const TypedVolum
       for (int l = 0; l < part.levels(); ++l) {
         const Int3 nb = part.blocksPerAxis(l);
         for (int kz = 0; kz < nb[2]; ++kz) {
-          SCOPED_TRACE(testing::Message() << sampleTypeName(t.type) << " level " << l << " row "
-                                          << kz << " box " << (sampling == LevelSampling::Box)
-                                          << " ghost " << ghost);
+          SCOPED_TRACE(testing::Message()
+                       << sampleTypeName(t.type) << " level " << l << " row " << kz << " box "
+                       << (sampling == LevelSampling::Box) << " ghost " << ghost);
           std::vector<Int3> row;
           for (int j = 0; j < nb[1]; ++j)
             for (int i = 0; i < nb[0]; ++i) row.push_back({i, j, kz});

@@ -30,9 +30,8 @@ TEST(GpuLevelSampler, RowsEqualTheSamplingBitForBit) {
        {SampleType::UInt8, SampleType::Int16, SampleType::Float32, SampleType::UInt16}) {
     auto gpu = gpuSampler();
     ASSERT_TRUE(gpu);
-    afam_test::TypedVolume t = afam_test::typedVolume(dims, type == SampleType::UInt16
-                                                                ? SampleType::Int16
-                                                                : type);
+    afam_test::TypedVolume t =
+        afam_test::typedVolume(dims, type == SampleType::UInt16 ? SampleType::Int16 : type);
     t.type = type;  // the int16 bytes read as uint16: large values, the same comparison
     afam_test::loadAll(*gpu, t);
     EXPECT_GT(afam_test::compareRowsWithTheSampling(*gpu, t, part),
@@ -66,7 +65,8 @@ TEST(GpuLevelSampler, AnEncodeWritesTheCpuEncodersModelsAndABudgetRefusesWithIts
   ArraySource src(t.bytes.data(), t.type, dims);
   InMemoryModels refused;
   const EncodeStats s = encodeVolume(src, opt, refused);
-  EXPECT_NE(s.levelSampler.find("not used: the volume's copy"), std::string::npos) << s.levelSampler;
+  EXPECT_NE(s.levelSampler.find("not used: the volume's copy"), std::string::npos)
+      << s.levelSampler;
   EXPECT_NE(s.levelSampler.find("over its budget"), std::string::npos) << s.levelSampler;
   EXPECT_EQ(refused.stored, cpu.stored);
 }

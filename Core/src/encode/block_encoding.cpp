@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "afam/base/any_nan.hpp"
+#include "afam/base/cpu_features.hpp"
 #include "afam/encode/first_step_blocks.hpp"
 #include "afam/format/block_codec.hpp"
 #include "afam/format/block_decode.hpp"
@@ -43,7 +44,13 @@ const uint32_t* validOf(const BlockTask& t) { return t.mask.empty() ? nullptr : 
 /// Error of model values (on the block's sample grid; model(i) gives value i) against the valid
 /// samples; min/max of the model there.
 template <typename Model>
+AFAM_TARGET_AVX2 ErrorStats compareAvx2(const Model& model, const std::vector<float>& s,
+                                        const uint32_t* valid) {
+  return errorOnValidOf(model, s.data(), s.size(), valid);
+}
+template <typename Model>
 ErrorStats compare(const Model& model, const std::vector<float>& s, const uint32_t* valid) {
+  if (cpuHasAvx2()) return compareAvx2(model, s, valid);
   return errorOnValidOf(model, s.data(), s.size(), valid);
 }
 
@@ -128,22 +135,35 @@ struct Candidate {
   const HugePageVector<float>* decoded = nullptr;
 };
 
-/// The RMSE of the value m on all the samples, summed in four lanes (vectorised).
-double rmseAround(const std::vector<float>& s, double m) {
+/// The sum of f(sample) over the samples in four lanes (sample i in lane i mod 4, the lanes added
+/// pairwise), compiled also for AVX2 (four doubles a vector, no FMA: the same sums) and chosen at
+/// run time.
+template <typename F>
+__attribute__((always_inline)) inline double laneSum(const std::vector<float>& s, const F& f) {
   double lane[4] = {0, 0, 0, 0};
   size_t i = 0;
   for (; i + 4 <= s.size(); i += 4)
-    for (size_t l = 0; l < 4; ++l) {
-      const double d = double(s[i + l]) - m;
-      lane[l] += d * d;
-    }
+    for (size_t l = 0; l < 4; ++l) lane[l] += f(double(s[i + l]));
   double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
-  for (; i < s.size(); ++i) sum += (double(s[i]) - m) * (double(s[i]) - m);
+  for (; i < s.size(); ++i) sum += f(double(s[i]));
+  return sum;
+}
+template <typename F>
+AFAM_TARGET_AVX2 double laneSumAvx2(const std::vector<float>& s, const F& f) {
+  return laneSum(s, f);
+}
+template <typename F>
+double sumOfLanes(const std::vector<float>& s, const F& f) {
+  return cpuHasAvx2() ? laneSumAvx2(s, f) : laneSum(s, f);
+}
+
+/// The RMSE of the value m on all the samples.
+double rmseAround(const std::vector<float>& s, double m) {
+  const double sum = sumOfLanes(s, [m](double v) { return (v - m) * (v - m); });
   return std::sqrt(sum / double(std::max<size_t>(s.size(), 1)));
 }
 
-/// The mean of the valid samples (every sample where `valid` is null: summed in four lanes,
-/// vectorised).
+/// The mean of the valid samples (every sample where `valid` is null: laneSum).
 double meanOf(const std::vector<float>& s, const uint32_t* valid) {
   if (valid) {
     double sum = 0;
@@ -155,12 +175,7 @@ double meanOf(const std::vector<float>& s, const uint32_t* valid) {
       }
     return sum / double(used);
   }
-  double lane[4] = {0, 0, 0, 0};
-  size_t i = 0;
-  for (; i + 4 <= s.size(); i += 4)
-    for (size_t l = 0; l < 4; ++l) lane[l] += double(s[i + l]);
-  double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
-  for (; i < s.size(); ++i) sum += double(s[i]);
+  const double sum = sumOfLanes(s, [](double v) { return v; });
   return sum / double(std::max<size_t>(s.size(), 1));
 }
 
@@ -196,6 +211,16 @@ bool constantFits(const BlockExtent& e, const std::vector<float>& s, const uint3
   return true;
 }
 
+/// How far over the budget a rung's rounding, scaled from the rung measured before, may be
+/// predicted and the rung still be measured (largestPassingStepGuided). Wider than the samples'
+/// kGuidedMargin: a spline's rounding is that of its control points seen through its basis, fewer
+/// values than samples, so that from one rung to the next it strays further from proportion (the
+/// head made 301x370x316 at 1e-2: 1.05 and 1.08 stopped a few blocks a rung short, 1.12 wrote
+/// the walk's bytes). At coarse steps, where most predictions round to zero, the rounding grows
+/// more slowly than the step and the guide may stop a rung short (the same head at 3e-2: 60 bytes
+/// of 50,572 more, even at 1.2); every step kept still keeps the bound.
+constexpr double kSplineGuidedMargin = 1.12;
+
 /// The fitted spline's control points, Lorenzo-predicted in the given form and coded; the step is
 /// the largest of the ladder that keeps the model within the bound.
 bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
@@ -220,10 +245,14 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
   ErrorStats passed;
   // The trial step's quantization, and the last passing step's: the one coded.
   thread_local QuantizedValues trial, kept;
+  // Whether factor k's step keeps the bound; under an RMSE also what the quantization adds to
+  // the fit's error in quadrature (`added`: the ladder's guide, <= budget where it keeps it).
+  double added = 0;
   auto passes = [&](double k) {
     const double step = ladderStep(kind, budget, k);
     if (!quantizeValues(fr.control.data(), fr.ncp, step, form, trial)) {
       lattice = false;
+      added = std::numeric_limits<double>::infinity();
       return false;
     }
     q.control.assign(trial.reconstructed.begin(), trial.reconstructed.end());
@@ -231,14 +260,28 @@ bool codeSplineInForm(const FitResult& fr, const std::vector<float>& s, Int3 n, 
       q.errorMeasured = false;
       fitter.measure(s.data(), n, q);
       if (!keeps(kind, q.error, bound)) return false;
-    } else if (!fitter.changeWithin(s.data(), n, fr, q, bound)) {
-      return false;
+    } else {
+      const bool within = fitter.changeWithin(s.data(), n, fr, q, bound);
+      const double quadrature =
+          std::sqrt(std::max(0.0, q.error.rmse * q.error.rmse - fr.error.rmse * fr.error.rmse));
+      added = within ? std::min(quadrature, budget) : std::max(quadrature, budget * (1 + 1e-12));
+      if (!within) return false;
     }
     passed = q.error;
     std::swap(trial, kept);
     return true;
   };
-  const int best = largestPassingStepFrom(rung, passes);
+  // Under an RMSE the rounding's share grows in proportion to the step: the ladder guided by it
+  // (largestPassingStepGuided, usually one quantization where the walk took two); a pointwise
+  // bound's worst sample does not, and walks.
+  const int best = kind == BoundKind::Rmse ? largestPassingStepGuided(
+                                                 rung, budget,
+                                                 [&](double k) {
+                                                   passes(k);
+                                                   return added;
+                                                 },
+                                                 kSplineGuidedMargin)
+                                           : largestPassingStepFrom(rung, passes);
   rung = best;
   if (best < 0 || !lattice) return false;
   // The coder codes what the ladder decided on: its verdict stands (the error the entry stores is

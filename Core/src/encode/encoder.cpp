@@ -745,7 +745,7 @@ class LevelEncoder {
   EncodeProgress& progress_;
   ModelSink& sink_;
   EncodeTeam& team_;
-  LevelSampler* sampler_;          ///< filters the coarse levels (null: sampleBlockRow)
+  LevelSampler* sampler_;  ///< filters the coarse levels (null: sampleBlockRow)
   std::string samplerFailure_;
   std::vector<uint8_t> outgoing_;  ///< a team's records of its fitted blocks, every level's
   int threads_;                    ///< fitting threads (each fits with its threadFitter())
@@ -860,8 +860,8 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   if (load.sampler && (missing || load.failed)) {  // its filter has no rule for missing samples
     load.sampler->release();
     load.sampler = nullptr;
-    stats.levelSampler = "not used: " + (load.failed ? load.failure
-                                                     : std::string("the volume has missing samples"));
+    stats.levelSampler =
+        "not used: " + (load.failed ? load.failure : std::string("the volume has missing samples"));
   }
   team.reduceRange(stats.valueMin, stats.valueMax);
   std::vector<uint8_t> anyMissing{uint8_t(missing ? 1 : 0)};

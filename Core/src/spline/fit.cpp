@@ -831,8 +831,18 @@ ErrorStats BlockFitter::error(const float* samples, std::array<int, 3> n, const 
 
 void BlockFitter::setMask(const std::vector<uint32_t>* valid) { impl_->valid = valid; }
 
+namespace {
+
+AFAM_TARGET_AVX2 ErrorStats errorOnValidAvx2(const float* model, const float* samples,
+                                             size_t count, const uint32_t* valid) {
+  return errorOnValidOf([model](size_t i) { return model[i]; }, samples, count, valid);
+}
+
+}  // namespace
+
 ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
                         const uint32_t* valid) {
+  if (cpuHasAvx2()) return errorOnValidAvx2(model, samples, count, valid);
   return errorOnValidOf([model](size_t i) { return model[i]; }, samples, count, valid);
 }
 

@@ -13,8 +13,8 @@
 
 #include "afam/cuda/common/gpu_error.hpp"
 #include "afam/cuda/encode/make_gpu_level_sampler.hpp"
-#include "afam/sampling/level_filter.hpp"
 #include "afam/ranks/device_selection.hpp"
+#include "afam/sampling/level_filter.hpp"
 #include "common/cuda_check.hpp"
 #include "common/growing_array.hpp"
 
@@ -98,10 +98,10 @@ bool GpuLevelSampler::reserve(Index3 dims, SampleType type, std::string& why) {
   size_t free = 0, total = 0;
   AFAM_CUDA_CHECK(cudaMemGetInfo(&free, &total));
   const size_t held = volume_.bytes;  // a copy of the encode before, reused or freed
-  const size_t budget = budget_ > 0 ? budget_
-                                    : (free + held > kGpuEncodeReserveBytes
-                                           ? free + held - kGpuEncodeReserveBytes
-                                           : 0);
+  const size_t budget =
+      budget_ > 0
+          ? budget_
+          : (free + held > kGpuEncodeReserveBytes ? free + held - kGpuEncodeReserveBytes : 0);
   if (bytes > budget) {
     why = "the volume's copy (" + std::to_string(bytes >> 20) + " MiB) is over " +
           (budget_ > 0 ? "its budget of " : "what the GPU can spare, ") +
@@ -144,8 +144,8 @@ void GpuLevelSampler::launch(const RowTaps& taps, const std::vector<RowBlock>& b
   std::memcpy(packed.data() + ni + nw, taps.first.data(), nf);
   std::memcpy(packed.data() + ni + nw + nf, blocks.data(), nb);
   taps_.reserve(packed.size());
-  AFAM_CUDA_CHECK(cudaMemcpyAsync(taps_.data, packed.data(), packed.size(),
-                                  cudaMemcpyHostToDevice, stream_));
+  AFAM_CUDA_CHECK(
+      cudaMemcpyAsync(taps_.data, packed.data(), packed.size(), cudaMemcpyHostToDevice, stream_));
   const auto* base = taps_.as<unsigned char>();
   const auto* index = reinterpret_cast<const int64_t*>(base);
   const auto* weight = reinterpret_cast<const double*>(base + ni);
@@ -161,19 +161,16 @@ void GpuLevelSampler::launch(const RowTaps& taps, const std::vector<RowBlock>& b
                                                       weight, first, rb, taps.z, taps.nz, out);
       break;
     case SampleType::UInt8:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint8_t*>(v), X, XY,
-                                                      index, weight, first, rb, taps.z, taps.nz,
-                                                      out);
+      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint8_t*>(v), X, XY, index,
+                                                      weight, first, rb, taps.z, taps.nz, out);
       break;
     case SampleType::Int16:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const int16_t*>(v), X, XY,
-                                                      index, weight, first, rb, taps.z, taps.nz,
-                                                      out);
+      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const int16_t*>(v), X, XY, index,
+                                                      weight, first, rb, taps.z, taps.nz, out);
       break;
     case SampleType::UInt16:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint16_t*>(v), X, XY,
-                                                      index, weight, first, rb, taps.z, taps.nz,
-                                                      out);
+      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint16_t*>(v), X, XY, index,
+                                                      weight, first, rb, taps.z, taps.nz, out);
       break;
     default:
       filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const float*>(v), X, XY, index,

@@ -36,13 +36,13 @@
 #include <vector>
 
 #include "afam/base/errors.hpp"
-#include "afam/sampling/block_sampling.hpp"
 #include "afam/encode/encode_team.hpp"
-#include "afam/sampling/level_sampler.hpp"
 #include "afam/encode/model_sink.hpp"
 #include "afam/entropy/entropy_stage.hpp"
 #include "afam/format/afam_file.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/sampling/block_sampling.hpp"
+#include "afam/sampling/level_sampler.hpp"
 #include "afam/search/least_squares_batch.hpp"
 #include "afam/search/ncp_search.hpp"
 #include "afam/spline/fit.hpp"

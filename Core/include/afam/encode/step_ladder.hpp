@@ -86,7 +86,8 @@ constexpr double kGuidedMargin = 1.05;
 /// A measure that is not finite and positive (a factor that cannot be used) says nothing of the
 /// next: the search then walks towards the smaller factors.
 template <typename Measure>
-int largestPassingGuided(const double* factors, int n, int hint, double limit, Measure&& measure) {
+int largestPassingGuided(const double* factors, int n, int hint, double limit, Measure&& measure,
+                         double margin = kGuidedMargin) {
   int fail = -1, pass = n;  // [fail] fails, [pass] passes (-1, n: none known)
   int last = hint;
   double lastMeasure = measure(factors[hint]);
@@ -95,8 +96,7 @@ int largestPassingGuided(const double* factors, int n, int hint, double limit, M
     const bool proportional = lastMeasure > 0 && std::isfinite(lastMeasure);
     int next = -1;
     for (int r = fail + 1; r < pass && next < 0; ++r)
-      if (!proportional || lastMeasure * factors[r] / factors[last] <= kGuidedMargin * limit)
-        next = r;
+      if (!proportional || lastMeasure * factors[r] / factors[last] <= margin * limit) next = r;
     if (next < 0) {
       if (pass < n) break;  // every factor between is predicted to fail: the smallest passing
       next = fail + 1;      // none passes yet: walk towards the smaller factors
@@ -116,11 +116,12 @@ int largestPassingGuided(const double* factors, int n, int hint, double limit, M
 /// five. `measure(factor)`: the test's measure, passing where it is <= limit (infinity where the
 /// step cannot be used). hint < 0: the bisection.
 template <typename Measure>
-int largestPassingStepGuided(int hint, double limit, Measure&& measure) {
+int largestPassingStepGuided(int hint, double limit, Measure&& measure,
+                             double margin = kGuidedMargin) {
   const int n = int(sizeof(kStepFactors) / sizeof(kStepFactors[0]));
   if (hint < 0 || hint >= n)
     return largestPassingStep([&](double f) { return measure(f) <= limit; });
-  return largestPassingGuided(kStepFactors, n, hint, limit, measure);
+  return largestPassingGuided(kStepFactors, n, hint, limit, measure, margin);
 }
 
 }  // namespace afam

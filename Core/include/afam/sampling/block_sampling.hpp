@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "afam/base/huge_pages.hpp"
-#include "afam/sampling/level_filter.hpp"
 #include "afam/format/partition.hpp"
+#include "afam/sampling/level_filter.hpp"
 #include "afam/volume/volume_source.hpp"
 
 namespace afam {

@@ -26,8 +26,8 @@ struct AxisTapsView {
 /// rows `rowSize` samples apart, planes `planeSize`; T the type it is stored in).
 template <typename T>
 AFAM_HD float filteredSample(const T* volume, int64_t rowSize, int64_t planeSize,
-                             const AxisTapsView& tx, const AxisTapsView& ty,
-                             const AxisTapsView& tz, int i, int j, int k) {
+                             const AxisTapsView& tx, const AxisTapsView& ty, const AxisTapsView& tz,
+                             int i, int j, int k) {
   double acc = 0;
   for (uint64_t t = tz.first[k]; t < tz.first[k + 1]; ++t) {
     const T* plane = volume + tz.index[t] * planeSize;

@@ -18,8 +18,8 @@ namespace afam {
 /// batches) when it has no budget of its own.
 constexpr size_t kGpuEncodeReserveBytes = size_t(2) << 30;
 
-/// A level sampler on CUDA device `device` (-1: the MPI local rank's, device_selection.hpp), or null
-/// with the reason given to `report`. It holds a volume only where its copy takes at most
+/// A level sampler on CUDA device `device` (-1: the MPI local rank's, device_selection.hpp), or
+/// null with the reason given to `report`. It holds a volume only where its copy takes at most
 /// `volumeBudgetBytes` of device memory (0: what the device has free when it reserves, less
 /// kGpuEncodeReserveBytes for the rest of the encode); otherwise reserve() says why. Its floats
 /// equal CpuLevelSampler's bit for bit (level_filter.hpp).

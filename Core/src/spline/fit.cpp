@@ -833,8 +833,8 @@ void BlockFitter::setMask(const std::vector<uint32_t>* valid) { impl_->valid = v
 
 namespace {
 
-AFAM_TARGET_AVX2 ErrorStats errorOnValidAvx2(const float* model, const float* samples,
-                                             size_t count, const uint32_t* valid) {
+AFAM_TARGET_AVX2 ErrorStats errorOnValidAvx2(const float* model, const float* samples, size_t count,
+                                             const uint32_t* valid) {
   return errorOnValidOf([model](size_t i) { return model[i]; }, samples, count, valid);
 }
 

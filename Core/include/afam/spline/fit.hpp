@@ -158,9 +158,8 @@ class BlockFitter {
 /// so that a caller compiled for AVX2 (errorOnValid) runs the lanes in one vector.
 template <typename Model>
 __attribute__((always_inline)) inline ErrorStats errorOnValidOf(const Model& model,
-                                                                 const float* samples,
-                                                                 size_t count,
-                                                                 const uint32_t* valid) {
+                                                                const float* samples, size_t count,
+                                                                const uint32_t* valid) {
   ErrorStats es;
   es.minValue = std::numeric_limits<double>::infinity();
   es.maxValue = -es.minValue;

@@ -210,29 +210,58 @@ struct SlabLoad {
   }
 };
 
-/// Reads planes [z, z + nz) into buf as floats, handing them to `load` (where given) as it holds
-/// them.
-void readScanSlab(VolumeSource& source, int64_t z, int64_t nz, std::vector<float>& buf,
-                  SlabLoad* load) {
-  if (!load || !load->stored) {
-    source.readSlab(z, nz, buf.data());
-    if (load) load->put(z, nz, buf.data());
-    return;
+/// The range of `count` samples stored as T (1- or 2-byte integers: every value a float exactly).
+template <typename T>
+void storedRange(const void* samples, size_t count, float& lo, float& hi) {
+  const T* v = static_cast<const T*>(samples);
+  T a = v[0], b = v[0];
+  for (size_t i = 1; i < count; ++i) {
+    a = std::min(a, v[i]);
+    b = std::max(b, v[i]);
   }
-  thread_local std::vector<unsigned char> stored;
-  stored.resize(buf.size() * size_t(sampleTypeSize(*load->stored)));
-  source.readStoredRows(z, nz, 0, source.dims()[1], stored.data());
-  load->put(z, nz, stored.data());
-  samplesToFloat(*load->stored, stored.data(), buf.size(), buf.data());
+  lo = std::min(lo, float(a));
+  hi = std::max(hi, float(b));
 }
 
+/// Planes of 1- or 2-byte integers as the source stores them (`stored`): their range (a float is
+/// never NaN or infinite there), handed to `load` (where given) as they are; false for other types.
+bool scanStored(VolumeSource& source, SampleType stored, int64_t z, int64_t nz, SlabLoad* load,
+                RangeChunk& c) {
+  if (sampleTypeSize(stored) > 2 || stored == SampleType::Float32) return false;
+  thread_local std::vector<unsigned char> raw;
+  const size_t count = size_t(nz * source.dims()[0] * source.dims()[1]);
+  if (count == 0) return true;
+  raw.resize(count * size_t(sampleTypeSize(stored)));
+  source.readStoredRows(z, nz, 0, source.dims()[1], raw.data());
+  if (load) load->put(z, nz, raw.data());
+  switch (stored) {
+    case SampleType::Int8:
+      storedRange<int8_t>(raw.data(), count, c.lo, c.hi);
+      break;
+    case SampleType::UInt8:
+      storedRange<uint8_t>(raw.data(), count, c.lo, c.hi);
+      break;
+    case SampleType::Int16:
+      storedRange<int16_t>(raw.data(), count, c.lo, c.hi);
+      break;
+    default:
+      storedRange<uint16_t>(raw.data(), count, c.lo, c.hi);
+  }
+  return true;
+}
+
+/// One chunk of the range scan: where the source stores 1- or 2-byte integers (and a load, if
+/// any, takes them as stored) their range as stored; else its floats, handed to `load` as floats.
 RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int64_t nz,
                      SlabLoad* load) {
+  RangeChunk c;
+  const std::optional<SampleType> stored = source.storedType();
+  if (stored && (!load || load->stored) && scanStored(source, *stored, z, nz, load, c)) return c;
   thread_local std::vector<float> buf;
   const Index3 dims = source.dims();
   buf.resize(size_t(nz * dims[0] * dims[1]));
-  readScanSlab(source, z, nz, buf, load);
-  RangeChunk c;
+  source.readSlab(z, nz, buf.data());
+  if (load) load->put(z, nz, buf.data());
   if (!extendRange(buf.data(), buf.size(), c.lo, c.hi)) try {
       c.missing = checkSlab(buf, z, source, part);
     } catch (const NumericError& e) {

@@ -194,3 +194,34 @@ TEST(LevelSampler, OneThatFailsLeavesTheCoarseLevelsToTheCpuSayingWhy) {
     EXPECT_EQ(models.stored, without.stored);
   }
 }
+
+namespace {
+/// A source whose range is known (as a run's steps are, after the run's first pass).
+class RangedArray : public ArraySource {
+ public:
+  using ArraySource::ArraySource;
+  bool knownRange(double& lo, double& hi) const override {
+    lo = 0;
+    hi = 255;
+    return true;
+  }
+};
+}  // namespace
+
+TEST(LevelSampler, AVolumeWhoseRangeIsKnownIsNotReadAgainToLoadIt) {
+  const Index3 dims{40, 36, 33};
+  const TypedVolume t = typedVolume(dims, SampleType::UInt8);
+  EncoderOptions opt;
+  opt.levels = 3;
+  opt.blocksPerAxis = 3;
+  opt.threads = 2;
+  auto counting = std::make_shared<CountingSampler>();
+  opt.levelSampler = counting;
+  RangedArray src(t.bytes.data(), t.type, dims);
+  InMemoryModels models;
+  const EncodeStats s = encodeVolume(src, opt, models);
+  EXPECT_EQ(s.levelSampler, "not used: the range is known, and the volume is not scanned");
+  EXPECT_EQ(counting->reserves, 0);
+  EXPECT_EQ(counting->planes, 0);
+  EXPECT_EQ(s.valueMax, 255);
+}

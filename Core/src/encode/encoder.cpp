@@ -271,20 +271,16 @@ RangeChunk scanChunk(VolumeSource& source, const Partition& part, int64_t z, int
 }
 
 /// Value range of the valid samples and Inf check in one streaming pass (unless the source knows
-/// its range and nothing is loaded) over this process's share of the z-planes, in chunks of about
-/// a megabyte, on `threads` threads where the source allows concurrentReads; the team reduces the
-/// shares to the volume's range. `missing`: whether a sample of the share is NaN (missing). An
-/// infinite sample stops the encode naming the first in z-order, whatever the threads. `load`:
-/// every plane read is handed to it (the whole volume: one process).
+/// its range) over this process's share of the z-planes, in chunks of about a megabyte, on
+/// `threads` threads where the source allows concurrentReads; the team reduces the shares to the
+/// volume's range. `missing`: whether a sample of the share is NaN (missing). An infinite sample
+/// stops the encode naming the first in z-order, whatever the threads. `load`: every plane read
+/// is handed to it (the whole volume: one process).
 void scanValueRange(VolumeSource& source, const Partition& part, const EncodeProgress& progress,
                     EncodeTeam& team, double& vmin, double& vmax, bool& missing, int threads = 1,
                     SlabLoad* load = nullptr) {
   missing = false;
-  double knownMin = 0, knownMax = 0;
-  const bool known = source.knownRange(knownMin, knownMax);
-  if (known && !load) {
-    vmin = knownMin;
-    vmax = knownMax;
+  if (source.knownRange(vmin, vmax)) {
     missing = source.knownMissing();
     return;
   }
@@ -322,9 +318,8 @@ void scanValueRange(VolumeSource& source, const Partition& part, const EncodePro
     hi = std::max(hi, c.hi);
     missing = missing || c.missing;
   }
-  vmin = known ? knownMin : lo;
-  vmax = known ? knownMax : hi;
-  if (known) missing = source.knownMissing();
+  vmin = lo;
+  vmax = hi;
 }
 
 /// A volume with missing samples: at least one valid sample, and a spline mode (DS draws its
@@ -822,7 +817,9 @@ void refuseBlocksNoAxisHolds(const Index3& dims, int blocksPerAxis) {
 namespace {
 /// The level sampler this encode loads and uses, reserved for the volume (stats.levelSampler says
 /// which, or why not), or null: spline modes with a level coarser than the volume, one process
-/// (a team's process scans only its share of the planes).
+/// (a team's process scans only its share of the planes), a volume whose range is scanned (a
+/// run's steps, whose range the run found before, are not read again to load it: the Gray-Scott
+/// run of docs/BENCHMARKS.md took 26.0 s with their loads, 23.3 s without).
 LevelSampler* reserveLevelSampler(const EncoderOptions& opt, const VolumeSource& source,
                                   const Partition& part, const EncodeTeam& team,
                                   EncodeStats& stats) {
@@ -830,6 +827,11 @@ LevelSampler* reserveLevelSampler(const EncoderOptions& opt, const VolumeSource&
   if (!sampler || team.size() > 1 || levelSampling(opt.mode) != LevelSampling::Box ||
       part.levels() < 2)
     return nullptr;
+  double lo = 0, hi = 0;
+  if (source.knownRange(lo, hi)) {
+    stats.levelSampler = "not used: the range is known, and the volume is not scanned";
+    return nullptr;
+  }
   const std::optional<SampleType> stored = source.storedType();
   const SampleType type = stored && levelSamplerHolds(*stored) ? *stored : SampleType::Float32;
   std::string why;

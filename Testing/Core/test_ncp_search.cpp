@@ -51,6 +51,52 @@ TEST(NcpSearch, RoughnessSeesTheLayeredAxis) {
   EXPECT_GT(r[0], 0.0);
 }
 
+namespace {
+
+/// axisRoughness as three passes, an axis at a time (its first form): along each axis the sum per
+/// x over the rows in increasing (z, y), then over x.
+std::array<double, 3> roughnessAxisByAxis(const std::vector<float>& v, Int3 n) {
+  std::array<double, 3> r{0, 0, 0};
+  const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
+  const size_t stride[3] = {1, nx, nx * ny};
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] < 3) continue;
+    std::vector<double> column(nx, 0.0);
+    for (size_t z = a == 2 ? 1 : 0; z < (a == 2 ? nz - 1 : nz); ++z)
+      for (size_t y = a == 1 ? 1 : 0; y < (a == 1 ? ny - 1 : ny); ++y)
+        for (size_t x = a == 0 ? 1 : 0; x < (a == 0 ? nx - 1 : nx); ++x) {
+          const size_t i = z * stride[2] + y * nx + x, s = stride[a];
+          const double d = double(v[i - s]) - 2.0 * double(v[i]) + double(v[i + s]);
+          column[x] += d * d;
+        }
+    double sum = 0;
+    for (double c : column) sum += c;
+    Int3 interior = n;
+    interior[size_t(a)] -= 2;
+    r[size_t(a)] = sum / (double(interior[0]) * double(interior[1]) * double(interior[2]));
+  }
+  return r;
+}
+
+}  // namespace
+
+TEST(NcpSearch, RoughnessInOnePassIsTheSumsOfAPassAnAxis) {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> noise(100.0f, 30.0f);
+  const std::vector<Int3> shapes{{53, 53, 53}, {2, 40, 33}, {40, 1, 5},
+                                 {7, 3, 64},   {3, 3, 3},   {65, 64, 2}};
+  for (const Int3& n : shapes) {
+    std::vector<float> v(static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]));
+    for (float& x : v) x = noise(rng);
+    const std::array<double, 3> got = axisRoughness(v.data(), n), want = roughnessAxisByAxis(v, n);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(got[size_t(a)], want[size_t(a)])
+          << n[0] << "x" << n[1] << "x" << n[2] << " axis " << a;
+      EXPECT_EQ(got[size_t(a)] > 0, n[a] >= 3);
+    }
+  }
+}
+
 TEST(NcpSearch, LayeredBlockKeepsTheBoundWithFarFewerControlPoints) {
   const int n = 33;
   const Int3 dims{n, n, n};

@@ -133,30 +133,43 @@ int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, dou
 
 namespace {
 
-/// axisRoughness's sums, compiled also for AVX2 (four doubles a vector; no FMA, so the same sums)
-/// and chosen at run time.
+/// axisRoughness's sums in one pass over the block's rows (each row with its neighbours along y
+/// and z, in cache once), compiled also for AVX2 (four doubles a vector; no FMA) and chosen at run
+/// time. An axis' sum per x gathers its rows in increasing (z, y), the order of a pass of its own,
+/// and the columns are added in increasing x: the same sums as three passes.
 __attribute__((always_inline)) inline std::array<double, 3> axisRoughnessBody(const float* samples,
                                                                               Int3 n) {
-  std::array<double, 3> r{0, 0, 0};
   const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
-  const size_t stride[3] = {1, nx, nx * ny};
-  std::vector<double> column(
-      nx);  // a sum per x: the inner loop is independent across x (vectorised)
+  thread_local std::vector<double> columns;  // a sum per x and axis (vectorised across x)
+  columns.assign(3 * nx, 0.0);
+  double* __restrict cx = columns.data();
+  double* __restrict cy = cx + nx;
+  double* __restrict cz = cy + nx;
+  const size_t plane = nx * ny;
+  for (size_t z = 0; z < nz; ++z)
+    for (size_t y = 0; y < ny; ++y) {
+      const float* row = samples + z * plane + y * nx;
+      if (nx >= 3)
+        for (size_t x = 1; x + 1 < nx; ++x) {
+          const double d = double(row[x - 1]) - 2.0 * double(row[x]) + double(row[x + 1]);
+          cx[x] += d * d;
+        }
+      if (ny >= 3 && y >= 1 && y + 1 < ny)
+        for (size_t x = 0; x < nx; ++x) {
+          const double d = double(row[x - nx]) - 2.0 * double(row[x]) + double(row[x + nx]);
+          cy[x] += d * d;
+        }
+      if (nz >= 3 && z >= 1 && z + 1 < nz)
+        for (size_t x = 0; x < nx; ++x) {
+          const double d = double(row[x - plane]) - 2.0 * double(row[x]) + double(row[x + plane]);
+          cz[x] += d * d;
+        }
+    }
+  std::array<double, 3> r{0, 0, 0};
   for (int a = 0; a < 3; ++a) {
     if (n[a] < 3) continue;
-    std::fill(column.begin(), column.end(), 0.0);
-    const size_t s = stride[a], x0 = a == 0 ? 1 : 0, x1 = a == 0 ? nx - 1 : nx;
-    for (size_t z = a == 2 ? 1 : 0; z < (a == 2 ? nz - 1 : nz); ++z)
-      for (size_t y = a == 1 ? 1 : 0; y < (a == 1 ? ny - 1 : ny); ++y) {
-        const float* row = samples + z * stride[2] + y * nx;
-        const float *prev = row - s, *next = row + s;
-        for (size_t x = x0; x < x1; ++x) {
-          const double d = double(prev[x]) - 2.0 * double(row[x]) + double(next[x]);
-          column[x] += d * d;
-        }
-      }
     double sum = 0;
-    for (double v : column) sum += v;
+    for (size_t x = 0; x < nx; ++x) sum += columns[size_t(a) * nx + x];
     Int3 interior = n;
     interior[size_t(a)] -= 2;
     r[size_t(a)] = sum / (double(interior[0]) * double(interior[1]) * double(interior[2]));

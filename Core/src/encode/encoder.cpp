@@ -7,8 +7,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <deque>
 #include <ctime>
+#include <deque>
 #include <future>
 #include <limits>
 #include <mutex>

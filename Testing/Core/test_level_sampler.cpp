@@ -63,6 +63,15 @@ class CountingSampler : public LevelSampler {
   int reserves = 0, releases = 0;
 };
 
+/// Three levels of three blocks per axis on `threads` threads (the default bound).
+EncoderOptions threeLevels(int threads) {
+  EncoderOptions opt;
+  opt.levels = 3;
+  opt.blocksPerAxis = 3;
+  opt.threads = threads;
+  return opt;
+}
+
 /// z-rows of blocks over the partition's levels coarser than the volume.
 int64_t coarseRows(const Partition& part) {
   int64_t rows = 0;
@@ -89,10 +98,7 @@ TEST(LevelSampler, AnEncodeLoadsItAsItScansAndAsksItForTheCoarseLevelsOnly) {
   for (const SampleType type : {SampleType::UInt8, SampleType::Float32}) {
     SCOPED_TRACE(sampleTypeName(type));
     const TypedVolume t = typedVolume(dims, type);
-    EncoderOptions opt;
-    opt.levels = 3;
-    opt.blocksPerAxis = 3;
-    opt.threads = 3;
+    EncoderOptions opt = threeLevels(3);
     opt.errorBound = 1e-2;
     opt.relativeBound = true;
     ArraySource plain(t.bytes.data(), type, dims);
@@ -119,10 +125,7 @@ TEST(LevelSampler, AnEncodeLoadsItAsItScansAndAsksItForTheCoarseLevelsOnly) {
 TEST(LevelSampler, MissingSamplesARefusalAndDSLeaveTheCoarseLevelsToTheCpu) {
   const Index3 dims{40, 36, 33};
   TypedVolume t = typedVolume(dims, SampleType::Float32);
-  EncoderOptions opt;
-  opt.levels = 3;
-  opt.blocksPerAxis = 3;
-  opt.threads = 2;
+  EncoderOptions opt = threeLevels(2);
   {  // a missing sample: the copy is dropped, the CPU filters (its rule for missing samples)
     std::vector<float> holed = t.floats;
     holed[1234] = std::nanf("");
@@ -164,35 +167,27 @@ TEST(LevelSampler, MissingSamplesARefusalAndDSLeaveTheCoarseLevelsToTheCpu) {
 TEST(LevelSampler, OneThatFailsLeavesTheCoarseLevelsToTheCpuSayingWhy) {
   const Index3 dims{61, 50, 47};
   const TypedVolume t = typedVolume(dims, SampleType::UInt8);
-  EncoderOptions opt;
-  opt.levels = 3;
-  opt.blocksPerAxis = 3;
-  opt.threads = 3;
+  EncoderOptions opt = threeLevels(3);
   ArraySource plain(t.bytes.data(), t.type, dims);
   InMemoryModels without;
   encodeVolume(plain, opt, without);
-  {  // a load: the copy is dropped after the scan
-    auto counting = std::make_shared<CountingSampler>();
-    counting->failLoad = true;
+  // Encodes with `counting`: its report, and the models as the encode without it wrote them.
+  const auto encodeWith = [&](const std::shared_ptr<CountingSampler>& counting) {
     opt.levelSampler = counting;
     ArraySource src(t.bytes.data(), t.type, dims);
     InMemoryModels models;
     const EncodeStats s = encodeVolume(src, opt, models);
-    EXPECT_EQ(s.levelSampler, "not used: a load failed");
-    EXPECT_EQ(counting->rows, 0);
     EXPECT_EQ(models.stored, without.stored);
-  }
-  {  // the second row: it and the rest read and filtered on the CPU
-    auto counting = std::make_shared<CountingSampler>();
-    counting->failRow = 2;
-    opt.levelSampler = counting;
-    ArraySource src(t.bytes.data(), t.type, dims);
-    InMemoryModels models;
-    const EncodeStats s = encodeVolume(src, opt, models);
-    EXPECT_EQ(s.levelSampler, "counting; failed, the rest filtered on the CPU: a row failed");
-    EXPECT_EQ(counting->rows, 2);
-    EXPECT_EQ(models.stored, without.stored);
-  }
+    return s.levelSampler;
+  };
+  auto failedLoad = std::make_shared<CountingSampler>();  // the copy dropped after the scan
+  failedLoad->failLoad = true;
+  EXPECT_EQ(encodeWith(failedLoad), "not used: a load failed");
+  EXPECT_EQ(failedLoad->rows, 0);
+  auto failedRow = std::make_shared<CountingSampler>();  // the second: it and the rest on the CPU
+  failedRow->failRow = 2;
+  EXPECT_EQ(encodeWith(failedRow), "counting; failed, the rest filtered on the CPU: a row failed");
+  EXPECT_EQ(failedRow->rows, 2);
 }
 
 namespace {
@@ -211,10 +206,7 @@ class RangedArray : public ArraySource {
 TEST(LevelSampler, AVolumeWhoseRangeIsKnownIsNotReadAgainToLoadIt) {
   const Index3 dims{40, 36, 33};
   const TypedVolume t = typedVolume(dims, SampleType::UInt8);
-  EncoderOptions opt;
-  opt.levels = 3;
-  opt.blocksPerAxis = 3;
-  opt.threads = 2;
+  EncoderOptions opt = threeLevels(2);
   auto counting = std::make_shared<CountingSampler>();
   opt.levelSampler = counting;
   RangedArray src(t.bytes.data(), t.type, dims);

@@ -153,31 +153,29 @@ void GpuLevelSampler::launch(const RowTaps& taps, const std::vector<RowBlock>& b
   const auto* rb = reinterpret_cast<const RowBlock*>(base + ni + nw + nf);
   const dim3 grid(unsigned((largest + kThreads - 1) / kThreads), unsigned(blocks.size()));
   const int64_t X = dims_[0], XY = dims_[0] * dims_[1];
-  float* out = out_.as<float>();
-  const void* v = volume_.data;
+  const auto run = [&](auto* typed) {  // typed: a null pointer of the volume's sample type
+    filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<decltype(typed)>(volume_.data), X,
+                                                    XY, index, weight, first, rb, taps.z, taps.nz,
+                                                    out_.as<float>());
+  };
   switch (type_) {
     case SampleType::Int8:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const int8_t*>(v), X, XY, index,
-                                                      weight, first, rb, taps.z, taps.nz, out);
+      run(static_cast<const int8_t*>(nullptr));
       break;
     case SampleType::UInt8:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint8_t*>(v), X, XY, index,
-                                                      weight, first, rb, taps.z, taps.nz, out);
+      run(static_cast<const uint8_t*>(nullptr));
       break;
     case SampleType::Int16:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const int16_t*>(v), X, XY, index,
-                                                      weight, first, rb, taps.z, taps.nz, out);
+      run(static_cast<const int16_t*>(nullptr));
       break;
     case SampleType::UInt16:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const uint16_t*>(v), X, XY, index,
-                                                      weight, first, rb, taps.z, taps.nz, out);
+      run(static_cast<const uint16_t*>(nullptr));
       break;
     default:
-      filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<const float*>(v), X, XY, index,
-                                                      weight, first, rb, taps.z, taps.nz, out);
+      run(static_cast<const float*>(nullptr));
   }
   AFAM_CUDA_CHECK(cudaGetLastError());
-  // The packed taps stay valid until the stream has used them: synchronised by the caller.
+  // `packed` (host memory) outlives its copy to the device: the row waits for its kernel here.
   AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));
 }
 

@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
-#include <deque>
 #include <future>
 #include <limits>
 #include <mutex>
@@ -417,11 +416,6 @@ class SampleBuffers {
   std::vector<std::vector<float>> free_;
 };
 
-/// Batches asked ahead that may still be fitted while the next is sampled (LevelEncoder::
-/// encodeLevels): with one, the fitting threads of the 2.25 G scan waited for the next batch's
-/// sampling, questions and answers (a chain longer than a batch's fitting).
-constexpr size_t kBatchesAskedBehind = 2;
-
 /// Encodes the levels, coarse to fine in one stream; one instance per encodeVolume call. In a team
 /// of several processes each fits its workShare of every level, and finishLevels hands the models
 /// to the first process, which alone calls the sink.
@@ -489,20 +483,17 @@ class LevelEncoder {
     if (l == levels) return stats;
     Batch cur = gatherLines(l, start, lines[size_t(l)].end);
     prepareAhead(l, cur);
-    // cur's first block in the stream, after those of the batches before it (the newest last).
-    std::deque<int64_t> firsts{0};
+    int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
     for (;;) {
       const auto [nl, from] = batchAfter(l, cur.endLine, lines);
       const bool more = nl < levels;
       // cur is asked ahead and then published on a thread of its own while the next batch is
       // sampled here, once the batch before cur is fitted: at most two batches of samples at a
       // time (the one fitted or asked, the one sampled) and the last blocks of a third. Where
-      // batches are asked ahead (a batch then takes its sampling, its questions and the device's
-      // answers before its blocks can be fitted), once the batch kBatchesAskedBehind before cur
-      // is fitted: the batches between are fitted meanwhile; the next batch's questions are
-      // prepared here too, while the device answers cur's.
-      const size_t behind = opt_.leastSquares ? kBatchesAskedBehind : 0;
-      const int64_t fitted = firsts.size() > behind ? firsts[firsts.size() - 1 - behind] : 0;
+      // batches are asked ahead (their questions take about as long as their sampling), once
+      // the batch before that is fitted: the batch before cur is fitted meanwhile; the next
+      // batch's questions are prepared here too, while the device answers cur's.
+      const int64_t fitted = opt_.leastSquares ? before : first;
       std::future<void> asking = std::async(std::launch::async, [&] {
         askAheadOf(cur);
         stream.publish(std::move(cur.tasks));
@@ -520,8 +511,8 @@ class LevelEncoder {
         throw;
       }
       asking.get();
-      firsts.push_back(stream.published());
-      if (firsts.size() > kBatchesAskedBehind + 1) firsts.pop_front();
+      before = first;
+      first = stream.published();
       countBatch(cur, stats[size_t(l)]);
       if (!more) break;
       cur = std::move(*next);

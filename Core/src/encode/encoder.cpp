@@ -227,7 +227,7 @@ void storedRange(const void* samples, size_t count, float& lo, float& hi) {
 /// never NaN or infinite there), handed to `load` (where given) as they are; false for other types.
 bool scanStored(VolumeSource& source, SampleType stored, int64_t z, int64_t nz, SlabLoad* load,
                 RangeChunk& c) {
-  if (sampleTypeSize(stored) > 2 || stored == SampleType::Float32) return false;
+  if (sampleTypeSize(stored) > 2) return false;
   thread_local std::vector<unsigned char> raw;
   const size_t count = size_t(nz * source.dims()[0] * source.dims()[1]);
   if (count == 0) return true;

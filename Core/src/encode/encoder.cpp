@@ -815,14 +815,14 @@ void refuseBlocksNoAxisHolds(const Index3& dims, int blocksPerAxis) {
 }  // namespace
 
 namespace {
-/// The level sampler this encode loads and uses, reserved for the volume (stats.levelSampler says
-/// which, or why not), or null: spline modes with a level coarser than the volume, one process
-/// (a team's process scans only its share of the planes), a volume whose range is scanned (a
-/// run's steps, whose range the run found before, are not read again to load it: the Gray-Scott
-/// run of docs/BENCHMARKS.md took 26.0 s with their loads, 23.3 s without).
+/// The level sampler this encode loads and uses, reserved for the volume as `type`
+/// (stats.levelSampler says which, or why not), or null: spline modes with a level coarser than the
+/// volume, one process (a team's process scans only its share of the planes), a volume whose range
+/// is scanned (a run's steps, whose range the run found before, are not read again to load it: the
+/// Gray-Scott run of docs/BENCHMARKS.md took 26.0 s with their loads, 23.3 s without).
 LevelSampler* reserveLevelSampler(const EncoderOptions& opt, const VolumeSource& source,
-                                  const Partition& part, const EncodeTeam& team,
-                                  EncodeStats& stats) {
+                                  const Partition& part, const EncodeTeam& team, EncodeStats& stats,
+                                  SampleType& type) {
   LevelSampler* sampler = opt.levelSampler.get();
   if (!sampler || team.size() > 1 || levelSampling(opt.mode) != LevelSampling::Box ||
       part.levels() < 2)
@@ -833,7 +833,7 @@ LevelSampler* reserveLevelSampler(const EncoderOptions& opt, const VolumeSource&
     return nullptr;
   }
   const std::optional<SampleType> stored = source.storedType();
-  const SampleType type = stored && levelSamplerHolds(*stored) ? *stored : SampleType::Float32;
+  type = stored && levelSamplerHolds(*stored) ? *stored : SampleType::Float32;
   std::string why;
   if (!sampler->reserve(source.dims(), type, why)) {
     stats.levelSampler = "not used: " + why;
@@ -874,15 +874,15 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   EncodeProgress progress(part, opt);
   bool missing = false;
   SlabLoad load;
-  load.sampler = reserveLevelSampler(opt, source, part, team, stats);
+  SampleType loadType = SampleType::Float32;  // as the copy holds the samples
+  load.sampler = reserveLevelSampler(opt, source, part, team, stats, loadType);
   const struct Release {  // the volume's copy, however the encode ends
     LevelSampler* sampler;
     ~Release() {
       if (sampler) sampler->release();
     }
   } release{load.sampler};
-  if (load.sampler && source.storedType() && levelSamplerHolds(*source.storedType()))
-    load.stored = source.storedType();
+  if (load.sampler && loadType != SampleType::Float32) load.stored = loadType;
   teamStep(team, [&] {
     scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing, threads,
                    load.sampler ? &load : nullptr);

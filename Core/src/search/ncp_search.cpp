@@ -154,16 +154,22 @@ __attribute__((always_inline)) inline std::array<double, 3> axisRoughnessBody(co
           const double d = double(row[x - 1]) - 2.0 * double(row[x]) + double(row[x + 1]);
           cx[x] += d * d;
         }
-      if (ny >= 3 && y >= 1 && y + 1 < ny)
+      if (ny >= 3 && y >= 1 && y + 1 < ny) {
+        const float* below = row - nx;  // in the block: y >= 1
+        const float* above = row + nx;
         for (size_t x = 0; x < nx; ++x) {
-          const double d = double(row[x - nx]) - 2.0 * double(row[x]) + double(row[x + nx]);
+          const double d = double(below[x]) - 2.0 * double(row[x]) + double(above[x]);
           cy[x] += d * d;
         }
-      if (nz >= 3 && z >= 1 && z + 1 < nz)
+      }
+      if (nz >= 3 && z >= 1 && z + 1 < nz) {
+        const float* below = row - plane;  // in the block: z >= 1
+        const float* above = row + plane;
         for (size_t x = 0; x < nx; ++x) {
-          const double d = double(row[x - plane]) - 2.0 * double(row[x]) + double(row[x + plane]);
+          const double d = double(below[x]) - 2.0 * double(row[x]) + double(above[x]);
           cz[x] += d * d;
         }
+      }
     }
   std::array<double, 3> r{0, 0, 0};
   for (int a = 0; a < 3; ++a) {

@@ -235,10 +235,12 @@ void grow(HugePageVector<double>& v, size_t n, size_t block) {
 /// Sum of squares of n values, in four lanes (vectorised).
 template <typename T>
 AFAM_FIT_INLINE double sumSquares(const T* v, size_t n) {
-  double lane[4] = {0, 0, 0, 0};
+  DoubleQuad lane = {0, 0, 0, 0};
   size_t i = 0;
-  for (; i + 4 <= n; i += 4)
-    for (int l = 0; l < 4; ++l) lane[l] += double(v[i + size_t(l)]) * double(v[i + size_t(l)]);
+  for (; i + 4 <= n; i += 4) {
+    const DoubleQuad q = {double(v[i]), double(v[i + 1]), double(v[i + 2]), double(v[i + 3])};
+    lane += q * q;
+  }
   double sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
   for (; i < n; ++i) sum += double(v[i]) * double(v[i]);
   return sum;
@@ -381,8 +383,13 @@ InterpolationAxis interpolationAxis(int n, int p) {
   return a;
 }
 
+namespace {
+AFAM_TARGET_AVX2 double sumSquaresAvx2(const float* v, size_t n) { return sumSquares(v, n); }
+}  // namespace
+
 double sumOfSquares(const float* samples, std::array<int, 3> n) {
-  return sumSquares(samples, size_t(n[0]) * size_t(n[1]) * size_t(n[2]));
+  const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
+  return cpuHasAvx2() ? sumSquaresAvx2(samples, count) : sumSquares(samples, count);
 }
 
 /// Lines of an x pass handled together (BlockFitter::Impl::lineTiles): a tile of 64 lines of up to

@@ -151,11 +151,16 @@ class BlockFitter {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Four doubles as one value (GCC/Clang vector extension): one AVX2 register where the caller is
+/// compiled for AVX2, two SSE2 registers otherwise; each operation rounds as its scalar does.
+using DoubleQuad = double __attribute__((vector_size(32)));
+
 /// Error of model values (model(i) gives value i) against samples (count of them) on the samples
 /// whose bit is set in `valid` (block_mask.hpp's words; nullptr: every sample); min/max are the
 /// model's there. Without a mask the squares are summed in four lanes (value i in lane i mod 4,
-/// the lanes added pairwise at the end): four chains of additions instead of one. Inlined always,
-/// so that a caller compiled for AVX2 (errorOnValid) runs the lanes in one vector.
+/// the lanes added pairwise at the end), the lanes one DoubleQuad: four chains of additions
+/// instead of one. Inlined always, so that a caller compiled for AVX2 (errorOnValid) runs the
+/// lanes in one vector.
 template <typename Model>
 __attribute__((always_inline)) inline ErrorStats errorOnValidOf(const Model& model,
                                                                 const float* samples, size_t count,
@@ -166,20 +171,29 @@ __attribute__((always_inline)) inline ErrorStats errorOnValidOf(const Model& mod
   double sum = 0;
   size_t used = 0;
   if (!valid) {
-    double lane[4] = {0, 0, 0, 0}, most[4] = {0, 0, 0, 0};
-    double lo[4] = {es.minValue, es.minValue, es.minValue, es.minValue};
-    double hi[4] = {es.maxValue, es.maxValue, es.maxValue, es.maxValue};
-    const auto add = [&](size_t i, size_t l) {  // value i in lane l = i mod 4
+    const double inf = es.minValue;
+    DoubleQuad lane = {0, 0, 0, 0}, most = {0, 0, 0, 0};
+    DoubleQuad lo = {inf, inf, inf, inf}, hi = {-inf, -inf, -inf, -inf};
+    size_t i = 0;
+    for (; i + 4 <= count; i += 4) {
+      const DoubleQuad m = {double(model(i)), double(model(i + 1)), double(model(i + 2)),
+                            double(model(i + 3))};
+      const DoubleQuad d = m - DoubleQuad{double(samples[i]), double(samples[i + 1]),
+                                          double(samples[i + 2]), double(samples[i + 3])};
+      lane += d * d;
+      const DoubleQuad ad = d < 0 ? -d : d;  // |d|; -0 and NaN never exceed `most`
+      most = ad > most ? ad : most;          // std::max(most, |d|)
+      lo = m < lo ? m : lo;                  // std::min(lo, m)
+      hi = m > hi ? m : hi;                  // std::max(hi, m)
+    }
+    for (; i < count; ++i) {  // value i in lane i mod 4
+      const size_t l = i & 3;
       const double m = double(model(i)), d = m - double(samples[i]);
       lane[l] += d * d;
       most[l] = std::max(most[l], std::fabs(d));
       lo[l] = std::min(lo[l], m);
       hi[l] = std::max(hi[l], m);
-    };
-    size_t i = 0;
-    for (; i + 4 <= count; i += 4)
-      for (size_t l = 0; l < 4; ++l) add(i + l, l);
-    for (; i < count; ++i) add(i, i & 3);
+    }
     sum = (lane[0] + lane[1]) + (lane[2] + lane[3]);
     for (size_t l = 0; l < 4; ++l) {
       es.maxError = std::max(es.maxError, most[l]);

@@ -333,26 +333,30 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
   return true;
 }
 
-/// Whether a spline's double form is not coded, its integer form coded (`integer`, its trial
-/// frames) and both laddered: where the integer form's trial kept its lanes frame and zstd's was
-/// no smaller (an order-0 coder, whose bytes stand to the order-0 estimate alike for both forms'
-/// codes, coded them best) and the double
-/// form's estimate (estimateQuantizedBytes) is at least kSplineFormsAlike of the integer form's,
-/// the double form's bytes stay over the 0.98 of the integer form's that doubleFormWins asks.
-/// Measured with both forms coded (RMSE 1e-2): over the 8,173 splines of the head made
-/// 1204x1480x1264 with noise 2.5, the 6,341 it spares coded at least 0.9915 of the integer form's
-/// bytes, and the 405 of a 160-plane slab of it 0.9909; the double form won on 1,686 and 1,843
-/// others (most under 1,000 points, or coded smaller by zstd), none spared. Without the lanes
-/// condition 22 of the slab's blocks whose zstd frame was the smaller were spared where the double
-/// form won.
+/// Whether a spline's double form is neither laddered nor coded, its integer form coded
+/// (`integer`, its trial frames): where the integer form's trial kept its lanes frame and zstd's
+/// was no smaller (an order-0 coder, whose bytes stand to the order-0 estimate alike for both
+/// forms' codes, coded them best) and the double form's estimate (estimateQuantizedBytes) at the
+/// integer form's step, the double form's ladder's usual end, is at least kSplineFormsAlike of the
+/// integer form's, the double form's bytes stay over the 0.98 of the integer form's that
+/// doubleFormWins asks. Measured with both forms coded (RMSE 1e-2): over the 8,173 splines of the
+/// head made 1204x1480x1264 with noise 2.5, the 6,341 it spares coded at least 0.9915 of the
+/// integer form's bytes, and the 405 of a 160-plane slab of it 0.9909; the double form won on
+/// 1,686 and 1,843 others (most under 1,000 points, or coded smaller by zstd), none spared.
+/// Without the lanes condition 22 of the slab's blocks whose zstd frame was the smaller were
+/// spared where the double form won.
 constexpr double kSplineFormsAlike = 0.99;
-bool doubleSplineSpared(const Candidate& integer) {
+bool doubleSplineSpared(const FitResult& fr, const Candidate& integer) {
   const FrameSizes f = integer.frames;
   if (!payloadIsLanesCoded(integer.bytes.data(), integer.bytes.size()) ||
       (f.zstd > 0 && f.lanes > f.zstd))
     return false;
-  return estimateQuantizedBytes(ladderedSpline(Predictor::Lorenzo).kept) >=
-         kSplineFormsAlike * estimateQuantizedBytes(ladderedSpline(Predictor::IntegerLorenzo).kept);
+  QuantizedValues& integerForm = ladderedSpline(Predictor::IntegerLorenzo).kept;
+  thread_local QuantizedValues doubleForm;
+  return quantizeValues(fr.control.data(), fr.ncp, integerForm.step, Predictor::Lorenzo,
+                        doubleForm) &&
+         estimateQuantizedBytes(doubleForm) >=
+             kSplineFormsAlike * estimateQuantizedBytes(integerForm);
 }
 
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
@@ -360,12 +364,11 @@ bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double
   constexpr Predictor integerForm = Predictor::IntegerLorenzo, doubleForm = Predictor::Lorenzo;
   // The integer form's rung, then the double form's from it: the likely one.
   int rung = kind == BoundKind::Rmse ? kLikelySplineRung : -1;
-  const bool ladderedInteger = ladderSpline(fr, s, n, bound, kind, integerForm, fitter, rung);
-  const bool ladderedDouble = ladderSpline(fr, s, n, bound, kind, doubleForm, fitter, rung);
   Candidate integer, dbl;
-  const bool hasInteger =
-      ladderedInteger && codeLadderedSpline(fr, integerForm, bound, kind, coding, integer);
-  const bool hasDouble = ladderedDouble && !(hasInteger && doubleSplineSpared(integer)) &&
+  const bool hasInteger = ladderSpline(fr, s, n, bound, kind, integerForm, fitter, rung) &&
+                          codeLadderedSpline(fr, integerForm, bound, kind, coding, integer);
+  const bool hasDouble = !(hasInteger && doubleSplineSpared(fr, integer)) &&
+                         ladderSpline(fr, s, n, bound, kind, doubleForm, fitter, rung) &&
                          codeLadderedSpline(fr, doubleForm, bound, kind, coding, dbl);
   return keepSmallerForm(hasInteger, integer, hasDouble, dbl, out);
 }

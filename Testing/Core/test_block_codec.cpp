@@ -302,6 +302,41 @@ TEST(BlockCodec, RecodingAFrameGivesThePayloadCodedAtTheOtherLevel) {
   EXPECT_THROW(recodeFrame(header, kCodedHeaderBytes, 0, 8, EntropyCoding{}), FormatError);
 }
 
+TEST(BlockCodec, ALorenzoFormJudgedUnableToWinCodesToAtLeastItsShareOfTheIntegerForm) {
+  // lorenzoFormCannotWin judges from the integer form's trial frames and both forms' order-0
+  // estimates, without coding the Lorenzo form: wherever it says that form cannot win, the form
+  // coded must not come under kDoubleFormShare of the integer form's payload. It must judge some
+  // value sets (noisy ones, whose lanes frames win) and leave the ones where the Lorenzo form wins.
+  int judged = 0, lorenzoWon = 0;
+  std::mt19937 rng(17u);
+  for (const Int3 n : {Int3{6, 5, 4}, Int3{16, 16, 12}, Int3{33, 33, 33}})
+    for (const double sigma : {0.0, 0.5, 2.0})
+      for (const double step : {0.25, 1.0, 4.0, 16.0}) {
+        SCOPED_TRACE(std::to_string(n[0]) + " sigma " + std::to_string(sigma) + " step " +
+                     std::to_string(step));
+        std::vector<float> v = field(n, 3u);
+        std::normal_distribution<double> g(0, sigma > 0 ? sigma : 1);
+        if (sigma > 0)
+          for (float& x : v) x = float(x + g(rng));
+        QuantizedValues integer, lorenzo, buffer;
+        ASSERT_TRUE(quantizeValues(v.data(), n, step, Predictor::IntegerLorenzo, integer));
+        ASSERT_TRUE(quantizeValues(v.data(), n, step, Predictor::Lorenzo, lorenzo));
+        std::vector<uint8_t> payload, other;
+        const FrameSizes trial = encodeQuantized(integer, EntropyCoding{1}, payload);
+        encodeQuantized(lorenzo, EntropyCoding{1}, other);
+        const bool won = double(other.size()) < kDoubleFormShare * double(payload.size());
+        lorenzoWon += won;
+        if (lorenzoFormCannotWin(integer, payload, trial, v.data(), buffer)) {
+          ++judged;
+          EXPECT_FALSE(won) << other.size() << " against " << payload.size();
+        }
+        // Only an IntegerLorenzo quantization is judged.
+        EXPECT_FALSE(lorenzoFormCannotWin(lorenzo, payload, trial, v.data(), buffer));
+      }
+  EXPECT_GE(judged, 6);      // 11 of the 36 sets
+  EXPECT_GE(lorenzoWon, 2);  // 4: the small blocks, whose header the Lorenzo form spares
+}
+
 TEST(BlockCodec, RecodingWithTheTrialsFramesGivesTheSameBytes) {
   // The frames' sizes of the trial coding spare work only: the lanes frame is not formed again.
   // Of the frames lanesFrameSure keeps, white noise's (codes of a few bits, where zstd's Huffman

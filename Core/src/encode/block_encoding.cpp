@@ -320,7 +320,9 @@ bool codeLadderedSpline(const FitResult& fr, Predictor form, double bound, Bound
 /// steps (a step of a few noise sigmas) the double form can code noticeably smaller, as its
 /// predictions keep the fractions the integer form rounds away.
 /// Whether a double form of `dbl` bytes wins over an integer form of `integer` bytes.
-bool doubleFormWins(size_t dbl, size_t integer) { return double(dbl) < 0.98 * double(integer); }
+bool doubleFormWins(size_t dbl, size_t integer) {
+  return double(dbl) < kDoubleFormShare * double(integer);
+}
 
 bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candidate& dbl,
                      Candidate& out) {
@@ -334,29 +336,13 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 }
 
 /// Whether a spline's double form is neither laddered nor coded, its integer form coded
-/// (`integer`, its trial frames): where the integer form's trial kept its lanes frame and zstd's
-/// was no smaller (an order-0 coder, whose bytes stand to the order-0 estimate alike for both
-/// forms' codes, coded them best) and the double form's estimate (estimateQuantizedBytes) at the
-/// integer form's step, the double form's ladder's usual end, is at least kSplineFormsAlike of the
-/// integer form's, the double form's bytes stay over the 0.98 of the integer form's that
-/// doubleFormWins asks. Measured with both forms coded (RMSE 1e-2): over the 8,173 splines of the
-/// head made 1204x1480x1264 with noise 2.5, the 6,341 it spares coded at least 0.9915 of the
-/// integer form's bytes, and the 405 of a 160-plane slab of it 0.9909; the double form won on
-/// 1,686 and 1,843 others (most under 1,000 points, or coded smaller by zstd), none spared.
-/// Without the lanes condition 22 of the slab's blocks whose zstd frame was the smaller were
-/// spared where the double form won.
-constexpr double kSplineFormsAlike = 0.99;
+/// (`integer`, its trial frames): where lorenzoFormCannotWin judges, at the integer form's step
+/// (where the double form's ladder, started there, ends on nearly every spline: 8,166 of the 8,173
+/// of the head made 1204x1480x1264), that the double form cannot win.
 bool doubleSplineSpared(const FitResult& fr, const Candidate& integer) {
-  const FrameSizes f = integer.frames;
-  if (!payloadIsLanesCoded(integer.bytes.data(), integer.bytes.size()) ||
-      (f.zstd > 0 && f.lanes > f.zstd))
-    return false;
-  QuantizedValues& integerForm = ladderedSpline(Predictor::IntegerLorenzo).kept;
   thread_local QuantizedValues doubleForm;
-  return quantizeValues(fr.control.data(), fr.ncp, integerForm.step, Predictor::Lorenzo,
-                        doubleForm) &&
-         estimateQuantizedBytes(doubleForm) >=
-             kSplineFormsAlike * estimateQuantizedBytes(integerForm);
+  return lorenzoFormCannotWin(ladderedSpline(Predictor::IntegerLorenzo).kept, integer.bytes,
+                              integer.frames, fr.control.data(), doubleForm);
 }
 
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,
@@ -561,7 +547,7 @@ constexpr double kTrialOverEstimate = 0.99;
 /// makes of `integerEstimate` (doubleFormWins against the least it codes to): then the integer
 /// form is not coded.
 bool doubleFormSurelyWins(size_t dbl, double integerEstimate) {
-  return double(dbl) < 0.98 * kTrialOverEstimate * integerEstimate;
+  return double(dbl) < kDoubleFormShare * kTrialOverEstimate * integerEstimate;
 }
 
 /// Whether a coded interpolant (codeLaddered) keeps the bound as decoded, measured on the

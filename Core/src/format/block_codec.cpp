@@ -212,6 +212,17 @@ double estimateCodedBytes(const float* values, Int3 n, double step, Predictor pr
   return estimateQuantizedBytes(q);
 }
 
+bool lorenzoFormCannotWin(QuantizedValues& integerForm, const std::vector<uint8_t>& payload,
+                          FrameSizes trial, const float* values, QuantizedValues& lorenzoForm) {
+  if (integerForm.predictor != Predictor::IntegerLorenzo ||
+      !payloadIsLanesCoded(payload.data(), payload.size()) ||
+      (trial.zstd > 0 && trial.lanes > trial.zstd))
+    return false;
+  return quantizeValues(values, integerForm.n, integerForm.step, Predictor::Lorenzo, lorenzoForm) &&
+         estimateQuantizedBytes(lorenzoForm) >=
+             kLorenzoFormsAlike * estimateQuantizedBytes(integerForm);
+}
+
 FrameSizes encodeQuantized(QuantizedValues& q, EntropyCoding coding, std::vector<uint8_t>& out) {
   const HugePageVector<int64_t>& codes = codesOf(q);
   thread_local std::vector<uint8_t> varints;

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -126,13 +125,15 @@ class StoredCountingSource : public ThreadCountingSource {
 };
 
 /// A loop on `n` threads of its own (as the encoder's sampling pool runs fn).
+/// A loop over n threads, piece i on thread i mod n: every thread reads a piece where there are n
+/// or more (threads taking pieces as they come may leave one thread all of them on a loaded
+/// machine: the sanitizer build under ctest -j2 did).
 BlockLoop threadsLoop(int n) {
   return [n](int64_t count, const std::function<void(int64_t)>& fn) {
-    std::atomic<int64_t> next{0};
     std::vector<std::thread> pool;
     for (int t = 0; t < n; ++t)
-      pool.emplace_back([&] {
-        for (int64_t i = next++; i < count; i = next++) fn(i);
+      pool.emplace_back([&fn, count, n, t] {
+        for (int64_t i = t; i < count; i += n) fn(i);
       });
     for (std::thread& t : pool) t.join();
   };

@@ -340,9 +340,9 @@ bool keepSmallerForm(bool hasInteger, Candidate& integer, bool hasDouble, Candid
 /// (where the double form's ladder, started there, ends on nearly every spline: 8,166 of the 8,173
 /// of the head made 1204x1480x1264), that the double form cannot win.
 bool doubleSplineSpared(const FitResult& fr, const Candidate& integer) {
-  thread_local QuantizedValues doubleForm;
   return lorenzoFormCannotWin(ladderedSpline(Predictor::IntegerLorenzo).kept, integer.bytes,
-                              integer.frames, fr.control.data(), doubleForm);
+                              integer.frames, fr.control.data(),
+                              ladderedSpline(Predictor::Lorenzo).kept);
 }
 
 bool codeSpline(const FitResult& fr, const std::vector<float>& s, Int3 n, double bound,

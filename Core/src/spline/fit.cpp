@@ -796,12 +796,11 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
   }
   const int w = az.p + 1;
   grow(plane, planeSize, 0);
-  // Four lanes as two pairs of doubles (GCC/Clang vector types: the reduction is vectorised);
-  // lane l takes the values c = l mod 4, reduced in lane order at the end.
-  using Pair = double __attribute__((vector_size(16)));
+  // Four lanes in one DoubleQuad (the reduction is vectorised); lane l takes the values c = l mod
+  // 4, reduced in lane order at the end.
   const double inf = std::numeric_limits<double>::infinity();
-  Pair sumSq[2] = {{0, 0}, {0, 0}}, maxErr[2] = {{0, 0}, {0, 0}};
-  Pair lo[2] = {{inf, inf}, {inf, inf}}, hi[2] = {{-inf, -inf}, {-inf, -inf}};
+  DoubleQuad sumSq = {0, 0, 0, 0}, maxErr = {0, 0, 0, 0};
+  DoubleQuad lo = {inf, inf, inf, inf}, hi = {-inf, -inf, -inf, -inf};
   double tailSum = 0, tailMax = 0, tailLo = inf, tailHi = -inf;
   for (size_t i = 0; i < nz; ++i) {
     const double* wi = &az.weight[i * size_t(w)];
@@ -819,17 +818,16 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
     }
     const float* __restrict sp = samples + i * planeSize;
     size_t c = 0;
-    for (; c + 4 <= planeSize; c += 4)
-      for (size_t h = 0; h < 2; ++h) {
-        const size_t q = c + 2 * h;
-        const Pair value = {v[q], v[q + 1]};
-        const Pair d = value - Pair{double(sp[q]), double(sp[q + 1])};
-        sumSq[h] += d * d;
-        const Pair ad = d < 0 ? -d : d;
-        maxErr[h] = ad > maxErr[h] ? ad : maxErr[h];
-        lo[h] = value < lo[h] ? value : lo[h];
-        hi[h] = value > hi[h] ? value : hi[h];
-      }
+    for (; c + 4 <= planeSize; c += 4) {
+      const DoubleQuad value = {v[c], v[c + 1], v[c + 2], v[c + 3]};
+      const DoubleQuad d = value - DoubleQuad{double(sp[c]), double(sp[c + 1]), double(sp[c + 2]),
+                                              double(sp[c + 3])};
+      sumSq += d * d;
+      const DoubleQuad ad = d < 0 ? -d : d;
+      maxErr = ad > maxErr ? ad : maxErr;
+      lo = value < lo ? value : lo;
+      hi = value > hi ? value : hi;
+    }
     for (; c < planeSize; ++c) {
       const double value = v[c];
       const double d = value - double(sp[c]);
@@ -841,10 +839,10 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
   }
   double sum = tailSum, me = tailMax, mn = tailLo, mxv = tailHi;
   for (size_t l = 0; l < 4; ++l) {
-    sum += sumSq[l / 2][l % 2];
-    me = std::max(me, maxErr[l / 2][l % 2]);
-    mn = std::min(mn, lo[l / 2][l % 2]);
-    mxv = std::max(mxv, hi[l / 2][l % 2]);
+    sum += sumSq[l];
+    me = std::max(me, maxErr[l]);
+    mn = std::min(mn, lo[l]);
+    mxv = std::max(mxv, hi[l]);
   }
   const double count = double(nx * ny * nz);
   stats->rmse = std::sqrt(sum / count);

@@ -177,9 +177,11 @@ int runEncode(int argc, char** argv) {
           : (opt.relativeBound ? " (relative)" : ""));
   std::printf(
       "seconds=%.3f cpu_seconds=%.3f threads=%d voxels_per_s_per_thread=%.4g voxels_per_cpu_s=%.4g "
-      "fits=%lld blocks=%lld asked_ahead=%lld device=\"%s\"\n",
+      "fits=%lld blocks=%lld asked_ahead=%lld device=\"%s\" scan_seconds=%.3f "
+      "levels_seconds=%.3f\n",
       s.seconds, s.cpuSeconds, s.threads, s.voxelsPerSecondPerThread(), s.voxelsPerCpuSecond(),
-      (long long)s.fits, (long long)s.blocks, (long long)s.askedAhead, device.c_str());
+      (long long)s.fits, (long long)s.blocks, (long long)s.askedAhead, device.c_str(),
+      s.scanSeconds, s.fitSeconds);
   if (!s.levelSampler.empty())
     std::printf("coarse_levels_filtered_by=\"%s\" load_seconds=%.3f\n", s.levelSampler.c_str(),
                 s.loadSeconds);
@@ -197,11 +199,11 @@ int runEncode(int argc, char** argv) {
         "bytes=%llu "
         "max_rmse=%.6g max_error=%.6g bound=%.6g seconds=%.3f sample_seconds=%.3f "
         "fit_wait_seconds=%.3f ahead_seconds=%.3f ahead_prep_seconds=%.3f upload_seconds=%.3f "
-        "residual_seconds=%.3f ncp:",
+        "residual_seconds=%.3f drain_seconds=%.3f ask_wait_seconds=%.3f ncp:",
         l, (long long)ls.blocks, (long long)ls.searched, (long long)ls.complex, (long long)ls.exact,
         (long long)ls.fits, (unsigned long long)ls.payloadBytes, ls.maxRmse, ls.maxError, s.bound,
         ls.seconds, ls.sampleSeconds, ls.fitWaitSeconds, ls.aheadSeconds, ls.aheadPrepSeconds,
-        ls.uploadSeconds, ls.residualSeconds);
+        ls.uploadSeconds, ls.residualSeconds, ls.drainSeconds, ls.askWaitSeconds);
     for (size_t k = 0; k < ls.ncpHistogram.size(); ++k)
       if (ls.ncpHistogram[k]) std::printf(" %zu:%lld", k, (long long)ls.ncpHistogram[k]);
     std::printf("\n");

@@ -97,6 +97,27 @@ TEST(NcpSearch, RoughnessInOnePassIsTheSumsOfAPassAnAxis) {
   }
 }
 
+TEST(NcpSearch, RoughnessOfSmallIntegersInFloatIsTheSameDoubles) {
+  std::mt19937 rng(11);
+  const std::vector<Int3> shapes{{66, 66, 66}, {65, 64, 3}, {2, 40, 33}, {17, 1, 9}, {9, 13, 2}};
+  for (const Int3& n : shapes) {
+    const size_t count = static_cast<size_t>(n[0]) * size_t(n[1]) * size_t(n[2]);
+    // Bytes as uint8 and int8 hold them, and the extremes: 0 and 255 alternating (|d| = 1020).
+    for (int pattern = 0; pattern < 3; ++pattern) {
+      std::vector<float> v(count);
+      for (size_t i = 0; i < count; ++i)
+        v[i] = pattern == 0   ? float(rng() % 256)
+               : pattern == 1 ? float(int(rng() % 256) - 128)
+                              : float(((i + i / size_t(n[0]) + i / size_t(n[0] * n[1])) % 2) * 255);
+      const std::array<double, 3> fast = axisRoughness(v.data(), n, true),
+                                  want = roughnessAxisByAxis(v, n);
+      for (int a = 0; a < 3; ++a)
+        EXPECT_EQ(fast[size_t(a)], want[size_t(a)])
+            << n[0] << "x" << n[1] << "x" << n[2] << " pattern " << pattern << " axis " << a;
+    }
+  }
+}
+
 TEST(NcpSearch, LayeredBlockKeepsTheBoundWithFarFewerControlPoints) {
   const int n = 33;
   const Int3 dims{n, n, n};

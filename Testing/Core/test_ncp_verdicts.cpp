@@ -8,11 +8,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "afam/encode/encoder.hpp"
+#include "afam/sampling/level_sampler.hpp"
 #include "afam/search/least_squares_batch.hpp"
 #include "afam/search/ncp_verdicts.hpp"
 #include "afam/spline/fit.hpp"
@@ -55,13 +57,63 @@ class FailsOnTheThirdCall final : public LeastSquaresBatch {
   int calls_ = 0;
 };
 
+/// The CPU reference, saying it answers `atOnce` requests at a time (a GPU's multiprocessors).
+class Wide final : public LeastSquaresBatch {
+ public:
+  explicit Wide(int64_t atOnce) : atOnce_(atOnce) {}
+  void setBlocks(const std::vector<const float*>& s, const std::vector<Int3>& n,
+                 int degree) override {
+    cpu_.setBlocks(s, n, degree);
+  }
+  void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override {
+    cpu_.residuals(requests, out);
+  }
+  std::string description() const override { return "wide"; }
+  int64_t requestsAtOnce() const override { return atOnce_; }
+
+ private:
+  CpuLeastSquaresBatch cpu_;
+  int64_t atOnce_;
+};
+
+/// The CPU reference, checking that each block handed over as a box of the volume's copy
+/// (setBlocksIn) holds the box's samples, float for float.
+class BoxesChecked final : public LeastSquaresBatch {
+ public:
+  void setBlocks(const std::vector<const float*>& s, const std::vector<Int3>& n,
+                 int degree) override {
+    cpu_.setBlocks(s, n, degree);
+  }
+  void setBlocksIn(const VolumeBoxes& boxes, const std::vector<const float*>& s,
+                   const std::vector<Int3>& n, int degree) override {
+    const auto* copy = dynamic_cast<const CpuLevelSampler*>(boxes.copy);
+    std::vector<float> box;
+    for (size_t b = 0; b < n.size() && copy; ++b) {
+      box.resize(size_t(n[b][0]) * size_t(n[b][1]) * size_t(n[b][2]));
+      copy->box(boxes.origins.at(b), n[b], box.data());
+      ++boxes_;
+      mismatches_ += std::memcmp(box.data(), s[b], box.size() * sizeof(float)) != 0;
+    }
+    cpu_.setBlocksIn(boxes, s, n, degree);
+  }
+  void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override {
+    cpu_.residuals(requests, out);
+  }
+  std::string description() const override { return "boxes checked"; }
+  int64_t boxes_ = 0, mismatches_ = 0;
+
+ private:
+  CpuLeastSquaresBatch cpu_;
+};
+
 struct Encoded {
   std::vector<char> bytes;
   EncodeStats stats;
 };
 
 Encoded encodeWith(const std::vector<float>& v, Int3 n, double bound,
-                   std::shared_ptr<LeastSquaresBatch> batch) {
+                   std::shared_ptr<LeastSquaresBatch> batch,
+                   std::shared_ptr<LevelSampler> sampler = nullptr) {
   ArraySource src(v.data(), {n[0], n[1], n[2]}, "v");
   EncoderOptions opt;
   opt.errorBound = bound;
@@ -70,6 +122,7 @@ Encoded encodeWith(const std::vector<float>& v, Int3 n, double bound,
   opt.levels = 2;
   opt.blocksPerAxis = 4;  // blocks of 10-18 samples: many searches
   opt.leastSquares = std::move(batch);
+  opt.levelSampler = std::move(sampler);
   const std::string path = afam_test::scratchPath("ahead.afam");
   Encoded e;
   e.stats = encodeVolume(src, opt, path);
@@ -165,4 +218,59 @@ TEST(NcpVerdicts, ADeviceThatFailsMidEncodeLeavesTheRestToTheFits) {
   EXPECT_NE(failed.stats.aheadFailure.find("the device was lost"), std::string::npos)
       << "'" << failed.stats.aheadFailure << "'";
   EXPECT_TRUE(plain.stats.aheadFailure.empty());
+}
+
+TEST(NcpVerdicts, QuestionsAskedAheadOfTheirTurnGiveTheSameVerdictsInFewerRounds) {
+  std::vector<std::vector<float>> values;
+  std::vector<Int3> shapes{{20, 18, 16}, {17, 17, 17}, {24, 10, 14}, {16, 16, 16}, {9, 30, 12}};
+  for (size_t b = 0; b < shapes.size(); ++b)
+    values.push_back(smoothPlusNoise(shapes[b], 0.05 + 0.1 * double(b), uint32_t(b + 3)));
+  const SearchSettings settings{2, 0.08, SearchMethod::Fast, 2, true};
+  std::vector<NcpVerdicts> narrow(shapes.size()), wide(shapes.size());
+  const auto ask = [&](std::vector<NcpVerdicts>& out, int64_t atOnce) {
+    std::vector<AheadBlock> blocks;
+    for (size_t b = 0; b < shapes.size(); ++b)
+      blocks.push_back(
+          {values[b].data(), shapes[b], &out[b], std::nullopt, std::nullopt, std::nullopt});
+    CpuLeastSquaresBatch batch;
+    return askAhead(batch, blocks, settings, atOnce);
+  };
+  const AheadStats one = ask(narrow, 1), many = ask(wide, 64);
+  std::printf("[ahead] one at a time: %lld rounds, %lld residuals; 64 at once: %lld, %lld\n",
+              (long long)one.rounds, (long long)one.requests, (long long)many.rounds,
+              (long long)many.requests);
+  EXPECT_LE(2 * many.rounds, one.rounds + 1);
+  EXPECT_GT(many.requests, one.requests);
+  for (size_t b = 0; b < shapes.size(); ++b)
+    for (const auto& [ncp, v] : narrow[b].known) {
+      SCOPED_TRACE(testing::Message()
+                   << "block " << b << " ncp " << ncp[0] << "," << ncp[1] << "," << ncp[2]);
+      EXPECT_EQ(wide[b].of(ncp), v) << "asked ahead of its turn, a verdict differs or is missing";
+    }
+  // The encoder's searches consult only those: the same file with the same fits.
+  const std::vector<float> head = afam_test::headMri();
+  const Encoded plain = encodeWith(head, {48, 62, 42}, 1e-2, std::make_shared<Wide>(1));
+  const Encoded wider = encodeWith(head, {48, 62, 42}, 1e-2, std::make_shared<Wide>(96));
+  EXPECT_TRUE(wider.bytes == plain.bytes) << "asked ahead of their turn, the file differs";
+  EXPECT_EQ(wider.stats.fits, plain.stats.fits);
+  int64_t roundsPlain = 0, roundsWider = 0;
+  for (const LevelStats& ls : plain.stats.levels) roundsPlain += ls.aheadRounds;
+  for (const LevelStats& ls : wider.stats.levels) roundsWider += ls.aheadRounds;
+  std::printf("[ahead] head MRI: rounds %lld one at a time, %lld 96 at once\n",
+              (long long)roundsPlain, (long long)roundsWider);
+  EXPECT_LT(3 * roundsWider, 2 * roundsPlain);
+}
+
+TEST(NcpVerdicts, TheFinestBlocksAreAskedAsBoxesOfTheVolumesCopyWithTheirOwnSamples) {
+  const std::vector<float> head = afam_test::headMri();
+  const Encoded plain = encodeWith(head, {48, 62, 42}, 1e-2, nullptr);
+  auto checked = std::make_shared<BoxesChecked>();
+  const Encoded boxed =
+      encodeWith(head, {48, 62, 42}, 1e-2, checked, std::make_shared<CpuLevelSampler>());
+  std::printf("[ahead] head MRI: %lld finest blocks asked as boxes of the copy\n",
+              (long long)checked->boxes_);
+  EXPECT_EQ(checked->boxes_, 4 * 4 * 4) << "every finest block (the level sampler held the volume)";
+  EXPECT_EQ(checked->mismatches_, 0) << "a box of the copy is not its block's samples";
+  EXPECT_TRUE(boxed.bytes == plain.bytes) << "asked from the copy, the file differs";
+  EXPECT_LT(2 * boxed.stats.fits, plain.stats.fits);
 }

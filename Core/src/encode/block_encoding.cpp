@@ -768,7 +768,7 @@ namespace {
 /// share of the bound: its verdict given ahead, else a fit); then t's search statistics say so.
 bool noiseDominated(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   if (!mayProbeForNoise(e, t)) return false;
-  if (!t.roughness) t.roughness = axisRoughness(t.samples.data(), e.samples);
+  if (!t.roughness) t.roughness = axisRoughness(t.samples.data(), e.samples, c.smallIntegers);
   const std::optional<Int3> ncp = noiseProbeNcp(c, e, t, *t.roughness);
   if (!ncp) return false;
   const double bound = searchBound(c.opt, c.bound);
@@ -1036,7 +1036,7 @@ bool firstStepHeadroom(const FitContext& c, Int3 ijk) {
 
 void encodeBlockAnew(const FitContext& c, const BlockExtent& e, BlockFitter& fitter, BlockTask& t) {
   try {
-    if (anyNaN(t.samples.data(), t.samples.size()) && !prepareMissing(c, e, t)) return;
+    if (c.mayMiss && anyNaN(t.samples.data(), t.samples.size()) && !prepareMissing(c, e, t)) return;
     const MaskScope scope(fitter, t);
     // A run's step: the block's model at the step before, and how far the block moved from it.
     // Masked blocks are coded on their own (their models are never shared in time).
@@ -1052,8 +1052,8 @@ void encodeBlockAnew(const FitContext& c, const BlockExtent& e, BlockFitter& fit
     const bool headroom =
         firstStepHeadroom(c, t.ijk) ||
         (c.opt.runStep && before && (!mayRefer || moved.rmse <= kDriftForHeadroom * c.bound));
-    const FitContext coded{c.opt, headroom ? c.bound * c.opt.runCodedShare : c.bound, c.level,
-                           c.sourceName};
+    FitContext coded = c;
+    if (headroom) coded.bound = c.bound * c.opt.runCodedShare;
     if (inTime && keeps(c.opt.boundKind, moved, c.bound)) {
       referPrevious(previous, moved, t);  // the step before's model, unchanged
     } else if (c.opt.compact && bounded(c.opt.mode)) {

@@ -57,6 +57,12 @@ struct FitContext {
   double bound;
   int level;
   std::string sourceName;
+  /// Whether a block's sample may be missing (NaN): false where the volume's scan found none, so
+  /// that no block looks for one.
+  bool mayMiss = true;
+  /// Whether every sample of the level's blocks is an integer of magnitude below 1024 (the finest
+  /// level of a volume stored in bytes, with none missing): axisRoughness's exact float path.
+  bool smallIntegers = false;
 };
 
 /// Compact storage: the NCP at which one fit tells whether a searched block is noise-dominated

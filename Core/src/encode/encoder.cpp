@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <ctime>
+#include <deque>
 #include <future>
 #include <limits>
 #include <mutex>
@@ -419,12 +420,18 @@ class SampleBuffers {
 /// Encodes the levels, coarse to fine in one stream; one instance per encodeVolume call. In a team
 /// of several processes each fits its workShare of every level, and finishLevels hands the models
 /// to the first process, which alone calls the sink.
+/// Where batches are asked ahead: how many batches before the one asked may still be fitted while
+/// the next is sampled (2 measured no faster on the 2.25 G-voxel scan: the fitting threads are
+/// then what the sampling waits for).
+constexpr size_t kFittedBesideAsked = 1;
+
 class LevelEncoder {
  public:
   LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound,
                int threads, EncodeProgress& progress, ModelSink& sink, EncodeTeam& team,
-               LevelSampler* sampler)
-      : source_(source),
+               LevelSampler* sampler, bool mayMiss)
+      : mayMiss_(mayMiss),
+        source_(source),
         opt_(opt),
         part_(part),
         bound_(bound),
@@ -445,6 +452,11 @@ class LevelEncoder {
 
   /// Lines of blocks of one level, sampled.
   struct Batch {
+    int level = 0;
+    bool prepared = false;  ///< prepareAhead ran
+    /// The volume copy its blocks are boxes of (the finest level's, sampled where the level
+    /// sampler holds the volume), for the device to take their samples from; else null.
+    const LevelSampler* copy = nullptr;
     std::vector<BlockTask> tasks;
     int64_t endLine = 0;                ///< the first line not in this batch
     double seconds = 0;                 ///< spent sampling it
@@ -452,15 +464,21 @@ class LevelEncoder {
     AheadStats ahead;
     double aheadSeconds = 0;  ///< spent asking
     double prepSeconds = 0;   ///< of it, preparing the questions on the CPU
+    /// While it was asked: the sampling thread's wait for the batches before it to be fitted
+    /// (before sampling the next), and then for its asking to end.
+    double drainSeconds = 0, askWaitSeconds = 0;
   };
 
   /// Every level's lines of blocks (this process's share), coarse to fine, streamed through the
-  /// fitting pool as one stream of batches: the next batch is sampled (I/O and filtering, on the
-  /// sampling pool) while the fitting threads fit the ones before, so reading the volume does not
-  /// leave them idle, and a thread done with its blocks of a batch goes on to the next batch's
-  /// (TaskStream), whatever its level. No level waits for the one above: a block's search is
-  /// decided by its own samples (searches), so the threads a coarse level's few blocks leave idle
-  /// fit the next level's. The models reach the sink in the file's order (level by level).
+  /// fitting pool as one stream of batches, in three stages that overlap: a batch is sampled (I/O
+  /// and filtering, on the sampling pool) while the one before has its questions prepared (on the
+  /// asking pool) and the one before that is asked ahead and then published to the fitting
+  /// threads, which fit the batches before it. So reading the volume, preparing the questions and
+  /// the device's answers each take their own time, not their sum, and the fitting threads are not
+  /// left idle. A thread done with its blocks of a batch goes on to the next batch's (TaskStream),
+  /// whatever its level. No level waits for the one above: a block's search is decided by its own
+  /// samples (searches), so the threads a coarse level's few blocks leave idle fit the next
+  /// level's. The models reach the sink in the file's order (level by level).
   std::vector<LevelStats> encodeLevels() {
     const int levels = part_.levels();
     std::vector<LevelStats> stats(static_cast<size_t>(levels));
@@ -469,7 +487,7 @@ class LevelEncoder {
     int64_t count = 0;
     for (int l = 0; l < levels; ++l) {
       stats[size_t(l)].blocks = part_.blockCount(l);
-      ctx.push_back(FitContext{opt_, bound_, l, source_.name()});
+      ctx.push_back(fitContext(l));
       lines.push_back(share(l));
       count += (lines.back().end - lines.back().first) * part_.blocksPerAxis(l)[0];
     }
@@ -478,45 +496,56 @@ class LevelEncoder {
     LevelClock clock(part_, lines, stream, stats);
     const auto take = [&](BlockTask& t) { handOn(t, clock, stats); };
     const auto tick = [&] { return progress_.report(clock.samplesDone()); };
-    auto [l, start] = lines[0].empty() ? batchAfter(0, lines[0].end, lines)
-                                       : std::pair<int, int64_t>{0, lines[0].first};
-    if (l == levels) return stats;
-    Batch cur = gatherLines(l, start, lines[size_t(l)].end);
-    prepareAhead(l, cur);
-    int64_t first = 0, before = 0;  // cur's first block in the stream, the batch before's
-    for (;;) {
-      const auto [nl, from] = batchAfter(l, cur.endLine, lines);
-      const bool more = nl < levels;
-      // cur is asked ahead and then published on a thread of its own while the next batch is
-      // sampled here, once the batch before cur is fitted: at most two batches of samples at a
-      // time (the one fitted or asked, the one sampled) and the last blocks of a third. Where
-      // batches are asked ahead (their questions take about as long as their sampling), once
-      // the batch before that is fitted: the batch before cur is fitted meanwhile; the next
-      // batch's questions are prepared here too, while the device answers cur's.
-      const int64_t fitted = opt_.leastSquares ? before : first;
-      std::future<void> asking = std::async(std::launch::async, [&] {
-        askAheadOf(cur);
-        stream.publish(std::move(cur.tasks));
-      });
-      std::optional<Batch> next;
+    // The next batch to sample: its level and first line ((levels, 0): none is left).
+    std::pair<int, int64_t> after =
+        lines[0].empty() ? batchAfter(0, lines[0].end, lines) : std::pair{0, lines[0].first};
+    std::optional<Batch> cur, next;  // prepared (to ask and publish), sampled (to prepare)
+    int64_t first = 0;               // cur's first block in the stream
+    std::deque<int64_t> earlier;     // the first blocks of the batches published before cur
+    while (cur || next || after.first < levels) {
+      // At most kFittedBesideAsked batches before cur still fitted while the next is sampled:
+      // with cur, next and the one sampled, that many batches of samples and a few blocks more.
+      const size_t inFlight = opt_.leastSquares ? kFittedBesideAsked : 0;
+      const int64_t fitted = earlier.size() < inFlight ? 0
+                             : inFlight == 0           ? first
+                                                       : earlier[earlier.size() - inFlight];
+      std::future<void> asking, preparing;
+      if (cur)
+        asking = std::async(std::launch::async, [&] {
+          askAheadOf(*cur);
+          stream.publish(std::move(cur->tasks));
+        });
+      if (next && !next->prepared)
+        preparing = std::async(std::launch::async, [&] { prepareAhead(*next); });
+      std::optional<Batch> sampled;
       try {
-        if (more) {
+        if (after.first < levels) {
+          const auto t0 = Clock::now();
           if (!stream.drain(fitted, take, tick)) throw cancelled();
-          if (nl != l) clock.started(nl);
-          next = gatherLines(nl, from, lines[size_t(nl)].end);
-          prepareAhead(nl, *next);
+          if (cur) cur->drainSeconds = secondsSince(t0);
+          if (after.second == lines[size_t(after.first)].first) clock.started(after.first);
+          sampled = gatherLines(after.first, after.second, lines[size_t(after.first)].end);
+          after = batchAfter(after.first, sampled->endLine, lines);
+          if (!asksAhead()) prepareAhead(*sampled);  // nothing to ask: no stage of its own
         }
-      } catch (...) {
-        asking.wait();  // it uses cur and the stream
+      } catch (...) {  // the stages use the batches and the stream
+        if (preparing.valid()) preparing.wait();
+        if (asking.valid()) asking.wait();
         throw;
       }
-      asking.get();
-      before = first;
-      first = stream.published();
-      countBatch(cur, stats[size_t(l)]);
-      if (!more) break;
-      cur = std::move(*next);
-      l = nl;
+      const auto t0 = Clock::now();
+      if (preparing.valid()) preparing.get();
+      if (asking.valid()) asking.get();
+      if (cur) {
+        cur->askWaitSeconds = secondsSince(t0);
+        earlier.push_back(first);
+        if (earlier.size() > kFittedBesideAsked) earlier.pop_front();
+        first = stream.published();
+        countBatch(*cur, stats[size_t(cur->level)]);
+      }
+      cur = std::move(next);
+      next = std::move(sampled);
+      if (!cur && next && next->prepared) std::swap(cur, next);
     }
     if (!stream.drain(count, take, tick)) throw cancelled();
     return stats;
@@ -541,6 +570,8 @@ class LevelEncoder {
     ls.residualSeconds += b.ahead.residualSeconds;
     ls.aheadPrepSeconds += b.prepSeconds;
     ls.uploadSeconds += b.ahead.uploadSeconds;
+    ls.drainSeconds += b.drainSeconds;
+    ls.askWaitSeconds += b.askWaitSeconds;
   }
 
   /// After every process has run encodeLevels: the models of a team reach the first process's
@@ -652,6 +683,8 @@ class LevelEncoder {
         member ? size_t(1) << 18 : std::min(size_t(24) << 20, (size_t(4) << 20) * size_t(threads_));
     const Int3 nb = part_.blocksPerAxis(l);
     Batch batch;
+    batch.level = l;
+    if (part_.stride(l) == 1 && !ds()) batch.copy = sampler_;
     std::vector<BlockTask>& tasks = batch.tasks;
     size_t floats = 0;
     while (line < endLine && (tasks.empty() || floats < budgetFloats)) {
@@ -689,8 +722,7 @@ class LevelEncoder {
       return true;
     } catch (const std::exception& e) {
       samplerFailure_ = e.what();
-      sampler_->release();
-      sampler_ = nullptr;
+      sampler_ = nullptr;  // its copy stays until the encode ends: batches before may read it
       return false;
     }
   }
@@ -700,6 +732,15 @@ class LevelEncoder {
   const std::string& samplerFailure() const { return samplerFailure_; }
 
  private:
+  /// The blocks of level l's context.
+  FitContext fitContext(int l) const {
+    const std::optional<SampleType> stored = source_.storedType();
+    const bool bytes = stored && (*stored == SampleType::UInt8 || *stored == SampleType::Int8);
+    return FitContext{opt_,     bound_,
+                      l,        source_.name(),
+                      mayMiss_, bytes && !mayMiss_ && part_.stride(l) == 1 && !ds()};
+  }
+
   /// Whether a batch's searches are asked ahead (EncoderOptions::leastSquares): under an RMSE
   /// bound, not in a run's steps (their bounds depend on the step before), and not after a failure.
   bool asksAhead() const {
@@ -709,25 +750,28 @@ class LevelEncoder {
 
   /// Which of the batch's blocks search, and where asked ahead, their questions (the blocks with
   /// finite samples, their roughness and noise probe): on the asking pool, beside the device's
-  /// answers to the batch before.
-  void prepareAhead(int l, Batch& b) {
+  /// answers to the batch before and the sampling of the next.
+  void prepareAhead(Batch& b) {
+    const int l = b.level;
+    b.prepared = true;
     for (BlockTask& t : b.tasks) t.search = searches();
     if (!asksAhead()) return;
     const auto t0 = Clock::now();
-    const FitContext ctx{opt_, bound_, l, source_.name()};
+    const FitContext ctx = fitContext(l);
     std::vector<std::optional<AheadBlock>> asked(b.tasks.size());
     askPool_.run(
         int64_t(b.tasks.size()),
         [&](int, int64_t i) {
           BlockTask& t = b.tasks[size_t(i)];
           t.verdicts = NcpVerdicts{};
-          if (!t.search || anyNaN(t.samples.data(), t.samples.size())) return;
+          if (!t.search || (mayMiss_ && anyNaN(t.samples.data(), t.samples.size()))) return;
           const BlockExtent e = part_.extent(l, t.ijk);
           AheadBlock a;
           a.samples = t.samples.data();  // the tasks' storage stays put until they are published
           a.n = e.samples;
           a.out = &t.verdicts;
-          t.roughness = axisRoughness(t.samples.data(), e.samples);
+          if (b.copy) a.origin = e.lo;
+          t.roughness = axisRoughness(t.samples.data(), e.samples, ctx.smallIntegers);
           a.rough = t.roughness;
           if (opt_.compact) a.probe = noiseProbeNcp(ctx, e, t, *a.rough);
           asked[size_t(i)] = a;
@@ -745,7 +789,7 @@ class LevelEncoder {
     const SearchSettings settings{opt_.degree, searchBound(opt_, bound_), opt_.search,
                                   opt_.fastWindow, opt_.perAxisNcp};
     try {
-      b.ahead = askAhead(*opt_.leastSquares, b.questions, settings);
+      b.ahead = askAhead(*opt_.leastSquares, b.questions, settings, 0, b.copy);
     } catch (const std::exception& e) {  // asking ahead only spares fits: the rest is fitted
       std::lock_guard<std::mutex> lock(aheadMutex_);
       aheadFailure_ = e.what();
@@ -762,6 +806,7 @@ class LevelEncoder {
   }
 
  private:
+  bool mayMiss_;  ///< whether a sample may be missing (the range scan found a NaN)
   VolumeSource& source_;
   const EncoderOptions& opt_;
   const Partition& part_;
@@ -887,6 +932,7 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
     scanValueRange(source, part, progress, team, stats.valueMin, stats.valueMax, missing, threads,
                    load.sampler ? &load : nullptr);
   });
+  stats.scanSeconds = secondsSince(t0);
   stats.loadSeconds = 1e-9 * double(load.nanoseconds.load());
   if (load.sampler && (missing || load.failed)) {  // its filter has no rule for missing samples
     load.sampler->release();
@@ -913,7 +959,8 @@ EncodeStats encodeVolume(VolumeSource& source, const EncoderOptions& opt, ModelS
   stats.blocksPerAxisUsed = resolved.blocksPerAxis;
 
   const auto tFit0 = Clock::now();
-  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team, load.sampler);
+  LevelEncoder levels(source, opt, part, stats.bound, threads, progress, sink, team, load.sampler,
+                      anyMissing[0] != 0);
   teamStep(team, [&] { stats.levels = levels.encodeLevels(); });
   teamStep(team, [&] { levels.finishLevels(stats.levels); });
   for (int l = 0; l < part.levels(); ++l) {

@@ -53,24 +53,38 @@ void CpuLevelSampler::sampleRow(const Partition& part, int level, const std::vec
   auto fill = [&](int64_t b) {
     std::vector<float>& o = *out[size_t(b)];
     o.resize(taps.samples(size_t(b)));
-    const void* v = volume_.data();
-    switch (type_) {
-      case SampleType::Int8:
-        return filterBlock(static_cast<const int8_t*>(v), dims_, taps, size_t(b), o.data());
-      case SampleType::UInt8:
-        return filterBlock(static_cast<const uint8_t*>(v), dims_, taps, size_t(b), o.data());
-      case SampleType::Int16:
-        return filterBlock(static_cast<const int16_t*>(v), dims_, taps, size_t(b), o.data());
-      case SampleType::UInt16:
-        return filterBlock(static_cast<const uint16_t*>(v), dims_, taps, size_t(b), o.data());
-      default:
-        return filterBlock(static_cast<const float*>(v), dims_, taps, size_t(b), o.data());
-    }
+    withCopyType(type_, [&](auto* typed) {
+      filterBlock(static_cast<decltype(typed)>(static_cast<const void*>(volume_.data())), dims_,
+                  taps, size_t(b), o.data());
+    });
   };
   if (loop)
     loop(int64_t(blocks.size()), fill);
   else
     for (size_t b = 0; b < blocks.size(); ++b) fill(int64_t(b));
+}
+
+namespace {
+
+template <typename T>
+void boxOf(const T* volume, const Index3& dims, const Index3& origin, const Int3& n, float* out) {
+  const int64_t count = int64_t(n[0]) * n[1] * n[2];
+  for (int64_t s = 0; s < count; ++s)
+    out[s] = boxSample(volume, dims[0], dims[0] * dims[1], origin, n, s);
+}
+
+}  // namespace
+
+void CpuLevelSampler::box(const Index3& origin, const Int3& n, float* out) const {
+  for (int a = 0; a < 3; ++a)
+    if (origin[a] < 0 || n[a] < 0 || origin[a] + n[a] > dims_[a])
+      throw InvalidArgument("CpuLevelSampler: a box of " + std::to_string(n[a]) + " samples from " +
+                            std::to_string(origin[a]) + " outside the copy's " +
+                            std::to_string(dims_[a]) + " along axis " + std::to_string(a));
+  withCopyType(type_, [&](auto* typed) {
+    boxOf(static_cast<decltype(typed)>(static_cast<const void*>(volume_.data())), dims_, origin, n,
+          out);
+  });
 }
 
 void CpuLevelSampler::release() {

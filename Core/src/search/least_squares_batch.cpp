@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "afam/sampling/level_sampler.hpp"
 #include "afam/search/least_squares_order.hpp"
 #include "afam/spline/fit.hpp"
 
@@ -37,6 +38,21 @@ void CpuLeastSquaresBatch::setBlocks(const std::vector<const float*>& samples,
   samples_ = samples;
   n_ = n;
   degree_ = degree;
+}
+
+void CpuLeastSquaresBatch::setBlocksIn(const VolumeBoxes& boxes,
+                                       const std::vector<const float*>& samples,
+                                       const std::vector<Int3>& n, int degree) {
+  const auto* copy = dynamic_cast<const CpuLevelSampler*>(boxes.copy);
+  if (!copy || boxes.origins.size() != n.size()) return setBlocks(samples, n, degree);
+  gathered_.resize(n.size());
+  std::vector<const float*> from(n.size());
+  for (size_t b = 0; b < n.size(); ++b) {
+    gathered_[b].resize(size_t(n[b][0]) * size_t(n[b][1]) * size_t(n[b][2]));
+    copy->box(boxes.origins[b], n[b], gathered_[b].data());
+    from[b] = gathered_[b].data();
+  }
+  setBlocks(from, n, degree);
 }
 
 void CpuLeastSquaresBatch::residuals(const std::vector<LsqRequest>& requests,

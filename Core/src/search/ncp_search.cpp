@@ -133,10 +133,19 @@ int searchNcp(BlockFitter& fitter, const float* samples, Int3 n, int degree, dou
 
 namespace {
 
+/// The square of a second difference a - 2b + c, taken in D (double; or float where the samples
+/// are small integers, where it is exact) and returned as a double: the same value either way.
+template <typename D>
+__attribute__((always_inline)) inline double squaredSecondDifference(float a, float b, float c) {
+  const D d = D(a) - D(2) * D(b) + D(c);
+  return double(d * d);
+}
+
 /// axisRoughness's sums in one pass over the block's rows (each row with its neighbours along y
-/// and z, in cache once), compiled also for AVX2 (four doubles a vector; no FMA) and chosen at run
-/// time. An axis' sum per x gathers its rows in increasing (z, y), the order of a pass of its own,
-/// and the columns are added in increasing x: the same sums as three passes.
+/// and z, in cache once), compiled also for AVX2 (no FMA) and chosen at run time. An axis' sum per
+/// x gathers its rows in increasing (z, y), the order of a pass of its own, and the columns are
+/// added in increasing x: the same sums as three passes. D: the differences' type (above).
+template <typename D>
 __attribute__((always_inline)) inline std::array<double, 3> axisRoughnessBody(const float* samples,
                                                                               Int3 n) {
   const size_t nx = size_t(n[0]), ny = size_t(n[1]), nz = size_t(n[2]);
@@ -150,25 +159,19 @@ __attribute__((always_inline)) inline std::array<double, 3> axisRoughnessBody(co
     for (size_t y = 0; y < ny; ++y) {
       const float* row = samples + z * plane + y * nx;
       if (nx >= 3)
-        for (size_t x = 1; x + 1 < nx; ++x) {
-          const double d = double(row[x - 1]) - 2.0 * double(row[x]) + double(row[x + 1]);
-          cx[x] += d * d;
-        }
+        for (size_t x = 1; x + 1 < nx; ++x)
+          cx[x] += squaredSecondDifference<D>(row[x - 1], row[x], row[x + 1]);
       if (ny >= 3 && y >= 1 && y + 1 < ny) {
         const float* below = row - nx;  // in the block: y >= 1
         const float* above = row + nx;
-        for (size_t x = 0; x < nx; ++x) {
-          const double d = double(below[x]) - 2.0 * double(row[x]) + double(above[x]);
-          cy[x] += d * d;
-        }
+        for (size_t x = 0; x < nx; ++x)
+          cy[x] += squaredSecondDifference<D>(below[x], row[x], above[x]);
       }
       if (nz >= 3 && z >= 1 && z + 1 < nz) {
         const float* below = row - plane;  // in the block: z >= 1
         const float* above = row + plane;
-        for (size_t x = 0; x < nx; ++x) {
-          const double d = double(below[x]) - 2.0 * double(row[x]) + double(above[x]);
-          cz[x] += d * d;
-        }
+        for (size_t x = 0; x < nx; ++x)
+          cz[x] += squaredSecondDifference<D>(below[x], row[x], above[x]);
       }
     }
   std::array<double, 3> r{0, 0, 0};
@@ -183,14 +186,19 @@ __attribute__((always_inline)) inline std::array<double, 3> axisRoughnessBody(co
   return r;
 }
 
+template <typename D>
 AFAM_TARGET_AVX2 std::array<double, 3> axisRoughnessAvx2(const float* samples, Int3 n) {
-  return axisRoughnessBody(samples, n);
+  return axisRoughnessBody<D>(samples, n);
 }
 
 }  // namespace
 
-std::array<double, 3> axisRoughness(const float* samples, Int3 n) {
-  return cpuHasAvx2() ? axisRoughnessAvx2(samples, n) : axisRoughnessBody(samples, n);
+std::array<double, 3> axisRoughness(const float* samples, Int3 n, bool smallIntegers) {
+  if (smallIntegers)
+    return cpuHasAvx2() ? axisRoughnessAvx2<float>(samples, n)
+                        : axisRoughnessBody<float>(samples, n);
+  return cpuHasAvx2() ? axisRoughnessAvx2<double>(samples, n)
+                      : axisRoughnessBody<double>(samples, n);
 }
 
 namespace {
@@ -275,8 +283,7 @@ bool interpolantPasses(const float* samples, Int3 n, int degree, double bound,
   double gain = 1;
   for (int a = 0; a < 3; ++a) gain *= interpolationGain(n[a], degree);
   const size_t count = size_t(n[0]) * size_t(n[1]) * size_t(n[2]);
-  float largest = 0;
-  for (size_t i = 0; i < count; ++i) largest = std::max(largest, std::fabs(samples[i]));
+  const float largest = largestMagnitude(samples, count);
   // float32 rounding of the points (2^-24 relative) and the double solve's error (1e-9 of them:
   // ~1e-13 at a condition number of 100), twice over.
   const double worst = 2 * (std::ldexp(1.0, -24) + 1e-9) * gain * double(largest);

@@ -11,12 +11,17 @@ namespace afam {
 
 namespace {
 
-/// One block's replay: its search on its verdicts alone. `ask` gets the first NCP without one;
-/// `unsure` is set at an NCP whose residual could not tell.
+/// Verdicts a replay takes as given beside the known ones (a branch of the search asked ahead of
+/// the verdicts before it): passes or fails.
+using Assumed = std::vector<std::pair<Int3, bool>>;
+
+/// One block's replay: its search on its verdicts alone (and `assumed`). `ask` gets the first NCP
+/// without one; `unsure` is set at an NCP whose residual could not tell.
 struct Replay {
   const AheadBlock& block;
   const SearchSettings& s;
   std::optional<std::array<double, 3>>& rough;
+  const Assumed& assumed;
   std::optional<Int3> ask;
   bool unsure = false;
 
@@ -27,6 +32,8 @@ struct Replay {
         unsure = v == Verdict::Unknown;
         return v == Verdict::Passes;
       }
+    for (const auto& [at, passes] : assumed)
+      if (at == ncp) return passes;
     ask = ncp;
     return false;
   }
@@ -45,6 +52,58 @@ struct Replay {
   }
 };
 
+/// A search's question asked ahead: its block, the verdicts assumed on the way to it, its NCP.
+struct Branch {
+  size_t block;
+  Assumed assumed;
+  Int3 ncp;
+};
+
+/// One round's requests: every unfinished block's next question (`open` cleared for the finished
+/// ones), then, while fewer than atOnce, the questions after either verdict of the deepest asked,
+/// a level of every block's branches at a time.
+std::vector<LsqRequest> roundRequests(const std::vector<AheadBlock>& blocks,
+                                      const SearchSettings& settings,
+                                      std::vector<std::optional<std::array<double, 3>>>& rough,
+                                      std::vector<uint8_t>& open, int64_t atOnce,
+                                      AheadStats& stats) {
+  std::vector<LsqRequest> requests;
+  std::vector<Branch> deepest;
+  const Assumed none;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    if (!open[b]) continue;
+    Replay replay{blocks[b], settings, rough[b], none, std::nullopt};
+    replay.run();
+    stats.unsure += replay.unsure;
+    if (!replay.ask) {
+      open[b] = 0;
+      continue;
+    }
+    requests.push_back({int32_t(b), *replay.ask});
+    deepest.push_back({b, {}, *replay.ask});
+  }
+  const auto asked = [&](size_t b, Int3 ncp) {
+    return std::any_of(requests.begin(), requests.end(),
+                       [&](const LsqRequest& r) { return size_t(r.block) == b && r.ncp == ncp; });
+  };
+  while (!deepest.empty() && int64_t(requests.size()) < atOnce) {
+    std::vector<Branch> next;
+    for (const Branch& br : deepest)
+      for (const bool passes : {true, false}) {
+        if (int64_t(requests.size()) >= atOnce) break;
+        Assumed assumed = br.assumed;
+        assumed.emplace_back(br.ncp, passes);
+        Replay replay{blocks[br.block], settings, rough[br.block], assumed, std::nullopt};
+        replay.run();
+        if (!replay.ask || asked(br.block, *replay.ask)) continue;
+        requests.push_back({int32_t(br.block), *replay.ask});
+        next.push_back({br.block, std::move(assumed), *replay.ask});
+      }
+    deepest = std::move(next);
+  }
+  return requests;
+}
+
 }  // namespace
 
 Verdict lsqVerdict(const LsqResidual& r, int64_t count, double bound) {
@@ -56,37 +115,33 @@ Verdict lsqVerdict(const LsqResidual& r, int64_t count, double bound) {
 }
 
 AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blocks,
-                    const SearchSettings& settings) {
+                    const SearchSettings& settings, int64_t atOnce, const LevelSampler* copy) {
   AheadStats stats;
   std::vector<const float*> samples;
   std::vector<Int3> shapes;
+  VolumeBoxes boxes{copy, {}};
   for (const AheadBlock& b : blocks) {
     samples.push_back(b.samples);
     shapes.push_back(b.n);
+    if (b.origin) boxes.origins.push_back(*b.origin);
     b.out->bound = settings.bound;
     b.out->known.clear();
   }
   const auto tUpload = std::chrono::steady_clock::now();
-  batch.setBlocks(samples, shapes, settings.degree);
+  if (copy && boxes.origins.size() == blocks.size())
+    batch.setBlocksIn(boxes, samples, shapes, settings.degree);
+  else
+    batch.setBlocks(samples, shapes, settings.degree);
   stats.uploadSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - tUpload).count();
+  if (atOnce <= 0) atOnce = batch.requestsAtOnce();
   std::vector<std::optional<std::array<double, 3>>> rough;
   for (const AheadBlock& b : blocks) rough.push_back(b.rough);
   std::vector<uint8_t> open(blocks.size(), 1);
-  std::vector<LsqRequest> requests;
   std::vector<LsqResidual> answers;
   for (;;) {
-    requests.clear();
-    for (size_t b = 0; b < blocks.size(); ++b) {
-      if (!open[b]) continue;
-      Replay replay{blocks[b], settings, rough[b], std::nullopt};
-      replay.run();
-      stats.unsure += replay.unsure;
-      if (replay.ask)
-        requests.push_back({int32_t(b), *replay.ask});
-      else
-        open[b] = 0;
-    }
+    const std::vector<LsqRequest> requests =
+        roundRequests(blocks, settings, rough, open, atOnce, stats);
     if (requests.empty()) return stats;
     const auto t0 = std::chrono::steady_clock::now();
     batch.residuals(requests, answers);

@@ -685,8 +685,8 @@ bool BlockFitter::fitWithin(const float* samples, std::array<int, 3> n, std::arr
 
 namespace {
 
-/// The largest |v[i]| (0 for none), in eight lanes (max is exact in any order; NaN ignored as
-/// std::max does), compiled also for AVX2 and chosen at run time.
+/// largestMagnitude in eight lanes (max is exact in any order; NaN ignored as std::max does),
+/// compiled also for AVX2 and chosen at run time.
 __attribute__((always_inline)) inline float largestMagnitudeBody(const float* v, size_t count) {
   using Eight = float __attribute__((vector_size(32)));
   Eight most = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -707,11 +707,11 @@ AFAM_TARGET_AVX2 float largestMagnitudeAvx2(const float* v, size_t count) {
   return largestMagnitudeBody(v, count);
 }
 
+}  // namespace
+
 float largestMagnitude(const float* v, size_t count) {
   return cpuHasAvx2() ? largestMagnitudeAvx2(v, count) : largestMagnitudeBody(v, count);
 }
-
-}  // namespace
 
 bool BlockFitter::changeWithin(const float* samples, std::array<int, 3> n, const FitResult& fitted,
                                FitResult& changed, double bound) {

@@ -16,9 +16,11 @@
 #include "afam/cuda/common/gpu_error.hpp"
 #include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/ranks/device_selection.hpp"
+#include "afam/sampling/level_filter.hpp"
 #include "afam/search/least_squares_order.hpp"
 #include "common/cuda_check.hpp"
 #include "common/growing_array.hpp"
+#include "encode/gpu_volume_copy.hpp"
 
 namespace afam {
 
@@ -123,6 +125,26 @@ __global__ void __launch_bounds__(kLsqLanes)
   if (threadIdx.x == 0) out[blockIdx.x] = make_double2(squares, squares - energy);
 }
 
+/// A box of the volume's copy gathered into the batch's samples (setBlocksIn).
+struct GatherBox {
+  Index3 origin{};
+  Int3 n{};
+  uint64_t out = 0;  ///< floats, of its first sample in the batch's samples
+};
+
+/// Each box's samples from the volume (boxSample: the floats the CPU's sampling makes), a grid
+/// row a box, its threads striding over the box.
+template <typename T>
+__global__ void __launch_bounds__(kLsqLanes)
+    gatherBoxesKernel(const T* volume, int64_t rowSize, int64_t planeSize, const GatherBox* boxes,
+                      float* out) {
+  const GatherBox b = boxes[blockIdx.y];
+  const int64_t count = int64_t(b.n[0]) * b.n[1] * b.n[2];
+  for (int64_t s = int64_t(blockIdx.x) * kLsqLanes + threadIdx.x; s < count;
+       s += int64_t(gridDim.x) * kLsqLanes)
+    out[b.out + uint64_t(s)] = boxSample(volume, rowSize, planeSize, b.origin, b.n, s);
+}
+
 class GpuLeastSquaresBatch final : public LeastSquaresBatch {
  public:
   explicit GpuLeastSquaresBatch(int device) : device_(device) {
@@ -130,6 +152,7 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
     cudaDeviceProp prop{};
     AFAM_CUDA_CHECK(cudaGetDeviceProperties(&prop, device));
     name_ = prop.name;
+    multiprocessors_ = prop.multiProcessorCount;
     sharedLimit_ = uint64_t(prop.sharedMemPerBlockOptin) - kLsqLanes * sizeof(double) - 1024;
     AFAM_CUDA_CHECK(cudaFuncSetAttribute(
         residualKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(sharedLimit_)));
@@ -156,8 +179,12 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
         cudaMemcpyAsync(samples_.data, staging_.data, bytes, cudaMemcpyHostToDevice, stream_));
   }
 
+  void setBlocksIn(const VolumeBoxes& boxes, const std::vector<const float*>& samples,
+                   const std::vector<Int3>& n, int degree) override;
   void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override;
   std::string description() const override { return name_; }
+  /// A request a multiprocessor: a fine level's requests take most of one's shared memory.
+  int64_t requestsAtOnce() const override { return multiprocessors_; }
 
  private:
   /// Jobs of the requests the GPU takes (their index in `requests` in `taken`), the others'
@@ -188,17 +215,53 @@ class GpuLeastSquaresBatch final : public LeastSquaresBatch {
   }
 
   static constexpr size_t kStagingThreads = 8;
-  int device_ = 0, degree_ = 2;
+  int device_ = 0, degree_ = 2, multiprocessors_ = 1;
   std::string name_;
   uint64_t sharedLimit_ = 0;
   cudaStream_t stream_ = nullptr;
   CpuLeastSquaresBatch cpu_;
   std::vector<Int3> n_;
   std::vector<uint64_t> offsets_;
+  std::vector<GatherBox> boxes_;  ///< setBlocksIn's, until their copy to the device is done
   AxisProjections projections_;
   size_t uploadedProjections_ = 0;
-  GrowingArray samples_, matrices_, scratch_, jobs_, results_, staging_{true};
+  GrowingArray samples_, matrices_, scratch_, jobs_, results_, gather_, staging_{true};
 };
+
+void GpuLeastSquaresBatch::setBlocksIn(const VolumeBoxes& boxes,
+                                       const std::vector<const float*>& samples,
+                                       const std::vector<Int3>& n, int degree) {
+  const GpuVolumeCopy v = gpuVolumeCopy(boxes.copy);
+  if (!v.data || v.device != device_ || boxes.origins.size() != n.size())
+    return setBlocks(samples, n, degree);
+  AFAM_CUDA_CHECK(cudaSetDevice(device_));
+  degree_ = degree;
+  n_ = n;
+  cpu_.setBlocks(samples, n, degree);  // for the requests too large for a multiprocessor
+  offsets_.assign(n.size() + 1, 0);
+  AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));  // boxes_' last copy is done
+  boxes_.resize(n.size());
+  int64_t largest = 0;
+  for (size_t b = 0; b < n.size(); ++b) {
+    const int64_t count = int64_t(n[b][0]) * n[b][1] * n[b][2];
+    boxes_[b] = {boxes.origins[b], n[b], offsets_[b]};
+    offsets_[b + 1] = offsets_[b] + uint64_t(count);
+    largest = std::max(largest, count);
+  }
+  if (n.empty()) return;
+  samples_.reserve(offsets_.back() * sizeof(float));
+  gather_.reserve(boxes_.size() * sizeof(GatherBox));
+  AFAM_CUDA_CHECK(cudaMemcpyAsync(gather_.data, boxes_.data(), boxes_.size() * sizeof(GatherBox),
+                                  cudaMemcpyHostToDevice, stream_));
+  const dim3 grid(unsigned(std::clamp<int64_t>((largest + kLsqLanes - 1) / kLsqLanes, 1, 64)),
+                  unsigned(n.size()));
+  const int64_t X = v.dims[0], XY = v.dims[0] * v.dims[1];
+  withCopyType(v.type, [&](auto* typed) {
+    gatherBoxesKernel<<<grid, kLsqLanes, 0, stream_>>>(
+        static_cast<decltype(typed)>(v.data), X, XY, gather_.as<GatherBox>(), samples_.as<float>());
+  });
+  AFAM_CUDA_CHECK(cudaGetLastError());
+}
 
 uint64_t GpuLeastSquaresBatch::prepare(const std::vector<LsqRequest>& requests,
                                        std::vector<LsqJob>& jobs, std::vector<size_t>& taken,

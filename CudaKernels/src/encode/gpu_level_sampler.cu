@@ -17,6 +17,7 @@
 #include "afam/sampling/level_filter.hpp"
 #include "common/cuda_check.hpp"
 #include "common/growing_array.hpp"
+#include "encode/gpu_volume_copy.hpp"
 
 namespace afam {
 
@@ -71,6 +72,7 @@ class GpuLevelSampler final : public LevelSampler {
     staging_.release();
   }
   std::string description() const override { return name_; }
+  GpuVolumeCopy copy() const { return {volume_.data, dims_, type_, device_}; }
 
  private:
   /// Launches the row's kernel for the volume's type.
@@ -153,27 +155,11 @@ void GpuLevelSampler::launch(const RowTaps& taps, const std::vector<RowBlock>& b
   const auto* rb = reinterpret_cast<const RowBlock*>(base + ni + nw + nf);
   const dim3 grid(unsigned((largest + kThreads - 1) / kThreads), unsigned(blocks.size()));
   const int64_t X = dims_[0], XY = dims_[0] * dims_[1];
-  const auto run = [&](auto* typed) {  // typed: a null pointer of the volume's sample type
+  withCopyType(type_, [&](auto* typed) {
     filterRowKernel<<<grid, kThreads, 0, stream_>>>(static_cast<decltype(typed)>(volume_.data), X,
                                                     XY, index, weight, first, rb, taps.z, taps.nz,
                                                     out_.as<float>());
-  };
-  switch (type_) {
-    case SampleType::Int8:
-      run(static_cast<const int8_t*>(nullptr));
-      break;
-    case SampleType::UInt8:
-      run(static_cast<const uint8_t*>(nullptr));
-      break;
-    case SampleType::Int16:
-      run(static_cast<const int16_t*>(nullptr));
-      break;
-    case SampleType::UInt16:
-      run(static_cast<const uint16_t*>(nullptr));
-      break;
-    default:
-      run(static_cast<const float*>(nullptr));
-  }
+  });
   AFAM_CUDA_CHECK(cudaGetLastError());
   // `packed` (host memory) outlives its copy to the device: the row waits for its kernel here.
   AFAM_CUDA_CHECK(cudaStreamSynchronize(stream_));
@@ -210,6 +196,11 @@ void GpuLevelSampler::sampleRow(const Partition& part, int level, const std::vec
 }
 
 }  // namespace
+
+GpuVolumeCopy gpuVolumeCopy(const LevelSampler* sampler) {
+  const auto* gpu = dynamic_cast<const GpuLevelSampler*>(sampler);
+  return gpu ? gpu->copy() : GpuVolumeCopy{};
+}
 
 std::shared_ptr<LevelSampler> makeGpuLevelSampler(
     const std::function<void(const std::string&)>& report, int device, size_t volumeBudgetBytes) {

@@ -175,6 +175,9 @@ struct LevelStats {
   /// Of aheadSeconds: the blocks' questions prepared on the CPU (their roughness, the noise probe),
   /// and their samples handed to the device (LeastSquaresBatch::setBlocks).
   double aheadPrepSeconds = 0, uploadSeconds = 0;
+  /// The sampling thread's waits, while a batch was asked: for the batches before it to be fitted
+  /// (and handed on) before it sampled the next, and for the asking to end after that.
+  double drainSeconds = 0, askWaitSeconds = 0;
 };
 
 struct EncodeStats {
@@ -195,6 +198,7 @@ struct EncodeStats {
   uint64_t payloadBytes = 0;
   uint64_t paperBytes = 0;  ///< the paper's layout: sum of 1 + ((NCP+p)*3 + NCP^3)*4
   double seconds = 0;       ///< wall time of the whole encode
+  double scanSeconds = 0;   ///< wall time of the range scan (and the level sampler's loads)
   double fitSeconds = 0;    ///< wall time of the fitting phases
   double cpuSeconds = 0;    ///< process CPU time (user + system) spent in the encode
   double maxRmse = 0, maxError = 0;

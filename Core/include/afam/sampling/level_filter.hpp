@@ -44,4 +44,15 @@ AFAM_HD float filteredSample(const T* volume, int64_t rowSize, int64_t planeSize
   return static_cast<float>(acc);
 }
 
+/// Sample s (x fastest) of the box of n samples from `origin` of `volume` (rows `rowSize` samples
+/// apart, planes `planeSize`): the volume's own sample, as the finest level's block holds it.
+template <typename T>
+AFAM_HD float boxSample(const T* volume, int64_t rowSize, int64_t planeSize, const Index3& origin,
+                        const Int3& n, int64_t s) {
+  const int64_t plane = int64_t(n[0]) * n[1];
+  const int64_t k = s / plane, j = (s % plane) / n[0], i = s % n[0];
+  return static_cast<float>(
+      volume[(origin[2] + k) * planeSize + (origin[1] + j) * rowSize + origin[0] + i]);
+}
+
 }  // namespace afam

@@ -47,6 +47,8 @@ class CpuLevelSampler final : public LevelSampler {
                  const BlockLoop& loop = {}) override;
   void release() override;
   std::string description() const override { return "cpu"; }
+  /// The box of n samples from `origin` of the copy, as floats (boxSample), into out.
+  void box(const Index3& origin, const Int3& n, float* out) const;
 
  private:
   Index3 dims_{};

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "afam/base/types.hpp"
+#include "afam/format/partition.hpp"
 
 namespace afam {
 
@@ -36,6 +37,15 @@ struct LsqResidual {
   double squares = 0, residual = 0;
 };
 
+class LevelSampler;
+
+/// Where a batch's blocks are boxes of a volume's own samples (the finest level's, a copy of the
+/// volume held by a LevelSampler): each block's first sample in the volume.
+struct VolumeBoxes {
+  const LevelSampler* copy = nullptr;
+  std::vector<Index3> origins;
+};
+
 /// Batched least-squares residuals (see the file's comment). Not thread-safe: one caller.
 class LeastSquaresBatch {
  public:
@@ -44,11 +54,23 @@ class LeastSquaresBatch {
   /// floats each), valid until the next setBlocks; degree 1..5 (reduced per axis as the fit does).
   virtual void setBlocks(const std::vector<const float*>& samples, const std::vector<Int3>& n,
                          int degree) = 0;
+  /// setBlocks for blocks whose samples are also boxes of the volume copy `boxes.copy` holds: a
+  /// batch that reads that copy where it lies (a GPU's, on its own device) takes them from there,
+  /// the same floats, instead of handing `samples` over; the others call setBlocks.
+  virtual void setBlocksIn(const VolumeBoxes& boxes, const std::vector<const float*>& samples,
+                           const std::vector<Int3>& n, int degree) {
+    (void)boxes;
+    setBlocks(samples, n, degree);
+  }
   /// The residual of each request, in order. Throws (GpuError on the GPU) when the device fails.
   virtual void residuals(const std::vector<LsqRequest>& requests,
                          std::vector<LsqResidual>& out) = 0;
   /// What computes them, in words ("cpu", or the GPU's name).
   virtual std::string description() const = 0;
+  /// How many requests one call answers in about the time of one (a GPU's multiprocessors, each
+  /// taking a request): askAhead asks up to that many a round, ahead of the searches' next
+  /// questions. 1: one at a time (the CPU reference).
+  virtual int64_t requestsAtOnce() const { return 1; }
 };
 
 /// The rows of Q^T (ncp x n, row-major, double) for one axis of n samples fitted with ncp control
@@ -74,10 +96,15 @@ class CpuLeastSquaresBatch final : public LeastSquaresBatch {
  public:
   void setBlocks(const std::vector<const float*>& samples, const std::vector<Int3>& n,
                  int degree) override;
+  /// From a CpuLevelSampler's copy, the boxes gathered into the batch's own buffer (the GPU's
+  /// gather, on the CPU); from any other, setBlocks.
+  void setBlocksIn(const VolumeBoxes& boxes, const std::vector<const float*>& samples,
+                   const std::vector<Int3>& n, int degree) override;
   void residuals(const std::vector<LsqRequest>& requests, std::vector<LsqResidual>& out) override;
   std::string description() const override { return "cpu"; }
 
  private:
+  std::vector<std::vector<float>> gathered_;  ///< setBlocksIn's boxes
   std::vector<const float*> samples_;
   std::vector<Int3> n_;
   int degree_ = 2;

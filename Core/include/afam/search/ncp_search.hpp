@@ -106,6 +106,10 @@ bool interpolantPasses(const float* samples, std::array<int, 3> n, int degree, d
 constexpr double kAnisotropy = 8.0;
 
 /// Mean squared second difference of the samples along each axis (0 for an axis of < 3 samples).
-std::array<double, 3> axisRoughness(const float* samples, std::array<int, 3> n);
+/// `smallIntegers`: every sample is an integer of magnitude below 1024 (a volume stored in bytes,
+/// at its own grid): the differences and their squares are then exact in float, taken eight at
+/// a time, and the sums are the same doubles.
+std::array<double, 3> axisRoughness(const float* samples, std::array<int, 3> n,
+                                    bool smallIntegers = false);
 
 }  // namespace afam

@@ -37,6 +37,8 @@ struct AheadBlock {
   NcpVerdicts* out = nullptr;
   std::optional<Int3> probe;
   std::optional<std::array<double, 3>> rough;  ///< axisRoughness of the samples, when known
+  /// Where its samples are a box of the volume askAhead's `copy` holds: the box's first sample.
+  std::optional<Index3> origin;
 };
 
 /// What asking ahead took.
@@ -51,8 +53,14 @@ struct AheadStats {
 /// Passes when below it with room for the float32 rounding of the points, else Unknown.
 Verdict lsqVerdict(const LsqResidual& r, int64_t count, double bound);
 
-/// Fills every block's verdicts at settings.bound (see the file's comment).
+/// Fills every block's verdicts at settings.bound (see the file's comment). Where a round asks
+/// fewer than `atOnce` residuals (0: batch.requestsAtOnce()), it also asks those the unfinished
+/// searches would ask next, after either verdict of the questions before (breadth first, every
+/// block one step deeper at a time): fewer rounds for the same verdicts at the NCPs the searches
+/// visit (the others are never consulted). `copy`: where every block has an origin, the volume
+/// copy it is a box of (LeastSquaresBatch::setBlocksIn).
 AheadStats askAhead(LeastSquaresBatch& batch, const std::vector<AheadBlock>& blocks,
-                    const SearchSettings& settings);
+                    const SearchSettings& settings, int64_t atOnce = 0,
+                    const LevelSampler* copy = nullptr);
 
 }  // namespace afam

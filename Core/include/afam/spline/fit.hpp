@@ -224,6 +224,9 @@ ErrorStats errorOnValid(const float* model, const float* samples, size_t count,
 /// Sum of the squared samples of an n0 x n1 x n2 block, in double.
 double sumOfSquares(const float* samples, std::array<int, 3> n);
 
+/// The largest |v[i]| of `count` floats (0 for none; a NaN ignored, as std::max does).
+float largestMagnitude(const float* v, size_t count);
+
 /// The calling thread's fitter, kept for the thread's life: the encoder's fitting threads, the
 /// decoding of interpolants (decodeInterpolant) and evaluateOnGrid share it, so that a thread
 /// faults in one set of block-sized work buffers, not one per use (a small volume's encode was

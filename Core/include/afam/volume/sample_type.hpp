@@ -61,6 +61,25 @@ constexpr SampleType sampleTypeOf() {
   }
 }
 
+/// f(p) with p a null `const T*` of the C++ type of samples stored as `type` where it is a 1- or
+/// 2-byte integer, else float32's (the types a copy of a volume holds: level_sampler.hpp): one
+/// switch for the code templated on them.
+template <typename F>
+decltype(auto) withCopyType(SampleType type, F&& f) {
+  switch (type) {
+    case SampleType::Int8:
+      return f(static_cast<const int8_t*>(nullptr));
+    case SampleType::UInt8:
+      return f(static_cast<const uint8_t*>(nullptr));
+    case SampleType::Int16:
+      return f(static_cast<const int16_t*>(nullptr));
+    case SampleType::UInt16:
+      return f(static_cast<const uint16_t*>(nullptr));
+    default:
+      return f(static_cast<const float*>(nullptr));
+  }
+}
+
 /// out[i] = static_cast<float>(sample i), for `count` samples of `type` at `samples` (any
 /// alignment); `swapBytes` reverses each sample's bytes first (big-endian data on this host).
 void samplesToFloat(SampleType type, const void* samples, uint64_t count, float* out,

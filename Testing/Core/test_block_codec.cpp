@@ -409,3 +409,34 @@ TEST(BlockCodec, ANoisyBlocksSureLanesFrameIsTheOneTheSlowLevelGives) {
   recodeFrame(slow, head, tail, values, EntropyCoding{});
   EXPECT_EQ(slow, stored);
 }
+
+TEST(BlockCodec, TheIntegerFormsQuantizeEveryValueToItsNearestStepTiesToEven) {
+  // 17 x 241 values (not a multiple of the four a vector takes): ties, negatives, noise.
+  const Int3 n{17, 241, 1};
+  const size_t count = size_t(n[0]) * size_t(n[1]);
+  const double step = 0.25;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> noise(-300.0f, 500.0f);
+  std::vector<float> v(count);
+  for (size_t i = 0; i < count; ++i)
+    v[i] = i % 3 == 0 ? float((double(int(rng() % 4001) - 2000) + 0.5) * step) : noise(rng);
+  QuantizedValues q;
+  ASSERT_TRUE(quantizeValues(v.data(), n, step, Predictor::IntegerLorenzo, q));
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  const double middle = std::nearbyint((double(*lo) + double(*hi)) / 2 / step);
+  EXPECT_EQ(q.base, int64_t(middle));
+  size_t ties = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const double x = double(v[i]) / step;
+    ties += x - std::floor(x) == 0.5;
+    ASSERT_EQ(q.k[i], int32_t(std::nearbyint(x) - middle)) << "value " << i << " = " << v[i];
+    ASSERT_EQ(q.reconstructed[i], float((middle + double(q.k[i])) * step)) << "value " << i;
+  }
+  EXPECT_GT(ties, count / 4);
+  // A value the codes cannot hold fails the block, in a vector's lanes or in the tail.
+  for (const size_t at : {size_t(5), count - 2}) {
+    std::vector<float> w = v;
+    w[at] = float(std::ldexp(step, 27));
+    EXPECT_FALSE(quantizeValues(w.data(), n, step, Predictor::IntegerLorenzo, q)) << "at " << at;
+  }
+}

@@ -156,7 +156,7 @@ bool quantizeValues(const float* values, Int3 n, double step, Predictor predicto
     q.hasCodes = true;
   }
   q.reconstructed.resize(count);
-  for (size_t i = 0; i < count; ++i) q.reconstructed[i] = codec::integerValue(q.base, q.k[i], step);
+  codec::integerValues(q.base, q.k.data(), count, step, q.reconstructed.data());
   return true;
 }
 
@@ -172,16 +172,20 @@ namespace {
 /// Order-0 entropy of the codes, in bits: a histogram where they span few values, else sorted.
 double orderZeroBits(const HugePageVector<int64_t>& codes) {
   if (codes.empty()) return 0;
-  const auto [lo, hi] = std::minmax_element(codes.begin(), codes.end());
+  int64_t lo = codes[0], hi = codes[0];  // one pass, no iterators kept: it vectorizes
+  for (const int64_t c : codes) {
+    lo = std::min(lo, c);
+    hi = std::max(hi, c);
+  }
   const double total = double(codes.size());
   double bits = 0;
   auto add = [&](double count) {
     if (count > 0) bits -= count * std::log2(count / total);
   };
-  if (uint64_t(*hi - *lo) < (uint64_t(1) << 16)) {
+  if (uint64_t(hi - lo) < (uint64_t(1) << 16)) {
     thread_local std::vector<uint32_t> histogram;
-    histogram.assign(size_t(*hi - *lo) + 1, 0);
-    for (const int64_t c : codes) ++histogram[size_t(c - *lo)];
+    histogram.assign(size_t(hi - lo) + 1, 0);
+    for (const int64_t c : codes) ++histogram[size_t(c - lo)];
     for (const uint32_t h : histogram) add(double(h));
     return bits;
   }

@@ -25,6 +25,9 @@ inline float integerValue(int64_t base, int32_t k, double step) {
   return static_cast<float>((double(base) + double(k)) * step);
 }
 
+/// out[i] = integerValue(base, k[i], step) for `count` codes (vectorised, compiled also for AVX2).
+void integerValues(int64_t base, const int32_t* k, size_t count, double step, float* out);
+
 /// The residuals of k under an integer predictor, in the predictor's visiting order. With free
 /// values (block_codec.hpp's FreeValues; interpolation only), a free point whose prediction lies
 /// within free.slack of its k takes the prediction as its k, and its residual is 0. `residuals`

@@ -254,6 +254,20 @@ AFAM_FIT_INLINE void evaluateRows(const AxisSystem& s, const In* in, size_t inSt
   for (int i = 0; i < s.n; ++i) {
     const double* wi = &s.weight[size_t(i) * size_t(w)];
     const int f = s.first[size_t(i)];
+    if (w == 3) {  // degree 2: each output summed in registers, the same products in the same order
+      const In* __restrict s0 = in + size_t(f) * inStride;
+      const In* __restrict s1 = s0 + inStride;
+      const In* __restrict s2 = s1 + inStride;
+      const double a0 = wi[0], a1 = wi[1], a2 = wi[2];
+      Out* __restrict dst = out + size_t(i) * outStride;
+      for (size_t c = 0; c < len; ++c) {
+        double v = a0 * double(s0[c]);
+        v += a1 * double(s1[c]);
+        v += a2 * double(s2[c]);
+        dst[c] = Out(v);
+      }
+      continue;
+    }
     double* __restrict acc = std::is_same<Out, double>::value
                                  ? reinterpret_cast<double*>(out + size_t(i) * outStride)
                                  : scratch;
@@ -806,20 +820,43 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
     const double* wi = &az.weight[i * size_t(w)];
     const size_t f = size_t(az.first[i]);
     double* __restrict v = plane.data();
-    {
-      const double* __restrict src = bufZ.data() + f * planeSize;
+    const double* __restrict src0 = bufZ.data() + f * planeSize;
+    // Degree 2 (three planes): each value summed where it is compared, not stored and read again;
+    // other degrees a plane at a time. The same products and sums in the same order either way.
+    const bool three = w == 3;
+    if (!three) {
       const double a = wi[0];
-      for (size_t c = 0; c < planeSize; ++c) v[c] = a * src[c];
+      for (size_t c = 0; c < planeSize; ++c) v[c] = a * src0[c];
+      for (int r = 1; r < w; ++r) {
+        const double* __restrict src = bufZ.data() + (f + size_t(r)) * planeSize;
+        const double b = wi[r];
+        for (size_t c = 0; c < planeSize; ++c) v[c] += b * src[c];
+      }
     }
-    for (int r = 1; r < w; ++r) {
-      const double* __restrict src = bufZ.data() + (f + size_t(r)) * planeSize;
-      const double a = wi[r];
-      for (size_t c = 0; c < planeSize; ++c) v[c] += a * src[c];
-    }
+    const double* __restrict src1 = three ? src0 + planeSize : src0;
+    const double* __restrict src2 = three ? src1 + planeSize : src0;
+    const double a0 = wi[0], a1 = three ? wi[1] : 0, a2 = three ? wi[2] : 0;
+    const auto valueAt = [&](size_t c) {
+      if (!three) return v[c];
+      double value = a0 * src0[c];
+      value += a1 * src1[c];
+      return value + a2 * src2[c];
+    };
     const float* __restrict sp = samples + i * planeSize;
     size_t c = 0;
     for (; c + 4 <= planeSize; c += 4) {
-      const DoubleQuad value = {v[c], v[c + 1], v[c + 2], v[c + 3]};
+      DoubleQuad value;
+      if (three) {
+        DoubleQuad p0, p1, p2;
+        std::memcpy(&p0, src0 + c, sizeof p0);
+        std::memcpy(&p1, src1 + c, sizeof p1);
+        std::memcpy(&p2, src2 + c, sizeof p2);
+        value = a0 * p0;
+        value += a1 * p1;
+        value += a2 * p2;
+      } else {
+        std::memcpy(&value, v + c, sizeof value);
+      }
       const DoubleQuad d = value - DoubleQuad{double(sp[c]), double(sp[c + 1]), double(sp[c + 2]),
                                               double(sp[c + 3])};
       sumSq += d * d;
@@ -829,7 +866,7 @@ void BlockFitter::Impl::evaluatePasses(const Axes& axes, const FitResult& model,
       hi = value > hi ? value : hi;
     }
     for (; c < planeSize; ++c) {
-      const double value = v[c];
+      const double value = valueAt(c);
       const double d = value - double(sp[c]);
       tailSum += d * d;
       tailMax = std::max(tailMax, std::fabs(d));

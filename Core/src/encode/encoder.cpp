@@ -417,14 +417,14 @@ class SampleBuffers {
   std::vector<std::vector<float>> free_;
 };
 
-/// Encodes the levels, coarse to fine in one stream; one instance per encodeVolume call. In a team
-/// of several processes each fits its workShare of every level, and finishLevels hands the models
-/// to the first process, which alone calls the sink.
 /// Where batches are asked ahead: how many batches before the one asked may still be fitted while
 /// the next is sampled (2 measured no faster on the 2.25 G-voxel scan: the fitting threads are
 /// then what the sampling waits for).
 constexpr size_t kFittedBesideAsked = 1;
 
+/// Encodes the levels, coarse to fine in one stream; one instance per encodeVolume call. In a team
+/// of several processes each fits its workShare of every level, and finishLevels hands the models
+/// to the first process, which alone calls the sink.
 class LevelEncoder {
  public:
   LevelEncoder(VolumeSource& source, const EncoderOptions& opt, const Partition& part, double bound,

@@ -9,10 +9,12 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <string>
 #include <system_error>
 #include <thread>
 #include <vector>
 
+#include "afam/base/errors.hpp"
 #include "afam/cuda/common/gpu_error.hpp"
 #include "afam/cuda/encode/make_gpu_least_squares.hpp"
 #include "afam/ranks/device_selection.hpp"
@@ -232,8 +234,15 @@ void GpuLeastSquaresBatch::setBlocksIn(const VolumeBoxes& boxes,
                                        const std::vector<const float*>& samples,
                                        const std::vector<Int3>& n, int degree) {
   const GpuVolumeCopy v = gpuVolumeCopy(boxes.copy);
-  if (!v.data || v.device != device_ || boxes.origins.size() != n.size())
-    return setBlocks(samples, n, degree);
+  if (!v.data || v.device != device_ || boxes.origins.size() != n.size() || n.size() > 65535)
+    return setBlocks(samples, n, degree);  // (a grid row a box: at most 65,535 of them)
+  for (size_t b = 0; b < n.size(); ++b)
+    for (int a = 0; a < 3; ++a)
+      if (boxes.origins[b][a] < 0 || n[b][a] < 0 || boxes.origins[b][a] + n[b][a] > v.dims[a])
+        throw InvalidArgument("GpuLeastSquaresBatch: box " + std::to_string(b) + " of " +
+                              std::to_string(n[b][a]) + " samples from " +
+                              std::to_string(boxes.origins[b][a]) + " outside the copy's " +
+                              std::to_string(v.dims[a]) + " along axis " + std::to_string(a));
   AFAM_CUDA_CHECK(cudaSetDevice(device_));
   degree_ = degree;
   n_ = n;

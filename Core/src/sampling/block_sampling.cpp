@@ -311,21 +311,10 @@ void fillBlockChunk(const PlaneChunk& chunk, const std::vector<int64_t>& zs, siz
     fillBlockChunkOf(static_cast<decltype(typed)>(chunk.samples), zs, plane, X, yBase, tz, k0, k1,
                      bt, out);
   };
-  switch (chunk.type) {
-    case SampleType::Int8:
-      return fill(static_cast<const int8_t*>(nullptr));
-    case SampleType::UInt8:
-      return fill(static_cast<const uint8_t*>(nullptr));
-    case SampleType::Int16:
-      return fill(static_cast<const int16_t*>(nullptr));
-    case SampleType::UInt16:
-      return fill(static_cast<const uint16_t*>(nullptr));
-    case SampleType::Float32:
-      return fill(static_cast<const float*>(nullptr));
-    default:
-      throw Error("fillBlockChunk: planes of " + std::string(sampleTypeName(chunk.type)) +
-                  " samples (a source's storedType is 1- or 2-byte integers)");
-  }
+  if (!isCopyType(chunk.type))
+    throw Error("fillBlockChunk: planes of " + std::string(sampleTypeName(chunk.type)) +
+                " samples (a source's storedType is 1- or 2-byte integers)");
+  withCopyType(chunk.type, fill);
 }
 
 /// Pieces a chunk's filtering is split into at least (blocks times z-sample ranges) when it runs

@@ -7,10 +7,7 @@
 
 namespace afam {
 
-bool levelSamplerHolds(SampleType type) {
-  return type == SampleType::Int8 || type == SampleType::UInt8 || type == SampleType::Int16 ||
-         type == SampleType::UInt16 || type == SampleType::Float32;
-}
+bool levelSamplerHolds(SampleType type) { return isCopyType(type); }
 
 bool CpuLevelSampler::reserve(Index3 dims, SampleType type, std::string& why) {
   if (!levelSamplerHolds(type)) {

@@ -61,9 +61,15 @@ constexpr SampleType sampleTypeOf() {
   }
 }
 
+/// Whether `type` is one that withCopyType names: a 1- or 2-byte integer, or float32.
+constexpr bool isCopyType(SampleType type) {
+  return type == SampleType::Int8 || type == SampleType::UInt8 || type == SampleType::Int16 ||
+         type == SampleType::UInt16 || type == SampleType::Float32;
+}
+
 /// f(p) with p a null `const T*` of the C++ type of samples stored as `type` where it is a 1- or
-/// 2-byte integer, else float32's (the types a copy of a volume holds: level_sampler.hpp): one
-/// switch for the code templated on them.
+/// 2-byte integer, else float32's (the types a copy of a volume holds: level_sampler.hpp; the
+/// planes the sampling reads): one switch for the code templated on them.
 template <typename F>
 decltype(auto) withCopyType(SampleType type, F&& f) {
   switch (type) {
